@@ -1,0 +1,248 @@
+/* raysort — the one header shared by the OpenCL kernels and the C++ host.
+ *
+ * Every struct that crosses between host and device is defined here, once, with its byte layout
+ * next to it, and so is every piece of arithmetic whose result must be bit-identical on both sides
+ * (vector maths, the counter-based RNG, sin/cos for ray generation). The host compiles this file as
+ * C++ with -ffp-contract=off; kernels compile it as OpenCL C 1.2 with FP_CONTRACT OFF and
+ * correctly rounded divide/sqrt, so the same source gives the same bits (DESIGN.md section 4).
+ *
+ * No library transcendentals appear here: OpenCL's and libm's sin/acos/atan2 may differ by ulps.
+ */
+#ifndef RAYSORT_SHARED_H
+#define RAYSORT_SHARED_H
+
+#ifdef __OPENCL_VERSION__
+#pragma OPENCL FP_CONTRACT OFF
+#define RS_GLOBAL __global
+#define RS_INLINE inline
+typedef uint rs_u32;
+typedef int rs_i32;
+typedef ulong rs_u64;
+RS_INLINE float rs_min(float a, float b) { return fmin(a, b); }
+RS_INLINE float rs_max(float a, float b) { return fmax(a, b); }
+RS_INLINE float rs_abs(float a) { return fabs(a); }
+RS_INLINE float rs_sqrt(float a) { return sqrt(a); }
+RS_INLINE float rs_floor(float a) { return floor(a); }
+RS_INLINE rs_i32 rs_float_as_int(float f) { return as_int(f); }
+RS_INLINE float rs_int_as_float(rs_i32 i) { return as_float(i); }
+#else
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#define RS_GLOBAL
+#define RS_INLINE inline
+typedef std::uint32_t rs_u32;
+typedef std::int32_t rs_i32;
+typedef std::uint64_t rs_u64;
+RS_INLINE float rs_min(float a, float b) { return std::fmin(a, b); }
+RS_INLINE float rs_max(float a, float b) { return std::fmax(a, b); }
+RS_INLINE float rs_abs(float a) { return std::fabs(a); }
+RS_INLINE float rs_sqrt(float a) { return std::sqrt(a); }
+RS_INLINE float rs_floor(float a) { return std::floor(a); }
+RS_INLINE rs_i32 rs_float_as_int(float f) { return std::bit_cast<rs_i32>(f); }
+RS_INLINE float rs_int_as_float(rs_i32 i) { return std::bit_cast<float>(i); }
+#endif
+
+/* "Infinite" ray length. A finite value on purpose: kernels must not rely on inf arithmetic,
+ * which -cl-fast-relaxed-math (finite-math-only) leaves undefined (DESIGN.md section 6). */
+#define RS_T_FAR 3.0e38f
+#define RS_NO_HIT 0xFFFFFFFFu
+/* Traversal stack entries per work-item (private memory). The BVH builder guarantees that the
+ * tree depth stays below this bound (host/bvh/build_sah.cpp, kMaxDepth); nearest-child-first
+ * traversal pushes at most one node per level, so the stack cannot overflow. */
+#define RS_STACK_SIZE 64
+
+/* ---------------------------------------------------------------------------------------------
+ * Device structs. All fields are 4 bytes; no float3 (whose size differs between host and CL).
+ * ------------------------------------------------------------------------------------------- */
+
+/* A ray, 32 bytes: [o.x o.y o.z tmin | d.x d.y d.z tmax]. The hit interval is (tmin, tmax). */
+typedef struct {
+  float o[3];
+  float tmin;
+  float d[3];
+  float tmax;
+} RsRay;
+
+/* A hit record, 16 bytes: distance t, original triangle id (RS_NO_HIT on a miss) and the
+ * barycentrics (u, v) of the hit point: p = (1-u-v)·v0 + u·v1 + v·v2. */
+typedef struct {
+  float t;
+  rs_u32 tri;
+  float u;
+  float v;
+} RsHit;
+
+/* A node of the flat binary BVH, 32 bytes: [bmin.x bmin.y bmin.z first | bmax.x bmax.y bmax.z count].
+ * count == 0: inner node; its children are nodes[first] (left) and nodes[first + 1] (right).
+ * count  > 0: leaf holding triangles [first, first + count) of the leaf-ordered triangle array.
+ * Node 0 is the root. Children are stored next to each other so one index names both. */
+typedef struct {
+  float bmin[3];
+  rs_u32 first;
+  float bmax[3];
+  rs_u32 count;
+} RsBvhNode;
+
+/* A triangle in leaf order, 48 bytes: [v0 id | v1 pad | v2 pad], id = the triangle's index in the
+ * scene's flattened triangle list (what hits report). */
+typedef struct {
+  float v0[3];
+  rs_u32 id;
+  float v1[3];
+  rs_u32 pad0;
+  float v2[3];
+  rs_u32 pad1;
+} RsTriangle;
+
+/* A pinhole camera, 64 bytes. tan_half_fov_y is computed on the host once (no transcendentals
+ * on the device). right/up are unit vectors; right is scaled by the aspect ratio at use. */
+typedef struct {
+  float pos[3];
+  float tan_half_fov_y;
+  float forward[3];
+  float aspect;
+  float right[3];
+  rs_u32 width;
+  float up[3];
+  rs_u32 height;
+} RsCamera;
+
+/* ---------------------------------------------------------------------------------------------
+ * Small vector maths (explicit, so host and device evaluate in the same order).
+ * ------------------------------------------------------------------------------------------- */
+typedef struct {
+  float x, y, z;
+} RsVec3;
+
+RS_INLINE RsVec3 rs_vec3(float x, float y, float z) {
+  RsVec3 r;
+  r.x = x;
+  r.y = y;
+  r.z = z;
+  return r;
+}
+RS_INLINE RsVec3 rs_load3(const float* p) { return rs_vec3(p[0], p[1], p[2]); }
+RS_INLINE RsVec3 rs_load3g(RS_GLOBAL const float* p) { return rs_vec3(p[0], p[1], p[2]); }
+RS_INLINE RsVec3 rs_add(RsVec3 a, RsVec3 b) { return rs_vec3(a.x + b.x, a.y + b.y, a.z + b.z); }
+RS_INLINE RsVec3 rs_sub(RsVec3 a, RsVec3 b) { return rs_vec3(a.x - b.x, a.y - b.y, a.z - b.z); }
+RS_INLINE RsVec3 rs_scale(RsVec3 a, float s) { return rs_vec3(a.x * s, a.y * s, a.z * s); }
+RS_INLINE float rs_dot(RsVec3 a, RsVec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+RS_INLINE RsVec3 rs_cross(RsVec3 a, RsVec3 b) {
+  return rs_vec3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+}
+RS_INLINE RsVec3 rs_normalize(RsVec3 a) {
+  float len = rs_sqrt(rs_dot(a, a));
+  return len > 0.0f ? rs_scale(a, 1.0f / len) : a;
+}
+
+/* ---------------------------------------------------------------------------------------------
+ * Counter-based RNG: a value is a pure function of (pixel, sample, bounce, dimension), so the
+ * same command gives the same rays on every device and in any order of evaluation.
+ * The mixer is the 32-bit finaliser of MurmurHash3, chained over the four counters.
+ * ------------------------------------------------------------------------------------------- */
+RS_INLINE rs_u32 rs_mix32(rs_u32 h) {
+  h ^= h >> 16;
+  h *= 0x85ebca6bu;
+  h ^= h >> 13;
+  h *= 0xc2b2ae35u;
+  h ^= h >> 16;
+  return h;
+}
+RS_INLINE rs_u32 rs_hash4(rs_u32 seed, rs_u32 pixel, rs_u32 sample, rs_u32 bounce_dim) {
+  rs_u32 h = rs_mix32(seed ^ 0x9e3779b9u);
+  h = rs_mix32(h ^ pixel);
+  h = rs_mix32(h ^ (sample * 0x27d4eb2fu));
+  h = rs_mix32(h ^ (bounce_dim * 0x165667b1u));
+  return h;
+}
+/* Uniform float in [0, 1) with 24 random bits: exact, no rounding. */
+RS_INLINE float rs_uniform(rs_u32 bits) { return (float)(bits >> 8) * (1.0f / 16777216.0f); }
+/* Dimension ids for rs_hash4's last counter: (bounce << 8) | dimension. */
+#define RS_DIM(bounce, dim) ((((rs_u32)(bounce)) << 8) | (rs_u32)(dim))
+
+/* sin and cos of 2π·u for u in [0, 1), from + − × only (odd/even Taylor polynomials on
+ * [−π/4, π/4] after an exact octant reduction); absolute error below 4e-7. */
+RS_INLINE void rs_sincos_2pi(float u, float* s, float* c) {
+  float q = u * 4.0f;                 /* quadrant coordinate in [0, 4) */
+  float qi = rs_floor(q + 0.5f);      /* nearest quadrant boundary 0..4 */
+  float x = (q - qi) * 1.57079632679f; /* in [−π/4, π/4] */
+  float x2 = x * x;
+  float sx = x * (1.0f + x2 * (-1.0f / 6.0f + x2 * (1.0f / 120.0f + x2 * (-1.0f / 5040.0f))));
+  float cx = 1.0f + x2 * (-0.5f + x2 * (1.0f / 24.0f + x2 * (-1.0f / 720.0f + x2 * (1.0f / 40320.0f))));
+  rs_i32 k = ((rs_i32)qi) & 3;
+  if (k == 0) { *s = sx; *c = cx; }
+  else if (k == 1) { *s = cx; *c = -sx; }
+  else if (k == 2) { *s = -sx; *c = -cx; }
+  else { *s = -cx; *c = sx; }
+}
+
+/* ---------------------------------------------------------------------------------------------
+ * Ray generation pieces shared by the host and the (later) generate kernels.
+ * ------------------------------------------------------------------------------------------- */
+
+/* Primary ray through pixel (x, y), jittered by (jx, jy) in [0,1)². */
+RS_INLINE RsRay rs_camera_ray(RsCamera cam, rs_u32 x, rs_u32 y, float jx, float jy) {
+  float sx = (2.0f * (((float)x + jx) / (float)cam.width) - 1.0f) * cam.tan_half_fov_y * cam.aspect;
+  float sy = (1.0f - 2.0f * (((float)y + jy) / (float)cam.height)) * cam.tan_half_fov_y;
+  RsVec3 d = rs_add(rs_load3(cam.forward), rs_add(rs_scale(rs_load3(cam.right), sx), rs_scale(rs_load3(cam.up), sy)));
+  d = rs_normalize(d);
+  RsRay r;
+  r.o[0] = cam.pos[0];
+  r.o[1] = cam.pos[1];
+  r.o[2] = cam.pos[2];
+  r.tmin = 0.0f;
+  r.d[0] = d.x;
+  r.d[1] = d.y;
+  r.d[2] = d.z;
+  r.tmax = RS_T_FAR;
+  return r;
+}
+
+/* Orthonormal basis around unit n (Duff et al. 2017, "Building an Orthonormal Basis, Revisited"). */
+RS_INLINE void rs_onb(RsVec3 n, RsVec3* t, RsVec3* b) {
+  float sign = n.z >= 0.0f ? 1.0f : -1.0f;
+  float a = -1.0f / (sign + n.z);
+  float bb = n.x * n.y * a;
+  *t = rs_vec3(1.0f + sign * n.x * n.x * a, sign * bb, -sign * n.x);
+  *b = rs_vec3(bb, sign + n.y * n.y * a, -n.y);
+}
+
+/* Cosine-weighted direction around unit normal n from (u1, u2) in [0,1)² (Malley's method). */
+RS_INLINE RsVec3 rs_cosine_direction(RsVec3 n, float u1, float u2) {
+  float r = rs_sqrt(u1);
+  float s, c;
+  rs_sincos_2pi(u2, &s, &c);
+  float lx = r * c, ly = r * s;
+  float lz = rs_sqrt(rs_max(0.0f, 1.0f - u1));
+  RsVec3 t, b;
+  rs_onb(n, &t, &b);
+  return rs_normalize(rs_add(rs_add(rs_scale(t, lx), rs_scale(b, ly)), rs_scale(n, lz)));
+}
+
+/* Uniform point on the unit sphere from (u1, u2) in [0,1)². */
+RS_INLINE RsVec3 rs_sphere_point(float u1, float u2) {
+  float z = 1.0f - 2.0f * u1;
+  float r = rs_sqrt(rs_max(0.0f, 1.0f - z * z));
+  float s, c;
+  rs_sincos_2pi(u2, &s, &c);
+  return rs_vec3(r * c, r * s, z);
+}
+
+/* Offset a surface point p along the geometric normal n (pointing to the side the new ray leaves
+ * from) so that the new ray does not hit its own surface: an offset in ulps, which scales with
+ * the magnitude of p, and a small absolute offset near the origin (Wächter & Binder,
+ * "A Fast and Robust Method for Avoiding Self-Intersection", Ray Tracing Gems, ch. 6). */
+RS_INLINE float rs_offset_component(float p, float n) {
+  const float origin = 1.0f / 32.0f;
+  const float float_scale = 1.0f / 65536.0f;
+  const float int_scale = 256.0f;
+  rs_i32 of_i = (rs_i32)(int_scale * n);
+  float p_i = rs_int_as_float(rs_float_as_int(p) + (p < 0.0f ? -of_i : of_i));
+  return rs_abs(p) < origin ? p + float_scale * n : p_i;
+}
+RS_INLINE RsVec3 rs_offset_ray_origin(RsVec3 p, RsVec3 n) {
+  return rs_vec3(rs_offset_component(p.x, n.x), rs_offset_component(p.y, n.y), rs_offset_component(p.z, n.z));
+}
+
+#endif /* RAYSORT_SHARED_H */

@@ -1,0 +1,34 @@
+// raysort devices: every OpenCL platform/device with the limits that shape the kernels.
+#include <fmt/format.h>
+
+#include "app/commands.h"
+#include "cl/runtime.h"
+
+namespace raysort {
+
+void register_devices_command(CLI::App& app) {
+  auto* cmd = app.add_subcommand("devices", "list OpenCL platforms and devices");
+  cmd->callback([] {
+    auto devices = list_devices();
+    if (devices.empty()) {
+      fmt::print("no OpenCL devices found (install PoCL with scripts/install-deps.sh, or a GPU driver)\n");
+      set_command_exit_code(1);
+      return;
+    }
+    auto def = select_device("");
+    for (auto& d : devices) {
+      fmt::print("[{}] {}{}\n", d.index, d.name, d.index == def.index ? "   (default)" : "");
+      fmt::print("    platform        {} ({})\n", d.platform_name, d.platform_version);
+      fmt::print("    type            {}\n", d.type);
+      fmt::print("    OpenCL          {} / {}\n", d.version, d.opencl_c_version);
+      fmt::print("    driver          {}\n", d.driver_version);
+      fmt::print("    compute units   {}\n", d.compute_units);
+      fmt::print("    global memory   {}\n", human_bytes(d.global_mem_bytes));
+      fmt::print("    local memory    {}\n", human_bytes(d.local_mem_bytes));
+      fmt::print("    max allocation  {}\n", human_bytes(d.max_alloc_bytes));
+      fmt::print("    max work-group  {}\n", d.max_work_group_size);
+    }
+  });
+}
+
+}  // namespace raysort

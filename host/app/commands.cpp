@@ -1,0 +1,18 @@
+#include "app/commands.h"
+
+namespace raysort {
+
+namespace {
+int g_exit_code = 0;
+}
+
+void set_command_exit_code(int code) { g_exit_code = code; }
+int command_exit_code() { return g_exit_code; }
+
+void register_commands(CLI::App& app) {
+  register_devices_command(app);
+  register_scenes_command(app);
+  register_trace_command(app);
+}
+
+}  // namespace raysort

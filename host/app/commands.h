@@ -1,0 +1,16 @@
+#pragma once
+// Subcommands of the raysort CLI. Each registers itself on the app and runs from its callback;
+// a callback that finds a failure sets the exit code through set_command_exit_code.
+#include <CLI/CLI.hpp>
+
+namespace raysort {
+
+void register_commands(CLI::App& app);
+void register_devices_command(CLI::App& app);
+void register_scenes_command(CLI::App& app);
+void register_trace_command(CLI::App& app);
+
+void set_command_exit_code(int code);
+int command_exit_code();
+
+}  // namespace raysort

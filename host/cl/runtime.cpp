@@ -1,0 +1,330 @@
+#include "cl/runtime.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cctype>
+#include <chrono>
+#include <cstdlib>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include "util/embedded.h"
+
+namespace raysort {
+
+namespace {
+
+std::string trim(std::string s) {
+  while (!s.empty() && (s.back() == '\0' || std::isspace(static_cast<unsigned char>(s.back())))) s.pop_back();
+  std::size_t b = 0;
+  while (b < s.size() && std::isspace(static_cast<unsigned char>(s[b]))) ++b;
+  return s.substr(b);
+}
+
+std::string lower(std::string s) {
+  for (auto& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+std::string type_name(cl_device_type t) {
+  if (t & CL_DEVICE_TYPE_GPU) return "GPU";
+  if (t & CL_DEVICE_TYPE_CPU) return "CPU";
+  if (t & CL_DEVICE_TYPE_ACCELERATOR) return "ACCELERATOR";
+  return "OTHER";
+}
+
+std::string& kernel_dir() {
+  static std::string dir;
+  return dir;
+}
+
+std::string read_kernel_file(const std::string& path) {
+  if (!kernel_dir().empty()) {
+    // --kernels DIR points at a cl/ folder (or the repository root holding one).
+    for (const std::string& candidate :
+         {kernel_dir() + "/" + path.substr(path.find('/') + 1), kernel_dir() + "/" + path}) {
+      std::ifstream in(candidate, std::ios::binary);
+      if (in) {
+        std::stringstream ss;
+        ss << in.rdbuf();
+        return ss.str();
+      }
+    }
+    throw Error(fmt::format("kernel file '{}' not found under --kernels {}; point it at the repository's cl/ folder",
+                            path, kernel_dir()));
+  }
+  auto e = find_embedded(path);
+  if (!e) throw Error(fmt::format("kernel file '{}' is not embedded in this binary (rebuild raysort)", path));
+  return std::string(*e);
+}
+
+void resolve_includes(const std::string& path, std::string& out, std::set<std::string>& seen) {
+  if (!seen.insert(path).second) return;  // every header is guarded anyway; include each once
+  std::istringstream in(read_kernel_file(path));
+  std::string line;
+  int line_no = 0;
+  out += fmt::format("#line 1 \"{}\"\n", path);
+  while (std::getline(in, line)) {
+    ++line_no;
+    auto pos = line.find("#include \"");
+    if (pos != std::string::npos && line.find_first_not_of(" \t") == pos) {
+      auto end = line.find('"', pos + 10);
+      std::string inc = "cl/" + line.substr(pos + 10, end - pos - 10);
+      resolve_includes(inc, out, seen);
+      out += fmt::format("#line {} \"{}\"\n", line_no + 1, path);
+      continue;
+    }
+    out += line;
+    out += '\n';
+  }
+}
+
+}  // namespace
+
+std::string cl_error_name(cl_int code) {
+  switch (code) {
+#define RS_CASE(x) \
+  case x:          \
+    return #x;
+    RS_CASE(CL_SUCCESS)
+    RS_CASE(CL_DEVICE_NOT_FOUND)
+    RS_CASE(CL_DEVICE_NOT_AVAILABLE)
+    RS_CASE(CL_COMPILER_NOT_AVAILABLE)
+    RS_CASE(CL_MEM_OBJECT_ALLOCATION_FAILURE)
+    RS_CASE(CL_OUT_OF_RESOURCES)
+    RS_CASE(CL_OUT_OF_HOST_MEMORY)
+    RS_CASE(CL_PROFILING_INFO_NOT_AVAILABLE)
+    RS_CASE(CL_MEM_COPY_OVERLAP)
+    RS_CASE(CL_IMAGE_FORMAT_MISMATCH)
+    RS_CASE(CL_IMAGE_FORMAT_NOT_SUPPORTED)
+    RS_CASE(CL_BUILD_PROGRAM_FAILURE)
+    RS_CASE(CL_MAP_FAILURE)
+    RS_CASE(CL_MISALIGNED_SUB_BUFFER_OFFSET)
+    RS_CASE(CL_EXEC_STATUS_ERROR_FOR_EVENTS_IN_WAIT_LIST)
+    RS_CASE(CL_COMPILE_PROGRAM_FAILURE)
+    RS_CASE(CL_LINKER_NOT_AVAILABLE)
+    RS_CASE(CL_LINK_PROGRAM_FAILURE)
+    RS_CASE(CL_DEVICE_PARTITION_FAILED)
+    RS_CASE(CL_KERNEL_ARG_INFO_NOT_AVAILABLE)
+    RS_CASE(CL_INVALID_VALUE)
+    RS_CASE(CL_INVALID_DEVICE_TYPE)
+    RS_CASE(CL_INVALID_PLATFORM)
+    RS_CASE(CL_INVALID_DEVICE)
+    RS_CASE(CL_INVALID_CONTEXT)
+    RS_CASE(CL_INVALID_QUEUE_PROPERTIES)
+    RS_CASE(CL_INVALID_COMMAND_QUEUE)
+    RS_CASE(CL_INVALID_HOST_PTR)
+    RS_CASE(CL_INVALID_MEM_OBJECT)
+    RS_CASE(CL_INVALID_IMAGE_FORMAT_DESCRIPTOR)
+    RS_CASE(CL_INVALID_IMAGE_SIZE)
+    RS_CASE(CL_INVALID_SAMPLER)
+    RS_CASE(CL_INVALID_BINARY)
+    RS_CASE(CL_INVALID_BUILD_OPTIONS)
+    RS_CASE(CL_INVALID_PROGRAM)
+    RS_CASE(CL_INVALID_PROGRAM_EXECUTABLE)
+    RS_CASE(CL_INVALID_KERNEL_NAME)
+    RS_CASE(CL_INVALID_KERNEL_DEFINITION)
+    RS_CASE(CL_INVALID_KERNEL)
+    RS_CASE(CL_INVALID_ARG_INDEX)
+    RS_CASE(CL_INVALID_ARG_VALUE)
+    RS_CASE(CL_INVALID_ARG_SIZE)
+    RS_CASE(CL_INVALID_KERNEL_ARGS)
+    RS_CASE(CL_INVALID_WORK_DIMENSION)
+    RS_CASE(CL_INVALID_WORK_GROUP_SIZE)
+    RS_CASE(CL_INVALID_WORK_ITEM_SIZE)
+    RS_CASE(CL_INVALID_GLOBAL_OFFSET)
+    RS_CASE(CL_INVALID_EVENT_WAIT_LIST)
+    RS_CASE(CL_INVALID_EVENT)
+    RS_CASE(CL_INVALID_OPERATION)
+    RS_CASE(CL_INVALID_GL_OBJECT)
+    RS_CASE(CL_INVALID_BUFFER_SIZE)
+    RS_CASE(CL_INVALID_MIP_LEVEL)
+    RS_CASE(CL_INVALID_GLOBAL_WORK_SIZE)
+    RS_CASE(CL_INVALID_PROPERTY)
+    RS_CASE(CL_INVALID_IMAGE_DESCRIPTOR)
+    RS_CASE(CL_INVALID_COMPILER_OPTIONS)
+    RS_CASE(CL_INVALID_LINKER_OPTIONS)
+    RS_CASE(CL_INVALID_DEVICE_PARTITION_COUNT)
+#undef RS_CASE
+    case -1001:
+      return "CL_PLATFORM_NOT_FOUND_KHR (no OpenCL driver installed: run scripts/install-deps.sh for PoCL)";
+    default:
+      return fmt::format("CL_UNKNOWN_ERROR({})", code);
+  }
+}
+
+std::string human_bytes(std::uint64_t b) {
+  const char* units[] = {"B", "KiB", "MiB", "GiB", "TiB"};
+  double v = static_cast<double>(b);
+  int u = 0;
+  while (v >= 1024.0 && u < 4) {
+    v /= 1024.0;
+    ++u;
+  }
+  return u == 0 ? fmt::format("{} B", b) : fmt::format("{:.1f} {}", v, units[u]);
+}
+
+std::string DeviceInfo::slug() const {
+  std::string s = (is_pocl() ? "pocl-" : "") + lower(type) + "-" + lower(name);
+  std::string out;
+  for (char c : s) {
+    if (std::isalnum(static_cast<unsigned char>(c))) out += c;
+    else if (!out.empty() && out.back() != '-') out += '-';
+  }
+  while (!out.empty() && out.back() == '-') out.pop_back();
+  if (out.size() > 48) out.resize(48);
+  return out;
+}
+
+std::vector<DeviceInfo> list_devices() {
+  std::vector<cl::Platform> platforms;
+  cl_int err = cl::Platform::get(&platforms);  // no exception: zero platforms is an answer
+  (void)err;
+  std::vector<DeviceInfo> out;
+  for (auto& p : platforms) {
+    std::vector<cl::Device> devices;
+    try {
+      p.getDevices(CL_DEVICE_TYPE_ALL, &devices);
+    } catch (const cl::Error&) {
+      continue;  // a platform with no devices
+    }
+    for (auto& d : devices) {
+      DeviceInfo i;
+      i.index = static_cast<int>(out.size());
+      i.platform = p;
+      i.device = d;
+      i.platform_name = trim(p.getInfo<CL_PLATFORM_NAME>());
+      i.platform_version = trim(p.getInfo<CL_PLATFORM_VERSION>());
+      i.name = trim(d.getInfo<CL_DEVICE_NAME>());
+      i.type = type_name(d.getInfo<CL_DEVICE_TYPE>());
+      i.version = trim(d.getInfo<CL_DEVICE_VERSION>());
+      i.driver_version = trim(d.getInfo<CL_DRIVER_VERSION>());
+      i.opencl_c_version = trim(d.getInfo<CL_DEVICE_OPENCL_C_VERSION>());
+      i.compute_units = d.getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>();
+      i.global_mem_bytes = d.getInfo<CL_DEVICE_GLOBAL_MEM_SIZE>();
+      i.local_mem_bytes = d.getInfo<CL_DEVICE_LOCAL_MEM_SIZE>();
+      i.max_alloc_bytes = d.getInfo<CL_DEVICE_MAX_MEM_ALLOC_SIZE>();
+      i.max_work_group_size = d.getInfo<CL_DEVICE_MAX_WORK_GROUP_SIZE>();
+      i.correctly_rounded_divide_sqrt =
+          (d.getInfo<CL_DEVICE_SINGLE_FP_CONFIG>() & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT) != 0;
+      out.push_back(std::move(i));
+    }
+  }
+  return out;
+}
+
+DeviceInfo select_device(std::string spec) {
+  if (spec.empty())
+    if (const char* env = std::getenv("RAYSORT_DEVICE")) spec = env;
+  auto devices = list_devices();
+  if (devices.empty())
+    throw Error(
+        "no OpenCL device found: install an OpenCL driver (PoCL for CPUs: scripts/install-deps.sh; "
+        "NVIDIA's driver for GPUs) and check with `clinfo -l`");
+  auto listing = [&] {
+    std::string s;
+    for (auto& d : devices) s += fmt::format("\n  [{}] {} / {} ({})", d.index, d.platform_name, d.name, d.type);
+    return s;
+  };
+  if (spec.empty()) {
+    for (auto& d : devices)
+      if (d.type == "GPU") return d;
+    for (auto& d : devices)
+      if (d.type == "CPU") return d;
+    return devices.front();
+  }
+  std::string ls = lower(spec);
+  if (std::all_of(spec.begin(), spec.end(), [](char c) { return std::isdigit(static_cast<unsigned char>(c)); })) {
+    std::size_t idx = std::stoul(spec);
+    if (idx < devices.size()) return devices[idx];
+    throw Error(fmt::format("--device {}: no device with that index; devices are:{}", spec, listing()));
+  }
+  if (ls == "gpu" || ls == "cpu") {
+    for (auto& d : devices)
+      if (lower(d.type) == ls) return d;
+    throw Error(fmt::format("--device {}: no {} device; devices are:{}", spec, ls, listing()));
+  }
+  for (auto& d : devices)
+    if (lower(d.name).find(ls) != std::string::npos || lower(d.platform_name).find(ls) != std::string::npos) return d;
+  throw Error(fmt::format("--device {}: no device name contains '{}'; devices are:{}", spec, spec, listing()));
+}
+
+void set_kernel_dir(std::string dir) { kernel_dir() = std::move(dir); }
+
+std::string kernel_source(const std::string& path) {
+  std::string out;
+  std::set<std::string> seen;
+  resolve_includes(path, out, seen);
+  return out;
+}
+
+double event_ms(const cl::Event& e) {
+  auto start = e.getProfilingInfo<CL_PROFILING_COMMAND_START>();
+  auto end = e.getProfilingInfo<CL_PROFILING_COMMAND_END>();
+  return static_cast<double>(end - start) * 1e-6;
+}
+
+double event_span_ms(const cl::Event& first, const cl::Event& last) {
+  auto start = first.getProfilingInfo<CL_PROFILING_COMMAND_START>();
+  auto end = last.getProfilingInfo<CL_PROFILING_COMMAND_END>();
+  return static_cast<double>(end - start) * 1e-6;
+}
+
+Runtime::Runtime(DeviceInfo info) : info_(std::move(info)) {
+  cl_call("creating a context on " + info_.name, [&] { context_ = cl::Context(info_.device); });
+  cl_call("creating a profiling command queue on " + info_.name,
+          [&] { queue_ = cl::CommandQueue(context_, info_.device, CL_QUEUE_PROFILING_ENABLE); });
+}
+
+std::string Runtime::build_options(const std::string& extra) const {
+  std::string opts = "-cl-std=CL1.2";
+  // Correctly rounded divide and sqrt: the kernels must give the host twin's bits (DESIGN.md 4).
+  if (info_.correctly_rounded_divide_sqrt) opts += " -cl-fp32-correctly-rounded-divide-sqrt";
+  if (!extra.empty()) opts += " " + extra;
+  return opts;
+}
+
+cl::Program Runtime::build(const std::vector<std::string>& files, const std::string& extra_options) {
+  std::string source;
+  for (auto& f : files) source += kernel_source(f);
+  std::string opts = build_options(extra_options);
+  std::string names;
+  for (auto& f : files) names += (names.empty() ? "" : ", ") + f;
+  auto t0 = std::chrono::steady_clock::now();
+  cl::Program program;
+  cl_call("creating program " + names, [&] { program = cl::Program(context_, source); });
+  cl_int err = CL_SUCCESS;
+  try {
+    program.build(std::vector<cl::Device>{info_.device}, opts.c_str());
+  } catch (const cl::BuildError& e) {
+    err = e.err();
+  } catch (const cl::Error& e) {
+    err = e.err();
+  }
+  build_ms_ += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  if (err != CL_SUCCESS) {
+    std::string log;
+    try {
+      log = program.getBuildInfo<CL_PROGRAM_BUILD_LOG>(info_.device);
+    } catch (const cl::Error&) {
+      log = "(no build log available)";
+    }
+    throw ClError(fmt::format("OpenCL build of {} failed with {} on device '{}' ({})\n  options: {}\n  build log:\n{}",
+                              names, cl_error_name(err), info_.name, info_.platform_name, opts, trim(log)),
+                  err);
+  }
+  return program;
+}
+
+cl::Buffer Runtime::buffer(const std::string& name, std::size_t bytes, cl_mem_flags flags, const void* host_data) {
+  std::string doing = fmt::format("allocating '{}' ({}) on {}", name, human_bytes(bytes), info_.name);
+  if (bytes > info_.max_alloc_bytes)
+    throw ClError(fmt::format("{}: larger than the device's maximum allocation of {}; use a smaller resolution or batch",
+                              doing, human_bytes(info_.max_alloc_bytes)),
+                  CL_INVALID_BUFFER_SIZE);
+  return cl_call(doing, [&] { return cl::Buffer(context_, flags, bytes, const_cast<void*>(host_data)); });
+}
+
+}  // namespace raysort

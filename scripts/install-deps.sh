@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Installs every Debian package raysort needs to build, test and run on PoCL.
+# Idempotent: packages already installed are skipped by apt-get; safe to run twice.
+set -euo pipefail
+
+PACKAGES=(
+  build-essential cmake pkg-config git
+  ocl-icd-opencl-dev opencl-c-headers opencl-clhpp-headers pocl-opencl-icd clinfo
+  #: OpenImageIO's CMake config refuses to load without its binaries
+  libtinyobjloader-dev libopenimageio-dev
+  googletest libgtest-dev libbenchmark-dev
+  libcli11-dev nlohmann-json3-dev libtomlplusplus-dev libfmt-dev
+)
+
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then
+  SUDO="sudo"
+fi
+
+missing=()
+for p in "${PACKAGES[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+
+if [ "${#missing[@]}" -eq 0 ]; then
+  echo "install-deps: all ${#PACKAGES[@]} packages present"
+  exit 0
+fi
+
+echo "install-deps: installing ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -q
+$SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
+echo "install-deps: done"
