@@ -1,0 +1,44 @@
+#pragma once
+// Finding and loading scenes: by name (an embedded scenes/*.toml or a file in the scene
+// directory), by path to a .toml file, or by path to a bare .obj (framed by a default camera
+// and lit by a sky light), so a user can try any mesh at once.
+#include <string>
+#include <vector>
+
+#include "scene/scene.h"
+
+namespace raysort {
+
+struct SceneOptions {
+  // Root for OBJ paths in scene files. Empty: env RAYSORT_SCENE_ROOT, else the compiled-in
+  // default (../shared/scenes beside the source tree).
+  std::string scene_root;
+  // Overrides of the scene's own camera resolution / spp when non-zero.
+  std::uint32_t width = 0, height = 0, spp = 0;
+};
+
+// The scene root in effect for these options (see SceneOptions::scene_root).
+std::string resolve_scene_root(const SceneOptions& opts);
+
+// Loads `name_or_path`. Throws Error with a message naming the file, line and key for a bad
+// scene file, the path for a missing OBJ (and the scene root used), and the known scene names
+// for an unknown name.
+Scene load_scene(const std::string& name_or_path, const SceneOptions& opts = {});
+
+// Parses scene TOML text; `origin` names it in error messages ("scenes/cornell.toml").
+Scene parse_scene_toml(const std::string& text, const std::string& origin, const SceneOptions& opts);
+
+// Loads an OBJ file into one mesh (all groups merged), with per-triangle material ids pointing
+// into `materials` (appended from the OBJ's MTL, Kd as albedo). Polygons are triangulated.
+Mesh load_obj(const std::string& path, std::vector<Material>& materials);
+
+struct SceneListing {
+  std::string name;
+  std::string file;         // "embedded:scenes/x.toml" or the .toml path
+  std::string description;
+  bool needs_scene_root;    // it names OBJ files
+};
+// Every scene `load_scene` knows by name: the embedded scenes/*.toml.
+std::vector<SceneListing> list_scenes();
+
+}  // namespace raysort

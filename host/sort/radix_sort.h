@@ -1,0 +1,2 @@
+#pragma once
+// Placeholder: the radix sort (issue 4) lives here.
