@@ -13,6 +13,7 @@ void register_commands(CLI::App& app) {
   register_devices_command(app);
   register_scenes_command(app);
   register_trace_command(app);
+  register_sortbench_command(app);
 }
 
 }  // namespace raysort

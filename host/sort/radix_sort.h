@@ -1,2 +1,0 @@
-#pragma once
-// Placeholder: the radix sort (issue 4) lives here.
