@@ -245,4 +245,17 @@ RS_INLINE RsVec3 rs_offset_ray_origin(RsVec3 p, RsVec3 n) {
   return rs_vec3(rs_offset_component(p.x, n.x), rs_offset_component(p.y, n.y), rs_offset_component(p.z, n.z));
 }
 
+/* Hit point from barycentrics: (1-u-v)·v0 + u·v1 + v·v2 (more accurate than o + t·d). */
+RS_INLINE RsVec3 rs_hit_point(RsVec3 v0, RsVec3 v1, RsVec3 v2, float u, float v) {
+  float w = 1.0f - u - v;
+  return rs_add(rs_add(rs_scale(v0, w), rs_scale(v1, u)), rs_scale(v2, v));
+}
+
+/* Unit geometric normal of a triangle, turned to face against direction d (the side a ray
+ * arrived from). */
+RS_INLINE RsVec3 rs_facing_normal(RsVec3 v0, RsVec3 v1, RsVec3 v2, RsVec3 d) {
+  RsVec3 n = rs_normalize(rs_cross(rs_sub(v1, v0), rs_sub(v2, v0)));
+  return rs_dot(n, d) > 0.0f ? rs_scale(n, -1.0f) : n;
+}
+
 #endif /* RAYSORT_SHARED_H */

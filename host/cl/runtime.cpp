@@ -289,9 +289,13 @@ std::string Runtime::build_options(const std::string& extra) const {
 cl::Program Runtime::build(const std::vector<std::string>& files, const std::string& extra_options) {
   std::string source;
   for (auto& f : files) source += kernel_source(f);
-  std::string opts = build_options(extra_options);
   std::string names;
   for (auto& f : files) names += (names.empty() ? "" : ", ") + f;
+  return build_source(source, names, extra_options);
+}
+
+cl::Program Runtime::build_source(const std::string& source, const std::string& names, const std::string& extra_options) {
+  std::string opts = build_options(extra_options);
   auto t0 = std::chrono::steady_clock::now();
   cl::Program program;
   cl_call("creating program " + names, [&] { program = cl::Program(context_, source); });

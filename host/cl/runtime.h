@@ -92,6 +92,8 @@ class Runtime {
   // (OpenCL C 1.2, correctly rounded divide/sqrt where supported) plus `extra_options`.
   // On failure throws an Error holding the full build log, the options and the device.
   cl::Program build(const std::vector<std::string>& files, const std::string& extra_options = "");
+  // Builds a program from source text; `name` identifies it in errors.
+  cl::Program build_source(const std::string& source, const std::string& name, const std::string& extra_options = "");
   // Total milliseconds spent in build() so far (reported apart from run times).
   double build_ms() const { return build_ms_; }
   std::string build_options(const std::string& extra) const;

@@ -1,0 +1,37 @@
+# raysort — the two commands that work on a fresh Debian 12 machine:
+#   make bench   the main job on the embedded procedural scenes (PoCL, a few minutes)
+#   make test    the test suite (ctest)
+# Both install the Debian dependencies first when any is missing (scripts/install-deps.sh).
+
+BUILD ?= build
+JOBS ?= $(shell nproc 2>/dev/null || echo 2)
+CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release
+# The procedural scenes, traced at a reduced resolution: every batch verified against the host.
+BENCH_SCENES ?= cornell,detail-room,landscape,multi-instance
+BENCH_RESOLUTION ?= 640x360
+
+.PHONY: all deps configure build test bench clean
+
+all: build
+
+deps:
+	bash scripts/install-deps.sh
+
+$(BUILD)/CMakeCache.txt:
+	cmake -S . -B $(BUILD) $(CMAKE_FLAGS)
+
+configure: $(BUILD)/CMakeCache.txt
+
+build: configure
+	cmake --build $(BUILD) -j $(JOBS)
+
+test: deps
+	$(MAKE) build
+	ctest --test-dir $(BUILD) --output-on-failure -j 1
+
+bench: deps
+	$(MAKE) build
+	$(BUILD)/raysort trace --scene $(BENCH_SCENES) --resolution $(BENCH_RESOLUTION)
+
+clean:
+	rm -rf $(BUILD)

@@ -1,0 +1,212 @@
+/* raysort — LSD radix sort of (key, value) pairs: keys uint (32-bit) or ulong (64-bit), values uint.
+ *
+ * Method: least-significant-digit radix sort by "reduce-then-scan" counting sort passes
+ * (Satish, Harris & Garland 2009, "Designing efficient sorting algorithms for manycore GPUs";
+ * Merrill & Grimshaw 2011), in the chunked form that is also the classic CPU LSD radix sort:
+ * every work-group owns one contiguous tile of the input, so a pass is
+ *   1. rs_histogram  per-tile digit counts, stored digit-major: counts[digit][tile];
+ *   2. rs_scan       one exclusive scan over that digit-major array, which turns every count into
+ *                    the output position of the tile's first key with that digit;
+ *   3. rs_scatter    every tile writes its keys, in input order, from those positions on.
+ * A tile's keys keep their input order and tiles are ranked in order, so every pass is stable,
+ * which is what makes LSD correct. Before the first pass rs_histogram counts the digits of *all*
+ * passes in one read of the keys; the host reads the totals back once (rs_reduce) and skips
+ * every pass whose digit is the same for all keys. The tile counts of the first pass that runs
+ * come from that same read, so only later passes count again.
+ *
+ * Inside a work-group (RS_WG work-items, each owning `items` consecutive keys of the tile):
+ *   RS_WG == 1 (CPUs through PoCL): a work-item is a plain scalar loop, local memory is ordinary
+ *     memory. The tile is one chunk scattered serially in order: no ranking, no barriers, the
+ *     256 output streams of an 8-bit digit stay in cache.
+ *   RS_WG  > 1 (GPUs): the tile is staged in local memory with coalesced reads; each work-item
+ *     counts its own keys into its column of a [digit][work-item] table; one work-group scan of
+ *     that table ranks every key stably inside the tile; keys are reordered by digit in local
+ *     memory and written out in digit runs, so consecutive work-items write consecutive words.
+ *
+ * The host (host/sort/radix_sort.cpp) picks RS_RADIX_BITS, RS_WG and the tile size from the
+ * device's type, local memory and maximum work-group size. OpenCL C 1.2, no sub-groups, every
+ * barrier in uniform control flow, global sizes padded to a multiple of the local size
+ * (DESIGN.md section 6).
+ *
+ * Build options (all required): RS_KEY_BITS (32 or 64), RS_RADIX_BITS, RS_WG, RS_MAX_ITEMS
+ * (keys per work-item staged in local memory when RS_WG > 1), RS_SCAN_WG.
+ */
+
+#if RS_KEY_BITS == 64
+typedef ulong rs_key;
+#else
+typedef uint rs_key;
+#endif
+
+#define RS_RADIX (1u << RS_RADIX_BITS)
+#define RS_MAX_PASSES ((64 + RS_RADIX_BITS - 1) / RS_RADIX_BITS)
+
+/* The digit of pass p covers key bits [shift, shift + width) with width = RS_RADIX_BITS except
+ * in the last pass, which stops at hi_bit (a 10-bit top-k sort by 8-bit digits: 8 + 2 bits). */
+inline uint rs_mask(uint shift, uint hi_bit) {
+  uint width = min((uint)RS_RADIX_BITS, hi_bit - shift);
+  return (1u << width) - 1u;
+}
+inline uint rs_digit(rs_key key, uint shift, uint mask) { return (uint)(key >> shift) & mask; }
+
+/* Per-tile digit counts of `passes` consecutive digits starting at lo_bit, one read of the keys.
+ * counts[out_offset + (p * RS_RADIX + digit) * tiles + tile]. A tile is items * RS_WG keys.
+ * Used once per sort for all passes, and again for each later pass with passes = 1. */
+__kernel void rs_histogram(__global const rs_key* restrict keys, uint n, uint items, uint lo_bit, uint hi_bit,
+                           uint passes, __global uint* restrict counts, uint out_offset) {
+  __local uint hist[RS_MAX_PASSES * RS_RADIX];
+  const uint lid = get_local_id(0);
+  const uint tile = get_group_id(0);
+  const uint tiles = get_num_groups(0);
+  const uint bins = passes * RS_RADIX;
+  for (uint i = lid; i < bins; i += RS_WG) hist[i] = 0;
+  barrier(CLK_LOCAL_MEM_FENCE);
+
+  const uint tile_size = items * RS_WG;
+  const uint begin = tile * tile_size;
+  const uint end = min(n, begin + tile_size);
+  /* Strided: coalesced on a GPU, a sequential loop when RS_WG == 1. Order does not matter here. */
+  for (uint i = begin + lid; i < end; i += RS_WG) {
+    rs_key key = keys[i];
+    uint shift = lo_bit;
+    for (uint p = 0; p < passes; ++p, shift += RS_RADIX_BITS) {
+      uint bin = p * RS_RADIX + rs_digit(key, shift, rs_mask(shift, hi_bit));
+#if RS_WG == 1
+      hist[bin] += 1u;
+#else
+      atomic_inc(&hist[bin]);
+#endif
+    }
+  }
+  barrier(CLK_LOCAL_MEM_FENCE);
+  for (uint i = lid; i < bins; i += RS_WG) counts[out_offset + i * tiles + tile] = hist[i];
+}
+
+/* totals[b] = sum over tiles of counts[b * tiles + tile], for every bin b of every pass. */
+__kernel void rs_reduce(__global const uint* restrict counts, uint tiles, uint bins, __global uint* restrict totals) {
+  const uint b = get_global_id(0);
+  if (b >= bins) return;
+  uint sum = 0;
+  for (uint t = 0; t < tiles; ++t) sum += counts[b * tiles + t];
+  totals[b] = sum;
+}
+
+/* Exclusive scan, in place, of counts[offset .. offset + m): one work-group of RS_SCAN_WG
+ * work-items, each owning a contiguous segment. Digit-major order makes the result the output
+ * position of every (digit, tile) run. */
+__kernel void rs_scan(__global uint* restrict counts, uint offset, uint m) {
+  __local uint partial[RS_SCAN_WG];
+  const uint lid = get_local_id(0);
+  const uint segment = (m + RS_SCAN_WG - 1) / RS_SCAN_WG;
+  const uint begin = offset + min(m, lid * segment);
+  const uint end = offset + min(m, (lid + 1) * segment);
+  uint sum = 0;
+  for (uint i = begin; i < end; ++i) sum += counts[i];
+  partial[lid] = sum;
+  barrier(CLK_LOCAL_MEM_FENCE);
+  /* Hillis-Steele inclusive scan of the segment sums (log2 RS_SCAN_WG steps). */
+  for (uint step = 1; step < RS_SCAN_WG; step <<= 1) {
+    uint add = lid >= step ? partial[lid - step] : 0u;
+    barrier(CLK_LOCAL_MEM_FENCE);
+    partial[lid] += add;
+    barrier(CLK_LOCAL_MEM_FENCE);
+  }
+  uint running = partial[lid] - sum;
+  for (uint i = begin; i < end; ++i) {
+    uint c = counts[i];
+    counts[i] = running;
+    running += c;
+  }
+}
+
+/* One counting-sort pass: tile `tile` writes its keys, stably, from offsets[offset + digit * tiles + tile]. */
+__kernel void rs_scatter(__global const rs_key* restrict keys_in, __global const uint* restrict values_in,
+                         __global rs_key* restrict keys_out, __global uint* restrict values_out, uint n, uint items,
+                         uint shift, uint hi_bit, __global const uint* restrict offsets, uint offset) {
+  const uint tile = get_group_id(0);
+  const uint tiles = get_num_groups(0);
+  const uint mask = rs_mask(shift, hi_bit);
+#if RS_WG == 1
+  /* One work-item per tile: the tile's counts are this work-item's counts; scatter in order. */
+  __local uint position[RS_RADIX];
+  for (uint d = 0; d < RS_RADIX; ++d) position[d] = offsets[offset + d * tiles + tile];
+  const uint begin = tile * items;
+  const uint end = min(n, begin + items);
+  for (uint i = begin; i < end; ++i) {
+    rs_key key = keys_in[i];
+    uint to = position[rs_digit(key, shift, mask)]++;
+    keys_out[to] = key;
+    values_out[to] = values_in[i];
+  }
+#else
+  __local rs_key tile_keys[RS_WG * RS_MAX_ITEMS];
+  __local uint tile_values[RS_WG * RS_MAX_ITEMS];
+  __local uint rank[RS_RADIX * RS_WG]; /* [digit][work-item]: counts, then ranks inside the tile */
+  __local uint partial[RS_WG];
+  __local uint run_delta[RS_RADIX]; /* global position - tile position of each digit's run */
+  const uint lid = get_local_id(0);
+  const uint tile_begin = tile * items * RS_WG;
+  const uint tile_n = min(n - min(n, tile_begin), items * RS_WG);
+
+  /* 1. Stage the tile (coalesced) and clear this work-item's column. */
+  for (uint i = lid; i < tile_n; i += RS_WG) {
+    tile_keys[i] = keys_in[tile_begin + i];
+    tile_values[i] = values_in[tile_begin + i];
+  }
+  for (uint d = 0; d < RS_RADIX; ++d) rank[d * RS_WG + lid] = 0;
+  barrier(CLK_LOCAL_MEM_FENCE);
+
+  /* 2. Each work-item counts its own `items` consecutive keys; keep them in registers. */
+  const uint mine = lid * items;
+  rs_key my_keys[RS_MAX_ITEMS];
+  uint my_values[RS_MAX_ITEMS];
+  for (uint j = 0; j < RS_MAX_ITEMS; ++j) {
+    if (j < items && mine + j < tile_n) {
+      my_keys[j] = tile_keys[mine + j];
+      my_values[j] = tile_values[mine + j];
+      rank[rs_digit(my_keys[j], shift, mask) * RS_WG + lid] += 1u;
+    }
+  }
+  barrier(CLK_LOCAL_MEM_FENCE);
+
+  /* 3. Exclusive scan of rank[] in digit-major order: work-item w owns entries
+   *    [w * RS_RADIX, (w + 1) * RS_RADIX), a Hillis-Steele scan joins the segments. */
+  uint sum = 0;
+  for (uint e = 0; e < RS_RADIX; ++e) sum += rank[lid * RS_RADIX + e];
+  partial[lid] = sum;
+  barrier(CLK_LOCAL_MEM_FENCE);
+  for (uint step = 1; step < RS_WG; step <<= 1) {
+    uint add = lid >= step ? partial[lid - step] : 0u;
+    barrier(CLK_LOCAL_MEM_FENCE);
+    partial[lid] += add;
+    barrier(CLK_LOCAL_MEM_FENCE);
+  }
+  uint running = partial[lid] - sum;
+  for (uint e = 0; e < RS_RADIX; ++e) {
+    uint c = rank[lid * RS_RADIX + e];
+    rank[lid * RS_RADIX + e] = running;
+    running += c;
+  }
+  barrier(CLK_LOCAL_MEM_FENCE);
+  for (uint d = lid; d < RS_RADIX; d += RS_WG) run_delta[d] = offsets[offset + d * tiles + tile] - rank[d * RS_WG];
+  barrier(CLK_LOCAL_MEM_FENCE); /* column 0 of rank[] is read above and advanced below */
+
+  /* 4. Reorder the tile by digit in local memory (stable: work-items in order, keys in order). */
+  for (uint j = 0; j < RS_MAX_ITEMS; ++j) {
+    if (j < items && mine + j < tile_n) {
+      uint to = rank[rs_digit(my_keys[j], shift, mask) * RS_WG + lid]++;
+      tile_keys[to] = my_keys[j];
+      tile_values[to] = my_values[j];
+    }
+  }
+  barrier(CLK_LOCAL_MEM_FENCE);
+
+  /* 5. Write out: consecutive work-items write consecutive positions inside each digit's run. */
+  for (uint i = lid; i < tile_n; i += RS_WG) {
+    rs_key key = tile_keys[i];
+    uint to = run_delta[rs_digit(key, shift, mask)] + i;
+    keys_out[to] = key;
+    values_out[to] = tile_values[i];
+  }
+#endif
+}

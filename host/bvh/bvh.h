@@ -1,0 +1,42 @@
+#pragma once
+// The BVH: a binary tree over world-space triangles in the flat layout the kernels read
+// (RsBvhNode / RsTriangle in cl/shared.h: children adjacent, triangles in leaf order).
+// This binary tree is the reference structure: HCC cuts, PPC and the host reference traversal
+// all work on it.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "scene/scene.h"
+#include "shared.h"
+
+namespace raysort {
+
+struct BvhBuildOptions {
+  std::uint32_t bins = 16;           // SAH bins per axis
+  std::uint32_t max_leaf_size = 8;   // a leaf never holds more (forced split)
+  float traversal_cost = 1.0f;       // SAH constants (relative to one triangle test)
+  float intersection_cost = 1.0f;
+};
+
+struct Bvh {
+  std::vector<RsBvhNode> nodes;       // node 0 is the root
+  std::vector<RsTriangle> triangles;  // leaf order; triangles[k].id = index in the scene's flat list
+  std::uint32_t depth = 0;            // longest root-to-leaf path, in edges
+  std::uint32_t leaf_count = 0;
+  double build_ms = 0.0;
+  Aabb bounds() const;                // the root's box
+  bool is_leaf(std::uint32_t n) const { return nodes[n].count > 0; }
+};
+
+// Binned SAH build (Wald 2007, "On fast Construction of SAH-based Bounding Volume Hierarchies")
+// over the flattened triangles. Deterministic: the same triangles give the same tree.
+// Depth stays below RS_STACK_SIZE: past kMaxSahDepth levels, nodes split at the object median.
+Bvh build_bvh(const Scene::Flat& tris, const BvhBuildOptions& opts = {});
+
+// Checks the invariants the kernels rely on: every triangle in exactly one leaf, every child box
+// inside its parent, leaf sizes within max_leaf_size, depth below the stack bound, children in
+// range. Returns an empty string when all hold, else a description of the first violation.
+std::string validate_bvh(const Bvh& bvh, std::size_t triangle_count, const BvhBuildOptions& opts = {});
+
+}  // namespace raysort

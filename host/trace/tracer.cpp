@@ -1,0 +1,130 @@
+#include "trace/tracer.h"
+
+#include <algorithm>
+#include <cstring>
+#include <numeric>
+#include <thread>
+
+#include "traverse.h"
+
+namespace raysort {
+
+Tracer::Tracer(Runtime& rt, const Bvh& bvh) : rt_(rt) {
+  nodes_ = rt.upload("bvh nodes", bvh.nodes);
+  triangles_ = rt.upload("triangles", bvh.triangles);
+  cl::Program program = rt.build({"cl/trace.cl"});
+  cl_call("creating the trace kernels", [&] {
+    closest_ = cl::Kernel(program, "trace_closest");
+    any_ = cl::Kernel(program, "trace_any");
+    counted_ = cl::Kernel(program, "trace_closest_counted");
+  });
+  // PoCL: the work-group is a loop over work-items and its size barely matters (DESIGN.md 6);
+  // GPUs want a few warps per group. 64 suits both and stays within every device's limit.
+  local_ = std::min<std::size_t>(64, rt.info().max_work_group_size);
+}
+
+cl::Event Tracer::enqueue(const cl::Buffer& rays, const cl::Buffer& order, std::uint32_t count, bool any_hit,
+                          const cl::Buffer& hits) {
+  cl::Kernel& k = any_hit ? any_ : closest_;
+  cl::Event ev;
+  cl_call(std::string("tracing ") + std::to_string(count) + (any_hit ? " shadow rays" : " rays"), [&] {
+    k.setArg(0, nodes_);
+    k.setArg(1, triangles_);
+    k.setArg(2, rays);
+    k.setArg(3, order);
+    k.setArg(4, count);
+    k.setArg(5, hits);
+    if (count > 0)
+      rt_.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(Runtime::padded(count, local_)), cl::NDRange(local_),
+                                       nullptr, &ev);
+    else
+      rt_.queue().enqueueMarkerWithWaitList(nullptr, &ev);
+  });
+  return ev;
+}
+
+cl::Event Tracer::enqueue_counted(const cl::Buffer& rays, const cl::Buffer& order, std::uint32_t count,
+                                  const cl::Buffer& hits, const cl::Buffer& visits) {
+  cl::Event ev;
+  cl_call("tracing " + std::to_string(count) + " rays (instrumented)", [&] {
+    counted_.setArg(0, nodes_);
+    counted_.setArg(1, triangles_);
+    counted_.setArg(2, rays);
+    counted_.setArg(3, order);
+    counted_.setArg(4, count);
+    counted_.setArg(5, hits);
+    counted_.setArg(6, visits);
+    if (count > 0)
+      rt_.queue().enqueueNDRangeKernel(counted_, cl::NullRange, cl::NDRange(Runtime::padded(count, local_)),
+                                       cl::NDRange(local_), nullptr, &ev);
+    else
+      rt_.queue().enqueueMarkerWithWaitList(nullptr, &ev);
+  });
+  return ev;
+}
+
+Tracer::Run Tracer::run(const std::vector<RsRay>& rays, const std::vector<std::uint32_t>* order, bool any_hit,
+                        unsigned warmup, unsigned reps) {
+  const auto n = static_cast<std::uint32_t>(rays.size());
+  std::vector<std::uint32_t> identity;
+  if (!order) {
+    identity.resize(n);
+    std::iota(identity.begin(), identity.end(), 0u);
+    order = &identity;
+  }
+  cl::Buffer ray_buf = rt_.upload("rays", rays);
+  cl::Buffer order_buf = rt_.upload("ray order", *order);
+  cl::Buffer hit_buf = rt_.buffer("hits", std::max<std::size_t>(1, n) * sizeof(RsHit));
+  std::vector<double> times;
+  for (unsigned i = 0; i < warmup + std::max(1u, reps); ++i) {
+    cl::Event ev = enqueue(ray_buf, order_buf, n, any_hit, hit_buf);
+    cl_call("waiting for a trace of " + std::to_string(n) + " rays", [&] { ev.wait(); });
+    if (i >= warmup && n > 0) times.push_back(event_ms(ev));
+  }
+  Run r;
+  if (!times.empty()) {
+    std::sort(times.begin(), times.end());
+    r.median_ms = times[times.size() / 2];
+    r.min_ms = times.front();
+    r.max_ms = times.back();
+  }
+  rt_.download("hits", hit_buf, r.hits, n);
+  return r;
+}
+
+std::vector<RsHit> trace_reference(const Bvh& bvh, const std::vector<RsRay>& rays, const std::uint32_t* order,
+                                   bool any_hit, std::vector<std::uint32_t>* node_visits) {
+  const std::size_t n = rays.size();
+  std::vector<RsHit> hits(n);
+  if (node_visits) node_visits->assign(n, 0);
+  const unsigned threads = std::max(1u, std::min(16u, std::thread::hardware_concurrency()));
+  auto work = [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      rs_u32 visits = 0;
+      hits[i] = rs_traverse(bvh.nodes.data(), bvh.triangles.data(), rays[order ? order[i] : i], any_hit ? 1 : 0,
+                            node_visits ? &visits : nullptr);
+      if (node_visits) (*node_visits)[i] = visits;
+    }
+  };
+  if (n < 4096 || threads == 1) {
+    work(0, n);
+    return hits;
+  }
+  std::vector<std::thread> pool;
+  const std::size_t chunk = (n + threads - 1) / threads;
+  for (unsigned t = 0; t < threads; ++t) {
+    std::size_t b = t * chunk, e = std::min(n, b + chunk);
+    if (b < e) pool.emplace_back(work, b, e);
+  }
+  for (auto& th : pool) th.join();
+  return hits;
+}
+
+std::size_t count_hit_mismatches(const std::vector<RsHit>& a, const std::vector<RsHit>& b) {
+  if (a.size() != b.size()) return std::max(a.size(), b.size());
+  std::size_t bad = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) bad += std::memcmp(&a[i], &b[i], sizeof(RsHit)) != 0;
+  return bad;
+}
+
+}  // namespace raysort

@@ -1,0 +1,53 @@
+#pragma once
+// Tracing a ray batch on the device (cl/trace.cl) and on the host (the reference twin, which
+// runs the same traversal source, cl/traverse.h).
+#include <cstdint>
+#include <vector>
+
+#include "bvh/bvh.h"
+#include "cl/runtime.h"
+#include "shared.h"
+
+namespace raysort {
+
+// The scene's BVH on one device, with the trace kernels built. Upload once per scene; trace
+// many batches and orders.
+class Tracer {
+ public:
+  Tracer(Runtime& rt, const Bvh& bvh);
+
+  // Traces rays[order[i]] for i < count into hits[i] (trace order). any_hit: shadow rays.
+  // Enqueues and returns the kernel's event without waiting.
+  cl::Event enqueue(const cl::Buffer& rays, const cl::Buffer& order, std::uint32_t count, bool any_hit,
+                    const cl::Buffer& hits);
+  // Same, also writing per-ray BVH node visit counts (instrumented kernel).
+  cl::Event enqueue_counted(const cl::Buffer& rays, const cl::Buffer& order, std::uint32_t count,
+                            const cl::Buffer& hits, const cl::Buffer& visits);
+
+  std::size_t local_size() const { return local_; }
+
+  struct Run {
+    std::vector<RsHit> hits;  // hits[i] of rays[order[i]]
+    double median_ms = 0.0;   // kernel time from profiling events, median over reps
+    double min_ms = 0.0, max_ms = 0.0;
+  };
+  // Uploads rays (and order; null = identity), traces warmup + reps times, returns the hits.
+  Run run(const std::vector<RsRay>& rays, const std::vector<std::uint32_t>* order, bool any_hit, unsigned warmup = 1,
+          unsigned reps = 1);
+
+ private:
+  Runtime& rt_;
+  cl::Buffer nodes_, triangles_;
+  cl::Kernel closest_, any_, counted_;
+  std::size_t local_ = 64;
+};
+
+// Host reference: the same traversal (cl/traverse.h) on host threads. order may be null
+// (identity). hits[i] belongs to rays[order[i]].
+std::vector<RsHit> trace_reference(const Bvh& bvh, const std::vector<RsRay>& rays, const std::uint32_t* order,
+                                   bool any_hit, std::vector<std::uint32_t>* node_visits = nullptr);
+
+// Number of positions whose hit records differ in any bit.
+std::size_t count_hit_mismatches(const std::vector<RsHit>& a, const std::vector<RsHit>& b);
+
+}  // namespace raysort

@@ -1,0 +1,90 @@
+// BVH invariants: every triangle in exactly one leaf, child boxes inside parents, bounded leaves
+// and depth, on every procedural scene and on degenerate inputs.
+#include <gtest/gtest.h>
+
+#include "bvh/bvh.h"
+#include "scene/load.h"
+
+namespace raysort {
+
+namespace {
+Scene::Flat flat_from(const std::vector<std::array<Vec3, 3>>& tris) {
+  Scene::Flat f;
+  for (auto& t : tris) {
+    f.v0.push_back(t[0]);
+    f.v1.push_back(t[1]);
+    f.v2.push_back(t[2]);
+    f.material.push_back(0);
+  }
+  return f;
+}
+}  // namespace
+
+class ProceduralBvh : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(ProceduralBvh, Invariants) {
+  Scene scene = load_scene(GetParam());
+  Scene::Flat tris = scene.flatten();
+  Bvh bvh = build_bvh(tris);
+  EXPECT_EQ(validate_bvh(bvh, tris.size()), "");
+  EXPECT_LT(bvh.depth, static_cast<std::uint32_t>(RS_STACK_SIZE));
+  // The root box is the scene's box.
+  Aabb a = bvh.bounds(), b = scene.bounds();
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(a.min[i], b.min[i]);
+    EXPECT_EQ(a.max[i], b.max[i]);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(AllProcedural, ProceduralBvh,
+                         ::testing::Values("cornell", "detail-room", "landscape", "multi-instance"));
+
+TEST(Bvh, SingleTriangleIsOneLeaf) {
+  auto f = flat_from({{Vec3{0, 0, 0}, Vec3{1, 0, 0}, Vec3{0, 1, 0}}});
+  Bvh bvh = build_bvh(f);
+  EXPECT_EQ(bvh.nodes.size(), 1u);
+  EXPECT_EQ(bvh.nodes[0].count, 1u);
+  EXPECT_EQ(validate_bvh(bvh, 1), "");
+}
+
+TEST(Bvh, IdenticalTrianglesStillSplitToBoundedLeaves) {
+  // All centroids equal: no SAH split exists; the builder must fall back to median splits.
+  std::vector<std::array<Vec3, 3>> tris(1000, {Vec3{0, 0, 0}, Vec3{1, 0, 0}, Vec3{0, 1, 0}});
+  Bvh bvh = build_bvh(flat_from(tris));
+  EXPECT_EQ(validate_bvh(bvh, tris.size()), "");
+}
+
+TEST(Bvh, FlatSceneAndDegenerateTriangles) {
+  std::vector<std::array<Vec3, 3>> tris;
+  for (int i = 0; i < 500; ++i) {
+    float x = static_cast<float>(i % 25), y = static_cast<float>(i / 25);
+    tris.push_back({Vec3{x, y, 0}, Vec3{x + 1, y, 0}, Vec3{x, y + 1, 0}});  // all in z = 0
+  }
+  tris.push_back({Vec3{3, 3, 0}, Vec3{3, 3, 0}, Vec3{3, 3, 0}});  // a point
+  tris.push_back({Vec3{0, 0, 0}, Vec3{1, 1, 0}, Vec3{2, 2, 0}});  // collinear
+  Bvh bvh = build_bvh(flat_from(tris));
+  EXPECT_EQ(validate_bvh(bvh, tris.size()), "");
+  EXPECT_EQ(bvh.bounds().extent()[2], 0.0f);
+}
+
+TEST(Bvh, ValidatorCatchesABrokenTree) {
+  auto f = flat_from({{Vec3{0, 0, 0}, Vec3{1, 0, 0}, Vec3{0, 1, 0}}, {Vec3{5, 0, 0}, Vec3{6, 0, 0}, Vec3{5, 1, 0}}});
+  Bvh bvh = build_bvh(f);
+  ASSERT_EQ(validate_bvh(bvh, 2), "");
+  Bvh broken = bvh;
+  broken.nodes[1].bmax[0] += 100.0f;  // child pokes out of its parent
+  EXPECT_NE(validate_bvh(broken, 2), "");
+  broken = bvh;
+  broken.triangles[1].id = broken.triangles[0].id;  // a triangle in two leaves, one missing
+  EXPECT_NE(validate_bvh(broken, 2), "");
+}
+
+TEST(Bvh, Deterministic) {
+  Scene scene = load_scene("cornell");
+  auto f = scene.flatten();
+  Bvh a = build_bvh(f), b = build_bvh(f);
+  ASSERT_EQ(a.nodes.size(), b.nodes.size());
+  EXPECT_EQ(std::memcmp(a.nodes.data(), b.nodes.data(), a.nodes.size() * sizeof(RsBvhNode)), 0);
+}
+
+}  // namespace raysort

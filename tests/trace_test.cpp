@@ -1,0 +1,169 @@
+// Trace kernels on the device against the host reference, bit for bit, on every batch of real
+// pipelines; plus hand-checked hits on tiny scenes.
+#include <gtest/gtest.h>
+
+#include <cstring>
+
+#include "bvh/bvh.h"
+#include "render/batches.h"
+#include "scene/load.h"
+#include "test_util.h"
+#include "trace/tracer.h"
+
+namespace raysort {
+
+namespace {
+
+// A unit quad in the z = 0 plane, [0,1]² (two triangles), plus a smaller one behind it at z = -1.
+Scene two_quads() {
+  Scene s;
+  s.name = "two-quads";
+  Mesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0.25f, 0.25f, -1}, {0.75f, 0.25f, -1}, {0.75f, 0.75f, -1}, {0.25f, 0.75f, -1}};
+  m.triangles = {{0, 1, 2}, {0, 2, 3}, {4, 5, 6}, {4, 6, 7}};
+  s.meshes.push_back(m);
+  return s;
+}
+
+RsRay ray(float ox, float oy, float oz, float dx, float dy, float dz, float tmax = RS_T_FAR) {
+  RsRay r{};
+  r.o[0] = ox, r.o[1] = oy, r.o[2] = oz, r.tmin = 0.0f;
+  r.d[0] = dx, r.d[1] = dy, r.d[2] = dz, r.tmax = tmax;
+  return r;
+}
+
+void expect_device_equals_reference(const Scene& scene, const RayGenOptions& gen, std::size_t min_batches) {
+  Scene::Flat tris = scene.flatten();
+  Bvh bvh = build_bvh(tris);
+  Tracer tracer(testing::runtime(), bvh);
+  auto batches = generate_batches(scene, tris, bvh, gen);
+  ASSERT_GE(batches.size(), min_batches) << scene.name;
+  for (const auto& rb : batches) {
+    ASSERT_FALSE(rb.batch.rays.empty()) << rb.batch.name;
+    auto run = tracer.run(rb.batch.rays, nullptr, rb.batch.any_hit());
+    EXPECT_EQ(count_hit_mismatches(run.hits, rb.reference_hits), 0u) << scene.name << " " << rb.batch.name;
+    std::size_t hits = 0;
+    for (auto& h : rb.reference_hits) hits += h.tri != RS_NO_HIT;
+    // A batch that hits nothing (or everything, for shadows) would test little.
+    if (!rb.batch.any_hit()) EXPECT_GT(hits, 0u) << scene.name << " " << rb.batch.name;
+    // Sorted order: trace through a reversed order; hits come back in trace order.
+    std::vector<std::uint32_t> reversed(rb.batch.size());
+    for (std::size_t i = 0; i < reversed.size(); ++i) reversed[i] = static_cast<std::uint32_t>(reversed.size() - 1 - i);
+    auto rev = tracer.run(rb.batch.rays, &reversed, rb.batch.any_hit());
+    std::size_t bad = 0;
+    for (std::size_t i = 0; i < reversed.size(); ++i)
+      bad += std::memcmp(&rev.hits[i], &rb.reference_hits[reversed[i]], sizeof(RsHit)) != 0;
+    EXPECT_EQ(bad, 0u) << "indirect order, " << scene.name << " " << rb.batch.name;
+  }
+}
+
+}  // namespace
+
+TEST(Trace, HandCheckedHitsOnTwoQuads) {
+  Scene s = two_quads();
+  Bvh bvh = build_bvh(s.flatten());
+  std::vector<RsRay> rays = {
+      ray(0.5f, 0.5f, 1.0f, 0, 0, -1),          // hits the front quad at t = 1
+      ray(0.5f, 0.5f, -2.0f, 0, 0, 1),          // from behind: back quad at t = 1
+      ray(2.0f, 2.0f, 1.0f, 0, 0, -1),          // misses
+      ray(0.5f, 0.5f, 1.0f, 0, 0, -1, 0.5f),    // tmax before the quad: miss
+      ray(0.1f, 0.9f, 5.0f, -0.0f, 0.0f, -1),   // axis-parallel with a -0 component
+      ray(0.5f, 0.5f, 0.5f, 0, 0, 1),           // pointing away: miss
+  };
+  auto ref = trace_reference(bvh, rays, nullptr, false);
+  EXPECT_EQ(ref[0].t, 1.0f);
+  EXPECT_LT(ref[0].tri, 2u);
+  EXPECT_EQ(ref[1].t, 1.0f);
+  EXPECT_GE(ref[1].tri, 2u);
+  EXPECT_EQ(ref[2].tri, RS_NO_HIT);
+  EXPECT_EQ(ref[3].tri, RS_NO_HIT);
+  EXPECT_EQ(ref[4].t, 5.0f);
+  EXPECT_LT(ref[4].tri, 2u);
+  EXPECT_EQ(ref[5].tri, RS_NO_HIT);
+  Tracer tracer(testing::runtime(), bvh);
+  auto dev = tracer.run(rays, nullptr, false);
+  EXPECT_EQ(count_hit_mismatches(dev.hits, ref), 0u);
+  auto any_ref = trace_reference(bvh, rays, nullptr, true);
+  auto any_dev = tracer.run(rays, nullptr, true);
+  EXPECT_EQ(count_hit_mismatches(any_dev.hits, any_ref), 0u);
+  for (std::size_t i = 0; i < rays.size(); ++i) EXPECT_EQ(any_ref[i].tri == RS_NO_HIT, ref[i].tri == RS_NO_HIT) << i;
+}
+
+TEST(Trace, BarycentricsReconstructTheHitPoint) {
+  Scene s = two_quads();
+  Scene::Flat tris = s.flatten();
+  Bvh bvh = build_bvh(tris);
+  std::vector<RsRay> rays;
+  for (int i = 0; i < 50; ++i) rays.push_back(ray(0.02f * i, 0.3f + 0.01f * i, 2.0f, 0, 0, -1));
+  auto hits = trace_reference(bvh, rays, nullptr, false);
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    if (hits[i].tri == RS_NO_HIT) continue;
+    auto t = hits[i].tri;
+    float w = 1.0f - hits[i].u - hits[i].v;
+    for (int a = 0; a < 2; ++a) {
+      float p = w * tris.v0[t][a] + hits[i].u * tris.v1[t][a] + hits[i].v * tris.v2[t][a];
+      EXPECT_NEAR(p, rays[i].o[a], 1e-5f);
+    }
+    EXPECT_NEAR(hits[i].t, 2.0f, 1e-6f);
+  }
+}
+
+TEST(Trace, EmptyBatchIsFine) {
+  Scene s = two_quads();
+  Bvh bvh = build_bvh(s.flatten());
+  Tracer tracer(testing::runtime(), bvh);
+  auto run = tracer.run({}, nullptr, false);
+  EXPECT_TRUE(run.hits.empty());
+}
+
+TEST(Trace, CornellEveryBatchMatchesReference) {
+  Scene scene = load_scene("cornell");
+  RayGenOptions gen;
+  gen.width = 96;
+  gen.height = 72;
+  gen.spp = 2;
+  // primary, shadow0, bounce1, shadow1 at least.
+  expect_device_equals_reference(scene, gen, 4);
+}
+
+TEST(Trace, DetailRoomEveryBatchMatchesReference) {
+  Scene scene = load_scene("detail-room");
+  RayGenOptions gen;
+  gen.width = 64;
+  gen.height = 36;
+  expect_device_equals_reference(scene, gen, 3);
+}
+
+TEST(Trace, SameCommandSameBatches) {
+  Scene scene = load_scene("cornell");
+  Scene::Flat tris = scene.flatten();
+  Bvh bvh = build_bvh(tris);
+  RayGenOptions gen;
+  gen.width = 32;
+  gen.height = 24;
+  auto a = generate_batches(scene, tris, bvh, gen);
+  auto b = generate_batches(scene, tris, bvh, gen);
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ASSERT_EQ(a[i].batch.rays.size(), b[i].batch.rays.size());
+    EXPECT_EQ(std::memcmp(a[i].batch.rays.data(), b[i].batch.rays.data(), a[i].batch.rays.size() * sizeof(RsRay)), 0);
+  }
+}
+
+TEST(Trace, SibenikPrimaryMatchesReference) {
+  RAYSORT_REQUIRE_REAL_SCENES();
+  Scene scene = load_scene("sibenik");
+  Scene::Flat tris = scene.flatten();
+  Bvh bvh = build_bvh(tris);
+  RayGenOptions gen;
+  gen.width = 80;
+  gen.height = 45;
+  auto batches = generate_batches(scene, tris, bvh, gen);
+  Tracer tracer(testing::runtime(), bvh);
+  for (const auto& rb : batches) {
+    auto run = tracer.run(rb.batch.rays, nullptr, rb.batch.any_hit());
+    EXPECT_EQ(count_hit_mismatches(run.hits, rb.reference_hits), 0u) << rb.batch.name;
+  }
+}
+
+}  // namespace raysort
