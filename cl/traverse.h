@@ -77,10 +77,14 @@ RS_INLINE int rs_intersect_triangle(RsTraversalRay r, RS_GLOBAL const RsTriangle
 }
 
 /* Closest hit (any_hit = 0) or first hit found (any_hit = 1, shadow rays).
- * *node_visits, when not null, counts the nodes whose box was fetched (for cost heatmaps and the
- * SIMT model). */
-RS_INLINE RsHit rs_traverse(RS_GLOBAL const RsBvhNode* nodes, RS_GLOBAL const RsTriangle* tris, RsRay ray, int any_hit,
-                            rs_u32* node_visits) {
+ * *node_visits, when not null, counts the nodes whose box was fetched (for cost heatmaps).
+ * trail, when not null, receives the id of every node the loop steps through, in order, up to
+ * trail_cap entries; *trail_len gets the full step count (the SIMT model, host only: kernels pass
+ * null and the compiler drops the recording). */
+RS_INLINE RsHit rs_traverse_recorded(RS_GLOBAL const RsBvhNode* nodes, RS_GLOBAL const RsTriangle* tris, RsRay ray,
+                                     int any_hit, rs_u32* node_visits, rs_u32* trail, rs_u32 trail_cap,
+                                     rs_u32* trail_len) {
+  rs_u32 steps = 0;
   RsTraversalRay r = rs_prepare_ray(ray);
   RsHit hit;
   hit.t = ray.tmax;
@@ -93,6 +97,7 @@ RS_INLINE RsHit rs_traverse(RS_GLOBAL const RsBvhNode* nodes, RS_GLOBAL const Rs
   rs_intersect_box(r, &nodes[0], hit.t, &root_hit);
   if (!root_hit) {
     if (node_visits) *node_visits = visits;
+    if (trail_len) *trail_len = 0;
     return hit;
   }
 
@@ -101,6 +106,8 @@ RS_INLINE RsHit rs_traverse(RS_GLOBAL const RsBvhNode* nodes, RS_GLOBAL const Rs
   rs_u32 node = 0;
   for (;;) {
     RS_GLOBAL const RsBvhNode* n = &nodes[node];
+    if (trail && steps < trail_cap) trail[steps] = node;
+    ++steps;
     if (n->count > 0) {
       for (rs_u32 i = n->first; i < n->first + n->count; ++i) {
         float t, u, v;
@@ -111,6 +118,7 @@ RS_INLINE RsHit rs_traverse(RS_GLOBAL const RsBvhNode* nodes, RS_GLOBAL const Rs
           hit.v = v;
           if (any_hit) {
             if (node_visits) *node_visits = visits;
+            if (trail_len) *trail_len = steps;
             return hit;
           }
         }
@@ -141,7 +149,13 @@ RS_INLINE RsHit rs_traverse(RS_GLOBAL const RsBvhNode* nodes, RS_GLOBAL const Rs
     node = stack[--sp];
   }
   if (node_visits) *node_visits = visits;
+  if (trail_len) *trail_len = steps;
   return hit;
+}
+
+RS_INLINE RsHit rs_traverse(RS_GLOBAL const RsBvhNode* nodes, RS_GLOBAL const RsTriangle* tris, RsRay ray, int any_hit,
+                            rs_u32* node_visits) {
+  return rs_traverse_recorded(nodes, tris, ray, any_hit, node_visits, 0, 0, 0);
 }
 
 #endif /* RAYSORT_TRAVERSE_H */

@@ -15,6 +15,8 @@ void register_commands(CLI::App& app) {
   register_trace_command(app);
   register_sortbench_command(app);
   register_render_command(app);
+  register_run_command(app);
+  register_compare_command(app);
 }
 
 }  // namespace raysort

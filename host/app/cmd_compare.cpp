@@ -1,0 +1,38 @@
+// raysort compare A B: two result sets side by side, with regression rules (--fail-if).
+#include <fmt/format.h>
+
+#include "app/commands.h"
+#include "bench/compare.h"
+#include "util/atomic_file.h"
+
+namespace raysort {
+
+void register_compare_command(CLI::App& app) {
+  struct Args {
+    std::string a, b, out;
+    std::vector<std::string> metrics{"trace_mrays", "speedup", "net_speedup", "overhead_pct", "anc"};
+    std::vector<std::string> fail_if;
+  };
+  auto a = std::make_shared<Args>();
+  auto* cmd = app.add_subcommand("compare", "compare two result sets cell by cell");
+  cmd->add_option("A", a->a, "first result set (baseline)")->required();
+  cmd->add_option("B", a->b, "second result set")->required();
+  cmd->add_option("--metrics", a->metrics, "metrics to tabulate")->delimiter(',');
+  cmd->add_option("--fail-if", a->fail_if,
+                  "regression rule, repeatable: 'speedup<-5%', 'overhead_pct>+10%', 'anc!=', 'anc!=0.01', 'missing'");
+  cmd->add_option("--out", a->out, "also write the report to this markdown file");
+  cmd->callback([a] {
+    std::vector<FailRule> rules;
+    for (auto& r : a->fail_if) rules.push_back(FailRule::parse(r));
+    auto ra = ResultSet::load(a->a), rb = ResultSet::load(a->b);
+    CompareResult res = compare_result_sets(ra, rb, a->metrics, rules);
+    fmt::print("{}", res.report);
+    if (!a->out.empty()) write_file_atomically(a->out, res.report);
+    if (!res.violations.empty()) {
+      fmt::print(stderr, "raysort compare: {} regression(s) past the --fail-if rules\n", res.violations.size());
+      set_command_exit_code(1);
+    }
+  });
+}
+
+}  // namespace raysort

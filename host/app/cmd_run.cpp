@@ -1,0 +1,90 @@
+// raysort run: a scenario matrix into a result set (host/bench/runner.h).
+#include <fmt/format.h>
+
+#include "app/commands.h"
+#include "bench/runner.h"
+#include "encode/encode.h"
+
+namespace raysort {
+
+namespace {
+struct RunArgs {
+  std::string preset;
+  std::vector<std::string> scenes, batches, encoders;
+  std::vector<unsigned> bits, top_bits;
+  std::string resolution;
+  unsigned spp = 0, reps = 0, warmup = 0, seed = 0;
+  bool warmup_set = false;
+  float lambda = -1, twopoint = -1;
+  int direction_bits = -1;
+  RunOptions opts;
+};
+}  // namespace
+
+void register_run_command(CLI::App& app) {
+  auto a = std::make_shared<RunArgs>();
+  auto* cmd = app.add_subcommand("run", "run a scenario matrix (encoders x key bits x scenes x batches) into a result set");
+  cmd->add_option("--preset", a->preset, "quick (what `make bench` runs) or paper (the paper's setup)");
+  cmd->add_option("--scenes", a->scenes, "scenes (names, .toml or .obj paths)")->delimiter(',');
+  cmd->add_option("--batches", a->batches, "batches: primary, shadow<k>, bounce<k>, or all")->delimiter(',');
+  cmd->add_option("--encoders", a->encoders, "encoders, or all")->delimiter(',');
+  cmd->add_option("--bits", a->bits, "key bits, e.g. 16,32,64")->delimiter(',');
+  cmd->add_option("--top-bits", a->top_bits, "also sort by only the highest k bits (top-k cells)")->delimiter(',');
+  cmd->add_option("--resolution", a->resolution, "WxH");
+  cmd->add_option("--spp", a->spp, "samples per pixel");
+  cmd->add_option("--reps", a->reps, "timed repetitions per cell");
+  cmd->add_option("--warmup", a->warmup, "untimed runs before timing")->each([a](const std::string&) { a->warmup_set = true; });
+  cmd->add_option("--seed", a->seed, "seed of the ray generator");
+  cmd->add_option("--lambda", a->lambda, "HAD lambda (paper Eq. 1; default 0.125)");
+  cmd->add_option("--twopoint-length", a->twopoint, "TwoPoint ray length as a fraction of the largest extent (0.25)");
+  cmd->add_option("--direction-bits", a->direction_bits, "HCC_DIR direction bits");
+  cmd->add_option("--out", a->opts.out, "result folder (default results/<device>/<preset>-<hash>)");
+  cmd->add_option("--device", a->opts.device, "device index, cpu, gpu or part of its name (env RAYSORT_DEVICE)");
+  cmd->add_option("--scene-root", a->opts.scene_root, "folder of the real scenes (env RAYSORT_SCENE_ROOT)");
+  cmd->callback([a, cmd] {
+    MatrixSpec spec;
+    if (!a->preset.empty()) {
+      spec = matrix_preset(a->preset);
+    } else {
+      for (Encoder e : all_encoders()) spec.encoders.emplace_back(encoder_name(e));
+      spec.batches = {"primary", "shadow0", "bounce1"};
+      spec.resolution = "640x360";
+    }
+    auto is_all = [](const std::vector<std::string>& v) { return v.size() == 1 && v[0] == "all"; };
+    if (!a->scenes.empty()) spec.scenes = a->scenes;
+    if (!a->batches.empty()) spec.batches = is_all(a->batches) ? std::vector<std::string>{} : a->batches;
+    if (!a->encoders.empty() && !is_all(a->encoders)) spec.encoders = a->encoders;
+    if (!a->bits.empty()) {
+      spec.bits = a->bits;
+      spec.key_length_bits.clear();
+      spec.key_length_scenes.clear();
+    }
+    if (!a->top_bits.empty()) spec.top_bits = a->top_bits;
+    if (!a->resolution.empty()) spec.resolution = a->resolution;
+    if (a->spp) spec.spp = a->spp;
+    if (a->reps) spec.reps = a->reps;
+    if (a->warmup_set) spec.warmup = a->warmup;
+    if (a->seed) spec.seed = a->seed;
+    if (a->lambda >= 0) spec.params.had_lambda = a->lambda;
+    if (a->twopoint >= 0) spec.params.twopoint_length_fraction = a->twopoint;
+    if (a->direction_bits >= 0) spec.params.direction_bits = static_cast<unsigned>(a->direction_bits);
+    // The command line as given, for meta.json.
+    std::string line = "raysort run";
+    for (auto* opt : cmd->get_options())
+      if (opt->count() > 0 && opt->get_name() != "--help")
+        for (auto& r : opt->results()) line += " " + opt->get_name() + " " + r;
+    a->opts.command = line;
+    RunSummary s = run_matrix(spec, a->opts);
+    fmt::print("{} cells run, {} already done (skipped), {} failed; results in {}\n", s.cells_run, s.cells_skipped,
+               s.cells_failed, s.out_dir);
+    fmt::print("tables: {}/tables.md\n", s.out_dir);
+    if (s.interrupted) {
+      fmt::print(stderr, "interrupted: finished cells are saved; rerun the same command to resume\n");
+      set_command_exit_code(130);
+    } else if (s.cells_failed > 0) {
+      set_command_exit_code(1);
+    }
+  });
+}
+
+}  // namespace raysort

@@ -1,0 +1,172 @@
+#include "bench/compare.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <functional>
+#include <map>
+#include <regex>
+
+#include "util/error.h"
+
+namespace raysort {
+
+namespace {
+
+using Getter = std::function<std::string(const CellRecord&)>;
+using Number = std::function<double(const CellRecord&)>;
+
+const std::map<std::string, Number>& numeric_metrics() {
+  static const std::map<std::string, Number> m = {
+      {"trace_mrays", [](const CellRecord& c) { return c.trace_mrays; }},
+      {"speedup", [](const CellRecord& c) { return c.speedup; }},
+      {"net_speedup", [](const CellRecord& c) { return c.net_speedup; }},
+      {"overhead_pct", [](const CellRecord& c) { return c.overhead_pct; }},
+      {"encode_ms", [](const CellRecord& c) { return c.encode.median_ms; }},
+      {"sort_ms", [](const CellRecord& c) { return c.sort.median_ms; }},
+      {"trace_ms", [](const CellRecord& c) { return c.trace.median_ms; }},
+      {"anc", [](const CellRecord& c) { return c.anc; }},
+      {"simt_lane_efficiency", [](const CellRecord& c) { return c.simt_lane_efficiency; }},
+      {"simt_distinct_per_visit", [](const CellRecord& c) { return c.simt_distinct_per_visit; }},
+      {"simt_lane_efficiency_ratio", [](const CellRecord& c) { return c.simt_lane_efficiency_ratio; }},
+      {"simt_distinct_per_visit_ratio", [](const CellRecord& c) { return c.simt_distinct_per_visit_ratio; }},
+      {"rays", [](const CellRecord& c) { return static_cast<double>(c.rays); }},
+  };
+  return m;
+}
+
+const std::map<std::string, Getter>& text_metrics() {
+  static const std::map<std::string, Getter> m = {
+      {"keys_hash", [](const CellRecord& c) { return c.keys_hash; }},
+      {"order_hash", [](const CellRecord& c) { return c.order_hash; }},
+      {"status", [](const CellRecord& c) { return c.status; }},
+  };
+  return m;
+}
+
+}  // namespace
+
+std::vector<std::string> comparable_metrics() {
+  std::vector<std::string> out;
+  for (auto& [k, v] : numeric_metrics()) out.push_back(k);
+  for (auto& [k, v] : text_metrics()) out.push_back(k);
+  return out;
+}
+
+FailRule FailRule::parse(const std::string& text) {
+  FailRule r;
+  r.text = text;
+  if (text == "missing") {
+    r.kind = Missing;
+    return r;
+  }
+  std::smatch m;
+  static const std::regex re(R"(^([a-z_]+)\s*(<-|>\+|!=)\s*([0-9]*\.?[0-9]*)\s*(%?)$)");
+  if (!std::regex_match(text, m, re))
+    throw Error(fmt::format("--fail-if '{}': expected METRIC<-X% (relative drop), METRIC>+X% (relative rise), "
+                            "METRIC!= (any change), METRIC!=X (absolute change) or 'missing'",
+                            text));
+  r.metric = m[1];
+  std::string op = m[2], num = m[3], pct = m[4];
+  if (!numeric_metrics().count(r.metric) && !text_metrics().count(r.metric)) {
+    std::string names;
+    for (auto& n : comparable_metrics()) names += (names.empty() ? "" : ", ") + n;
+    throw Error(fmt::format("--fail-if '{}': unknown metric '{}'; metrics are: {}", text, r.metric, names));
+  }
+  if (op == "!=") {
+    r.kind = num.empty() ? AnyChange : AbsoluteChange;
+    r.threshold = num.empty() ? 0.0 : std::stod(num);
+  } else {
+    if (num.empty() || pct.empty())
+      throw Error(fmt::format("--fail-if '{}': a relative rule needs a percentage, e.g. {}{}5%", text, r.metric, op));
+    if (!numeric_metrics().count(r.metric))
+      throw Error(fmt::format("--fail-if '{}': {} is not numeric; use {}!=", text, r.metric, r.metric));
+    r.kind = op == "<-" ? RelativeDrop : RelativeRise;
+    r.threshold = std::stod(num) / 100.0;
+  }
+  return r;
+}
+
+CompareResult compare_result_sets(const ResultSet& a, const ResultSet& b, const std::vector<std::string>& metrics,
+                                  const std::vector<FailRule>& rules) {
+  CompareResult out;
+  auto ca = a.cells(), cb = b.cells();
+  std::map<std::string, const CellRecord*> ma, mb;
+  for (auto& c : ca) ma[c.id()] = &c;
+  for (auto& c : cb) mb[c.id()] = &c;
+  auto name_of = [](const ResultSet& s) {
+    return s.meta().contains("device") ? s.meta()["device"].value("name", s.dir()) + " @ " + s.meta().value("git_commit", "?")
+                                       : s.dir();
+  };
+  std::string& md = out.report;
+  md += fmt::format("# raysort compare\n\nA: {} ({})\nB: {} ({})\n\n", a.dir(), name_of(a), b.dir(), name_of(b));
+
+  for (auto& metric : metrics) {
+    bool numeric = numeric_metrics().count(metric) > 0;
+    if (!numeric && !text_metrics().count(metric)) {
+      std::string names;
+      for (auto& n : comparable_metrics()) names += (names.empty() ? "" : ", ") + n;
+      throw Error(fmt::format("unknown metric '{}'; metrics are: {}", metric, names));
+    }
+    md += fmt::format("## {}\n\n| cell | A | B | B/A |\n|---|---:|---:|---:|\n", metric);
+    for (auto& [id, x] : ma) {
+      auto it = mb.find(id);
+      if (it == mb.end()) continue;
+      const CellRecord* y = it->second;
+      if (numeric) {
+        double va = numeric_metrics().at(metric)(*x), vb = numeric_metrics().at(metric)(*y);
+        md += fmt::format("| {} | {:.4g} | {:.4g} | {} |\n", id, va, vb, va != 0 ? fmt::format("{:.3f}", vb / va) : "–");
+      } else {
+        std::string va = text_metrics().at(metric)(*x), vb = text_metrics().at(metric)(*y);
+        md += fmt::format("| {} | {} | {} | {} |\n", id, va, vb, va == vb ? "same" : "**differs**");
+      }
+    }
+    md += "\n";
+  }
+
+  std::vector<std::string> only_a, only_b;
+  for (auto& [id, x] : ma)
+    if (!mb.count(id)) only_a.push_back(id);
+  for (auto& [id, y] : mb)
+    if (!ma.count(id)) only_b.push_back(id);
+  md += fmt::format("## Cells in one set only\n\nOnly in A: {}\n\nOnly in B: {}\n\n", only_a.size(), only_b.size());
+  for (auto& id : only_a) md += "- A only: `" + id + "`\n";
+  for (auto& id : only_b) md += "- B only: `" + id + "`\n";
+
+  for (const FailRule& rule : rules) {
+    if (rule.kind == FailRule::Missing) {
+      for (auto& id : only_a) out.violations.push_back(fmt::format("missing: cell {} is in A but not in B", id));
+      for (auto& [id, x] : ma)
+        if (mb.count(id) && x->ok() && !mb[id]->ok())
+          out.violations.push_back(fmt::format("missing: cell {} failed in B: {}", id, mb[id]->error));
+      continue;
+    }
+    for (auto& [id, x] : ma) {
+      auto it = mb.find(id);
+      if (it == mb.end()) continue;
+      const CellRecord* y = it->second;
+      if (numeric_metrics().count(rule.metric)) {
+        double va = numeric_metrics().at(rule.metric)(*x), vb = numeric_metrics().at(rule.metric)(*y);
+        bool bad = false;
+        switch (rule.kind) {
+          case FailRule::AnyChange: bad = va != vb; break;
+          case FailRule::AbsoluteChange: bad = std::abs(vb - va) > rule.threshold; break;
+          case FailRule::RelativeDrop: bad = va > 0 && (vb - va) / va < -rule.threshold; break;
+          case FailRule::RelativeRise: bad = va > 0 && (vb - va) / va > rule.threshold; break;
+          case FailRule::Missing: break;
+        }
+        if (bad) out.violations.push_back(fmt::format("{}: {} {} -> {} (rule {})", id, rule.metric, va, vb, rule.text));
+      } else {
+        std::string va = text_metrics().at(rule.metric)(*x), vb = text_metrics().at(rule.metric)(*y);
+        if (va != vb) out.violations.push_back(fmt::format("{}: {} {} -> {} (rule {})", id, rule.metric, va, vb, rule.text));
+      }
+    }
+  }
+  if (!out.violations.empty()) {
+    md += fmt::format("\n## Regressions: {}\n\n", out.violations.size());
+    for (auto& v : out.violations) md += "- " + v + "\n";
+  }
+  return out;
+}
+
+}  // namespace raysort

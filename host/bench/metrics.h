@@ -1,0 +1,37 @@
+#pragma once
+// Ordering-quality metrics of a sorted batch: ANC (the paper's Table 7) and the SIMT model of
+// DESIGN.md section 3, which shows what a 32-wide GPU would gain even when the run is on a CPU.
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "bvh/bvh.h"
+#include "shared.h"
+
+namespace raysort {
+
+constexpr std::size_t kWarpSize = 32;
+
+// Average number of distinct keys per group of 32 consecutive keys (the last group may be
+// shorter). keys are in trace (sorted) order. 0 for an empty sequence.
+double average_number_of_codes(std::span<const std::uint64_t> keys);
+
+struct SimtModel {
+  // Σ steps / Σ_warps (lanes · max steps): the fraction of issued lane-steps doing work when
+  // each warp of 32 consecutive rays runs until its longest traversal ends.
+  double lane_efficiency = 0.0;
+  // Σ_warps |∪ nodes visited| / Σ_rays |nodes visited|: distinct BVH nodes a warp fetches per
+  // node visit (lower = rays of a warp share more of their paths).
+  double distinct_nodes_per_visit = 0.0;
+  std::uint64_t total_steps = 0;
+  std::uint64_t warps = 0;
+};
+
+// The model from per-ray traversal trails (node ids in visit order), rays in trace order.
+SimtModel simt_model_from_trails(const std::vector<std::vector<std::uint32_t>>& trails);
+
+// Traces rays[order[i]] with the host reference (cl/traverse.h) recording every ray's trail,
+// warp by warp on host threads, and returns the model. order null = identity.
+SimtModel simt_model(const Bvh& bvh, const std::vector<RsRay>& rays, const std::uint32_t* order, bool any_hit);
+
+}  // namespace raysort

@@ -1,0 +1,43 @@
+#pragma once
+// A result set on disk: DIR/meta.json, one DIR/cells/<id>.json per finished cell (each written
+// atomically the moment the cell finishes, so a killed run loses no finished cell and a rerun
+// skips them), and the views regenerated from those files after every cell: cells.json,
+// cells.csv and tables.md.
+#include <nlohmann/json.hpp>
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "bench/record.h"
+
+namespace raysort {
+
+class ResultSet {
+ public:
+  // Opens DIR for a run with this meta, creating it if needed. If DIR already holds a result set,
+  // its "matrix" entry must equal meta["matrix"] (same configuration) or an Error says so;
+  // its finished cells are kept and reported by has().
+  static ResultSet open_for_run(const std::string& dir, const nlohmann::json& meta);
+  // Reads a finished (or partial) result set. Throws Error for a missing set or another format.
+  static ResultSet load(const std::string& dir);
+
+  bool has(const std::string& cell_id) const { return cells_.count(cell_id) > 0; }
+  const CellRecord* find(const std::string& cell_id) const;
+  // Writes the cell's file atomically, then the regenerated views.
+  void add(const CellRecord& cell);
+  std::vector<CellRecord> cells() const;  // sorted by id
+  const nlohmann::json& meta() const { return meta_; }
+  const std::string& dir() const { return dir_; }
+  void write_views() const;
+
+ private:
+  std::string dir_;
+  nlohmann::json meta_;
+  std::map<std::string, CellRecord> cells_;
+};
+
+// The paper's tables from a set of cells, as markdown (see tables.cpp).
+std::string render_tables(const std::vector<CellRecord>& cells, const nlohmann::json& meta);
+
+}  // namespace raysort

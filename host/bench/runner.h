@@ -1,0 +1,31 @@
+#pragma once
+// Runs a scenario matrix into a result set. For every scene: load, BVH, the batches its effects
+// imply (generated once; every encoder sees the same rays); for every selected batch: NoSort (the
+// baseline), then every encoder × key length: encode → radix sort → trace through the sorted
+// order, each timed with profiling events, checked (permutation, hits equal NoSort bit for bit),
+// and measured (ANC, SIMT model). Each cell is written the moment it finishes.
+#include <string>
+
+#include "bench/matrix.h"
+
+namespace raysort {
+
+struct RunOptions {
+  std::string device;      // select_device spec
+  std::string scene_root;  // for real scenes
+  std::string out;         // result folder; empty: results/<device-slug>/<preset>-<matrix hash>
+  std::string command;     // the command line, for meta.json
+};
+
+struct RunSummary {
+  std::string out_dir;
+  std::size_t cells_run = 0, cells_skipped = 0, cells_failed = 0;
+  bool interrupted = false;
+};
+
+RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts);
+
+// The default result folder for a matrix on a device.
+std::string default_result_dir(const MatrixSpec& spec, const std::string& device_slug);
+
+}  // namespace raysort

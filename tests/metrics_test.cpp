@@ -1,0 +1,92 @@
+// ANC on known key sequences and the SIMT model on hand-built traversal trails.
+#include <gtest/gtest.h>
+
+#include <numeric>
+
+#include "bench/metrics.h"
+
+namespace raysort {
+
+TEST(Anc, KnownSequences) {
+  std::vector<std::uint64_t> same(64, 7);
+  EXPECT_DOUBLE_EQ(average_number_of_codes(same), 1.0);
+  std::vector<std::uint64_t> all_distinct(64);
+  std::iota(all_distinct.begin(), all_distinct.end(), 0u);
+  EXPECT_DOUBLE_EQ(average_number_of_codes(all_distinct), 32.0);
+  // Two groups: first has keys {0,1} (16 each), second all 5 except one 6 -> (2 + 2) / 2.
+  std::vector<std::uint64_t> mixed(64, 0);
+  for (int i = 16; i < 32; ++i) mixed[i] = 1;
+  for (int i = 32; i < 64; ++i) mixed[i] = 5;
+  mixed[40] = 6;
+  EXPECT_DOUBLE_EQ(average_number_of_codes(mixed), 2.0);
+  // A short last group counts as a group: 32 equal keys then 3 distinct ones -> (1 + 3) / 2.
+  std::vector<std::uint64_t> tail(35, 9);
+  tail[32] = 1, tail[33] = 2, tail[34] = 3;
+  EXPECT_DOUBLE_EQ(average_number_of_codes(tail), 2.0);
+  EXPECT_DOUBLE_EQ(average_number_of_codes({}), 0.0);
+  // Order within a group does not matter; order across groups does.
+  std::vector<std::uint64_t> interleaved(64);
+  for (int i = 0; i < 64; ++i) interleaved[i] = i % 2;
+  EXPECT_DOUBLE_EQ(average_number_of_codes(interleaved), 2.0);
+}
+
+TEST(SimtModel, HandBuiltTrails) {
+  // One warp of 32 lanes, all the same path of 4 nodes: efficiency 1, 4 distinct / 128 visits.
+  std::vector<std::vector<std::uint32_t>> same(32, {0, 1, 3, 7});
+  auto m = simt_model_from_trails(same);
+  EXPECT_DOUBLE_EQ(m.lane_efficiency, 1.0);
+  EXPECT_DOUBLE_EQ(m.distinct_nodes_per_visit, 4.0 / 128.0);
+  EXPECT_EQ(m.total_steps, 128u);
+  EXPECT_EQ(m.warps, 1u);
+
+  // Lane 0 takes 8 steps, the other 31 take 1: Σ = 39 of 32·8 = 256 issued.
+  std::vector<std::vector<std::uint32_t>> skewed(32, {0});
+  skewed[0] = {0, 1, 2, 3, 4, 5, 6, 7};
+  m = simt_model_from_trails(skewed);
+  EXPECT_DOUBLE_EQ(m.lane_efficiency, 39.0 / 256.0);
+  EXPECT_DOUBLE_EQ(m.distinct_nodes_per_visit, 8.0 / 39.0);
+
+  // Two warps, every lane a different path: distinct == visits.
+  std::vector<std::vector<std::uint32_t>> divergent(64);
+  for (std::uint32_t i = 0; i < 64; ++i) divergent[i] = {1000 + 2 * i, 1001 + 2 * i};
+  m = simt_model_from_trails(divergent);
+  EXPECT_DOUBLE_EQ(m.lane_efficiency, 1.0);
+  EXPECT_DOUBLE_EQ(m.distinct_nodes_per_visit, 1.0);
+  EXPECT_EQ(m.warps, 2u);
+
+  // A partial last warp issues only its own lanes.
+  std::vector<std::vector<std::uint32_t>> partial(33, {0, 1});
+  partial[32] = {0, 1, 2, 3};
+  m = simt_model_from_trails(partial);
+  EXPECT_DOUBLE_EQ(m.lane_efficiency, (64.0 + 4.0) / (64.0 + 4.0));
+}
+
+TEST(SimtModel, TracedModelMatchesTrailsAndOrderMatters) {
+  // A row of 64 separated unit quads along x; rays straight down onto each.
+  Scene::Flat f;
+  for (int i = 0; i < 64; ++i) {
+    float x = static_cast<float>(i) * 2.0f;
+    f.v0.push_back({x, 0, 0}), f.v1.push_back({x + 1, 0, 0}), f.v2.push_back({x, 0, 1}), f.material.push_back(0);
+    f.v0.push_back({x + 1, 0, 0}), f.v1.push_back({x + 1, 0, 1}), f.v2.push_back({x, 0, 1}), f.material.push_back(0);
+  }
+  Bvh bvh = build_bvh(f);
+  std::vector<RsRay> rays;
+  for (int i = 0; i < 256; ++i) {
+    RsRay r{};
+    r.o[0] = static_cast<float>(i % 64) * 2.0f + 0.5f, r.o[1] = 1.0f, r.o[2] = 0.5f;
+    r.d[1] = -1.0f;
+    r.tmax = RS_T_FAR;
+    rays.push_back(r);
+  }
+  // Interleaved (i % 64) vs sorted by position: sorted warps share far more nodes.
+  std::vector<std::uint32_t> sorted(rays.size());
+  std::iota(sorted.begin(), sorted.end(), 0u);
+  std::stable_sort(sorted.begin(), sorted.end(), [&](auto a, auto b) { return rays[a].o[0] < rays[b].o[0]; });
+  auto interleaved_model = simt_model(bvh, rays, nullptr, false);
+  auto sorted_model = simt_model(bvh, rays, sorted.data(), false);
+  EXPECT_LT(sorted_model.distinct_nodes_per_visit, interleaved_model.distinct_nodes_per_visit);
+  EXPECT_EQ(sorted_model.total_steps, interleaved_model.total_steps);  // same rays, same work
+  EXPECT_GT(sorted_model.total_steps, 0u);
+}
+
+}  // namespace raysort
