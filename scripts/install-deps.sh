@@ -7,7 +7,7 @@ PACKAGES=(
   build-essential cmake pkg-config git
   ocl-icd-opencl-dev opencl-c-headers opencl-clhpp-headers pocl-opencl-icd clinfo
   #: OpenImageIO's CMake config refuses to load without its binaries
-  libtinyobjloader-dev libopenimageio-dev
+  libtinyobjloader-dev libopenimageio-dev fonts-dejavu-core
   googletest libgtest-dev libbenchmark-dev
   libcli11-dev nlohmann-json3-dev libtomlplusplus-dev libfmt-dev
 )

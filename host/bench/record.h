@@ -12,6 +12,9 @@ namespace raysort {
 // Bump when the meaning or layout of a field changes; readers refuse other versions clearly.
 constexpr int kResultFormatVersion = 1;
 
+// The encoder name of the baseline cells (rays traced in generation order): encoder_name(NoSort).
+inline constexpr const char* kBaselineEncoder = "nosort";
+
 struct Timing {
   double median_ms = 0.0, min_ms = 0.0, max_ms = 0.0;
   static Timing of(std::vector<double> samples);  // median/min/max of the samples

@@ -4,6 +4,7 @@
 
 #include <filesystem>
 
+#include "bench/plots.h"
 #include "util/atomic_file.h"
 #include "util/error.h"
 
@@ -121,5 +122,7 @@ void ResultSet::write_views() const {
   write_file_atomically((fs::path(dir_) / "cells.csv").string(), csv);
   write_file_atomically((fs::path(dir_) / "tables.md").string(), render_tables(all, meta_));
 }
+
+void ResultSet::write_plots() const { raysort::write_plots(cells(), dir_); }
 
 }  // namespace raysort

@@ -30,6 +30,8 @@ class ResultSet {
   const nlohmann::json& meta() const { return meta_; }
   const std::string& dir() const { return dir_; }
   void write_views() const;
+  // PNG plots (bench/plots.h); slower than the text views, so written at the end of a run.
+  void write_plots() const;
 
  private:
   std::string dir_;

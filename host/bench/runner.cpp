@@ -190,7 +190,7 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
       const SimtModel nosort_simt = simt_model(bvh, batch.rays, nullptr, any_hit);
       {
         CellRecord c;
-        c.scene = scene_name, c.batch = batch_name, c.encoder = "NoSort", c.bits = 0, c.rays = n;
+        c.scene = scene_name, c.batch = batch_name, c.encoder = kBaselineEncoder, c.bits = 0, c.rays = n;
         c.variant = spec.variant;
         c.trace = nosort_trace;
         c.trace_mrays = nosort_trace.median_ms > 0 ? n / (nosort_trace.median_ms * 1e3) : 0;
@@ -333,6 +333,7 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
   std::signal(SIGINT, previous);
   std::signal(SIGTERM, SIG_DFL);
   results.write_views();
+  results.write_plots();
   summary.interrupted = g_interrupted;
   return summary;
 }

@@ -32,7 +32,7 @@ const CellRecord* find(const std::vector<CellRecord>& cells, const std::string& 
                        const std::string& encoder, unsigned bits) {
   for (auto& c : cells)
     if (c.scene == scene && c.batch == batch && c.encoder == encoder && c.top_bits == 0 &&
-        (c.encoder == "NoSort" || c.bits == bits))
+        (c.encoder == kBaselineEncoder || c.bits == bits))
       return &c;
   return nullptr;
 }
@@ -69,7 +69,7 @@ std::string render_tables(const std::vector<CellRecord>& cells, const nlohmann::
   auto encoders = ordered(cells, meta, "encoders", &CellRecord::encoder);
   std::set<unsigned> bit_set;
   for (auto& c : cells)
-    if (c.encoder != "NoSort" && c.top_bits == 0) bit_set.insert(c.bits);
+    if (c.encoder != kBaselineEncoder && c.top_bits == 0) bit_set.insert(c.bits);
   std::vector<unsigned> bits(bit_set.begin(), bit_set.end());
   const unsigned overview_bits = bit_set.count(32) ? 32 : (bits.empty() ? 0 : bits.back());
 
@@ -101,7 +101,7 @@ std::string render_tables(const std::vector<CellRecord>& cells, const nlohmann::
                       overview_bits);
     md += header("encoder", scenes);
     for (auto& e : encoders) {
-      if (e == "NoSort") continue;
+      if (e == kBaselineEncoder) continue;
       md += fmt::format("| {} |", e);
       for (auto& s : scenes) {
         auto* c = find(cells, s, batch, e, overview_bits);
@@ -124,12 +124,12 @@ std::string render_tables(const std::vector<CellRecord>& cells, const nlohmann::
       for (auto& batch : batches) {
         bool any = false;
         for (auto& e : encoders)
-          for (auto b : bits) any |= find(cells, s, batch, e, b) && e != "NoSort";
+          for (auto b : bits) any |= find(cells, s, batch, e, b) && e != kBaselineEncoder;
         if (!any) continue;
         md += fmt::format("## Key length, {} {}: MRays/s (speedup) | ANC\n\n", s, batch);
         md += header("encoder", bit_cols);
         for (auto& e : encoders) {
-          if (e == "NoSort") continue;
+          if (e == kBaselineEncoder) continue;
           md += fmt::format("| {} |", e);
           for (auto b : bits) {
             auto* c = find(cells, s, batch, e, b);
@@ -152,7 +152,7 @@ std::string render_tables(const std::vector<CellRecord>& cells, const nlohmann::
         for (auto b : bits) cols.push_back(fmt::format("{} {} {}b", s, batch, b));
     md += header("encoder", cols);
     for (auto& e : encoders) {
-      if (e == "NoSort") continue;
+      if (e == kBaselineEncoder) continue;
       md += fmt::format("| {} |", e);
       for (auto& s : scenes)
         for (auto& batch : batches)
