@@ -37,6 +37,7 @@ struct SceneListing {
   std::string file;         // "embedded:scenes/x.toml" or the .toml path
   std::string description;
   bool needs_scene_root;    // it names OBJ files
+  std::vector<std::string> obj_files;  // the OBJ paths it names, relative to the scene root
 };
 // Every scene `load_scene` knows by name: the embedded scenes/*.toml.
 std::vector<SceneListing> list_scenes();

@@ -1,0 +1,179 @@
+// OBJ loading through tinyobjloader, with the checks it leaves out: every vertex coordinate must
+// be a finite number, every face index in range, and no face is dropped without an error.
+// Polygons are triangulated here (not by tinyobjloader, which skips faces it cannot split):
+// quads along their shorter diagonal (as tinyobjloader does), larger polygons as a fan from
+// their first vertex, so an n-gon always gives n − 2 triangles.
+#include <fmt/format.h>
+#include <tiny_obj_loader.h>
+
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "scene/load.h"
+#include "util/error.h"
+
+namespace raysort {
+
+namespace {
+
+std::string read_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(fmt::format("cannot open OBJ file {}: {}", path, std::strerror(errno)));
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return std::move(ss).str();
+}
+
+// Checks the first three coordinates of every `v` line: a number that parses completely and is
+// finite. tinyobjloader reads "nan", "1e999" or "3.1+e2" without complaint as some value.
+// Returns the number of `v` lines.
+std::size_t check_vertex_lines(const std::string& text, const std::string& path) {
+  std::size_t vertex = 0, line = 0, pos = 0;
+  while (pos < text.size()) {
+    ++line;
+    std::size_t end = text.find('\n', pos);
+    if (end == std::string::npos) end = text.size();
+    const char* p = text.data() + pos;
+    const char* e = text.data() + end;
+    pos = end + 1;
+    while (p < e && (*p == ' ' || *p == '\t')) ++p;
+    if (e - p < 2 || p[0] != 'v' || (p[1] != ' ' && p[1] != '\t')) continue;
+    p += 2;
+    for (int axis = 0; axis < 3; ++axis) {
+      while (p < e && (*p == ' ' || *p == '\t')) ++p;
+      const char* tok = p;
+      while (p < e && *p != ' ' && *p != '\t' && *p != '\r') ++p;
+      std::string_view token(tok, static_cast<std::size_t>(p - tok));
+      if (token.empty())
+        throw Error(fmt::format("{}:{}: vertex {} has {} coordinate(s), an OBJ 'v' line needs 3; fix the file", path,
+                                line, vertex + 1, axis));
+      const char* first = token.data();
+      if (*first == '+') ++first;
+      float value = 0.0f;
+      auto [stop, ec] = std::from_chars(first, token.data() + token.size(), value);
+      if (ec == std::errc::result_out_of_range || (ec == std::errc() && !std::isfinite(value)))
+        throw Error(fmt::format("{}:{}: vertex {} has a non-finite coordinate '{}' (NaN or Inf); fix the file", path,
+                                line, vertex + 1, token));
+      if (ec != std::errc() || stop != token.data() + token.size())
+        throw Error(fmt::format("{}:{}: vertex {} has a malformed coordinate '{}'; fix the file", path, line,
+                                vertex + 1, token));
+    }
+    ++vertex;
+  }
+  return vertex;
+}
+
+}  // namespace
+
+Mesh load_obj(const std::string& path, std::vector<Material>& materials) {
+  std::string text = read_file(path);
+  if (text.size() >= 2 && ((text[0] == '\xFE' && text[1] == '\xFF') || (text[0] == '\xFF' && text[1] == '\xFE')))
+    throw Error(fmt::format("OBJ file {} is UTF-16 encoded; convert it to UTF-8 or ASCII (e.g. iconv -f UTF-16 -t UTF-8)",
+                            path));
+  std::size_t vertex_lines = check_vertex_lines(text, path);
+
+  tinyobj::attrib_t attrib;
+  std::vector<tinyobj::shape_t> shapes;
+  std::vector<tinyobj::material_t> obj_materials;
+  std::string warn, err;
+  std::istringstream stream(text);
+  tinyobj::MaterialFileReader mtl_reader(std::filesystem::path(path).parent_path().string() + "/");
+  bool ok = tinyobj::LoadObj(&attrib, &shapes, &obj_materials, &warn, &err, &stream, &mtl_reader,
+                             /*triangulate=*/false);
+  if (!ok || !err.empty()) {
+    while (!err.empty() && (err.back() == '\n' || err.back() == '.')) err.pop_back();
+    throw Error(fmt::format("cannot read OBJ file {}: {}; fix the file", path, err.empty() ? "parse error" : err));
+  }
+  if (warn.find("Degenerated face") != std::string::npos)
+    throw Error(fmt::format("OBJ file {} has a face with fewer than 3 vertices; remove or fix it", path));
+
+  std::size_t nverts = attrib.vertices.size() / 3;
+  if (nverts != vertex_lines)
+    throw Error(fmt::format("OBJ file {}: read {} vertices but the file has {} 'v' lines; fix the file", path, nverts,
+                            vertex_lines));
+
+  Mesh mesh;
+  mesh.name = std::filesystem::path(path).stem().string();
+  mesh.source = "obj:" + path;
+  mesh.positions.resize(nverts);
+  for (std::size_t i = 0; i < nverts; ++i)
+    mesh.positions[i] = {attrib.vertices[3 * i], attrib.vertices[3 * i + 1], attrib.vertices[3 * i + 2]};
+
+  auto material_base = static_cast<std::int32_t>(materials.size());
+  for (const auto& m : obj_materials) {
+    Material mat;
+    mat.name = m.name;
+    mat.albedo = {m.diffuse[0], m.diffuse[1], m.diffuse[2]};
+    materials.push_back(mat);
+  }
+  bool any_material = !obj_materials.empty();
+
+  for (const auto& shape : shapes) {
+    // tinyobjloader stores a face's vertex count in an unsigned char: a face of 256 or more
+    // vertices wraps around, and its indices no longer line up with the counts.
+    std::size_t counted = 0;
+    for (auto n : shape.mesh.num_face_vertices) counted += n;
+    if (counted != shape.mesh.indices.size())
+      throw Error(fmt::format("OBJ file {}: object '{}' has a face with 256 or more vertices, which the OBJ reader "
+                              "(tinyobjloader) cannot represent; split that polygon into smaller faces",
+                              path, shape.name));
+    std::size_t offset = 0;
+    for (std::size_t f = 0; f < shape.mesh.num_face_vertices.size(); ++f) {
+      std::size_t n = shape.mesh.num_face_vertices[f];
+      std::uint32_t idx[3];
+      auto vertex_of = [&](std::size_t k) -> std::uint32_t {
+        int v = shape.mesh.indices[offset + k].vertex_index;
+        if (v < 0 || static_cast<std::size_t>(v) >= nverts)
+          throw Error(fmt::format(
+              "OBJ file {}: face {} of object '{}' refers to vertex {} but the file has {} vertices (indices start at "
+              "1; negative ones count back from the last vertex); fix the face",
+              path, f + 1, shape.name, v + 1, nverts));
+        return static_cast<std::uint32_t>(v);
+      };
+      std::int32_t mat = 0;
+      if (any_material && f < shape.mesh.material_ids.size() && shape.mesh.material_ids[f] >= 0)
+        mat = material_base + shape.mesh.material_ids[f];
+      auto emit = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
+        mesh.triangles.push_back({a, b, c});
+        mesh.material.push_back(mat);
+      };
+      if (n == 4) {
+        std::uint32_t q[4] = {vertex_of(0), vertex_of(1), vertex_of(2), vertex_of(3)};
+        auto dist2 = [&](std::uint32_t a, std::uint32_t b) {
+          double s = 0.0;
+          for (int k = 0; k < 3; ++k) {
+            double d = double(mesh.positions[a][k]) - mesh.positions[b][k];
+            s += d * d;
+          }
+          return s;
+        };
+        if (dist2(q[0], q[2]) < dist2(q[1], q[3])) {
+          emit(q[0], q[1], q[2]);
+          emit(q[0], q[2], q[3]);
+        } else {
+          emit(q[0], q[1], q[3]);
+          emit(q[1], q[2], q[3]);
+        }
+      } else {
+        idx[0] = vertex_of(0);
+        for (std::size_t k = 2; k < n; ++k) {
+          idx[1] = vertex_of(k - 1);
+          idx[2] = vertex_of(k);
+          emit(idx[0], idx[1], idx[2]);
+        }
+      }
+      offset += n;
+    }
+  }
+  if (mesh.triangles.empty())
+    throw Error(fmt::format("OBJ file {} has no triangles (no 'f' faces); a scene mesh needs at least one", path));
+  // An OBJ without materials uses Scene::materials[0] throughout.
+  if (!any_material) mesh.material.clear();
+  return mesh;
+}
+
+}  // namespace raysort

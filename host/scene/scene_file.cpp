@@ -1,0 +1,434 @@
+// Scene files (docs/scene-format.md): TOML → Scene, scene lookup by name or path, and bare OBJs.
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "scene/ground.h"
+#include "scene/load.h"
+#include "scene/noise.h"
+#include "scene/procedural.h"
+#include "scene/toml_reader.h"
+#include "util/embedded.h"
+#include "util/error.h"
+
+namespace fs = std::filesystem;
+
+namespace raysort {
+
+namespace {
+
+constexpr std::uint32_t kDefaultWidth = 1920, kDefaultHeight = 1080;
+
+std::string read_text_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(fmt::format("cannot open scene file {}", path));
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return std::move(ss).str();
+}
+
+bool ends_with(const std::string& s, std::string_view suffix) {
+  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+Camera read_camera(const TomlTable& t) {
+  Camera c;
+  c.position = t.vec3("position");
+  c.look_at = t.vec3("look_at");
+  c.up = t.vec3("up", {0, 1, 0});
+  c.fov_y_deg = static_cast<float>(t.number("fov_y", 45.0));
+  if (!(c.fov_y_deg > 0.0f && c.fov_y_deg < 180.0f))
+    t.fail("fov_y", fmt::format("= {} is not a field of view; use degrees in (0, 180)", c.fov_y_deg));
+  c.width = kDefaultWidth;
+  c.height = kDefaultHeight;
+  if (t.has("resolution")) {
+    auto r = t.numbers("resolution", 2);
+    if (r.size() != 2 || r[0] < 1 || r[1] < 1 || r[0] > 65536 || r[1] > 65536 || r[0] != std::floor(r[0]) ||
+        r[1] != std::floor(r[1]))
+      t.fail("resolution", "must be [width, height] with whole numbers in [1, 65536], e.g. [1920, 1080]");
+    c.width = static_cast<std::uint32_t>(r[0]);
+    c.height = static_cast<std::uint32_t>(r[1]);
+  }
+  Vec3 d{c.look_at[0] - c.position[0], c.look_at[1] - c.position[1], c.look_at[2] - c.position[2]};
+  double len = std::sqrt(double(d[0]) * d[0] + double(d[1]) * d[1] + double(d[2]) * d[2]);
+  if (len == 0.0) t.fail("look_at", "equals the camera position; look at another point");
+  double ul = std::sqrt(double(c.up[0]) * c.up[0] + double(c.up[1]) * c.up[1] + double(c.up[2]) * c.up[2]);
+  Vec3 cr{d[1] * c.up[2] - d[2] * c.up[1], d[2] * c.up[0] - d[0] * c.up[2], d[0] * c.up[1] - d[1] * c.up[0]};
+  double cl = std::sqrt(double(cr[0]) * cr[0] + double(cr[1]) * cr[1] + double(cr[2]) * cr[2]);
+  if (ul == 0.0 || cl <= 1e-6 * len * ul) t.fail("up", "is zero or parallel to the view direction; use another up vector");
+  return c;
+}
+
+Vec3 read_color(const TomlTable& t, std::string_view key, Vec3 fallback) {
+  Vec3 c = t.vec3(key, fallback);
+  for (float v : c)
+    if (v < 0.0f) t.fail(key, "must not be negative");
+  return c;
+}
+
+// Builds an affine transform from translate / rotate / scale keys: T · R · S.
+Affine read_transform(const TomlTable& t) {
+  Vec3 tr = t.vec3("translate", {0, 0, 0});
+  Vec3 rot = t.vec3("rotate", {0, 0, 0});
+  Vec3 s{1, 1, 1};
+  if (t.has("scale")) {
+    auto v = t.node("scale")->is_number() ? std::vector<double>(3, t.number("scale")) : t.numbers("scale", 3);
+    for (int i = 0; i < 3; ++i) s[i] = static_cast<float>(v[i]);
+    for (float x : s)
+      if (!(x > 0.0f)) t.fail("scale", "must be positive (a mirror or a flat instance is not supported)");
+  }
+  return Affine::translation(tr).then_after(Affine::rotation_deg(rot)).then_after(Affine::scaling(s));
+}
+
+class SceneBuilder {
+ public:
+  SceneBuilder(const std::string& origin, const SceneOptions& opts) : origin_(origin), opts_(opts) {}
+
+  Scene build(const toml::table& root) {
+    TomlTable top(origin_, root, "",
+                  {"name", "description", "camera", "mesh", "instance", "scatter", "sphere_light", "sky", "effects"});
+    Scene s;
+    s.file = origin_;
+    s.name = top.string("name", fs::path(origin_).stem().string());
+    s.description = top.string("description", "");
+
+    auto meshes = top.table_array("mesh");
+    if (meshes.empty())
+      throw Error(fmt::format("{}:1: the scene has no [[mesh]]; add at least one (docs/scene-format.md)", origin_));
+    std::vector<bool> drawn;
+    for (std::size_t i = 0; i < meshes.size(); ++i) drawn.push_back(read_mesh(s, *meshes[i], i));
+
+    // Placements: drawn meshes once, then [[instance]], then [[scatter]].
+    bool plain = std::all_of(drawn.begin(), drawn.end(), [](bool d) { return d; });
+    for (std::size_t i = 0; i < drawn.size(); ++i)
+      if (drawn[i]) s.instances.push_back({static_cast<std::uint32_t>(i), Affine{}});
+    auto instances = top.table_array("instance");
+    for (std::size_t i = 0; i < instances.size(); ++i) {
+      TomlTable t(origin_, *instances[i], fmt::format("instance[{}]", i), {"mesh", "translate", "rotate", "scale"});
+      s.instances.push_back({mesh_index(t, "mesh"), read_transform(t)});
+    }
+    std::size_t placed_before_scatter = s.instances.size();
+    auto scatters = top.table_array("scatter");
+    for (std::size_t i = 0; i < scatters.size(); ++i) read_scatter(s, *scatters[i], i, placed_before_scatter);
+    if (s.instances.empty())
+      throw Error(fmt::format("{}:1: the scene draws nothing: every mesh has draw = false and there is no [[instance]] "
+                              "or [[scatter]]; place a mesh",
+                              origin_));
+    if (plain && instances.empty() && scatters.empty()) s.instances.clear();  // every mesh once, untransformed
+
+    if (auto cam = top.subtable("camera"))
+      s.camera = read_camera(TomlTable(origin_, *cam, "camera", {"position", "look_at", "up", "fov_y", "resolution"}));
+    else
+      throw Error(fmt::format("{}:1: the scene has no [camera]; add one with position and look_at", origin_));
+
+    auto lights = top.table_array("sphere_light");
+    for (std::size_t i = 0; i < lights.size(); ++i) {
+      TomlTable t(origin_, *lights[i], fmt::format("sphere_light[{}]", i), {"center", "radius", "color", "power"});
+      SphereLight l;
+      l.center = t.vec3("center");
+      l.radius_relative = static_cast<float>(t.number("radius"));
+      if (!(l.radius_relative > 0.0f))
+        t.fail("radius", fmt::format("= {} must be positive (a fraction of the scene's largest extent, e.g. 0.05)",
+                                     l.radius_relative));
+      l.color = read_color(t, "color", {1, 1, 1});
+      l.power = static_cast<float>(t.number("power", 1.0));
+      if (!(l.power > 0.0f)) t.fail("power", "must be positive");
+      s.sphere_lights.push_back(l);
+    }
+
+    if (auto sky = top.subtable("sky")) {
+      TomlTable t(origin_, *sky, "sky", {"color", "zenith", "horizon"});
+      s.sky.enabled = true;
+      if (t.has("color")) {
+        if (t.has("zenith") || t.has("horizon"))
+          t.fail("color", "conflicts with zenith/horizon; give either color or both zenith and horizon");
+        s.sky.zenith = s.sky.horizon = read_color(t, "color", {1, 1, 1});
+      } else if (t.has("zenith") || t.has("horizon")) {
+        if (!t.has("zenith") || !t.has("horizon"))
+          t.fail_table("needs both zenith and horizon for a gradient sky (or one color)");
+        s.sky.zenith = read_color(t, "zenith", {1, 1, 1});
+        s.sky.horizon = read_color(t, "horizon", {1, 1, 1});
+      }
+    }
+
+    if (auto fx = top.subtable("effects")) {
+      TomlTable t(origin_, *fx, "effects",
+                  {"max_bounces", "shadow_rays_per_bounce", "russian_roulette_start", "russian_roulette_survival",
+                   "samples_per_pixel"});
+      auto& e = s.effects;
+      e.max_bounces = static_cast<std::uint32_t>(t.integer("max_bounces", e.max_bounces, 0, 64));
+      e.shadow_rays_per_bounce =
+          static_cast<std::uint32_t>(t.integer("shadow_rays_per_bounce", e.shadow_rays_per_bounce, 0, 64));
+      e.russian_roulette_start =
+          static_cast<std::uint32_t>(t.integer("russian_roulette_start", e.russian_roulette_start, 0, 1024));
+      e.russian_roulette_survival = static_cast<float>(t.number("russian_roulette_survival", e.russian_roulette_survival));
+      if (!(e.russian_roulette_survival > 0.0f && e.russian_roulette_survival <= 1.0f))
+        t.fail("russian_roulette_survival", "must be in (0, 1]");
+      e.samples_per_pixel = static_cast<std::uint32_t>(t.integer("samples_per_pixel", e.samples_per_pixel, 1, 1 << 16));
+    }
+
+    if (opts_.width) s.camera.width = opts_.width;
+    if (opts_.height) s.camera.height = opts_.height;
+    if (opts_.spp) s.effects.samples_per_pixel = opts_.spp;
+    return s;
+  }
+
+ private:
+  // Reads one [[mesh]]; returns its `draw` flag.
+  bool read_mesh(Scene& s, const toml::table& table, std::size_t index) {
+    TomlTable t(origin_, table, fmt::format("mesh[{}]", index),
+                {"name", "obj", "generator", "seed", "params", "albedo", "draw"});
+    std::string name = t.string("name");
+    if (name.empty()) t.fail("name", "must not be empty");
+    if (mesh_names_.count(name))
+      t.fail("name", fmt::format("'{}' is already the name of another mesh; mesh names must be unique", name));
+    bool has_obj = t.has("obj"), has_gen = t.has("generator");
+    if (has_obj == has_gen)
+      t.fail_table(fmt::format("mesh '{}' needs exactly one of 'obj' (a file) or 'generator' (one of: {})", name,
+                               fmt::join(generator_names(), ", ")));
+    Mesh mesh;
+    if (has_obj) {
+      if (t.has("params")) t.fail("params", "applies to generated meshes only, not to an obj mesh");
+      if (t.has("seed")) t.fail("seed", "applies to generated meshes only, not to an obj mesh");
+      std::string rel = t.string("obj");
+      std::string root = resolve_scene_root(opts_);
+      fs::path p = fs::path(rel).is_absolute() ? fs::path(rel) : fs::path(root) / rel;
+      std::error_code ec;
+      if (!fs::is_regular_file(p, ec))
+        t.fail("obj", fmt::format("names an OBJ file that does not exist: {} (scene root: {}); pass --scene-root DIR "
+                                  "or set RAYSORT_SCENE_ROOT to the folder that holds '{}'",
+                                  p.lexically_normal().string(), root, rel));
+      try {
+        mesh = load_obj(p.lexically_normal().string(), s.materials);
+      } catch (const Error& e) {
+        throw Error(fmt::format("{}:{}: mesh '{}': {}", origin_, t.line("obj"), name, e.what()));
+      }
+    } else {
+      std::string gen = t.string("generator");
+      std::uint64_t seed = t.integer("seed", 0, 0, ~std::uint64_t{0} >> 1);
+      GeneratorParams params;
+      if (auto pt = t.subtable("params")) {
+        for (auto&& [k, v] : *pt) {
+          std::string key(k.str());
+          std::uint32_t line = v.source().begin.line;
+          if (v.is_number()) {
+            double x = v.is_integer() ? double(v.as_integer()->get()) : v.as_floating_point()->get();
+            params.numbers[key] = x;
+          } else if (auto arr = v.as_array(); arr && arr->size() == 3 &&
+                                              std::all_of(arr->begin(), arr->end(),
+                                                          [](const toml::node& e) { return e.is_number(); })) {
+            Vec3 vec{};
+            for (std::size_t i = 0; i < 3; ++i) {
+              const auto& e = (*arr)[i];
+              vec[i] = static_cast<float>(e.is_integer() ? double(e.as_integer()->get()) : e.as_floating_point()->get());
+            }
+            params.vectors[key] = vec;
+          } else {
+            throw Error(fmt::format("{}:{}: '{}.params.{}' must be a number or an array of 3 numbers, not {}", origin_,
+                                    line, t.path(), key, toml_type_name(v)));
+          }
+        }
+      }
+      try {
+        mesh = generate_mesh(gen, params, seed);
+      } catch (const Error& e) {
+        std::string_view key = gen_known(gen) ? "params" : "generator";
+        t.fail(key, fmt::format("(mesh '{}'): {}", name, e.what()));
+      }
+    }
+    mesh.name = name;
+    if (t.has("albedo")) {
+      Material m;
+      m.name = name;
+      m.albedo = read_color(t, "albedo", {0.7f, 0.7f, 0.7f});
+      s.materials.push_back(m);
+      mesh.material.assign(mesh.triangles.size(), static_cast<std::int32_t>(s.materials.size() - 1));
+    }
+    mesh_names_[name] = static_cast<std::uint32_t>(s.meshes.size());
+    s.meshes.push_back(std::move(mesh));
+    return t.boolean("draw", true);
+  }
+
+  static bool gen_known(const std::string& gen) {
+    auto names = generator_names();
+    return std::find(names.begin(), names.end(), gen) != names.end();
+  }
+
+  std::uint32_t mesh_index(const TomlTable& t, std::string_view key) const {
+    std::string name = t.string(key);
+    auto it = mesh_names_.find(name);
+    if (it == mesh_names_.end()) {
+      std::vector<std::string> names;
+      for (auto& [n, i] : mesh_names_) names.push_back(n);
+      t.fail(key, fmt::format("names an unknown mesh '{}'; the scene's meshes are: {}", name, fmt::join(names, ", ")));
+    }
+    return it->second;
+  }
+
+  void read_scatter(Scene& s, const toml::table& table, std::size_t index, std::size_t placed) {
+    TomlTable t(origin_, table, fmt::format("scatter[{}]", index),
+                {"mesh", "count", "seed", "min", "max", "ground", "y_offset", "scale", "rotate", "random_rotation_y"});
+    std::uint32_t mesh = mesh_index(t, "mesh");
+    auto count = t.integer("count", 0, 0, 10'000'000);
+    if (!t.has("count")) t.fail_table("is missing the required key 'count'; add it, e.g. count = 100");
+    std::uint64_t seed = t.integer("seed", 0, 0, ~std::uint64_t{0} >> 1);
+    Vec3 lo = t.vec3("min"), hi = t.vec3("max");
+    for (int a = 0; a < 3; ++a)
+      if (lo[a] > hi[a]) t.fail("max", "must not be below min on any axis");
+    double scale_lo = 1.0, scale_hi = 1.0;
+    if (t.has("scale")) {
+      auto v = t.node("scale")->is_number() ? std::vector<double>(2, t.number("scale")) : t.numbers("scale", 2);
+      scale_lo = v[0];
+      scale_hi = v[1];
+      if (!(scale_lo > 0.0) || scale_hi < scale_lo) t.fail("scale", "must be a positive number or [low, high] with 0 < low <= high");
+    }
+    Vec3 rotate = t.vec3("rotate", {0, 0, 0});
+    bool spin = t.boolean("random_rotation_y", true);
+    double y_offset = t.number("y_offset", 0.0);
+    std::optional<GroundGrid> ground;
+    std::string ground_name;
+    if (t.has("ground")) {
+      std::uint32_t g = mesh_index(t, "ground");
+      ground_name = t.string("ground");
+      std::vector<Affine> xfs;
+      for (std::size_t i = 0; i < placed; ++i)
+        if (s.instances[i].mesh == g) xfs.push_back(s.instances[i].transform);
+      if (xfs.empty())
+        t.fail("ground", fmt::format("names mesh '{}', which is not placed (draw = false and no [[instance]] of it)",
+                                     ground_name));
+      ground.emplace(s.meshes[g], xfs);
+    }
+    SceneRng rng(seed ^ 0x5CA77E5ull);
+    Affine base = Affine::rotation_deg(rotate);
+    for (std::uint64_t i = 0; i < count; ++i) {
+      double x = rng.uniform(lo[0], hi[0]);
+      double y = rng.uniform(lo[1], hi[1]);
+      double z = rng.uniform(lo[2], hi[2]);
+      double scale = rng.uniform(scale_lo, scale_hi);
+      double angle = rng.uniform(0.0, 360.0);
+      if (ground) {
+        auto h = ground->height(x, z, lo[1], hi[1]);
+        if (!h)
+          t.fail("ground", fmt::format("has no surface of mesh '{}' at x = {:.3f}, z = {:.3f} between y = {} and {}; "
+                                       "make min/max lie over the ground and span its heights",
+                                       ground_name, x, z, lo[1], hi[1]));
+        y = *h;
+      }
+      y += y_offset;
+      auto f = [](double v) { return static_cast<float>(v); };
+      Affine xf = Affine::translation({f(x), f(y), f(z)})
+                      .then_after(Affine::rotation_deg({0.0f, spin ? f(angle) : 0.0f, 0.0f}))
+                      .then_after(base)
+                      .then_after(Affine::scaling({f(scale), f(scale), f(scale)}));
+      s.instances.push_back({mesh, xf});
+    }
+  }
+
+  std::string origin_;
+  const SceneOptions& opts_;
+  std::map<std::string, std::uint32_t> mesh_names_;
+};
+
+std::vector<std::string> embedded_scene_names() {
+  std::vector<std::string> names;
+  for (const auto& f : embedded_files()) {
+    std::string p(f.path);
+    if (p.rfind("scenes/", 0) == 0 && ends_with(p, ".toml")) names.push_back(fs::path(p).stem().string());
+  }
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+// A bare OBJ: one mesh, a camera looking at its bounding box from a 3/4 view, and a sky light.
+Scene load_bare_obj(const std::string& path, const SceneOptions& opts) {
+  Scene s;
+  s.name = fs::path(path).stem().string();
+  s.description = "bare OBJ " + path;
+  s.file = path;
+  s.meshes.push_back(load_obj(path, s.materials));
+  Aabb b = s.bounds();
+  Vec3 c = b.center(), e = b.extent();
+  double radius = 0.5 * std::sqrt(double(e[0]) * e[0] + double(e[1]) * e[1] + double(e[2]) * e[2]);
+  if (radius <= 0.0) radius = 1.0;
+  s.camera.fov_y_deg = 45.0f;
+  double dist = radius / std::sin(0.5 * 45.0 * 3.14159265358979323846 / 180.0) * 1.05;
+  double dir[3] = {0.62, 0.45, 0.64};  // from front-right, above
+  double dl = std::sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+  for (int a = 0; a < 3; ++a) s.camera.position[a] = static_cast<float>(c[a] + dir[a] / dl * dist);
+  s.camera.look_at = c;
+  s.camera.up = {0, 1, 0};
+  s.camera.width = opts.width ? opts.width : kDefaultWidth;
+  s.camera.height = opts.height ? opts.height : kDefaultHeight;
+  s.sky.enabled = true;
+  s.sky.zenith = {0.6f, 0.7f, 0.9f};
+  s.sky.horizon = {0.9f, 0.9f, 0.9f};
+  s.effects.max_bounces = 1;
+  if (opts.spp) s.effects.samples_per_pixel = opts.spp;
+  return s;
+}
+
+}  // namespace
+
+std::string resolve_scene_root(const SceneOptions& opts) {
+  if (!opts.scene_root.empty()) return opts.scene_root;
+  if (const char* env = std::getenv("RAYSORT_SCENE_ROOT"); env && *env) return env;
+  return fs::path(RAYSORT_DEFAULT_SCENE_ROOT).lexically_normal().string();
+}
+
+Scene parse_scene_toml(const std::string& text, const std::string& origin, const SceneOptions& opts) {
+  toml::table root = parse_toml_text(text, origin);
+  return SceneBuilder(origin, opts).build(root);
+}
+
+Scene load_scene(const std::string& name_or_path, const SceneOptions& opts) {
+  std::string embedded_path = "scenes/" + name_or_path + ".toml";
+  if (name_or_path.find('/') == std::string::npos && !ends_with(name_or_path, ".toml") &&
+      !ends_with(name_or_path, ".obj")) {
+    if (auto text = find_embedded(embedded_path))
+      return parse_scene_toml(std::string(*text), "embedded:" + embedded_path, opts);
+  }
+  std::error_code ec;
+  bool exists = fs::is_regular_file(name_or_path, ec);
+  if (ends_with(name_or_path, ".toml")) {
+    if (!exists) throw Error(fmt::format("scene file not found: {}", name_or_path));
+    return parse_scene_toml(read_text_file(name_or_path), name_or_path, opts);
+  }
+  if (ends_with(name_or_path, ".obj") || ends_with(name_or_path, ".OBJ")) {
+    if (!exists) throw Error(fmt::format("OBJ file not found: {}", name_or_path));
+    return load_bare_obj(name_or_path, opts);
+  }
+  throw Error(fmt::format("unknown scene '{}'; the known scenes are: {} (or give a path to a .toml or .obj file)",
+                          name_or_path, fmt::join(embedded_scene_names(), ", ")));
+}
+
+std::vector<SceneListing> list_scenes() {
+  std::vector<SceneListing> out;
+  for (const auto& name : embedded_scene_names()) {
+    std::string path = "scenes/" + name + ".toml";
+    SceneListing l;
+    l.name = name;
+    l.file = "embedded:" + path;
+    l.needs_scene_root = false;
+    auto text = find_embedded(path);
+    toml::table root = parse_toml_text(std::string(*text), l.file);
+    if (auto d = root["description"].value<std::string>()) l.description = *d;
+    if (auto meshes = root["mesh"].as_array())
+      for (const auto& m : *meshes)
+        if (auto t = m.as_table())
+          if (auto obj = (*t)["obj"].value<std::string>()) {
+            l.needs_scene_root = true;
+            l.obj_files.push_back(*obj);
+          }
+    out.push_back(std::move(l));
+  }
+  return out;
+}
+
+}  // namespace raysort

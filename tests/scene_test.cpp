@@ -1,0 +1,326 @@
+// Scene loading: the TOML parser's error messages, OBJ checks, procedural determinism and sizes,
+// bare OBJ paths, and the real scenes when the scene root is there.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "scene/load.h"
+#include "scene/procedural.h"
+#include "util/error.h"
+
+namespace fs = std::filesystem;
+using namespace raysort;
+
+namespace {
+
+// A valid scene; tests append or replace lines to break it.
+const std::string kValid = R"(name = "t"
+[camera]
+position = [0.0, 1.0, 3.0]
+look_at = [0.0, 1.0, 0.0]
+fov_y = 40.0
+
+[[mesh]]
+name = "floor"
+generator = "plane"
+[mesh.params]
+size_x = 4.0
+size_z = 4.0
+
+[[sphere_light]]
+center = [0.0, 2.0, 0.0]
+radius = 0.05
+)";
+
+// The message of the Error that parsing `text` throws ("" when it does not throw).
+std::string parse_error(const std::string& text) {
+  try {
+    parse_scene_toml(text, "bad.toml", {});
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+std::string replace(std::string s, const std::string& from, const std::string& to) {
+  auto pos = s.find(from);
+  EXPECT_NE(pos, std::string::npos) << from;
+  return s.replace(pos, from.size(), to);
+}
+
+fs::path temp_dir(const std::string& name) {
+  fs::path dir = fs::temp_directory_path() / ("raysort_scene_test_" + name);
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+void write_file(const fs::path& p, const std::string& text) {
+  std::ofstream out(p, std::ios::binary);
+  out << text;
+}
+
+bool same_triangles(const Scene& a, const Scene& b) {
+  auto fa = a.flatten(), fb = b.flatten();
+  return fa.v0 == fb.v0 && fa.v1 == fb.v1 && fa.v2 == fb.v2 && fa.material == fb.material;
+}
+
+}  // namespace
+
+TEST(SceneToml, ValidSceneParses) {
+  Scene s = parse_scene_toml(kValid, "ok.toml", {});
+  EXPECT_EQ(s.name, "t");
+  EXPECT_EQ(s.triangle_count(), 2u);
+  EXPECT_EQ(s.camera.width, 1920u);
+  EXPECT_EQ(s.camera.height, 1080u);
+  ASSERT_EQ(s.sphere_lights.size(), 1u);
+  EXPECT_FLOAT_EQ(s.sphere_lights[0].radius(s.bounds().largest_extent()), 0.2f);
+}
+
+TEST(SceneToml, OptionsOverrideResolutionAndSpp) {
+  SceneOptions o;
+  o.width = 64;
+  o.height = 32;
+  o.spp = 4;
+  Scene s = parse_scene_toml(kValid, "ok.toml", o);
+  EXPECT_EQ(s.camera.width, 64u);
+  EXPECT_EQ(s.camera.height, 32u);
+  EXPECT_EQ(s.effects.samples_per_pixel, 4u);
+}
+
+TEST(SceneToml, UnknownKeyNamesLineAndKey) {
+  std::string msg = parse_error(replace(kValid, "fov_y = 40.0", "fov_y = 40.0\nfovy = 3.0"));
+  EXPECT_NE(msg.find("bad.toml:6:"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("camera.fovy"), std::string::npos) << msg;
+}
+
+TEST(SceneToml, WrongTypeNamesLineAndKey) {
+  std::string msg = parse_error(replace(kValid, "fov_y = 40.0", "fov_y = \"wide\""));
+  EXPECT_NE(msg.find("bad.toml:5:"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("camera.fov_y"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("a string"), std::string::npos) << msg;
+}
+
+TEST(SceneToml, MissingRequiredKeyNamesTableLineAndKey) {
+  std::string msg = parse_error(replace(kValid, "look_at = [0.0, 1.0, 0.0]\n", ""));
+  EXPECT_NE(msg.find("bad.toml:2:"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("look_at"), std::string::npos) << msg;
+}
+
+TEST(SceneToml, BadMeshReferenceNamesLineAndMesh) {
+  std::string msg = parse_error(kValid + "\n[[instance]]\nmesh = \"flor\"\n");
+  EXPECT_NE(msg.find("bad.toml:19:"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("instance[0].mesh"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("flor"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("floor"), std::string::npos) << msg;  // lists the meshes there are
+}
+
+TEST(SceneToml, NegativeRadiusNamesLineAndKey) {
+  std::string msg = parse_error(replace(kValid, "radius = 0.05", "radius = -0.05"));
+  EXPECT_NE(msg.find("bad.toml:16:"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("sphere_light[0].radius"), std::string::npos) << msg;
+}
+
+TEST(SceneToml, OtherValidation) {
+  EXPECT_NE(parse_error(replace(kValid, "fov_y = 40.0", "fov_y = 180.0")).find("camera.fov_y"), std::string::npos);
+  EXPECT_NE(parse_error(replace(kValid, "fov_y = 40.0", "resolution = [0, 100]")).find("camera.resolution"),
+            std::string::npos);
+  EXPECT_NE(parse_error(replace(kValid, "radius = 0.05", "radius = 0.0")).find("radius"), std::string::npos);
+  EXPECT_NE(parse_error(replace(kValid, "generator = \"plane\"", "generator = \"plain\"")).find("displaced_sphere"),
+            std::string::npos);  // lists the generators
+  EXPECT_NE(parse_error(replace(kValid, "size_x = 4.0", "sise_x = 4.0")).find("sise_x"), std::string::npos);
+  EXPECT_NE(parse_error(kValid + "[effects]\nmax_bounces = -1\n").find("effects.max_bounces"), std::string::npos);
+  std::string syntax = parse_error(replace(kValid, "fov_y = 40.0", "fov_y = = 40"));
+  EXPECT_NE(syntax.find("bad.toml:5:"), std::string::npos) << syntax;
+}
+
+TEST(SceneToml, ScatterIsDeterministicAndStandsOnGround) {
+  std::string text = kValid + R"(
+[[mesh]]
+name = "rock"
+generator = "rock"
+draw = false
+
+[[scatter]]
+mesh = "rock"
+count = 50
+seed = 9
+min = [-1.5, -10.0, -1.5]
+max = [1.5, 10.0, 1.5]
+ground = "floor"
+scale = [0.5, 1.0]
+)";
+  Scene a = parse_scene_toml(text, "s.toml", {}), b = parse_scene_toml(text, "s.toml", {});
+  ASSERT_EQ(a.instances.size(), 51u);  // the floor + 50 rocks
+  EXPECT_TRUE(same_triangles(a, b));
+  for (std::size_t i = 1; i < a.instances.size(); ++i) EXPECT_FLOAT_EQ(a.instances[i].transform.m[7], 0.0f);
+  std::string off = parse_error(replace(text, "max = [1.5, 10.0, 1.5]", "max = [9.0, 10.0, 9.0]"));
+  EXPECT_NE(off.find("scatter[0].ground"), std::string::npos) << off;
+}
+
+TEST(SceneObj, MissingObjNamesPathAndRoot) {
+  SceneOptions o;
+  o.scene_root = "/nonexistent/scene-root";
+  std::string text = replace(kValid, "generator = \"plane\"\n[mesh.params]\nsize_x = 4.0\nsize_z = 4.0\n",
+                             "obj = \"nowhere/missing.obj\"\n");
+  try {
+    parse_scene_toml(text, "bad.toml", o);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    std::string msg = e.what();
+    EXPECT_NE(msg.find("/nonexistent/scene-root/nowhere/missing.obj"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("--scene-root"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("RAYSORT_SCENE_ROOT"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("bad.toml:9:"), std::string::npos) << msg;
+  }
+}
+
+TEST(SceneObj, NanVertexRejectedWithIndex) {
+  fs::path dir = temp_dir("nan");
+  write_file(dir / "nan.obj", "v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n");
+  std::vector<Material> mats;
+  try {
+    load_obj((dir / "nan.obj").string(), mats);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    std::string msg = e.what();
+    EXPECT_NE(msg.find("nan.obj:3"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("vertex 3"), std::string::npos) << msg;
+  }
+  write_file(dir / "inf.obj", "v 0 0 0\nv 1e999 0 0\nv 0 1 0\nf 1 2 3\n");
+  EXPECT_THROW(load_obj((dir / "inf.obj").string(), mats), Error);
+}
+
+TEST(SceneObj, BadIndexAndEmptyFileRejected) {
+  fs::path dir = temp_dir("bad");
+  write_file(dir / "range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n");
+  write_file(dir / "empty.obj", "v 0 0 0\n");
+  std::vector<Material> mats;
+  try {
+    load_obj((dir / "range.obj").string(), mats);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("vertex 9"), std::string::npos) << e.what();
+  }
+  try {
+    load_obj((dir / "empty.obj").string(), mats);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("empty.obj"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SceneObj, PolygonsTriangulatedAndMaterialsRead) {
+  fs::path dir = temp_dir("poly");
+  write_file(dir / "m.mtl", "newmtl red\nKd 0.8 0.1 0.1\nnewmtl blue\nKd 0.1 0.1 0.8\n");
+  write_file(dir / "poly.obj",
+             "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv -1 0.5 0\nusemtl blue\nf 1 2 3 4\nusemtl red\n"
+             "f 1 2 3 4 5\nf -3 -2 -1\n");
+  std::vector<Material> mats{Material{}};
+  Mesh m = load_obj((dir / "poly.obj").string(), mats);
+  EXPECT_EQ(m.triangles.size(), 2u + 3u + 1u);  // an n-gon gives n - 2 triangles
+  ASSERT_EQ(mats.size(), 3u);
+  ASSERT_EQ(m.material.size(), m.triangles.size());
+  EXPECT_EQ(mats[m.material[0]].name, "blue");
+  EXPECT_EQ(mats[m.material[5]].name, "red");
+  EXPECT_FLOAT_EQ(mats[m.material[5]].albedo[0], 0.8f);
+}
+
+TEST(SceneObj, BareObjPathGetsCameraAndSky) {
+  fs::path dir = temp_dir("bare");
+  write_file(dir / "tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 3 4\n");
+  Scene s = load_scene((dir / "tri.obj").string());
+  EXPECT_EQ(s.name, "tri");
+  EXPECT_EQ(s.triangle_count(), 2u);
+  EXPECT_TRUE(s.sky.enabled);
+  EXPECT_TRUE(s.sphere_lights.empty());
+  EXPECT_EQ(s.effects.max_bounces, 1u);
+  // The camera is outside the box, looking at its centre.
+  Aabb b = s.bounds();
+  bool outside = false;
+  for (int a = 0; a < 3; ++a) outside = outside || s.camera.position[a] > b.max[a];
+  EXPECT_TRUE(outside);
+}
+
+TEST(SceneLookup, UnknownNameListsScenes) {
+  try {
+    load_scene("no-such-scene");
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("cornell"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SceneProcedural, GeneratorsAreDeterministic) {
+  for (const auto& name : generator_names()) {
+    Mesh a = generate_mesh(name, {}, 17), b = generate_mesh(name, {}, 17);
+    EXPECT_GT(a.triangles.size(), 0u) << name;
+    EXPECT_EQ(a.positions, b.positions) << name;
+    EXPECT_EQ(a.triangles, b.triangles) << name;
+    for (const auto& t : a.triangles)
+      for (auto i : t) ASSERT_LT(i, a.positions.size()) << name;
+  }
+}
+
+// The embedded procedural scenes: deterministic, at least their triangle budgets, fast to load.
+TEST(SceneProcedural, EmbeddedScenesMeetTheirBudgets) {
+  struct Want {
+    const char* name;
+    std::size_t min_triangles, max_triangles;
+  };
+  for (Want w : {Want{"cornell", 10, 999}, Want{"detail-room", 300'000, 2'000'000},
+                 Want{"landscape", 500'000, 3'000'000}, Want{"multi-instance", 300'000, 2'000'000}}) {
+    auto t0 = std::chrono::steady_clock::now();
+    Scene a = load_scene(w.name);
+    double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    Scene b = load_scene(w.name);
+    EXPECT_GE(a.triangle_count(), w.min_triangles) << w.name;
+    EXPECT_LE(a.triangle_count(), w.max_triangles) << w.name;
+    EXPECT_TRUE(same_triangles(a, b)) << w.name;
+    EXPECT_EQ(a.camera.width, 1920u) << w.name;
+    EXPECT_EQ(a.effects.max_bounces, 1u) << w.name;
+    EXPECT_FALSE(a.sphere_lights.empty()) << w.name;
+    // The budget is 2 s on a 2-core machine in a Release build; leave room for slow CI runners.
+    EXPECT_LT(s, 6.0) << w.name;
+  }
+}
+
+TEST(SceneLookup, EveryListedSceneParses) {
+  // Every embedded scene file is well-formed (real ones need the scene root only for their OBJs).
+  auto listings = list_scenes();
+  EXPECT_GE(listings.size(), 13u);
+  for (const auto& l : listings) {
+    if (l.needs_scene_root) continue;
+    EXPECT_NO_THROW(load_scene(l.name)) << l.name;
+  }
+}
+
+// Real scenes from the scene root: skipped when it is absent, except on CI where they must be there.
+TEST(SceneReal, SibenikAndBreakfastRoomLoad) {
+  SceneOptions o;
+  std::string root = resolve_scene_root(o);
+  if (!fs::exists(fs::path(root) / "sibenik")) {
+    const char* ci = std::getenv("CI");
+    if (ci && std::string(ci) == "true") FAIL() << "scene root " << root << " is missing on CI (set RAYSORT_SCENE_ROOT)";
+    GTEST_SKIP() << "scene root " << root << " not found; set RAYSORT_SCENE_ROOT to run the real-scene test";
+  }
+  Scene sib = load_scene("sibenik", o);
+  EXPECT_EQ(sib.triangle_count(), 75'284u);
+  EXPECT_EQ(sib.sphere_lights.size(), 13u);
+  Scene bfr = load_scene("breakfast_room", o);
+  EXPECT_EQ(bfr.triangle_count(), 269'538u);
+  EXPECT_EQ(bfr.sphere_lights.size(), 3u);
+  EXPECT_GT(bfr.materials.size(), 10u);
+  // Cameras inside the interiors.
+  for (const Scene* s : {&sib, &bfr}) {
+    Aabb b = s->bounds();
+    for (int a = 0; a < 3; ++a) {
+      EXPECT_GT(s->camera.position[a], b.min[a]) << s->name;
+      EXPECT_LT(s->camera.position[a], b.max[a]) << s->name;
+    }
+  }
+}
