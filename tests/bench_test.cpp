@@ -168,10 +168,14 @@ TEST(Matrix, RefusesImpossibleCombinationsBeforeWork) {
   EXPECT_NO_THROW(validate_matrix(matrix_preset("paper")));
 }
 
-// The quick preset end to end at a tiny resolution; every cell checks itself (permutation, hits
-// equal NoSort). A rerun of the same command resumes: every cell is skipped.
-TEST(Matrix, QuickPresetEndToEndAndResume) {
+// A small matrix end to end (the full quick preset runs in the golden test, scripts/golden.sh):
+// every cell checks itself (permutation, hits equal NoSort). A rerun of the same command resumes:
+// every encoder cell is skipped.
+TEST(Matrix, EndToEndAndResume) {
   MatrixSpec spec = matrix_preset("quick");
+  spec.scenes = {"cornell", "multi-instance"};
+  spec.key_length_scenes = {"cornell"};
+  spec.top_bits = {8};
   spec.resolution = "48x27";
   spec.reps = 1;
   spec.warmup = 0;
@@ -180,7 +184,8 @@ TEST(Matrix, QuickPresetEndToEndAndResume) {
   RunSummary s = run_matrix(spec, opts);
   EXPECT_FALSE(s.interrupted);
   EXPECT_EQ(s.cells_failed, 0u);
-  EXPECT_GT(s.cells_run, 40u);
+  // 2 scenes x 3 batches x (NoSort + 10 encoders x (bits + top-k)); cornell runs 3 key lengths.
+  EXPECT_EQ(s.cells_run, 3u * (1 + 10 * 4) + 3u * (1 + 10 * 2));
   auto rs = ResultSet::load(opts.out);
   for (auto& c : rs.cells()) {
     EXPECT_TRUE(c.ok()) << c.id() << ": " << c.error;
@@ -189,14 +194,17 @@ TEST(Matrix, QuickPresetEndToEndAndResume) {
     if (c.encoder != kBaselineEncoder) {
       EXPECT_GE(c.anc, 1.0) << c.id();
       EXPECT_LE(c.anc, 32.0) << c.id();
+      EXPECT_GT(c.trace_mrays, 0.0) << c.id();
     }
   }
   std::string tables = read_file(opts.out + "/tables.md");
   EXPECT_NE(tables.find("## Trace speed, bounce1 rays"), std::string::npos);
-  EXPECT_NE(tables.find("## Key length, detail-room"), std::string::npos);
+  EXPECT_NE(tables.find("## Key length, cornell"), std::string::npos);
+  EXPECT_NE(tables.find("## Top-k sorting"), std::string::npos);
+  EXPECT_TRUE(fs::exists(opts.out + "/overhead-vs-gain-bounce1.png"));
   RunSummary again = run_matrix(spec, opts);
   EXPECT_EQ(again.cells_run, 0u);
-  EXPECT_EQ(again.cells_skipped, s.cells_run - 4 * 3);  // NoSort cells are re-measured, not skipped
+  EXPECT_EQ(again.cells_skipped, s.cells_run - 2 * 3);  // NoSort cells are re-measured, not skipped
   EXPECT_EQ(ResultSet::load(opts.out).cells().size(), rs.cells().size());
 }
 
@@ -213,14 +221,19 @@ TEST(Matrix, KilledRunResumesToTheSameCells) {
     return a;
   };
   ASSERT_EQ(run_cli(with_out(clean)), 0);
-  for (int kill_ms : {400, 900, 1500, 2500}) run_cli(with_out(killed), kill_ms);
+  int kills_landed = 0;  // runs that SIGKILL actually interrupted (not finished before it)
+  for (int kill_ms : {400, 900, 1500, 2500}) kills_landed += run_cli(with_out(killed), kill_ms) == -SIGKILL;
+  EXPECT_GE(kills_landed, 2) << "the kill points should interrupt the run";
   ASSERT_EQ(run_cli(with_out(killed)), 0);
   auto a = ResultSet::load(clean), b = ResultSet::load(killed);
   EXPECT_EQ(deterministic(a), deterministic(b));
   std::size_t files = 0;
   for (auto& e : fs::directory_iterator(killed + "/cells")) files += e.path().extension() == ".json";
   EXPECT_EQ(files, b.cells().size());
-  EXPECT_NO_THROW((void)nlohmann::json::parse(read_file(killed + "/cells.json")));
+  EXPECT_NO_THROW({
+    auto parsed = nlohmann::json::parse(read_file(killed + "/cells.json"));
+    EXPECT_EQ(parsed.size(), b.cells().size());
+  });
 }
 
 }  // namespace raysort

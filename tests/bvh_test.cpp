@@ -2,6 +2,8 @@
 // and depth, on every procedural scene and on degenerate inputs.
 #include <gtest/gtest.h>
 
+#include <cstring>
+
 #include "bvh/bvh.h"
 #include "scene/load.h"
 

@@ -45,7 +45,9 @@ void expect_device_equals_reference(const Scene& scene, const RayGenOptions& gen
     std::size_t hits = 0;
     for (auto& h : rb.reference_hits) hits += h.tri != RS_NO_HIT;
     // A batch that hits nothing (or everything, for shadows) would test little.
-    if (!rb.batch.any_hit()) EXPECT_GT(hits, 0u) << scene.name << " " << rb.batch.name;
+    if (!rb.batch.any_hit()) {
+      EXPECT_GT(hits, 0u) << scene.name << " " << rb.batch.name;
+    }
     // Sorted order: trace through a reversed order; hits come back in trace order.
     std::vector<std::uint32_t> reversed(rb.batch.size());
     for (std::size_t i = 0; i < reversed.size(); ++i) reversed[i] = static_cast<std::uint32_t>(reversed.size() - 1 - i);
