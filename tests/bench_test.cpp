@@ -53,9 +53,10 @@ std::map<std::string, std::string> deterministic(const ResultSet& rs) {
   return m;
 }
 
-int run_cli(const std::vector<std::string>& args, int kill_after_ms = -1) {
+int run_cli(const std::vector<std::string>& args, int kill_after_ms = -1, int kill_after_cells = 0) {
   pid_t pid = fork();
   if (pid == 0) {
+    if (kill_after_cells > 0) ::setenv("RAYSORT_TEST_KILL_AFTER_CELLS", std::to_string(kill_after_cells).c_str(), 1);
     std::vector<char*> argv;
     std::string bin = RAYSORT_BINARY;
     argv.push_back(bin.data());
@@ -221,9 +222,10 @@ TEST(Matrix, KilledRunResumesToTheSameCells) {
     return a;
   };
   ASSERT_EQ(run_cli(with_out(clean)), 0);
-  int kills_landed = 0;  // runs that SIGKILL actually interrupted (not finished before it)
-  for (int kill_ms : {400, 900, 1500, 2500}) kills_landed += run_cli(with_out(killed), kill_ms) == -SIGKILL;
-  EXPECT_GE(kills_landed, 2) << "the kill points should interrupt the run";
+  // Deterministic kill points: SIGKILL right after the 3rd, 7th and 12th new cell of each run.
+  for (int cells : {3, 7, 12}) EXPECT_EQ(run_cli(with_out(killed), -1, cells), -SIGKILL) << "kill after " << cells;
+  // And at arbitrary moments (possibly mid-write, possibly after the run finished).
+  for (int kill_ms : {150, 700}) run_cli(with_out(killed), kill_ms);
   ASSERT_EQ(run_cli(with_out(killed)), 0);
   auto a = ResultSet::load(clean), b = ResultSet::load(killed);
   EXPECT_EQ(deterministic(a), deterministic(b));

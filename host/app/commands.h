@@ -11,6 +11,7 @@ void register_scenes_command(CLI::App& app);
 void register_trace_command(CLI::App& app);
 void register_sortbench_command(CLI::App& app);
 void register_render_command(CLI::App& app);
+void register_encode_command(CLI::App& app);
 void register_run_command(CLI::App& app);
 void register_compare_command(CLI::App& app);
 

@@ -5,6 +5,7 @@
 #include <atomic>
 #include <chrono>
 #include <csignal>
+#include <cstdlib>
 #include <cstring>
 #include <ctime>
 #include <fstream>
@@ -127,6 +128,8 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
     progress.total += (spec.batches.empty() ? 3 : spec.batches.size()) *
                       (1 + encoders.size() * (spec.bits_for(s).size() + spec.top_bits.size()));
 
+  const char* kill_env = std::getenv("RAYSORT_TEST_KILL_AFTER_CELLS");
+  const std::size_t kill_after = kill_env ? std::strtoul(kill_env, nullptr, 10) : 0;
   auto previous = std::signal(SIGINT, on_sigint);
   std::signal(SIGTERM, on_sigint);
   RadixSort sorter(rt);
@@ -323,6 +326,9 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
           results.add(c);
           ++summary.cells_run;
           summary.cells_failed += !c.ok();
+          // Test hook (tests/bench_test.cpp): die by SIGKILL right after the N-th new cell, a
+          // deterministic kill point for the resume test.
+          if (kill_after > 0 && summary.cells_run >= kill_after) std::raise(SIGKILL);
           progress.line(c.ok() ? fmt::format("{}: {:.2f} MRays/s ({:.2f}x), encode {:.2f} + sort {:.2f} ms, ANC {:.2f}",
                                              c.id(), c.trace_mrays, c.speedup, c.encode.median_ms, c.sort.median_ms, c.anc)
                                : fmt::format("{}: FAILED: {}", c.id(), c.error));

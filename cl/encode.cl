@@ -1,0 +1,74 @@
+/* raysort — encode kernels: the sort keys of every encoder of DESIGN.md section 3, one kernel per
+ * family (spatial codes, box-set codes, two-level cut code, prefix path code, no key).
+ *
+ * Conventions shared with trace.cl: the ray of work-item i is rays[order[i]]; the global size is
+ * padded to a multiple of the local size and every kernel guards on count. Each kernel writes
+ * keys[i] and values[i] = i, ready for the key-value radix sort. The key layouts themselves live in
+ * keys.h, shared with the host twin (host/encode/), so both give the same bits.
+ *
+ * Every kernel exists twice: *_k32 writes uint keys (key bits ≤ 32), *_k64 ulong keys.
+ * Cut nodes (HCC, RegularGrid cells, MLHCC top nodes) are copied to local memory once per
+ * work-group before any ray reads them (Xiang et al. Alg. 1, line 1); the barrier sits before the
+ * count guard, in uniform control flow.
+ */
+#include "keys.h"
+
+#define RS_DEFINE_ENCODE_KERNELS(SUFFIX, KEY_T)                                                             \
+  __kernel void encode_nosort_##SUFFIX(uint count, __global KEY_T* keys, __global uint* values) {        \
+    uint i = get_global_id(0);                                                                           \
+    if (i >= count) return;                                                                              \
+    keys[i] = 0;                                                                                         \
+    values[i] = i;                                                                                       \
+  }                                                                                                      \
+                                                                                                         \
+  __kernel void encode_spatial_##SUFFIX(__global const RsEncodeFrame* frame, __global const RsRay* rays, \
+                                        __global const uint* order, uint count, int encoder, uint bits,  \
+                                        __global KEY_T* keys, __global uint* values) {                   \
+    uint i = get_global_id(0);                                                                           \
+    if (i >= count) return;                                                                              \
+    RsEncodeFrame f = *frame;                                                                            \
+    keys[i] = (KEY_T)rs_key_from_code(rs_spatial_code(encoder, &f, rays[order[i]]), bits);               \
+    values[i] = i;                                                                                       \
+  }                                                                                                      \
+                                                                                                         \
+  __kernel void encode_box_set_##SUFFIX(__global const RsBox* boxes, uint box_count, uint field,         \
+                                        uint dir_bits, __global const RsRay* rays,                       \
+                                        __global const uint* order, uint count, uint bits,               \
+                                        __global KEY_T* keys, __global uint* values) {                   \
+    __local RsBox cut[RS_MAX_KEY_BITS];                                                                  \
+    for (uint j = get_local_id(0); j < box_count; j += get_local_size(0)) cut[j] = boxes[j];             \
+    barrier(CLK_LOCAL_MEM_FENCE);                                                                        \
+    uint i = get_global_id(0);                                                                           \
+    if (i >= count) return;                                                                              \
+    rs_u64 code = rs_box_set_code(rays[order[i]], cut, box_count, field, dir_bits);                      \
+    keys[i] = (KEY_T)rs_key_from_code(code, bits);                                                       \
+    values[i] = i;                                                                                       \
+  }                                                                                                      \
+                                                                                                         \
+  __kernel void encode_two_level_##SUFFIX(__global const RsBox* top, uint top_count,                     \
+                                          __global const RsBox* low, __global const uint* low_count,     \
+                                          uint half_bits, __global const RsRay* rays,                    \
+                                          __global const uint* order, uint count, uint bits,             \
+                                          __global KEY_T* keys, __global uint* values) {                 \
+    __local RsBox top_cut[RS_MAX_KEY_BITS];                                                              \
+    for (uint j = get_local_id(0); j < top_count; j += get_local_size(0)) top_cut[j] = top[j];           \
+    barrier(CLK_LOCAL_MEM_FENCE);                                                                        \
+    uint i = get_global_id(0);                                                                           \
+    if (i >= count) return;                                                                              \
+    rs_u64 code = rs_two_level_cut_code(rays[order[i]], top_cut, top_count, low, low_count, half_bits);  \
+    keys[i] = (KEY_T)rs_key_from_code(code, bits);                                                       \
+    values[i] = i;                                                                                       \
+  }                                                                                                      \
+                                                                                                         \
+  __kernel void encode_prefix_path_##SUFFIX(__global const RsBvhNode* nodes,                             \
+                                            __global const RsTriangle* tris, __global const RsRay* rays, \
+                                            __global const uint* order, uint count, uint bits,           \
+                                            __global KEY_T* keys, __global uint* values) {               \
+    uint i = get_global_id(0);                                                                           \
+    if (i >= count) return;                                                                              \
+    keys[i] = (KEY_T)rs_key_from_code(rs_prefix_path_code(nodes, tris, rays[order[i]], bits), bits);     \
+    values[i] = i;                                                                                       \
+  }
+
+RS_DEFINE_ENCODE_KERNELS(k32, uint)
+RS_DEFINE_ENCODE_KERNELS(k64, ulong)

@@ -1,0 +1,176 @@
+// DeviceEncoder: the encode kernels of cl/encode.cl on one device (see encode.h).
+#include <algorithm>
+#include <chrono>
+#include <numeric>
+
+#include "encode/encode.h"
+
+namespace raysort {
+
+namespace {
+
+bool is_spatial(Encoder e) {
+  return e == Encoder::Origin || e == Encoder::Reis || e == Encoder::Costa || e == Encoder::Aila ||
+         e == Encoder::TwoPoint;
+}
+bool is_box_set(Encoder e) { return e == Encoder::RegularGrid || e == Encoder::HCC || e == Encoder::HCC_DIR; }
+
+}  // namespace
+
+DeviceEncoder::DeviceEncoder(Runtime& rt, const Bvh& bvh, const Aabb& scene_box, const EncoderParams& params)
+    : rt_(rt), scene_(bvh, scene_box, params) {
+  frame_ = rt.upload("encode frame", std::vector<RsEncodeFrame>{scene_.frame()});
+  nodes_ = rt.upload("bvh nodes (ppc)", bvh.nodes);
+  triangles_ = rt.upload("triangles (ppc)", bvh.triangles);
+  cl::Program program = rt.build({"cl/encode.cl"});
+  cl_call("creating the encode kernels", [&] {
+    for (auto [k, suffix] : {std::pair{&k32_, "k32"}, std::pair{&k64_, "k64"}}) {
+      k->nosort = cl::Kernel(program, (std::string("encode_nosort_") + suffix).c_str());
+      k->spatial = cl::Kernel(program, (std::string("encode_spatial_") + suffix).c_str());
+      k->box_set = cl::Kernel(program, (std::string("encode_box_set_") + suffix).c_str());
+      k->two_level = cl::Kernel(program, (std::string("encode_two_level_") + suffix).c_str());
+      k->prefix_path = cl::Kernel(program, (std::string("encode_prefix_path_") + suffix).c_str());
+    }
+  });
+  // Box-set kernels copy up to 64 boxes to local memory per group; 64 work-items suit PoCL (the
+  // group is a loop) and GPUs (two warps) alike.
+  local_ = std::min<std::size_t>(64, rt.info().max_work_group_size);
+}
+
+const DeviceEncoder::Uploaded& DeviceEncoder::uploaded(Encoder e, unsigned bits) {
+  const auto key = std::make_pair(static_cast<int>(e), bits);
+  auto it = uploads_.find(key);
+  if (it != uploads_.end()) return it->second;
+  Uploaded u;
+  const std::string what = std::string(encoder_name(e)) + " " + std::to_string(bits) + "-bit ";
+  if (is_box_set(e)) {
+    const auto& boxes = scene_.box_set(e, bits);
+    u.a = rt_.upload(what + "cut boxes", boxes);
+    u.n = static_cast<std::uint32_t>(boxes.size());
+  } else if (e == Encoder::MLHCC) {
+    const auto& t = scene_.two_level(bits);
+    u.a = rt_.upload(what + "top-level cut boxes", t.top);
+    u.b = rt_.upload(what + "low-level cut boxes", t.low);
+    u.c = rt_.upload(what + "low-level cut sizes", t.low_count);
+    u.n = static_cast<std::uint32_t>(t.top.size());
+  }
+  return uploads_.emplace(key, std::move(u)).first->second;
+}
+
+void DeviceEncoder::prepare(Encoder e, unsigned bits) {
+  check_key_bits(e, bits, scene_.params());
+  uploaded(e, bits);
+}
+
+cl::Event DeviceEncoder::enqueue(Encoder e, unsigned bits, const cl::Buffer& rays, const cl::Buffer& order,
+                                 std::uint32_t count, const cl::Buffer& keys, const cl::Buffer& values) {
+  check_key_bits(e, bits, scene_.params());
+  Kernels& ks = bits > 32 ? k64_ : k32_;
+  const Uploaded& u = uploaded(e, bits);
+  cl::Kernel* k = nullptr;
+  cl::Event ev;
+  cl_call("encoding " + std::to_string(count) + " rays with " + std::string(encoder_name(e)) + " (" +
+              std::to_string(bits) + " bits)",
+          [&] {
+            int arg = 0;
+            if (e == Encoder::NoSort) {
+              k = &ks.nosort;
+            } else if (is_spatial(e)) {
+              k = &ks.spatial;
+              k->setArg(arg++, frame_);
+              k->setArg(arg++, rays);
+              k->setArg(arg++, order);
+              k->setArg(arg++, count);
+              k->setArg(arg++, static_cast<cl_int>(e));
+            } else if (is_box_set(e)) {
+              const cl_uint dir = e == Encoder::HCC_DIR ? scene_.params().direction_bits : 0u;
+              k = &ks.box_set;
+              k->setArg(arg++, u.a);
+              k->setArg(arg++, u.n);
+              k->setArg(arg++, static_cast<cl_uint>(bits - dir));
+              k->setArg(arg++, dir);
+              k->setArg(arg++, rays);
+              k->setArg(arg++, order);
+              k->setArg(arg++, count);
+            } else if (e == Encoder::MLHCC) {
+              k = &ks.two_level;
+              k->setArg(arg++, u.a);
+              k->setArg(arg++, u.n);
+              k->setArg(arg++, u.b);
+              k->setArg(arg++, u.c);
+              k->setArg(arg++, static_cast<cl_uint>(bits / 2));
+              k->setArg(arg++, rays);
+              k->setArg(arg++, order);
+              k->setArg(arg++, count);
+            } else {
+              k = &ks.prefix_path;
+              k->setArg(arg++, nodes_);
+              k->setArg(arg++, triangles_);
+              k->setArg(arg++, rays);
+              k->setArg(arg++, order);
+              k->setArg(arg++, count);
+            }
+            if (e == Encoder::NoSort)
+              k->setArg(arg++, count);
+            else
+              k->setArg(arg++, static_cast<cl_uint>(bits));
+            k->setArg(arg++, keys);
+            k->setArg(arg++, values);
+            if (count > 0)
+              rt_.queue().enqueueNDRangeKernel(*k, cl::NullRange, cl::NDRange(Runtime::padded(count, local_)),
+                                               cl::NDRange(local_), nullptr, &ev);
+            else
+              rt_.queue().enqueueMarkerWithWaitList(nullptr, &ev);
+          });
+  return ev;
+}
+
+DeviceEncoder::Run DeviceEncoder::run(Encoder e, unsigned bits, const std::vector<RsRay>& rays,
+                                      const std::vector<std::uint32_t>* order, unsigned warmup, unsigned reps) {
+  const auto n = static_cast<std::uint32_t>(order ? order->size() : rays.size());
+  std::vector<std::uint32_t> identity;
+  if (!order) {
+    identity.resize(n);
+    std::iota(identity.begin(), identity.end(), 0u);
+    order = &identity;
+  }
+  prepare(e, bits);
+  cl::Buffer ray_buf = rt_.upload("rays", rays);
+  cl::Buffer order_buf = rt_.upload("ray order", *order);
+  cl::Buffer key_buf = rt_.buffer("keys", std::max<std::size_t>(1, n) * key_bytes(bits));
+  cl::Buffer value_buf = rt_.buffer("values", std::max<std::size_t>(1, n) * sizeof(std::uint32_t));
+  std::vector<double> times;
+  for (unsigned i = 0; i < warmup + std::max(1u, reps); ++i) {
+    cl::Event ev = enqueue(e, bits, ray_buf, order_buf, n, key_buf, value_buf);
+    cl_call("waiting for an encode of " + std::to_string(n) + " rays", [&] { ev.wait(); });
+    if (i >= warmup && n > 0) times.push_back(event_ms(ev));
+  }
+  Run r;
+  if (!times.empty()) {
+    std::sort(times.begin(), times.end());
+    r.median_ms = times[times.size() / 2];
+    r.min_ms = times.front();
+  }
+  if (bits > 32) {
+    rt_.download("keys", key_buf, r.keys, n);
+  } else {
+    std::vector<std::uint32_t> k32;
+    rt_.download("keys", key_buf, k32, n);
+    r.keys.assign(k32.begin(), k32.end());
+  }
+  rt_.download("values", value_buf, r.values, n);
+  return r;
+}
+
+double DeviceEncoder::warm_up() {
+  auto t0 = std::chrono::steady_clock::now();
+  RsRay ray{};
+  ray.d[2] = 1.0f;
+  ray.tmax = RS_T_FAR;
+  std::vector<RsRay> rays(4, ray);
+  for (unsigned bits : {32u, 64u})
+    for (Encoder e : {Encoder::NoSort, Encoder::Origin, Encoder::HCC, Encoder::MLHCC, Encoder::PPC}) run(e, bits, rays);
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace raysort

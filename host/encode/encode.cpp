@@ -1,0 +1,205 @@
+// Host side of the encoders: names, key-length rules, the per-scene inputs (frame, HAD, cuts,
+// grid cells) and the host twin. The key arithmetic is cl/keys.h, the same source the kernels run.
+#include "encode/encode.h"
+
+#include <algorithm>
+#include <cctype>
+#include <thread>
+
+#include "bvh/had.h"
+#include "util/error.h"
+
+namespace raysort {
+
+static_assert(sizeof(RsBox) == 24 && sizeof(RsEncodeFrame) == 48, "device struct layouts (cl/keys.h)");
+
+std::string_view encoder_name(Encoder e) {
+  switch (e) {
+    case Encoder::NoSort: return "nosort";
+    case Encoder::Origin: return "origin";
+    case Encoder::Reis: return "reis";
+    case Encoder::Costa: return "costa";
+    case Encoder::Aila: return "aila";
+    case Encoder::TwoPoint: return "twopoint";
+    case Encoder::RegularGrid: return "grid";
+    case Encoder::HCC: return "hcc";
+    case Encoder::MLHCC: return "mlhcc";
+    case Encoder::PPC: return "ppc";
+    case Encoder::HCC_DIR: return "hcc-dir";
+  }
+  return "?";
+}
+
+std::optional<Encoder> parse_encoder(std::string_view name) {
+  std::string s;
+  for (char c : name)
+    if (c != '-' && c != '_' && c != ' ') s += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  for (Encoder e : all_encoders()) {
+    std::string n;
+    for (char c : encoder_name(e))
+      if (c != '-') n += c;
+    if (s == n) return e;
+  }
+  if (s == "none" || s == "nosorting") return Encoder::NoSort;
+  if (s == "regulargrid") return Encoder::RegularGrid;
+  if (s == "ailacompact") return Encoder::Aila;
+  if (s == "prefixpath" || s == "prefixpathcode") return Encoder::PPC;
+  if (s == "hierarchycut" || s == "hierarchycutcode") return Encoder::HCC;
+  return std::nullopt;
+}
+
+const std::vector<Encoder>& all_encoders() {
+  static const std::vector<Encoder> all = {Encoder::NoSort,      Encoder::Origin, Encoder::Reis,  Encoder::Costa,
+                                           Encoder::Aila,        Encoder::TwoPoint, Encoder::RegularGrid,
+                                           Encoder::HCC,         Encoder::MLHCC,  Encoder::PPC,   Encoder::HCC_DIR};
+  return all;
+}
+
+unsigned max_key_bits(Encoder) { return RS_MAX_KEY_BITS; }
+
+std::string key_bits_problem(Encoder e, unsigned bits, const EncoderParams& params) {
+  const std::string name(encoder_name(e));
+  if (bits < 1 || bits > max_key_bits(e))
+    return name + " keys have 1 to " + std::to_string(max_key_bits(e)) + " bits, not " + std::to_string(bits);
+  if (e == Encoder::MLHCC && bits % 2 != 0)
+    return "mlhcc keys need an even number of bits (half top-level, half low-level cut nodes), not " +
+           std::to_string(bits);
+  if (e == Encoder::HCC_DIR) {
+    if (params.direction_bits > 2 * RS_DIRECTION_LEVELS)
+      return "hcc-dir takes at most " + std::to_string(2 * RS_DIRECTION_LEVELS) + " direction bits, not " +
+             std::to_string(params.direction_bits);
+    if (params.direction_bits >= bits)
+      return "hcc-dir with " + std::to_string(params.direction_bits) + " direction bits needs keys of more than " +
+             std::to_string(params.direction_bits) + " bits, not " + std::to_string(bits);
+  }
+  return "";
+}
+
+void check_key_bits(Encoder e, unsigned bits, const EncoderParams& params) {
+  std::string why = key_bits_problem(e, bits, params);
+  if (!why.empty()) throw Error(why);
+}
+
+RsBox to_rs_box(const Aabb& b) {
+  RsBox r{};
+  for (int a = 0; a < 3; ++a) {
+    r.bmin[a] = b.min[a];
+    r.bmax[a] = b.max[a];
+  }
+  return r;
+}
+
+EncodeScene::EncodeScene(const Bvh& bvh, const Aabb& scene_box, const EncoderParams& params)
+    : bvh_(&bvh), params_(params), box_(scene_box.empty() ? Aabb{{0, 0, 0}, {0, 0, 0}} : scene_box) {
+  for (int a = 0; a < 3; ++a) {
+    frame_.box_min[a] = box_.min[a];
+    frame_.box_max[a] = box_.max[a];
+    const float extent = box_.max[a] - box_.min[a];
+    frame_.inv_extent[a] = extent > 0.0f ? 1.0f / extent : 0.0f;  // flat axis: every t is 0
+  }
+  frame_.twopoint_length = params.twopoint_length_fraction * box_.largest_extent();
+  had_ = hierarchically_accumulated_density(bvh, params.had_lambda);
+}
+
+const std::vector<std::uint32_t>& EncodeScene::hcc_cut(unsigned size) const {
+  auto it = hcc_cuts_.find(size);
+  if (it == hcc_cuts_.end()) it = hcc_cuts_.emplace(size, hierarchy_cut(*bvh_, had_, size)).first;
+  return it->second;
+}
+
+const std::vector<RsBox>& EncodeScene::box_set(Encoder e, unsigned bits) const {
+  const auto key = std::make_pair(static_cast<int>(e), bits);
+  auto it = box_sets_.find(key);
+  if (it != box_sets_.end()) return it->second;
+  check_key_bits(e, bits, params_);
+  std::vector<RsBox> boxes;
+  if (e == Encoder::RegularGrid) {
+    for (const Aabb& c : regular_grid_cells(box_, bits)) boxes.push_back(to_rs_box(c));
+  } else if (e == Encoder::HCC || e == Encoder::HCC_DIR) {
+    const unsigned size = e == Encoder::HCC ? bits : bits - params_.direction_bits;
+    for (std::uint32_t n : hcc_cut(size)) boxes.push_back(to_rs_box(node_box(bvh_->nodes[n])));
+  } else {
+    throw Error(std::string(encoder_name(e)) + " is not a box-set encoder");
+  }
+  return box_sets_.emplace(key, std::move(boxes)).first->second;
+}
+
+const EncodeScene::TwoLevel& EncodeScene::two_level(unsigned bits) const {
+  auto it = two_levels_.find(bits);
+  if (it != two_levels_.end()) return it->second;
+  check_key_bits(Encoder::MLHCC, bits, params_);
+  TwoLevel t;
+  t.half = bits / 2;
+  t.cut = two_level_cut(*bvh_, had_, t.half);
+  t.low.assign(t.cut.top.size() * t.half, RsBox{});
+  for (std::size_t i = 0; i < t.cut.top.size(); ++i) {
+    t.top.push_back(to_rs_box(node_box(bvh_->nodes[t.cut.top[i]])));
+    const auto& low = t.cut.low[i];
+    t.low_count.push_back(static_cast<rs_u32>(low.size()));
+    for (std::size_t j = 0; j < low.size(); ++j) t.low[i * t.half + j] = to_rs_box(node_box(bvh_->nodes[low[j]]));
+  }
+  return two_levels_.emplace(bits, std::move(t)).first->second;
+}
+
+std::uint64_t encode_ray(Encoder e, unsigned bits, const EncodeScene& scene, const RsRay& ray) {
+  switch (e) {
+    case Encoder::NoSort: return 0;
+    case Encoder::Origin:
+    case Encoder::Reis:
+    case Encoder::Costa:
+    case Encoder::Aila:
+    case Encoder::TwoPoint:
+      return rs_key_from_code(rs_spatial_code(static_cast<int>(e), &scene.frame(), ray), bits);
+    case Encoder::RegularGrid:
+    case Encoder::HCC:
+    case Encoder::HCC_DIR: {
+      const auto& boxes = scene.box_set(e, bits);
+      const unsigned dir = e == Encoder::HCC_DIR ? scene.params().direction_bits : 0u;
+      return rs_key_from_code(
+          rs_box_set_code(ray, boxes.data(), static_cast<rs_u32>(boxes.size()), bits - dir, dir), bits);
+    }
+    case Encoder::MLHCC: {
+      const auto& t = scene.two_level(bits);
+      return rs_key_from_code(rs_two_level_cut_code(ray, t.top.data(), static_cast<rs_u32>(t.top.size()), t.low.data(),
+                                                    t.low_count.data(), t.half),
+                              bits);
+    }
+    case Encoder::PPC:
+      return rs_key_from_code(rs_prefix_path_code(scene.bvh().nodes.data(), scene.bvh().triangles.data(), ray, bits),
+                              bits);
+  }
+  return 0;
+}
+
+std::vector<std::uint64_t> encode_on_host(Encoder e, unsigned bits, const EncodeScene& scene,
+                                          const std::vector<RsRay>& rays) {
+  check_key_bits(e, bits, scene.params());
+  // Build the cached cut data before the threads read it.
+  if (e == Encoder::RegularGrid || e == Encoder::HCC || e == Encoder::HCC_DIR) scene.box_set(e, bits);
+  if (e == Encoder::MLHCC) scene.two_level(bits);
+  std::vector<std::uint64_t> keys(rays.size());
+  auto work = [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) keys[i] = encode_ray(e, bits, scene, rays[i]);
+  };
+  const unsigned threads = std::max(1u, std::min(16u, std::thread::hardware_concurrency()));
+  if (rays.size() < 8192 || threads == 1) {
+    work(0, rays.size());
+    return keys;
+  }
+  std::vector<std::thread> pool;
+  const std::size_t chunk = (rays.size() + threads - 1) / threads;
+  for (unsigned t = 0; t < threads; ++t) {
+    const std::size_t b = t * chunk, end = std::min(rays.size(), b + chunk);
+    if (b < end) pool.emplace_back(work, b, end);
+  }
+  for (auto& th : pool) th.join();
+  return keys;
+}
+
+std::vector<std::uint64_t> encode_on_host(Encoder e, unsigned bits, const Bvh& bvh, const Aabb& scene_box,
+                                          const EncoderParams& params, const std::vector<RsRay>& rays) {
+  EncodeScene scene(bvh, scene_box, params);
+  return encode_on_host(e, bits, scene, rays);
+}
+
+}  // namespace raysort

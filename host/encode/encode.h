@@ -1,0 +1,153 @@
+#pragma once
+// Ray sort keys: every encoder of DESIGN.md section 3, on the device (cl/encode.cl) and on the host
+// (a bit-exact twin running the same key code, cl/keys.h). Layouts: docs/encoders.md.
+//
+//   EncodeScene   per-scene inputs of the keys: the scene box frame, HAD, cuts, grid cells
+//   encode_on_host(encoder, bits, scene, rays)            host twin, keys as uint64
+//   DeviceEncoder::enqueue(encoder, bits, rays, order, n, keys, values)   the kernels
+//
+// A key of b bits (1..64; the suite uses 16, 32, 64) is the top b bits of the encoder's 64-bit
+// code. On the device, keys of up to 32 bits are uint32 words and wider keys uint64 words.
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "bvh/bvh.h"
+#include "cl/runtime.h"
+#include "bvh/cut.h"
+#include "keys.h"  // cl/keys.h: the key layouts shared with the kernels
+
+namespace raysort {
+
+enum class Encoder : int {
+  NoSort = RS_ENC_NOSORT,
+  Origin = RS_ENC_ORIGIN,
+  Reis = RS_ENC_REIS,
+  Costa = RS_ENC_COSTA,
+  Aila = RS_ENC_AILA,
+  TwoPoint = RS_ENC_TWOPOINT,
+  RegularGrid = RS_ENC_REGULAR_GRID,
+  HCC = RS_ENC_HCC,
+  MLHCC = RS_ENC_MLHCC,
+  PPC = RS_ENC_PPC,
+  HCC_DIR = RS_ENC_HCC_DIR,
+};
+
+// "nosort", "origin", "reis", "costa", "aila", "twopoint", "grid", "hcc", "mlhcc", "ppc", "hcc-dir".
+std::string_view encoder_name(Encoder e);
+// Case-insensitive; also accepts a few aliases ("regular-grid", "aila_compact", "hcc_dir", ...).
+std::optional<Encoder> parse_encoder(std::string_view name);
+// Every encoder, NoSort first, in the order of the enum.
+const std::vector<Encoder>& all_encoders();
+// The widest key an encoder supports (64 for all of them today).
+unsigned max_key_bits(Encoder e);
+
+struct EncoderParams {
+  float twopoint_length_fraction = 0.25f;  // TwoPoint ray length, × largest scene extent (paper §5)
+  double had_lambda = 0.125;               // λ of HAD, Eq. 1 (paper §4.2.2)
+  unsigned direction_bits = 1;             // HCC_DIR: d direction bits after b − d cut bits (appendix)
+};
+
+// "" when `bits` is a valid key length for e (1..64; MLHCC: even; HCC_DIR: more than d bits and
+// d ≤ 42), else why not.
+std::string key_bits_problem(Encoder e, unsigned bits, const EncoderParams& params);
+// Throws Error with key_bits_problem's text.
+void check_key_bits(Encoder e, unsigned bits, const EncoderParams& params);
+
+// What the keys of one scene depend on, computed on the host once and cached per key length.
+// Holds a reference to the BVH: keep it alive as long as this.
+class EncodeScene {
+ public:
+  EncodeScene(const Bvh& bvh, const Aabb& scene_box, const EncoderParams& params = {});
+
+  const Bvh& bvh() const { return *bvh_; }
+  const EncoderParams& params() const { return params_; }
+  const RsEncodeFrame& frame() const { return frame_; }
+  const std::vector<double>& had() const { return had_; }
+
+  // HCC cut of `size` nodes (node indices, bit order), cached.
+  const std::vector<std::uint32_t>& hcc_cut(unsigned size) const;
+  // The boxes of a box-set encoder (HCC, RegularGrid, HCC_DIR) for keys of `bits` bits, bit order.
+  const std::vector<RsBox>& box_set(Encoder e, unsigned bits) const;
+  // MLHCC for keys of `bits` bits: top boxes (≤ half), low boxes [top.size() × half] (row i: the
+  // low cut of top i, zero-padded), low counts per top node.
+  struct TwoLevel {
+    unsigned half = 0;
+    TwoLevelCut cut;
+    std::vector<RsBox> top, low;
+    std::vector<rs_u32> low_count;
+  };
+  const TwoLevel& two_level(unsigned bits) const;
+
+ private:
+  const Bvh* bvh_;
+  EncoderParams params_;
+  RsEncodeFrame frame_{};
+  Aabb box_;
+  std::vector<double> had_;
+  mutable std::map<unsigned, std::vector<std::uint32_t>> hcc_cuts_;
+  mutable std::map<std::pair<int, unsigned>, std::vector<RsBox>> box_sets_;
+  mutable std::map<unsigned, TwoLevel> two_levels_;
+};
+
+RsBox to_rs_box(const Aabb& b);
+
+// The key of one ray (host twin of the kernels; same source for the key arithmetic).
+std::uint64_t encode_ray(Encoder e, unsigned bits, const EncodeScene& scene, const RsRay& ray);
+// Keys of every ray (host threads), keys[i] of rays[i].
+std::vector<std::uint64_t> encode_on_host(Encoder e, unsigned bits, const EncodeScene& scene,
+                                          const std::vector<RsRay>& rays);
+std::vector<std::uint64_t> encode_on_host(Encoder e, unsigned bits, const Bvh& bvh, const Aabb& scene_box,
+                                          const EncoderParams& params, const std::vector<RsRay>& rays);
+
+// The encode kernels of one scene on one device. Per-scene data (frame, BVH for PPC) is uploaded
+// at construction; cut boxes per (encoder, bits) at their first use (or by prepare()), once.
+class DeviceEncoder {
+ public:
+  DeviceEncoder(Runtime& rt, const Bvh& bvh, const Aabb& scene_box, const EncoderParams& params = {});
+
+  // keys[i], values[i] = i for the ray rays[order[i]], i < count. keys holds uint32 (bits ≤ 32) or
+  // uint64 (bits > 32). Enqueues and returns the kernel's event without waiting.
+  cl::Event enqueue(Encoder e, unsigned bits, const cl::Buffer& rays, const cl::Buffer& order, std::uint32_t count,
+                    const cl::Buffer& keys, const cl::Buffer& values);
+  // Uploads what (e, bits) needs now, so a timed enqueue does no host work.
+  void prepare(Encoder e, unsigned bits);
+  // Runs every kernel once on a few rays (PoCL compiles kernels at their first launch). Returns ms.
+  double warm_up();
+
+  static std::size_t key_bytes(unsigned bits) { return bits > 32 ? 8 : 4; }
+
+  struct Run {
+    std::vector<std::uint64_t> keys;  // widened to 64 bits
+    std::vector<std::uint32_t> values;
+    double median_ms = 0.0, min_ms = 0.0;
+  };
+  // Uploads rays (order null = identity), encodes warmup + reps times, returns keys and times.
+  Run run(Encoder e, unsigned bits, const std::vector<RsRay>& rays, const std::vector<std::uint32_t>* order = nullptr,
+          unsigned warmup = 0, unsigned reps = 1);
+
+  const EncodeScene& scene() const { return scene_; }
+  std::size_t local_size() const { return local_; }
+
+ private:
+  struct Uploaded {
+    cl::Buffer a, b, c;
+    std::uint32_t n = 0;
+  };
+  const Uploaded& uploaded(Encoder e, unsigned bits);
+
+  Runtime& rt_;
+  EncodeScene scene_;
+  cl::Buffer frame_, nodes_, triangles_;
+  struct Kernels {
+    cl::Kernel nosort, spatial, box_set, two_level, prefix_path;
+  } k32_, k64_;
+  std::map<std::pair<int, unsigned>, Uploaded> uploads_;
+  std::size_t local_ = 64;
+};
+
+}  // namespace raysort

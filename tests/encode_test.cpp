@@ -1,0 +1,456 @@
+// Encoders: kernel keys equal host keys bit for bit (every encoder × 16/32/64 bits, every batch of
+// two procedural scenes), hand-computed keys on a tiny scene, and the numerical hard cases of
+// issue 3 (signed zeros, acos domain, box faces and corner, clamping, rays inside cut nodes,
+// rays that miss everything, a single-leaf BVH, a flat scene, 1e6 and 1e-4 scene scales).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <set>
+
+#include "bvh/bvh.h"
+#include "encode/encode.h"
+#include "render/batches.h"
+#include "scene/load.h"
+#include "test_util.h"
+
+namespace raysort {
+
+namespace {
+
+const unsigned kBits[] = {16, 32, 64};
+
+RsRay ray(float ox, float oy, float oz, float dx, float dy, float dz, float tmax = RS_T_FAR) {
+  RsRay r{};
+  r.o[0] = ox, r.o[1] = oy, r.o[2] = oz, r.tmin = 0.0f;
+  r.d[0] = dx, r.d[1] = dy, r.d[2] = dz, r.tmax = tmax;
+  return r;
+}
+
+Aabb unit_box() { return Aabb{{0, 0, 0}, {1, 1, 1}}; }
+
+// A hand-made BVH over four flat triangles in z-planes (leaf boxes have zero z extent):
+//   node 0 root, children 1 (T0, T1) and 2 (T2, T3); leaves 3 = T0, 4 = T1, 5 = T2, 6 = T3.
+//   T0 x,y ∈ [0, .4]² z = .1     T1 x ∈ [.6, .9], y ∈ [0, .3] z = .2
+//   T2 x ∈ [0, .2], y ∈ [.6, .8] z = .3    T3 x,y ∈ [.6, .7]² z = .4
+// HAD (λ = 1/8): leaves .32 .18 .08 .02; node 1: .5 + .98/8 = .6225; node 2: .1 + .46/8 = .1575.
+Bvh four_leaf_bvh() {
+  Bvh b;
+  auto tri = [](float x0, float y0, float x1, float y1, float x2, float y2, float z, rs_u32 id) {
+    RsTriangle t{};
+    t.v0[0] = x0, t.v0[1] = y0, t.v0[2] = z;
+    t.v1[0] = x1, t.v1[1] = y1, t.v1[2] = z;
+    t.v2[0] = x2, t.v2[1] = y2, t.v2[2] = z;
+    t.id = id;
+    return t;
+  };
+  b.triangles = {tri(0, 0, .4f, 0, 0, .4f, .1f, 0), tri(.6f, 0, .9f, 0, .6f, .3f, .2f, 1),
+                 tri(0, .6f, .2f, .6f, 0, .8f, .3f, 2), tri(.6f, .6f, .7f, .6f, .7f, .7f, .4f, 3)};
+  auto node = [](float x0, float y0, float z0, float x1, float y1, float z1, rs_u32 first, rs_u32 count) {
+    RsBvhNode n{};
+    n.bmin[0] = x0, n.bmin[1] = y0, n.bmin[2] = z0, n.first = first;
+    n.bmax[0] = x1, n.bmax[1] = y1, n.bmax[2] = z1, n.count = count;
+    return n;
+  };
+  b.nodes = {node(0, 0, .1f, .9f, .8f, .4f, 1, 0),     node(0, 0, .1f, .9f, .4f, .2f, 3, 0),
+             node(0, .6f, .3f, .7f, .8f, .4f, 5, 0),   node(0, 0, .1f, .4f, .4f, .1f, 0, 1),
+             node(.6f, 0, .2f, .9f, .3f, .2f, 1, 1),   node(0, .6f, .3f, .2f, .8f, .3f, 2, 1),
+             node(.6f, .6f, .4f, .7f, .7f, .4f, 3, 1)};
+  b.depth = 2;
+  b.leaf_count = 4;
+  return b;
+}
+
+// Kernel keys and values against the host twin, bit for bit; keys fit in `bits`.
+void expect_device_equals_host(DeviceEncoder& dev, Encoder e, unsigned bits, const std::vector<RsRay>& rays,
+                               const std::string& what) {
+  auto host = encode_on_host(e, bits, dev.scene(), rays);
+  auto run = dev.run(e, bits, rays);
+  ASSERT_EQ(run.keys.size(), rays.size());
+  std::size_t bad = 0, first_bad = 0, overflow = 0;
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    if (run.keys[i] != host[i] && bad++ == 0) first_bad = i;
+    if (bits < 64 && (host[i] >> bits) != 0) ++overflow;
+  }
+  EXPECT_EQ(bad, 0u) << what << " " << encoder_name(e) << "/" << bits << ": first mismatch at ray " << first_bad
+                     << " device " << std::hex << run.keys[first_bad] << " host " << host[first_bad];
+  EXPECT_EQ(overflow, 0u) << what << " " << encoder_name(e) << "/" << bits;
+  for (std::size_t i = 0; i < run.values.size(); ++i) {
+    if (run.values[i] != i) {
+      ADD_FAILURE() << what << " " << encoder_name(e) << ": values[" << i << "] = " << run.values[i];
+      break;
+    }
+  }
+}
+
+void expect_all_encoders_bit_exact(DeviceEncoder& dev, const std::vector<RsRay>& rays, const std::string& what) {
+  for (Encoder e : all_encoders())
+    for (unsigned bits : kBits) expect_device_equals_host(dev, e, bits, rays, what);
+}
+
+std::uint64_t key1(Encoder e, unsigned bits, const EncodeScene& s, const RsRay& r) {
+  return encode_on_host(e, bits, s, {r})[0];
+}
+
+}  // namespace
+
+TEST(EncodeMath, AtanAndAcosAreCloseToLibm) {
+  double worst_atan = 0, worst_acos = 0;
+  for (int i = -200; i <= 200; ++i)
+    for (int j = -200; j <= 200; ++j) {
+      const float y = i * 0.013f, x = j * 0.0171f;
+      if (x == 0 && y == 0) continue;
+      worst_atan = std::max(worst_atan, std::abs(static_cast<double>(rs_atan2(y, x)) - std::atan2(double(y), double(x))));
+    }
+  for (int i = -10000; i <= 10000; ++i) {
+    const float x = i * 1e-4f;
+    worst_acos = std::max(worst_acos, std::abs(static_cast<double>(rs_acos(x)) - std::acos(double(x))));
+  }
+  EXPECT_LT(worst_atan, 1e-6);
+  EXPECT_LT(worst_acos, 1e-6);
+  EXPECT_EQ(rs_acos(1.0f), 0.0f);
+  EXPECT_EQ(rs_acos(1.5f), 0.0f);  // clamped
+  EXPECT_NEAR(rs_acos(-1.0f), 3.14159265f, 1e-6f);
+  EXPECT_EQ(rs_atan2(0.0f, 0.0f), 0.0f);
+  EXPECT_EQ(rs_atan2(-0.0f, -1.0f), rs_atan2(0.0f, -1.0f));  // −0 counts as +0
+}
+
+TEST(Encode, NamesRoundTrip) {
+  EXPECT_EQ(all_encoders().size(), 11u);
+  for (Encoder e : all_encoders()) {
+    auto p = parse_encoder(encoder_name(e));
+    ASSERT_TRUE(p.has_value()) << encoder_name(e);
+    EXPECT_EQ(*p, e);
+  }
+  EXPECT_EQ(parse_encoder("Aila_Compact"), Encoder::Aila);
+  EXPECT_EQ(parse_encoder("HCC_DIR"), Encoder::HCC_DIR);
+  EXPECT_EQ(parse_encoder("regular-grid"), Encoder::RegularGrid);
+  EXPECT_FALSE(parse_encoder("zorder").has_value());
+  EXPECT_NE(key_bits_problem(Encoder::MLHCC, 17, {}), "");
+  EXPECT_NE(key_bits_problem(Encoder::HCC, 65, {}), "");
+  EXPECT_NE(key_bits_problem(Encoder::HCC_DIR, 1, {}), "");
+  EXPECT_EQ(key_bits_problem(Encoder::HCC_DIR, 16, {}), "");
+  EXPECT_THROW(check_key_bits(Encoder::Origin, 0, {}), Error);
+}
+
+// Keys worked out by hand (docs/encoders.md has the layouts). Scene box [0,1]³.
+TEST(Encode, HandComputedSpatialKeys) {
+  Bvh bvh = four_leaf_bvh();
+  EncodeScene s(bvh, unit_box());
+  // Origin (.75, .25, .5) = x .11, y .01, z .1 in binary; direction +z: φ = ½ (atan2(0,0) = 0),
+  // θ = 0; Aila's (d+1)/2 = (.5, .5, 1).
+  const RsRay r = ray(.75f, .25f, .5f, 0, 0, 1);
+  // Morton levels: 101, 110, then 000...
+  EXPECT_EQ(key1(Encoder::Origin, 16, s, r), 0xB800u);
+  EXPECT_EQ(key1(Encoder::Origin, 64, s, r), 0xB800000000000000ull);
+  // Reis: 22 origin bits (101110 + 16 zeros), then (φ,θ) levels 10 00 00 ...
+  EXPECT_EQ(key1(Encoder::Reis, 16, s, r), 0xB800u);
+  EXPECT_EQ(key1(Encoder::Reis, 32, s, r), 0xB8000200u);
+  // Costa: (φ,θ) 10 00 00 00, then origin 101 110 00...
+  EXPECT_EQ(key1(Encoder::Costa, 16, s, r), 0x80B8u);
+  // Aila: origin 101 110 000, [origin level 3: 000 | direction level 0: 111], origin level 4: 0...
+  EXPECT_EQ(key1(Encoder::Aila, 16, s, r), 0xB80Eu);
+  // TwoPoint: L = min(.25, exit .5) → b = (.75, .25, .75); levels a|b: 101|101, 110|111, 000|0
+  EXPECT_EQ(key1(Encoder::TwoPoint, 16, s, r), 0xB770u);
+  // NoSort: no key.
+  EXPECT_EQ(key1(Encoder::NoSort, 32, s, r), 0u);
+  // RegularGrid of a cube: 16 cells = 4×2×2 (x most significant), 32 = 4×4×2. The ray from
+  // (.6, .3, .1) up +z crosses cells (2,0,0), (2,0,1) of 16 and (2,1,0), (2,1,1) of 32.
+  const RsRay g = ray(.6f, .3f, .1f, 0, 0, 1);
+  EXPECT_EQ(key1(Encoder::RegularGrid, 16, s, g), 0x00C0u);
+  EXPECT_EQ(key1(Encoder::RegularGrid, 32, s, g), 0x00003000u);
+}
+
+TEST(Encode, HandComputedCutKeys) {
+  Bvh bvh = four_leaf_bvh();
+  EncodeScene s(bvh, unit_box());
+  // The 16-node cut is all four leaves, by HAD: T0, T1, T2, T3 (bits 15, 14, 13, 12).
+  ASSERT_EQ(s.hcc_cut(16), (std::vector<std::uint32_t>{3, 4, 5, 6}));
+  const RsRay r1 = ray(.1f, .1f, 0, 0, 0, 1);           // through T0 only
+  const RsRay r2 = ray(.68f, .62f, 1, 0, 0, -1);        // through T3 only
+  const RsRay r2_short = ray(.68f, .62f, 1, 0, 0, -1, .5f);  // stops at z = .5, above T3
+  EXPECT_EQ(key1(Encoder::HCC, 16, s, r1), 0x8000u);
+  EXPECT_EQ(key1(Encoder::HCC, 16, s, r2), 0x1000u);
+  EXPECT_EQ(key1(Encoder::HCC, 16, s, r2_short), 0u);
+  EXPECT_EQ(key1(Encoder::HCC, 64, s, r2), 0x1000000000000000ull);
+  // HCC_DIR (d = 1): 15 cut bits (the same four leaves), then φ's top bit (φ = ½ → 1).
+  EXPECT_EQ(key1(Encoder::HCC_DIR, 16, s, r1), 0x8001u);
+  EXPECT_EQ(key1(Encoder::HCC_DIR, 16, s, r2), 0x1001u);
+  // MLHCC 16: 4 leaves < 8, so the root is the only top node (bit 15); the low cut under it is
+  // the four leaves (bits 7..4).
+  EXPECT_EQ(key1(Encoder::MLHCC, 16, s, r1), 0x8080u);
+  EXPECT_EQ(key1(Encoder::MLHCC, 16, s, r2), 0x8010u);
+  // PPC: root 1; (node 1, node 2) = 10; (T0, T1) = 10; T0's leaf, stack empty → 11010.
+  EXPECT_EQ(key1(Encoder::PPC, 16, s, r1), 0xD000u);
+  // r2: root 1; (node 1, node 2) = 01; (T2, T3) = 01 → 10101.
+  EXPECT_EQ(key1(Encoder::PPC, 16, s, r2), 0xA800u);
+  EXPECT_EQ(key1(Encoder::PPC, 32, s, r2), 0xA8000000u);
+  // PPC truncation: 2 bits of 11010 are 11.
+  EXPECT_EQ(key1(Encoder::PPC, 2, s, r1), 3u);
+  // The device agrees on all of these.
+  DeviceEncoder dev(testing::runtime(), bvh, unit_box());
+  expect_all_encoders_bit_exact(dev, {r1, r2, r2_short, ray(.75f, .25f, .5f, 0, 0, 1), ray(.6f, .3f, .1f, 0, 0, 1)},
+                                "four-leaf");
+}
+
+TEST(Encode, SignedZeroDirectionsGiveTheSameKeys) {
+  Bvh bvh = four_leaf_bvh();
+  EncodeScene s(bvh, unit_box());
+  const std::vector<std::pair<RsRay, RsRay>> pairs = {
+      {ray(.35f, .35f, .35f, 0, 0, 1), ray(.35f, .35f, .35f, -0.0f, -0.0f, 1)},
+      {ray(.35f, .35f, .35f, -1, 0, 0), ray(.35f, .35f, .35f, -1, -0.0f, 0)},   // atan2(±0, −1): π, not ±π
+      {ray(.35f, .35f, .35f, 1, 0, 0), ray(.35f, .35f, .35f, 1, -0.0f, -0.0f)},
+      {ray(.35f, .35f, .35f, 0, 1, 0), ray(.35f, .35f, .35f, -0.0f, 1, -0.0f)},
+  };
+  // (The origin lies on no box plane. A ray lying in a box's face plane with a ±0 component is
+  // where the slab test itself, shared with traversal, sees the sign: there box-set keys follow
+  // the trace's test; both sides still agree bit for bit, checked below.)
+  std::vector<RsRay> all = {ray(.3f, .3f, .3f, 0, 1, 0), ray(.3f, .3f, .3f, -0.0f, 1, -0.0f)};
+  for (Encoder e : {Encoder::Origin, Encoder::Reis, Encoder::Costa, Encoder::Aila, Encoder::TwoPoint})
+    EXPECT_EQ(key1(e, 64, s, all[0]), key1(e, 64, s, all[1])) << encoder_name(e);
+  for (const auto& [a, b] : pairs) {
+    for (Encoder e : all_encoders())
+      for (unsigned bits : kBits)
+        EXPECT_EQ(key1(e, bits, s, a), key1(e, bits, s, b)) << encoder_name(e) << "/" << bits;
+    all.push_back(a);
+    all.push_back(b);
+  }
+  DeviceEncoder dev(testing::runtime(), bvh, unit_box());
+  expect_all_encoders_bit_exact(dev, all, "signed zeros");
+}
+
+TEST(Encode, PolarDirectionsStayInTheAcosDomain) {
+  Bvh bvh = four_leaf_bvh();
+  EncodeScene s(bvh, unit_box());
+  // dz = ±1 after normalisation, also from unnormalised and nearly polar directions.
+  std::vector<RsRay> rays = {ray(.5f, .5f, .5f, 0, 0, 1),        ray(.5f, .5f, .5f, 0, 0, -1),
+                             ray(.5f, .5f, .5f, 0, 0, 7.5f),     ray(.5f, .5f, .5f, 0, 0, -1e-3f),
+                             ray(.5f, .5f, .5f, 1e-7f, 0, 1),    ray(.5f, .5f, .5f, -1e-7f, 1e-7f, -1),
+                             ray(.5f, .5f, .5f, 1e-30f, 0, 1),   ray(.5f, .5f, .5f, 0, 0, 0)};
+  // Reis 64: the low 42 bits are (φ,θ) × 21 levels; θ = 0 for +z and the top cell for −z.
+  const std::uint64_t theta_mask = 0x15555555555ull;  // θ bits of the 42-bit field
+  for (int i : {0, 2, 4, 6}) EXPECT_EQ(key1(Encoder::Reis, 64, s, rays[i]) & theta_mask, 0u) << i;
+  for (int i : {1, 3, 5}) EXPECT_EQ(key1(Encoder::Reis, 64, s, rays[i]) & theta_mask, theta_mask) << i;
+  DeviceEncoder dev(testing::runtime(), bvh, unit_box());
+  expect_all_encoders_bit_exact(dev, rays, "polar directions");
+}
+
+TEST(Encode, OriginsOnTheBoxFacesStayInTheirField) {
+  Bvh bvh = four_leaf_bvh();
+  EncodeScene s(bvh, unit_box());
+  const RsRay max_corner = ray(1, 1, 1, 1, 0, 0), min_corner = ray(0, 0, 0, -1, 0, 0);
+  const RsRay x_face = ray(1, 0, 0, 0, 1, 0), y_face = ray(0.5f, 1, 0.5f, 1, 0, 0);
+  EXPECT_EQ(key1(Encoder::Origin, 64, s, max_corner), ~0ull);
+  EXPECT_EQ(key1(Encoder::Origin, 32, s, max_corner), 0xFFFFFFFFull);
+  EXPECT_EQ(key1(Encoder::Origin, 16, s, max_corner), 0xFFFFull);
+  EXPECT_EQ(key1(Encoder::Origin, 64, s, min_corner), 0u);
+  EXPECT_EQ(key1(Encoder::Origin, 64, s, x_face), 0x9249249249249249ull);  // x bits all 1
+  EXPECT_EQ(key1(Encoder::Origin, 64, s, y_face) & 0x4924924924924924ull, 0x4924924924924924ull);
+  // TwoPoint from the max corner: a and b (clamped) are both the top cell.
+  EXPECT_EQ(key1(Encoder::TwoPoint, 64, s, max_corner), ~0ull);
+  // Aila: (d + 1)/2 = 1 for +x: the direction cell is clamped, not carried into the next group.
+  const std::uint64_t aila = key1(Encoder::Aila, 64, s, max_corner);
+  // 9 origin ones, [111|111], then 8 × [111|100] (dy, dz = 0 → .5 → 100...), last bit 0.
+  EXPECT_EQ(aila, 0xFFFFE79E79E79E78ull) << std::hex << aila;
+  DeviceEncoder dev(testing::runtime(), bvh, unit_box());
+  expect_all_encoders_bit_exact(dev, {max_corner, min_corner, x_face, y_face}, "box faces");
+}
+
+TEST(Encode, TerminationPointsOutsideTheBoxAreClamped) {
+  Bvh bvh = four_leaf_bvh();
+  EncoderParams p;
+  p.twopoint_length_fraction = 10.0f;  // L far beyond the box: b is limited by the box exit
+  EncodeScene s(bvh, unit_box(), p);
+  // From inside, a long fixed length is cut at the box exit (x = 1): b = (1, .25, .25).
+  const RsRay inside = ray(.25f, .25f, .25f, 1, 0, 0);
+  // From outside, pointing away: a and b both outside; both clamp to the max cell.
+  const RsRay outside = ray(10, 10, 10, 1, 1, 1);
+  // Behind the origin there is no segment (L = 0): b = a.
+  const RsRay away = ray(2, .5f, .5f, 1, 0, 0);
+  const std::uint64_t k = key1(Encoder::TwoPoint, 64, s, inside);
+  // a = (.01, .01, .01) in binary, b = (1 → top cell, .01, .01): level 0 a|b = 000|100,
+  // level 1 = 111|111.
+  EXPECT_EQ(k >> 52, 0x13Fu) << std::hex << k;
+  EXPECT_EQ(key1(Encoder::TwoPoint, 64, s, outside), ~0ull);
+  const std::uint64_t ka = key1(Encoder::TwoPoint, 16, s, away);
+  // a = b = (2 → top cell, .5, .5): level 0 = 111|111, levels 1, 2 = 100|100 → 111111 100100 1001.
+  EXPECT_EQ(ka, 0xFE49u) << std::hex << ka;
+  DeviceEncoder dev(testing::runtime(), bvh, unit_box(), p);
+  expect_all_encoders_bit_exact(dev, {inside, outside, away}, "outside the box");
+}
+
+TEST(Encode, RaysThatMissEverythingGetZeroCutBits) {
+  Bvh bvh = four_leaf_bvh();
+  EncodeScene s(bvh, unit_box());
+  const RsRay away = ray(5, 5, 5, 1, 0, 0);
+  for (Encoder e : {Encoder::HCC, Encoder::MLHCC, Encoder::PPC, Encoder::RegularGrid})
+    for (unsigned bits : kBits) EXPECT_EQ(key1(e, bits, s, away), 0u) << encoder_name(e) << "/" << bits;
+  DeviceEncoder dev(testing::runtime(), bvh, unit_box());
+  expect_all_encoders_bit_exact(dev, {away}, "misses");
+}
+
+// Procedural scenes: rays starting inside cut nodes set their bit; MLHCC rays that miss every top
+// node have zero low bits; kernel == host on every batch.
+namespace {
+
+void check_scene(const std::string& name, std::uint32_t w, std::uint32_t h) {
+  Scene scene = load_scene(name);
+  Scene::Flat tris = scene.flatten();
+  Bvh bvh = build_bvh(tris);
+  RayGenOptions gen;
+  gen.width = w;
+  gen.height = h;
+  gen.spp = 1;
+  auto batches = generate_batches(scene, tris, bvh, gen);
+  ASSERT_GE(batches.size(), 3u) << name;
+  DeviceEncoder dev(testing::runtime(), bvh, bvh.bounds());
+  for (const auto& rb : batches) expect_all_encoders_bit_exact(dev, rb.batch.rays, name + " " + rb.batch.name);
+
+  // Rays from the centre of each 32-bit cut node, in a few directions: that node's bit is 1.
+  const auto& cut = dev.scene().hcc_cut(32);
+  std::vector<RsRay> inside;
+  for (std::size_t i = 0; i < cut.size(); ++i) {
+    const RsBvhNode& n = bvh.nodes[cut[i]];
+    float c[3];
+    for (int a = 0; a < 3; ++a) c[a] = 0.5f * (n.bmin[a] + n.bmax[a]);
+    for (const RsRay& r : {ray(c[0], c[1], c[2], 1, 0, 0), ray(c[0], c[1], c[2], -0.3f, 0.9f, -0.1f)}) {
+      inside.push_back(r);
+      EXPECT_NE(key1(Encoder::HCC, 32, dev.scene(), r) & (1ull << (31 - i)), 0u) << name << " cut node " << i;
+    }
+  }
+  expect_all_encoders_bit_exact(dev, inside, name + " inside cut nodes");
+
+  // MLHCC: whenever no top bit is set, no low bit is either.
+  for (const auto& rb : batches)
+    for (unsigned bits : kBits) {
+      auto keys = encode_on_host(Encoder::MLHCC, bits, dev.scene(), rb.batch.rays);
+      const unsigned half = bits / 2;
+      for (auto k : keys)
+        if ((k >> half) == 0) {
+          ASSERT_EQ(k, 0u);
+        }
+    }
+}
+
+}  // namespace
+
+TEST(Encode, CornellEveryBatchBitExact) { check_scene("cornell", 64, 36); }
+TEST(Encode, DetailRoomEveryBatchBitExact) { check_scene("detail-room", 64, 36); }
+
+TEST(Encode, ThroughAnOrderBuffer) {
+  Scene scene = load_scene("cornell");
+  Scene::Flat tris = scene.flatten();
+  Bvh bvh = build_bvh(tris);
+  RayGenOptions gen;
+  gen.width = 32;
+  gen.height = 18;
+  auto batches = generate_batches(scene, tris, bvh, gen);
+  const auto& rays = batches.at(0).batch.rays;
+  std::vector<std::uint32_t> reversed(rays.size());
+  for (std::size_t i = 0; i < rays.size(); ++i) reversed[i] = static_cast<std::uint32_t>(rays.size() - 1 - i);
+  DeviceEncoder dev(testing::runtime(), bvh, bvh.bounds());
+  for (Encoder e : {Encoder::Reis, Encoder::HCC, Encoder::MLHCC, Encoder::PPC}) {
+    auto host = encode_on_host(e, 32, dev.scene(), rays);
+    auto run = dev.run(e, 32, rays, &reversed);
+    std::size_t bad = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) bad += run.keys[i] != host[reversed[i]] || run.values[i] != i;
+    EXPECT_EQ(bad, 0u) << encoder_name(e);
+  }
+}
+
+TEST(Encode, SingleLeafBvh) {
+  Scene s;
+  Mesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 1}};
+  m.triangles = {{0, 1, 2}};
+  s.meshes.push_back(m);
+  Bvh bvh = build_bvh(s.flatten());
+  ASSERT_EQ(bvh.nodes.size(), 1u);
+  EncodeScene es(bvh, bvh.bounds());
+  EXPECT_EQ(es.hcc_cut(32), std::vector<std::uint32_t>{0});
+  const auto& t = es.two_level(32);
+  EXPECT_EQ(t.cut.top, std::vector<std::uint32_t>{0});
+  ASSERT_EQ(t.cut.low.size(), 1u);
+  EXPECT_EQ(t.cut.low[0], std::vector<std::uint32_t>{0});
+  const RsRay hit = ray(.2f, .2f, -1, 0, 0, 1), miss = ray(5, 5, 5, 0, 1, 0);
+  EXPECT_EQ(key1(Encoder::HCC, 16, es, hit), 0x8000u);
+  EXPECT_EQ(key1(Encoder::MLHCC, 16, es, hit), 0x8080u);
+  EXPECT_EQ(key1(Encoder::PPC, 16, es, hit), 0x8000u);
+  EXPECT_EQ(key1(Encoder::PPC, 16, es, miss), 0u);
+  DeviceEncoder dev(testing::runtime(), bvh, bvh.bounds());
+  expect_all_encoders_bit_exact(dev, {hit, miss, ray(.1f, .1f, .1f, 0, 0, -1)}, "single leaf");
+}
+
+TEST(Encode, FlatSceneHasNoNanCells) {
+  // Every triangle in the plane z = 2: the scene box has zero z extent.
+  Scene s;
+  Mesh m;
+  for (int i = 0; i < 20; ++i) {
+    const float x = static_cast<float>(i % 5), y = static_cast<float>(i / 5);
+    const auto b = static_cast<std::uint32_t>(m.positions.size());
+    m.positions.push_back({x, y, 2});
+    m.positions.push_back({x + 0.9f, y, 2});
+    m.positions.push_back({x, y + 0.9f, 2});
+    m.triangles.push_back({b, b + 1, b + 2});
+  }
+  s.meshes.push_back(m);
+  Bvh bvh = build_bvh(s.flatten());
+  const Aabb box = bvh.bounds();
+  ASSERT_EQ(box.min[2], box.max[2]);
+  EncodeScene es(bvh, box);
+  EXPECT_EQ(es.frame().inv_extent[2], 0.0f);
+  std::vector<RsRay> rays;
+  for (int i = 0; i < 64; ++i) {
+    const float u = static_cast<float>(i) / 64.0f;
+    rays.push_back(ray(5 * u, 4 * (1 - u), 3, 0.1f * u, -0.2f, -1));
+    rays.push_back(ray(5 * u, 4 * u, 2, 1, 0, 0));  // in the plane
+  }
+  // z cells are all 0: Origin keys have no z bit set.
+  for (const RsRay& r : rays) EXPECT_EQ(key1(Encoder::Origin, 64, es, r) & 0x2492492492492492ull, 0u);
+  // Grid cells never split the flat axis.
+  EXPECT_EQ(regular_grid_shape(box, 32)[2], 1u);
+  DeviceEncoder dev(testing::runtime(), bvh, box);
+  expect_all_encoders_bit_exact(dev, rays, "flat scene");
+}
+
+namespace {
+Scene scaled(Scene s, float k) {
+  for (auto& m : s.meshes)
+    for (auto& p : m.positions)
+      for (auto& c : p) c *= k;
+  for (auto& inst : s.instances)
+    for (int r = 0; r < 3; ++r) inst.transform.m[r * 4 + 3] *= k;
+  for (auto& c : s.camera.position) c *= k;
+  for (auto& c : s.camera.look_at) c *= k;
+  for (auto& l : s.sphere_lights)
+    for (auto& c : l.center) c *= k;
+  return s;
+}
+}  // namespace
+
+TEST(Encode, LargeAndSmallSceneScales) {
+  Scene base = load_scene("cornell");
+  std::size_t base_distinct = 0;
+  for (float k : {1.0f, 1e6f, 1e-4f}) {
+    Scene scene = scaled(base, k);
+    Scene::Flat tris = scene.flatten();
+    Bvh bvh = build_bvh(tris);
+    RayGenOptions gen;
+    gen.width = 48;
+    gen.height = 27;
+    gen.spp = 1;
+    auto batches = generate_batches(scene, tris, bvh, gen);
+    ASSERT_GE(batches.size(), 2u);
+    DeviceEncoder dev(testing::runtime(), bvh, bvh.bounds());
+    for (const auto& rb : batches)
+      expect_all_encoders_bit_exact(dev, rb.batch.rays, "scale " + std::to_string(k) + " " + rb.batch.name);
+    // Sensible keys: the primary batch spreads over about as many TwoPoint cells at every scale.
+    auto keys = encode_on_host(Encoder::TwoPoint, 32, dev.scene(), batches[0].batch.rays);
+    const std::size_t distinct = std::set<std::uint64_t>(keys.begin(), keys.end()).size();
+    if (k == 1.0f) base_distinct = distinct;
+    EXPECT_GT(distinct, base_distinct / 2) << "scale " << k;
+    EXPECT_GT(distinct, 10u) << "scale " << k;
+  }
+}
+
+}  // namespace raysort
