@@ -6,9 +6,11 @@
 BUILD ?= build
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release
-# The procedural scenes, traced at a reduced resolution: every batch verified against the host.
+# The main job: the quick preset of the benchmark matrix (procedural scenes, reduced resolution),
+# after verifying every batch's hits against the host reference at the same resolution.
 BENCH_SCENES ?= cornell,detail-room,landscape,multi-instance
-BENCH_RESOLUTION ?= 640x360
+BENCH_RESOLUTION ?= 320x180
+BENCH_OUT ?= results/bench-quick
 
 .PHONY: all deps configure build test bench clean
 
@@ -32,6 +34,9 @@ test: deps
 bench: deps
 	$(MAKE) build
 	$(BUILD)/raysort trace --scene $(BENCH_SCENES) --resolution $(BENCH_RESOLUTION)
+	$(BUILD)/raysort run --preset quick --resolution $(BENCH_RESOLUTION) --out $(BENCH_OUT)
+	@echo "tables: $(BENCH_OUT)/tables.md"
+
 
 clean:
 	rm -rf $(BUILD)
