@@ -4,15 +4,16 @@
  * (Satish, Harris & Garland 2009, "Designing efficient sorting algorithms for manycore GPUs";
  * Merrill & Grimshaw 2011), in the chunked form that is also the classic CPU LSD radix sort:
  * every work-group owns one contiguous tile of the input, so a pass is
- *   1. rs_histogram  per-tile digit counts, stored digit-major: counts[digit][tile];
- *   2. rs_scan       one exclusive scan over that digit-major array, which turns every count into
- *                    the output position of the tile's first key with that digit;
- *   3. rs_scatter    every tile writes its keys, in input order, from those positions on.
+ *   1. rs_count    per-tile counts of the pass's digit, stored digit-major: counts[digit][tile];
+ *   2. rs_scan     one exclusive scan over that digit-major array, which turns every count into
+ *                  the output position of the tile's first key with that digit;
+ *   3. rs_scatter  every tile writes its keys, in input order, from those positions on.
  * A tile's keys keep their input order and tiles are ranked in order, so every pass is stable,
- * which is what makes LSD correct. Before the first pass rs_histogram counts the digits of *all*
- * passes in one read of the keys; the host reads the totals back once (rs_reduce) and skips
- * every pass whose digit is the same for all keys. The tile counts of the first pass that runs
- * come from that same read, so only later passes count again.
+ * which is what makes LSD correct. The first read of a sort (rs_count_bounds) also takes the OR
+ * and the AND of all keys; the host reads those two words back once (rs_reduce_bounds) and skips
+ * every pass whose digit is the same for all keys: OR and AND agree on a digit's bits exactly
+ * when one bin of that digit's histogram holds every key. That costs two bit operations per key
+ * instead of a histogram per pass, and the first read's counts serve the first pass if it runs.
  *
  * Inside a work-group (RS_WG work-items, each owning `items` consecutive keys of the tile):
  *   RS_WG == 1 (CPUs through PoCL): a work-item is a plain scalar loop, local memory is ordinary
@@ -39,7 +40,6 @@ typedef uint rs_key;
 #endif
 
 #define RS_RADIX (1u << RS_RADIX_BITS)
-#define RS_MAX_PASSES ((64 + RS_RADIX_BITS - 1) / RS_RADIX_BITS)
 
 /* The digit of pass p covers key bits [shift, shift + width) with width = RS_RADIX_BITS except
  * in the last pass, which stops at hi_bit (a 10-bit top-k sort by 8-bit digits: 8 + 2 bits). */
@@ -49,57 +49,110 @@ inline uint rs_mask(uint shift, uint hi_bit) {
 }
 inline uint rs_digit(rs_key key, uint shift, uint mask) { return (uint)(key >> shift) & mask; }
 
-/* Per-tile digit counts of `passes` consecutive digits starting at lo_bit, one read of the keys.
- * counts[out_offset + (p * RS_RADIX + digit) * tiles + tile]. A tile is items * RS_WG keys.
- * Used once per sort for all passes, and again for each later pass with passes = 1. */
-__kernel void rs_histogram(__global const rs_key* restrict keys, uint n, uint items, uint lo_bit, uint hi_bit,
-                           uint passes, __global uint* restrict counts, uint out_offset) {
-  __local uint hist[RS_MAX_PASSES * RS_RADIX];
+/* Per-tile counts of one digit, bits [shift, shift + width): counts[digit * tiles + tile]. A tile
+ * is items * RS_WG keys. With bounds != 0 (the first read of a sort) the kernel also writes the
+ * OR and the AND of the tile's keys to bounds[2 * tile], bounds[2 * tile + 1]. */
+inline void rs_count_tile(__global const rs_key* restrict keys, uint n, uint items, uint shift, uint hi_bit,
+                          __global uint* restrict counts, __global rs_key* restrict bounds, const bool with_bounds,
+                          __local uint* hist, __local rs_key* red_any, __local rs_key* red_all) {
   const uint lid = get_local_id(0);
   const uint tile = get_group_id(0);
   const uint tiles = get_num_groups(0);
-  const uint bins = passes * RS_RADIX;
-  for (uint i = lid; i < bins; i += RS_WG) hist[i] = 0;
+  const uint mask = rs_mask(shift, hi_bit);
+  for (uint d = lid; d < RS_RADIX; d += RS_WG) hist[d] = 0;
   barrier(CLK_LOCAL_MEM_FENCE);
 
-  const uint tile_size = items * RS_WG;
-  const uint begin = tile * tile_size;
-  const uint end = min(n, begin + tile_size);
+  const uint begin = tile * items * RS_WG;
+  const uint end = min(n, begin + items * RS_WG);
+  rs_key any = 0, all = ~(rs_key)0;
   /* Strided: coalesced on a GPU, a sequential loop when RS_WG == 1. Order does not matter here. */
   for (uint i = begin + lid; i < end; i += RS_WG) {
     rs_key key = keys[i];
-    uint shift = lo_bit;
-    for (uint p = 0; p < passes; ++p, shift += RS_RADIX_BITS) {
-      uint bin = p * RS_RADIX + rs_digit(key, shift, rs_mask(shift, hi_bit));
-#if RS_WG == 1
-      hist[bin] += 1u;
-#else
-      atomic_inc(&hist[bin]);
-#endif
+    if (with_bounds) {
+      any |= key;
+      all &= key;
     }
+#if RS_WG == 1
+    hist[rs_digit(key, shift, mask)] += 1u;
+#else
+    atomic_inc(&hist[rs_digit(key, shift, mask)]);
+#endif
+  }
+  if (with_bounds) {
+#if RS_WG == 1
+    bounds[2 * tile] = any;
+    bounds[2 * tile + 1] = all;
+#else
+    /* Tree reduction over the work-group (RS_WG is a power of two). */
+    red_any[lid] = any;
+    red_all[lid] = all;
+    barrier(CLK_LOCAL_MEM_FENCE);
+    for (uint stride = RS_WG / 2; stride > 0; stride >>= 1) {
+      if (lid < stride) {
+        red_any[lid] |= red_any[lid + stride];
+        red_all[lid] &= red_all[lid + stride];
+      }
+      barrier(CLK_LOCAL_MEM_FENCE);
+    }
+    if (lid == 0) {
+      bounds[2 * tile] = red_any[0];
+      bounds[2 * tile + 1] = red_all[0];
+    }
+#endif
   }
   barrier(CLK_LOCAL_MEM_FENCE);
-  for (uint i = lid; i < bins; i += RS_WG) counts[out_offset + i * tiles + tile] = hist[i];
+  for (uint d = lid; d < RS_RADIX; d += RS_WG) counts[d * tiles + tile] = hist[d];
 }
 
-/* totals[b] = sum over tiles of counts[b * tiles + tile], for every bin b of every pass. */
-__kernel void rs_reduce(__global const uint* restrict counts, uint tiles, uint bins, __global uint* restrict totals) {
-  const uint b = get_global_id(0);
-  if (b >= bins) return;
-  uint sum = 0;
-  for (uint t = 0; t < tiles; ++t) sum += counts[b * tiles + t];
-  totals[b] = sum;
+__kernel void rs_count(__global const rs_key* restrict keys, uint n, uint items, uint shift, uint hi_bit,
+                       __global uint* restrict counts) {
+  __local uint hist[RS_RADIX];
+  rs_count_tile(keys, n, items, shift, hi_bit, counts, 0, false, hist, 0, 0);
 }
 
-/* Exclusive scan, in place, of counts[offset .. offset + m): one work-group of RS_SCAN_WG
- * work-items, each owning a contiguous segment. Digit-major order makes the result the output
- * position of every (digit, tile) run. */
-__kernel void rs_scan(__global uint* restrict counts, uint offset, uint m) {
+/* The first read of a sort: the first digit's tile counts and every tile's key OR and AND. */
+__kernel void rs_count_bounds(__global const rs_key* restrict keys, uint n, uint items, uint shift, uint hi_bit,
+                              __global uint* restrict counts, __global rs_key* restrict bounds) {
+  __local uint hist[RS_RADIX];
+  __local rs_key red_any[RS_WG], red_all[RS_WG]; /* OpenCL C 1.2: __local only at kernel scope */
+  rs_count_tile(keys, n, items, shift, hi_bit, counts, bounds, true, hist, red_any, red_all);
+}
+
+/* OR and AND of all keys from the tiles' (one work-group). A digit is the same for every key
+ * exactly when OR and AND agree on its bits, i.e. when one bin of its histogram holds all keys. */
+__kernel void rs_reduce_bounds(__global const rs_key* restrict bounds, uint tiles, __global rs_key* restrict out) {
+  __local rs_key red_any[RS_SCAN_WG], red_all[RS_SCAN_WG];
+  const uint lid = get_local_id(0);
+  rs_key any = 0, all = ~(rs_key)0;
+  for (uint t = lid; t < tiles; t += RS_SCAN_WG) {
+    any |= bounds[2 * t];
+    all &= bounds[2 * t + 1];
+  }
+  red_any[lid] = any;
+  red_all[lid] = all;
+  barrier(CLK_LOCAL_MEM_FENCE);
+  for (uint stride = RS_SCAN_WG / 2; stride > 0; stride >>= 1) {
+    if (lid < stride) {
+      red_any[lid] |= red_any[lid + stride];
+      red_all[lid] &= red_all[lid + stride];
+    }
+    barrier(CLK_LOCAL_MEM_FENCE);
+  }
+  if (lid == 0) {
+    out[0] = red_any[0];
+    out[1] = red_all[0];
+  }
+}
+
+/* Exclusive scan, in place, of counts[0 .. m): one work-group of RS_SCAN_WG work-items, each
+ * owning a contiguous segment. Digit-major order makes the result the output position of every
+ * (digit, tile) run. */
+__kernel void rs_scan(__global uint* restrict counts, uint m) {
   __local uint partial[RS_SCAN_WG];
   const uint lid = get_local_id(0);
   const uint segment = (m + RS_SCAN_WG - 1) / RS_SCAN_WG;
-  const uint begin = offset + min(m, lid * segment);
-  const uint end = offset + min(m, (lid + 1) * segment);
+  const uint begin = min(m, lid * segment);
+  const uint end = min(m, (lid + 1) * segment);
   uint sum = 0;
   for (uint i = begin; i < end; ++i) sum += counts[i];
   partial[lid] = sum;
@@ -119,17 +172,17 @@ __kernel void rs_scan(__global uint* restrict counts, uint offset, uint m) {
   }
 }
 
-/* One counting-sort pass: tile `tile` writes its keys, stably, from offsets[offset + digit * tiles + tile]. */
+/* One counting-sort pass: tile `tile` writes its keys, stably, from offsets[digit * tiles + tile]. */
 __kernel void rs_scatter(__global const rs_key* restrict keys_in, __global const uint* restrict values_in,
                          __global rs_key* restrict keys_out, __global uint* restrict values_out, uint n, uint items,
-                         uint shift, uint hi_bit, __global const uint* restrict offsets, uint offset) {
+                         uint shift, uint hi_bit, __global const uint* restrict offsets) {
   const uint tile = get_group_id(0);
   const uint tiles = get_num_groups(0);
   const uint mask = rs_mask(shift, hi_bit);
 #if RS_WG == 1
   /* One work-item per tile: the tile's counts are this work-item's counts; scatter in order. */
   __local uint position[RS_RADIX];
-  for (uint d = 0; d < RS_RADIX; ++d) position[d] = offsets[offset + d * tiles + tile];
+  for (uint d = 0; d < RS_RADIX; ++d) position[d] = offsets[d * tiles + tile];
   const uint begin = tile * items;
   const uint end = min(n, begin + items);
   for (uint i = begin; i < end; ++i) {
@@ -188,7 +241,7 @@ __kernel void rs_scatter(__global const rs_key* restrict keys_in, __global const
     running += c;
   }
   barrier(CLK_LOCAL_MEM_FENCE);
-  for (uint d = lid; d < RS_RADIX; d += RS_WG) run_delta[d] = offsets[offset + d * tiles + tile] - rank[d * RS_WG];
+  for (uint d = lid; d < RS_RADIX; d += RS_WG) run_delta[d] = offsets[d * tiles + tile] - rank[d * RS_WG];
   barrier(CLK_LOCAL_MEM_FENCE); /* column 0 of rank[] is read above and advanced below */
 
   /* 4. Reorder the tile by digit in local memory (stable: work-items in order, keys in order). */

@@ -10,6 +10,8 @@ PACKAGES=(
   libtinyobjloader-dev libopenimageio-dev fonts-dejavu-core
   googletest libgtest-dev libbenchmark-dev
   libcli11-dev nlohmann-json3-dev libtomlplusplus-dev libfmt-dev
+  #: optional: Boost.Compute (header-only) is the sortbench's reference GPU-library sort
+  libboost-dev
 )
 
 SUDO=""

@@ -1,4 +1,236 @@
+// raysort sortbench: throughput of our radix sort (host/sort) against the host's std::stable_sort
+// and std::sort, Boost.Compute's sort_by_key on the same device (when its headers are installed),
+// and the device's copy-bandwidth bound. Device times come from profiling events, medians over
+// --reps after a warm-up; program builds and first launches are reported apart.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdint>
+#include <fstream>
+#include <numeric>
+#include <random>
+#include <string>
+#include <vector>
+
 #include "app/commands.h"
+#include "cl/runtime.h"
+#include "sort/radix_sort.h"
+
+#if __has_include(<boost/compute/algorithm/sort_by_key.hpp>)
+#include <boost/compute/algorithm/sort_by_key.hpp>
+#include <boost/compute/command_queue.hpp>
+#include <boost/compute/context.hpp>
+#include <boost/compute/iterator/buffer_iterator.hpp>
+#define RAYSORT_HAVE_BOOST_COMPUTE 1
+#else
+#define RAYSORT_HAVE_BOOST_COMPUTE 0
+#endif
+
 namespace raysort {
-void register_sortbench_command(CLI::App&) {}
+
+namespace {
+
+struct Options {
+  std::string device;
+  int reps = 10;
+  int ref_reps = 3;
+  bool large = true;
+};
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+}
+
+template <class F>
+double wall_ms(F&& f) {
+  auto t0 = std::chrono::steady_clock::now();
+  f();
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// Device copy bandwidth (bytes read + written per second) from clEnqueueCopyBuffer, median of 5.
+double copy_bandwidth(Runtime& rt) {
+  const std::size_t bytes = std::min<std::size_t>(256u << 20, rt.info().max_alloc_bytes / 2);
+  cl::Buffer a = rt.buffer("copy-bandwidth source", bytes), b = rt.buffer("copy-bandwidth target", bytes);
+  std::vector<double> ms;
+  for (int i = 0; i < 6; ++i) {
+    cl::Event e;
+    rt.queue().enqueueFillBuffer(a, cl_uint(i), 0, bytes);
+    rt.queue().enqueueCopyBuffer(a, b, 0, 0, bytes, nullptr, &e);
+    e.wait();
+    if (i > 0) ms.push_back(event_ms(e));  // the first copy touches fresh pages
+  }
+  return 2.0 * static_cast<double>(bytes) / (median(ms) * 1e-3);
+}
+
+template <class Key>
+struct Pair {
+  Key key;
+  std::uint32_t value;
+};
+
+struct Row {
+  std::size_t n = 0;
+  unsigned bits = 0;
+  std::string keys;
+  SortStats stats;
+  double ours = 0, ours_ms = 0, bound = 0, stable = 0, unstable = 0, boost = -1, boost_first_ms = 0;
+  bool ok = false;
+};
+
+template <class Key>
+Row bench_case(Runtime& rt, RadixSort& sorter, double bandwidth, std::size_t n, unsigned bits, bool few,
+               const Options& opt) {
+  Row row;
+  row.n = n;
+  row.bits = bits;
+  row.keys = few ? "few-distinct" : "random";
+  std::mt19937_64 rng(n * 131 + bits * 7 + few);
+  std::vector<Key> keys(n);
+  // few-distinct: only the 16 highest key bits are random (at most 65536 distinct keys).
+  for (auto& k : keys) k = few ? static_cast<Key>((rng() & 0xFFFF) << (bits - 16)) : static_cast<Key>(rng());
+  std::vector<std::uint32_t> values(n);
+  std::iota(values.begin(), values.end(), 0u);
+  const RadixSortConfig cfg{bits, 0};
+
+  // Host references, on (key, value) pairs.
+  std::vector<Pair<Key>> pairs(n), expected;
+  for (std::size_t i = 0; i < n; ++i) pairs[i] = {keys[i], values[i]};
+  auto by_key = [](const Pair<Key>& a, const Pair<Key>& b) { return a.key < b.key; };
+  std::vector<double> stable_ms, unstable_ms;
+  for (int r = 0; r < opt.ref_reps; ++r) {
+    auto p = pairs;
+    stable_ms.push_back(wall_ms([&] { std::stable_sort(p.begin(), p.end(), by_key); }));
+    if (r == 0) expected = p;
+    p = pairs;
+    unstable_ms.push_back(wall_ms([&] { std::sort(p.begin(), p.end(), by_key); }));
+  }
+  const double nk = static_cast<double>(n) * 1e-3;  // keys per ms -> Mkeys/s
+  row.stable = nk / median(stable_ms);
+  row.unstable = nk / median(unstable_ms);
+
+  // Ours: the input kept pristine on the device, copied into the sorted buffers before each rep.
+  cl::Buffer src_keys = rt.upload("bench keys", keys), src_values = rt.upload("bench values", values);
+  cl::Buffer work_keys = rt.buffer("bench work keys", n * sizeof(Key));
+  cl::Buffer work_values = rt.buffer("bench work values", n * 4);
+  auto restore = [&] {
+    rt.queue().enqueueCopyBuffer(src_keys, work_keys, 0, 0, n * sizeof(Key));
+    rt.queue().enqueueCopyBuffer(src_values, work_values, 0, 0, n * 4);
+    rt.queue().finish();
+  };
+  std::vector<double> ms;
+  for (int r = -1; r < opt.reps; ++r) {  // rep -1: warm-up at this size, not timed
+    restore();
+    SortStats s = sorter.sort(work_keys, work_values, n, cfg);
+    if (r >= 0) ms.push_back(s.ms);
+    row.stats = s;
+  }
+  row.ours_ms = median(ms);
+  row.ours = nk / row.ours_ms;
+  std::vector<Key> got_keys;
+  std::vector<std::uint32_t> got_values;
+  rt.download("sorted keys", work_keys, got_keys, n);
+  rt.download("sorted values", work_values, got_values, n);
+  row.ok = true;
+  for (std::size_t i = 0; i < n && row.ok; ++i)
+    row.ok = got_keys[i] == expected[i].key && got_values[i] == expected[i].value;
+
+  // The copy-bandwidth bound: every pass that runs reads and writes all keys and values once,
+  // and the upfront histogram reads the keys once.
+  const double bytes = static_cast<double>(n) * (row.stats.passes_run * 2.0 * (sizeof(Key) + 4) + sizeof(Key));
+  row.bound = nk / (bytes / bandwidth * 1e3);
+
+#if RAYSORT_HAVE_BOOST_COMPUTE
+  namespace bc = boost::compute;
+  bc::context context(rt.context()(), true);
+  bc::command_queue queue(rt.queue()(), true);
+  bc::buffer bk(work_keys(), true), bv(work_values(), true);
+  auto boost_sort = [&] {
+    bc::sort_by_key(bc::make_buffer_iterator<Key>(bk, 0), bc::make_buffer_iterator<Key>(bk, n),
+                    bc::make_buffer_iterator<std::uint32_t>(bv, 0), queue);
+    queue.finish();
+  };
+  restore();
+  row.boost_first_ms = wall_ms(boost_sort);  // builds Boost.Compute's programs: reported apart
+  std::vector<double> boost_ms;
+  for (int r = 0; r < opt.ref_reps; ++r) {
+    restore();
+    boost_ms.push_back(wall_ms(boost_sort));
+  }
+  row.boost = nk / median(boost_ms);
+#endif
+  return row;
+}
+
+void run_sortbench(const Options& opt) {
+  Runtime rt(select_device(opt.device));
+  fmt::print("device: {} ({}, {} compute units)\n", rt.info().name, rt.info().platform_name, rt.info().compute_units);
+  if (std::ifstream load("/proc/loadavg"); load) {  // other work on the machine skews every column
+    std::string one, five;
+    load >> one >> five;
+    fmt::print("host load average (1, 5 min): {} {}\n", one, five);
+  }
+  RadixSort sorter(rt);
+  const auto& t = sorter.tuning();
+  fmt::print("radix sort: {}-bit digits, work-group {}, {}; programs built in {:.0f} ms\n", t.radix_bits,
+             t.work_group,
+             t.work_group == 1 ? fmt::format("tiles of >= {} keys, {} per compute unit", t.min_tile, t.tiles_per_unit)
+                               : fmt::format("{} keys per work-item", t.items),
+             rt.build_ms());
+  fmt::print("first launches (warm-up, both key widths): {:.0f} ms\n", sorter.warm_up());
+  const double bandwidth = copy_bandwidth(rt);
+  fmt::print("copy bandwidth (clEnqueueCopyBuffer, read + write): {:.1f} GB/s\n", bandwidth * 1e-9);
+  fmt::print("ours: median of {} reps, profiling events; host sorts and Boost.Compute: median of {} reps, wall clock\n",
+             opt.reps, opt.ref_reps);
+#if !RAYSORT_HAVE_BOOST_COMPUTE
+  fmt::print("Boost.Compute: headers not installed (libboost-dev), column left empty\n");
+#endif
+  fmt::print("\n| pairs | key bits | keys | passes run/skipped | ours Mkeys/s | ours ms | copy bound Mkeys/s | "
+             "% of bound | std::stable_sort | std::sort | Boost.Compute | x stable_sort | x Boost | ok |\n");
+  fmt::print("|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n");
+  std::vector<std::size_t> sizes = {2073600};
+  if (opt.large) sizes.push_back(16u << 20);
+  std::vector<Row> rows;
+  bool all_ok = true;
+  for (std::size_t n : sizes)
+    for (unsigned bits : {32u, 64u})
+      for (bool few : {false, true}) {
+        Row r = bits == 64 ? bench_case<std::uint64_t>(rt, sorter, bandwidth, n, bits, few, opt)
+                           : bench_case<std::uint32_t>(rt, sorter, bandwidth, n, bits, few, opt);
+        all_ok = all_ok && r.ok;
+        auto boost = [&](double v) { return r.boost < 0 ? std::string("-") : fmt::format("{:.1f}", v); };
+        fmt::print("| {} | {} | {} | {}/{} | {:.1f} | {:.2f} | {:.1f} | {:.0f}% | {:.1f} | {:.1f} | {} | {:.1f} | {} | {} |\n",
+                   r.n, r.bits, r.keys, r.stats.passes_run, r.stats.passes_skipped, r.ours, r.ours_ms, r.bound,
+                   100.0 * r.ours / r.bound, r.stable, r.unstable, boost(r.boost), r.ours / r.stable,
+                   boost(r.ours / r.boost), r.ok ? "yes" : "NO");
+        std::fflush(stdout);
+        rows.push_back(r);
+      }
+#if RAYSORT_HAVE_BOOST_COMPUTE
+  fmt::print("\nBoost.Compute first call (program builds) per case, ms:");
+  for (auto& r : rows) fmt::print(" {:.0f}", r.boost_first_ms);
+  fmt::print("\n");
+#endif
+  if (!all_ok) {
+    fmt::print("FAILED: a sorted result differs from std::stable_sort\n");
+    set_command_exit_code(1);
+  }
+}
+
+}  // namespace
+
+void register_sortbench_command(CLI::App& app) {
+  static Options opt;
+  auto* cmd = app.add_subcommand("sortbench", "benchmark the radix sort against host sorts and Boost.Compute");
+  cmd->add_option("--device", opt.device, "OpenCL device: index, cpu, gpu or a name substring (default: first GPU)");
+  cmd->add_option("--reps", opt.reps, "timed repetitions of our sort per case (median)")->check(CLI::Range(1, 1000));
+  cmd->add_option("--ref-reps", opt.ref_reps, "repetitions of the host sorts and Boost.Compute per case")
+      ->check(CLI::Range(1, 100));
+  cmd->add_flag("!--no-large", opt.large, "skip the 16 M pair cases");
+  cmd->callback([] { run_sortbench(opt); });
+}
+
 }  // namespace raysort

@@ -1,0 +1,296 @@
+#include "sort/radix_sort.h"
+
+#include <fmt/format.h>
+
+#include <chrono>
+#include <cstring>
+#include <limits>
+#include <numeric>
+
+namespace raysort {
+
+namespace {
+
+unsigned floor_pow2(std::size_t v) {
+  unsigned p = 1;
+  while (p * 2 <= v && p < (1u << 30)) p *= 2;
+  return p;
+}
+
+std::string program_options(const RadixSortTuning& t, unsigned key_bits) {
+  return fmt::format("-DRS_KEY_BITS={} -DRS_RADIX_BITS={} -DRS_WG={} -DRS_MAX_ITEMS={} -DRS_SCAN_WG={}", key_bits,
+                     t.radix_bits, t.work_group, t.items, t.scan_work_group);
+}
+
+}  // namespace
+
+std::size_t RadixSortTuning::local_bytes(std::size_t key_bytes) const {
+  const std::size_t radix = std::size_t(1) << radix_bits;
+  const std::size_t count = radix * 4 + 2 * std::size_t(work_group) * key_bytes;
+  if (work_group == 1) return count;
+  const std::size_t scatter =
+      std::size_t(work_group) * items * (key_bytes + 4) + radix * work_group * 4 + work_group * 4 + radix * 4;
+  return std::max(count, scatter);
+}
+
+RadixSortTuning RadixSortTuning::for_device(const DeviceInfo& device) {
+  RadixSortTuning t;
+  if (device.type != "GPU") {
+    // A CPU (PoCL): a work-item is a scalar loop and local memory is ordinary memory, so one
+    // work-item per tile scatters its chunk serially; 8-bit digits keep the 2 x 256 output
+    // streams of a tile (keys, values) within the L1/L2 caches.
+    t.radix_bits = 8;
+    t.work_group = 1;
+    t.scan_work_group = 1;
+    t.reduce_work_group = 64;
+    return t;
+  }
+  // A GPU: the widest digit (8 down to 4 bits) whose [digit][work-item] rank table plus a staged
+  // tile of 64-bit keys fits the device's local memory with at least 128 work-items per group.
+  const std::size_t max_wg = std::max<std::size_t>(1, device.max_work_group_size);
+  const unsigned min_wg = std::min<unsigned>(128, floor_pow2(max_wg));
+  t.items = 8;
+  t.radix_bits = 0;
+  for (unsigned bits = 8; bits >= 4 && t.radix_bits == 0; --bits) {
+    for (unsigned wg = std::min<unsigned>(256, floor_pow2(max_wg)); wg >= min_wg; wg /= 2) {
+      RadixSortTuning c = t;
+      c.radix_bits = bits;
+      c.work_group = wg;
+      if (c.local_bytes(8) <= device.local_mem_bytes) {
+        t = c;
+        break;
+      }
+    }
+  }
+  if (t.radix_bits == 0) {  // a tiny local memory: the smallest shape that fits
+    t.radix_bits = 4;
+    t.work_group = min_wg;
+    while (t.work_group > 1 && t.local_bytes(8) > device.local_mem_bytes) t.work_group /= 2;
+  }
+  t.scan_work_group = std::min<unsigned>(1024, floor_pow2(max_wg));
+  t.reduce_work_group = std::min<unsigned>(64, floor_pow2(max_wg));
+  return t;
+}
+
+RadixSort::RadixSort(Runtime& rt) : RadixSort(rt, RadixSortTuning::for_device(rt.info())) {}
+
+RadixSort::RadixSort(Runtime& rt, const RadixSortTuning& tuning) : rt_(rt), tuning_(tuning) {
+  auto pow2 = [](unsigned v) { return v >= 1 && (v & (v - 1)) == 0; };
+  if (tuning_.radix_bits < 1 || tuning_.radix_bits > 12 || !pow2(tuning_.work_group) || tuning_.items < 1 ||
+      !pow2(tuning_.scan_work_group) || tuning_.reduce_work_group < 1)
+    throw Error(fmt::format("radix sort: invalid tuning (radix_bits {}, work_group {}, items {}, scan_work_group {})",
+                            tuning_.radix_bits, tuning_.work_group, tuning_.items, tuning_.scan_work_group));
+  if (tuning_.local_bytes(8) > rt.info().local_mem_bytes)
+    throw Error(fmt::format("radix sort: the tuning needs {} of local memory, device '{}' has {}",
+                            human_bytes(tuning_.local_bytes(8)), rt.info().name,
+                            human_bytes(rt.info().local_mem_bytes)));
+  for (unsigned key_bits : {32u, 64u}) {
+    cl::Program program = rt.build({"cl/radix_sort.cl"}, program_options(tuning_, key_bits));
+    Kernels& k = key_bits == 64 ? wide_ : narrow_;
+    cl_call("creating the radix sort kernels", [&] {
+      k.count_bounds = cl::Kernel(program, "rs_count_bounds");
+      k.reduce_bounds = cl::Kernel(program, "rs_reduce_bounds");
+      k.count = cl::Kernel(program, "rs_count");
+      k.scan = cl::Kernel(program, "rs_scan");
+      k.scatter = cl::Kernel(program, "rs_scatter");
+    });
+  }
+}
+
+unsigned RadixSort::passes(const RadixSortConfig& cfg) const {
+  return (cfg.sorted_bits() + tuning_.radix_bits - 1) / tuning_.radix_bits;
+}
+
+void RadixSort::ensure(Runtime& rt, cl::Buffer& b, std::size_t& have, std::size_t need, const char* name) {
+  if (need <= have && have > 0) return;
+  b = cl::Buffer();  // release before allocating the larger one
+  have = 0;
+  b = rt.buffer(name, std::max<std::size_t>(need, 4));
+  have = std::max<std::size_t>(need, 4);
+}
+
+void RadixSort::enqueue(cl::Kernel& k, std::size_t global, std::size_t local) {
+  events_.emplace_back();
+  rt_.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(Runtime::padded(global, local)), cl::NDRange(local),
+                                   nullptr, &events_.back());
+}
+
+SortStats RadixSort::sort(cl::Buffer& keys, cl::Buffer& values, std::size_t count, const RadixSortConfig& cfg) {
+  if (cfg.key_bits < 1 || cfg.key_bits > 64 || cfg.top_bits > cfg.key_bits)
+    throw Error(fmt::format("radix sort: key_bits must be 1..64 and top_bits 0..key_bits (got key_bits {}, top_bits {})",
+                            cfg.key_bits, cfg.top_bits));
+  SortStats stats;
+  stats.count = count;
+  const unsigned total_passes = passes(cfg);
+  if (count < 2) {  // nothing to order: every digit is constant
+    stats.passes_skipped = total_passes;
+    return stats;
+  }
+  if (count > std::numeric_limits<cl_uint>::max() / 2)
+    throw Error(fmt::format("radix sort: {} pairs is more than the 32-bit positions of the kernels can address", count));
+  const std::size_t key_bytes = cfg.key_bytes();
+  const std::size_t keys_size = cl_call("querying the key buffer's size", [&] { return keys.getInfo<CL_MEM_SIZE>(); });
+  const std::size_t values_size =
+      cl_call("querying the value buffer's size", [&] { return values.getInfo<CL_MEM_SIZE>(); });
+  if (keys_size < count * key_bytes || values_size < count * 4)
+    throw Error(fmt::format("radix sort of {} pairs with {}-byte keys: the key buffer holds {} bytes and the value "
+                            "buffer {} bytes; they need {} and {}",
+                            count, key_bytes, keys_size, values_size, count * key_bytes, count * 4));
+
+  const RadixSortTuning& t = tuning_;
+  const std::size_t radix = std::size_t(1) << t.radix_bits;
+  const std::size_t wg = t.work_group;
+  std::size_t items = t.items;
+  if (wg == 1) {
+    const std::size_t target_tiles = std::max<std::size_t>(1, std::size_t(rt_.info().compute_units) * t.tiles_per_unit);
+    items = std::max<std::size_t>(t.min_tile, (count + target_tiles - 1) / target_tiles);
+  }
+  const std::size_t tile = items * wg;
+  const std::size_t tiles = (count + tile - 1) / tile;
+  const std::size_t bins = radix * tiles;
+
+  ensure(rt_, keys_tmp_, keys_tmp_bytes_, count * key_bytes, "radix sort scratch keys");
+  ensure(rt_, values_tmp_, values_tmp_bytes_, count * 4, "radix sort scratch values");
+  ensure(rt_, counts_, counts_bytes_, bins * 4, "radix sort tile counts");
+  ensure(rt_, tile_bounds_, tile_bounds_bytes_, 2 * tiles * key_bytes, "radix sort tile key bounds");
+  ensure(rt_, bounds_, bounds_bytes_, 2 * 8, "radix sort key bounds");
+
+  Kernels& k = kernels_for(cfg);
+  const cl_uint n = static_cast<cl_uint>(count);
+  const cl_uint n_items = static_cast<cl_uint>(items);
+  const cl_uint lo = cfg.lo_bit();
+  const cl_uint hi = cfg.key_bits;
+  events_.clear();
+
+  // First read of the keys: the lowest digit's tile counts, and which key bits vary at all.
+  std::uint64_t varying = 0;
+  cl_call("running the radix sort's first read", [&] {
+    k.count_bounds.setArg(0, keys);
+    k.count_bounds.setArg(1, n);
+    k.count_bounds.setArg(2, n_items);
+    k.count_bounds.setArg(3, lo);
+    k.count_bounds.setArg(4, hi);
+    k.count_bounds.setArg(5, counts_);
+    k.count_bounds.setArg(6, tile_bounds_);
+    enqueue(k.count_bounds, tiles * wg, wg);
+    k.reduce_bounds.setArg(0, tile_bounds_);
+    k.reduce_bounds.setArg(1, static_cast<cl_uint>(tiles));
+    k.reduce_bounds.setArg(2, bounds_);
+    enqueue(k.reduce_bounds, t.scan_work_group, t.scan_work_group);
+    std::uint64_t bounds[2] = {0, 0};  // OR, AND of all keys
+    events_.emplace_back();
+    rt_.queue().enqueueReadBuffer(bounds_, CL_TRUE, 0, 2 * key_bytes, bounds, nullptr, &events_.back());
+    if (key_bytes == 4) {
+      std::uint32_t b32[2];
+      std::memcpy(b32, bounds, sizeof b32);
+      bounds[0] = b32[0];
+      bounds[1] = b32[1];
+    }
+    varying = bounds[0] ^ bounds[1];
+  });
+
+  std::vector<unsigned> run;  // the passes that move keys
+  for (unsigned p = 0; p < total_passes; ++p) {
+    const unsigned shift = lo + p * t.radix_bits;
+    const unsigned width = std::min<unsigned>(t.radix_bits, hi - shift);
+    if (((varying >> shift) & ((std::uint64_t(1) << width) - 1)) != 0) run.push_back(p);
+  }
+  stats.passes_skipped = total_passes - static_cast<unsigned>(run.size());  // same digit in every key
+
+  cl::Buffer* src_keys = &keys;
+  cl::Buffer* src_values = &values;
+  cl::Buffer* dst_keys = &keys_tmp_;
+  cl::Buffer* dst_values = &values_tmp_;
+  cl_call("running the radix sort passes", [&] {
+    for (unsigned p : run) {
+      const cl_uint shift = lo + p * t.radix_bits;
+      if (p != 0) {  // the first read counted the lowest digit; every other pass counts its own
+        k.count.setArg(0, *src_keys);
+        k.count.setArg(1, n);
+        k.count.setArg(2, n_items);
+        k.count.setArg(3, shift);
+        k.count.setArg(4, hi);
+        k.count.setArg(5, counts_);
+        enqueue(k.count, tiles * wg, wg);
+      }
+      k.scan.setArg(0, counts_);
+      k.scan.setArg(1, static_cast<cl_uint>(bins));
+      enqueue(k.scan, t.scan_work_group, t.scan_work_group);
+      k.scatter.setArg(0, *src_keys);
+      k.scatter.setArg(1, *src_values);
+      k.scatter.setArg(2, *dst_keys);
+      k.scatter.setArg(3, *dst_values);
+      k.scatter.setArg(4, n);
+      k.scatter.setArg(5, n_items);
+      k.scatter.setArg(6, shift);
+      k.scatter.setArg(7, hi);
+      k.scatter.setArg(8, counts_);
+      enqueue(k.scatter, tiles * wg, wg);
+      std::swap(src_keys, dst_keys);
+      std::swap(src_values, dst_values);
+      ++stats.passes_run;
+    }
+    if (stats.passes_run % 2 == 1) {  // the result is in the scratch buffers: copy it home
+      events_.emplace_back();
+      rt_.queue().enqueueCopyBuffer(keys_tmp_, keys, 0, 0, count * key_bytes, nullptr, &events_.back());
+      events_.emplace_back();
+      rt_.queue().enqueueCopyBuffer(values_tmp_, values, 0, 0, count * 4, nullptr, &events_.back());
+    }
+    events_.back().wait();
+  });
+  cl_call("reading the radix sort's profiling events", [&] {
+    stats.ms = event_span_ms(events_.front(), events_.back());
+    for (auto& e : events_) stats.kernel_ms += event_ms(e);
+  });
+  return stats;
+}
+
+template <class Key>
+SortStats RadixSort::sort_host(std::vector<Key>& keys, std::vector<std::uint32_t>& values, const RadixSortConfig& cfg) {
+  if (keys.size() != values.size())
+    throw Error(fmt::format("radix sort: {} keys but {} values", keys.size(), values.size()));
+  if (cfg.key_bytes() != sizeof(Key))
+    throw Error(fmt::format("radix sort: key_bits {} needs {}-byte keys, got {}-byte keys", cfg.key_bits,
+                            cfg.key_bytes(), sizeof(Key)));
+  const std::size_t n = keys.size();
+  if (n == 0) return sort(keys_io_, values_io_, 0, cfg);
+  ensure(rt_, keys_io_, keys_io_bytes_, n * sizeof(Key), "radix sort input keys");
+  ensure(rt_, values_io_, values_io_bytes_, n * 4, "radix sort input values");
+  cl_call("uploading keys and values to sort", [&] {
+    rt_.queue().enqueueWriteBuffer(keys_io_, CL_FALSE, 0, n * sizeof(Key), keys.data());
+    rt_.queue().enqueueWriteBuffer(values_io_, CL_FALSE, 0, n * 4, values.data());
+  });
+  SortStats stats = sort(keys_io_, values_io_, n, cfg);
+  rt_.download("sorted keys", keys_io_, keys, n);
+  rt_.download("sorted values", values_io_, values, n);
+  return stats;
+}
+
+SortStats RadixSort::sort(std::vector<std::uint32_t>& keys, std::vector<std::uint32_t>& values,
+                          const RadixSortConfig& cfg) {
+  return sort_host(keys, values, cfg);
+}
+
+SortStats RadixSort::sort(std::vector<std::uint64_t>& keys, std::vector<std::uint32_t>& values,
+                          const RadixSortConfig& cfg) {
+  return sort_host(keys, values, cfg);
+}
+
+double RadixSort::warm_up() {
+  auto t0 = std::chrono::steady_clock::now();
+  const std::size_t n = 3 * std::size_t(std::max(tuning_.min_tile, tuning_.items * tuning_.work_group)) + 1;
+  std::vector<std::uint32_t> values(n);
+  std::iota(values.begin(), values.end(), 0u);
+  std::vector<std::uint32_t> narrow(n);
+  std::vector<std::uint64_t> wide(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    narrow[i] = static_cast<std::uint32_t>((n - i) * 2654435761u);
+    wide[i] = std::uint64_t(narrow[i]) * 0x9E3779B97F4A7C15ull;
+  }
+  std::vector<std::uint32_t> v1 = values;
+  sort(narrow, v1, {32, 0});
+  sort(wide, values, {64, 0});
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace raysort

@@ -1,0 +1,122 @@
+#pragma once
+// Our own LSD radix sort on an OpenCL device (kernels: cl/radix_sort.cl, which documents the
+// method): stable (key, value) pairs, 32- or 64-bit keys, 32-bit values (ray indices), any count.
+// Only the bits a key uses are sorted, passes whose digit is the same for every key are skipped,
+// and a "top k bits" mode sorts by the highest k bits only.
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "cl/runtime.h"
+
+namespace raysort {
+
+struct RadixSortConfig {
+  // Bits the key uses, counted from bit 0: keys of up to 32 bits live in uint32 buffers, wider
+  // ones in uint64 buffers. Bits above key_bits are ignored. 16, 32 and 64 are the suite's widths.
+  unsigned key_bits = 32;
+  // 0: sort by all key_bits. k > 0: sort by the highest k of them, bits [key_bits - k, key_bits),
+  // keeping the input order among keys that agree there (cheaper, less ordered).
+  unsigned top_bits = 0;
+
+  bool wide_keys() const { return key_bits > 32; }
+  std::size_t key_bytes() const { return wide_keys() ? 8 : 4; }
+  unsigned sorted_bits() const { return top_bits == 0 ? key_bits : top_bits; }
+  unsigned lo_bit() const { return key_bits - sorted_bits(); }
+};
+
+struct SortStats {
+  std::size_t count = 0;
+  unsigned passes_run = 0;      // counting-sort passes executed
+  unsigned passes_skipped = 0;  // passes whose digit is the same for every key
+  double ms = 0.0;              // profiling events: first command's start to last command's end
+  double kernel_ms = 0.0;       // sum of the commands' own durations (no gaps, no host read-back)
+  double mkeys_per_s() const { return ms > 0.0 ? static_cast<double>(count) / ms * 1e-3 : 0.0; }
+};
+
+// The shape of the kernels on one device. for_device() derives it from the device's limits; tests
+// force other shapes to cover both kernel paths on one device.
+struct RadixSortTuning {
+  unsigned radix_bits = 8;  // digit width: 2^radix_bits buckets per pass
+  // Work-items per tile. 1: a tile is one serial chunk (CPUs). > 1: ranked in local memory (GPUs).
+  unsigned work_group = 1;
+  unsigned items = 8;             // work_group > 1: keys per work-item, staged in local memory
+  unsigned tiles_per_unit = 16;   // work_group == 1: tiles per compute unit (tile size follows N)
+  unsigned min_tile = 4096;       // work_group == 1: smallest tile, in keys
+  unsigned scan_work_group = 1;   // work-items of the single-group scan (a power of two)
+  unsigned reduce_work_group = 64;
+
+  static RadixSortTuning for_device(const DeviceInfo& device);
+  // Local memory one tile of the scatter kernel needs (the largest of the kernels).
+  std::size_t local_bytes(std::size_t key_bytes) const;
+};
+
+class RadixSort {
+ public:
+  // Builds the 32- and 64-bit key programs once, shaped by RadixSortTuning::for_device.
+  explicit RadixSort(Runtime& rt);
+  RadixSort(Runtime& rt, const RadixSortTuning& tuning);
+
+  // Sorts `count` pairs in place: `keys` holds uint32 (cfg.key_bits <= 32) or uint64 keys,
+  // `values` uint32. Stable. Blocks until done: after the first read of the keys it reads back
+  // which digits vary (one 16-byte read) to choose the passes. Scratch buffers only grow.
+  SortStats sort(cl::Buffer& keys, cl::Buffer& values, std::size_t count, const RadixSortConfig& cfg = {});
+
+  // Host vectors in, sorted vectors out (through device buffers that are kept and only grow).
+  SortStats sort(std::vector<std::uint32_t>& keys, std::vector<std::uint32_t>& values, const RadixSortConfig& cfg = {});
+  SortStats sort(std::vector<std::uint64_t>& keys, std::vector<std::uint32_t>& values, const RadixSortConfig& cfg = {});
+
+  // Runs every kernel once on a small input (both key widths), so that a device compiling kernels
+  // at their first launch (PoCL) does so outside the timed part. Returns its wall-clock ms.
+  double warm_up();
+
+  const RadixSortTuning& tuning() const { return tuning_; }
+  // Passes a sort with cfg takes before skipping: ceil(sorted_bits / radix_bits).
+  unsigned passes(const RadixSortConfig& cfg) const;
+
+ private:
+  struct Kernels {
+    cl::Kernel count_bounds, reduce_bounds, count, scan, scatter;
+  };
+  Kernels& kernels_for(const RadixSortConfig& cfg) { return cfg.wide_keys() ? wide_ : narrow_; }
+  void enqueue(cl::Kernel& k, std::size_t global, std::size_t local);
+  static void ensure(Runtime& rt, cl::Buffer& b, std::size_t& have, std::size_t need, const char* name);
+  template <class Key>
+  SortStats sort_host(std::vector<Key>& keys, std::vector<std::uint32_t>& values, const RadixSortConfig& cfg);
+
+  Runtime& rt_;
+  RadixSortTuning tuning_;
+  Kernels narrow_, wide_;
+  // Scratch, grown on demand: ping-pong keys/values, per-tile digit counts, per-tile key OR/AND
+  // and their reduction.
+  cl::Buffer keys_tmp_, values_tmp_, counts_, tile_bounds_, bounds_;
+  std::size_t keys_tmp_bytes_ = 0, values_tmp_bytes_ = 0, counts_bytes_ = 0, tile_bounds_bytes_ = 0, bounds_bytes_ = 0;
+  // Device copies for the host-vector overloads.
+  cl::Buffer keys_io_, values_io_;
+  std::size_t keys_io_bytes_ = 0, values_io_bytes_ = 0;
+  std::vector<cl::Event> events_;
+};
+
+// The host twin: std::stable_sort of the pairs by the bits cfg sorts on. The device sort must give
+// exactly these keys and values.
+template <class Key>
+void reference_sort(std::vector<Key>& keys, std::vector<std::uint32_t>& values, const RadixSortConfig& cfg) {
+  const unsigned lo = cfg.lo_bit();
+  const unsigned bits = cfg.sorted_bits();
+  const Key mask = bits >= 64 ? ~Key(0) : static_cast<Key>((std::uint64_t(1) << bits) - 1);
+  struct Pair {
+    Key key;
+    std::uint32_t value;
+  };
+  std::vector<Pair> pairs(keys.size());
+  for (std::size_t i = 0; i < keys.size(); ++i) pairs[i] = {keys[i], values[i]};
+  std::stable_sort(pairs.begin(), pairs.end(),
+                   [&](const Pair& a, const Pair& b) { return ((a.key >> lo) & mask) < ((b.key >> lo) & mask); });
+  for (std::size_t i = 0; i < keys.size(); ++i) {
+    keys[i] = pairs[i].key;
+    values[i] = pairs[i].value;
+  }
+}
+
+}  // namespace raysort

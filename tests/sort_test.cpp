@@ -1,0 +1,229 @@
+// The OpenCL radix sort (host/sort, cl/radix_sort.cl) against its host twin, std::stable_sort:
+// keys and values must match bit for bit (values are the input positions, so any instability
+// shows), for every input shape, size and key width, in full and top-k mode, and on both kernel
+// paths (the CPU shape picked for this device and a GPU shape forced onto it).
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <numeric>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "cl/runtime.h"
+#include "sort/radix_sort.h"
+
+namespace raysort {
+namespace {
+
+enum class Shape { Uniform, Sorted, Reversed, AllEqual, AllOnes, FewDistinct, HighBits16, LowBits };
+const Shape kShapes[] = {Shape::Uniform,  Shape::Sorted,      Shape::Reversed,   Shape::AllEqual,
+                         Shape::AllOnes, Shape::FewDistinct, Shape::HighBits16, Shape::LowBits};
+
+const char* name(Shape s) {
+  switch (s) {
+    case Shape::Uniform: return "uniform";
+    case Shape::Sorted: return "sorted";
+    case Shape::Reversed: return "reversed";
+    case Shape::AllEqual: return "all-equal";
+    case Shape::AllOnes: return "all-ones";
+    case Shape::FewDistinct: return "few-distinct";
+    case Shape::HighBits16: return "high-16-bits";
+    case Shape::LowBits: return "low-8-bits";
+  }
+  return "?";
+}
+
+std::uint64_t mask_of(unsigned bits) { return bits >= 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << bits) - 1; }
+
+// Keys of `bits` bits (fixed seed per case, so a failure reproduces).
+std::vector<std::uint64_t> make_keys(Shape shape, std::size_t n, unsigned bits, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  const std::uint64_t mask = mask_of(bits);
+  std::vector<std::uint64_t> k(n);
+  std::vector<std::uint64_t> pool(16);
+  for (auto& p : pool) p = rng() & mask;
+  const std::uint64_t constant = rng() & mask;
+  for (std::size_t i = 0; i < n; ++i) {
+    switch (shape) {
+      case Shape::Uniform:
+      case Shape::Sorted:
+      case Shape::Reversed: k[i] = rng() & mask; break;
+      case Shape::AllEqual: k[i] = constant; break;
+      case Shape::AllOnes: k[i] = mask; break;
+      case Shape::FewDistinct: k[i] = pool[rng() % pool.size()]; break;
+      case Shape::HighBits16: k[i] = bits <= 16 ? rng() & mask : (rng() & 0xFFFF) << (bits - 16); break;
+      case Shape::LowBits: k[i] = rng() & 0xFF & mask; break;
+    }
+  }
+  if (shape == Shape::Sorted) std::sort(k.begin(), k.end());
+  if (shape == Shape::Reversed) std::sort(k.begin(), k.end(), std::greater<>());
+  return k;
+}
+
+struct Device {
+  std::unique_ptr<Runtime> rt;
+  std::unique_ptr<RadixSort> cpu_shape;  // RadixSortTuning::for_device (this device: a CPU)
+  std::unique_ptr<RadixSort> gpu_shape;  // the work-group ranking path, forced onto this device
+};
+
+Device& device() {
+  static Device d = [] {
+    Device d;
+    d.rt = std::make_unique<Runtime>(select_device(""));
+    d.cpu_shape = std::make_unique<RadixSort>(*d.rt);
+    // The shape for_device picks for a GPU with 48 KiB of local memory (NVIDIA's OpenCL limit).
+    DeviceInfo gpu = d.rt->info();
+    gpu.type = "GPU";
+    gpu.local_mem_bytes = 48 * 1024;
+    gpu.max_work_group_size = 1024;
+    RadixSortTuning tuning = RadixSortTuning::for_device(gpu);
+    EXPECT_GT(tuning.work_group, 1u);
+    EXPECT_LE(tuning.local_bytes(8), gpu.local_mem_bytes);
+    d.gpu_shape = std::make_unique<RadixSort>(*d.rt, tuning);
+    return d;
+  }();
+  return d;
+}
+
+// Sorts with `sorter` and with std::stable_sort; returns the device's stats.
+SortStats check(RadixSort& sorter, const std::vector<std::uint64_t>& keys64, RadixSortConfig cfg,
+                const std::string& what) {
+  std::vector<std::uint32_t> values(keys64.size());
+  std::iota(values.begin(), values.end(), 0u);
+  std::vector<std::uint32_t> expected_values = values;
+  SortStats stats;
+  if (cfg.wide_keys()) {
+    std::vector<std::uint64_t> keys = keys64, expected = keys64;
+    reference_sort(expected, expected_values, cfg);
+    stats = sorter.sort(keys, values, cfg);
+    EXPECT_TRUE(keys == expected) << what << ": keys differ from std::stable_sort";
+  } else {
+    std::vector<std::uint32_t> keys(keys64.begin(), keys64.end());
+    std::vector<std::uint32_t> expected = keys;
+    reference_sort(expected, expected_values, cfg);
+    stats = sorter.sort(keys, values, cfg);
+    EXPECT_TRUE(keys == expected) << what << ": keys differ from std::stable_sort";
+  }
+  EXPECT_TRUE(values == expected_values) << what << ": values differ from std::stable_sort (order not stable?)";
+  EXPECT_EQ(stats.passes_run + stats.passes_skipped, sorter.passes(cfg)) << what;
+  return stats;
+}
+
+const std::size_t kSizes[] = {0, 1, 2, 31, 32, 33, 1000, 65537, (1u << 20) + 3};
+const unsigned kKeyBits[] = {16, 32, 64};
+
+TEST(Sort, MatchesStableSortEveryShapeSizeAndWidth) {
+  auto& sorter = *device().cpu_shape;
+  for (unsigned bits : kKeyBits)
+    for (Shape shape : kShapes)
+      for (std::size_t n : kSizes) {
+        auto keys = make_keys(shape, n, bits, 1000 * bits + n + static_cast<int>(shape));
+        check(sorter, keys, {bits, 0}, fmt::format("{} keys of {} bits, n = {}", name(shape), bits, n));
+      }
+}
+
+TEST(Sort, GpuShapeMatchesStableSort) {
+  // The local-memory ranking path (RS_WG > 1) run on this device; fewer sizes, it is slow on a CPU.
+  auto& sorter = *device().gpu_shape;
+  for (unsigned bits : kKeyBits)
+    for (Shape shape : kShapes)
+      for (std::size_t n : {std::size_t(0), std::size_t(1), std::size_t(33), std::size_t(1000), std::size_t(65537)}) {
+        auto keys = make_keys(shape, n, bits, 7000 * bits + n + static_cast<int>(shape));
+        check(sorter, keys, {bits, 0}, fmt::format("gpu shape: {} keys of {} bits, n = {}", name(shape), bits, n));
+      }
+  auto keys = make_keys(Shape::Uniform, (1u << 20) + 3, 64, 99);
+  check(sorter, keys, {64, 0}, "gpu shape: 1M+3 uniform 64-bit keys");
+}
+
+TEST(Sort, TopBitsOrderByTheHighBitsOnly) {
+  struct Case {
+    unsigned bits, top;
+  };
+  for (auto [bits, top] : {Case{16, 4}, Case{16, 9}, Case{32, 1}, Case{32, 5}, Case{32, 8}, Case{32, 10},
+                           Case{32, 13}, Case{32, 24}, Case{64, 3}, Case{64, 21}, Case{64, 33}, Case{64, 64}}) {
+    for (std::size_t n : {std::size_t(1000), std::size_t(65537), std::size_t(300007)}) {
+      auto keys = make_keys(Shape::Uniform, n, bits, bits * 31 + top + n);
+      check(*device().cpu_shape, keys, {bits, top}, fmt::format("top {} of {} bits, n = {}", top, bits, n));
+      check(*device().gpu_shape, keys, {bits, top}, fmt::format("gpu shape: top {} of {} bits, n = {}", top, bits, n));
+    }
+  }
+}
+
+TEST(Sort, TopBitsReferenceIsCoarserThanFullSort) {
+  // Guards the test itself: a top-k sort of random keys must not be a full sort, or the top-k
+  // tests above could pass with a sorter that ignores top_bits.
+  auto keys64 = make_keys(Shape::Uniform, 10000, 32, 5);
+  std::vector<std::uint32_t> a(keys64.begin(), keys64.end()), b = a, va(a.size()), vb(a.size());
+  reference_sort(a, va, {32, 8});
+  reference_sort(b, vb, {32, 0});
+  EXPECT_FALSE(a == b);
+  EXPECT_TRUE(std::is_sorted(a.begin(), a.end(), [](auto x, auto y) { return (x >> 24) < (y >> 24); }));
+}
+
+TEST(Sort, SkipsPassesWhoseDigitIsConstant) {
+  auto& sorter = *device().cpu_shape;  // 8-bit digits
+  ASSERT_EQ(sorter.tuning().radix_bits, 8u);
+  const std::size_t n = 100003;
+  struct Case {
+    Shape shape;
+    unsigned bits, run, skipped;
+  };
+  for (auto c : {Case{Shape::Uniform, 32, 4, 0}, Case{Shape::Uniform, 16, 2, 0}, Case{Shape::Uniform, 64, 8, 0},
+                 Case{Shape::LowBits, 32, 1, 3}, Case{Shape::LowBits, 64, 1, 7}, Case{Shape::HighBits16, 32, 2, 2},
+                 Case{Shape::HighBits16, 64, 2, 6}, Case{Shape::AllEqual, 32, 0, 4}, Case{Shape::AllOnes, 64, 0, 8}}) {
+    auto keys = make_keys(c.shape, n, c.bits, 42);
+    auto stats = check(sorter, keys, {c.bits, 0}, fmt::format("{} keys of {} bits", name(c.shape), c.bits));
+    EXPECT_EQ(stats.passes_run, c.run) << name(c.shape) << " " << c.bits;
+    EXPECT_EQ(stats.passes_skipped, c.skipped) << name(c.shape) << " " << c.bits;
+  }
+  // 16-bit keys sort 16 bits: two passes, not four.
+  EXPECT_EQ(sorter.passes({16, 0}), 2u);
+  EXPECT_EQ(sorter.passes({32, 10}), 2u);
+  EXPECT_EQ(sorter.passes({64, 0}), 8u);
+}
+
+TEST(Sort, DeviceBuffersAreSortedInPlaceAndReused) {
+  // Larger buffers than the count: only the first `count` pairs move; calls of changing size on
+  // the same sorter (scratch grown, then reused) stay correct.
+  auto& d = device();
+  const std::size_t capacity = 200000;
+  std::vector<std::uint32_t> sentinel(capacity, 0xDEADBEEFu);
+  cl::Buffer keys = d.rt->upload("test keys", sentinel, CL_MEM_READ_WRITE);
+  cl::Buffer values = d.rt->upload("test values", sentinel, CL_MEM_READ_WRITE);
+  for (std::size_t n : {std::size_t(150001), std::size_t(77), std::size_t(199999), std::size_t(5000)}) {
+    auto k64 = make_keys(Shape::Uniform, n, 32, n);
+    std::vector<std::uint32_t> k(k64.begin(), k64.end()), v(n);
+    std::iota(v.begin(), v.end(), 0u);
+    d.rt->queue().enqueueWriteBuffer(keys, CL_TRUE, 0, n * 4, k.data());
+    d.rt->queue().enqueueWriteBuffer(values, CL_TRUE, 0, n * 4, v.data());
+    auto stats = d.cpu_shape->sort(keys, values, n, {32, 0});
+    EXPECT_GT(stats.ms, 0.0);
+    EXPECT_GE(stats.ms, 0.5 * stats.kernel_ms);
+    reference_sort(k, v, {32, 0});
+    std::vector<std::uint32_t> got_k, got_v;
+    d.rt->download("keys", keys, got_k, capacity);
+    d.rt->download("values", values, got_v, capacity);
+    EXPECT_TRUE(std::equal(k.begin(), k.end(), got_k.begin())) << n;
+    EXPECT_TRUE(std::equal(v.begin(), v.end(), got_v.begin())) << n;
+    EXPECT_EQ(got_k[capacity - 1], 0xDEADBEEFu) << "wrote past count";
+  }
+}
+
+TEST(Sort, RejectsBadInput) {
+  auto& sorter = *device().cpu_shape;
+  std::vector<std::uint32_t> k(10), v(10);
+  std::vector<std::uint64_t> k64(10);
+  EXPECT_THROW(sorter.sort(k, v, {0, 0}), Error);
+  EXPECT_THROW(sorter.sort(k, v, {32, 33}), Error);
+  EXPECT_THROW(sorter.sort(k64, v, {32, 0}), Error);  // 64-bit keys for a 32-bit config
+  std::vector<std::uint32_t> short_v(9);
+  EXPECT_THROW(sorter.sort(k, short_v, {32, 0}), Error);
+}
+
+}  // namespace
+}  // namespace raysort
