@@ -1,4 +1,7 @@
-/* raysort — trace kernels: closest hit and any hit (shadow) for a batch of rays.
+/* raysort — trace kernels: closest hit and any hit (shadow) for a batch of rays, in two variants
+ * (docs/trace.md): fast (Möller–Trumbore, plain slab test) and robust (watertight triangle test of
+ * Woop et al. 2013, conservative slab test of Ize 2013), one kernel per variant so that each
+ * compiles with its variant as a constant.
  *
  * One ray per work-item; the ray is read through an index buffer, ray[order[i]], so a sorted
  * order needs no copy of the rays, and its hit is written to hits[i] (trace order). The host
@@ -36,5 +39,35 @@ __kernel void trace_closest_counted(__global const RsBvhNode* nodes, __global co
   uint ray_index = order[i];
   uint v = 0;
   hits[i] = rs_traverse(nodes, tris, rays[ray_index], 0, &v);
+  visits[i] = v;
+}
+
+
+__kernel void trace_closest_robust(__global const RsBvhNode* nodes, __global const RsTriangle* tris,
+                                   __global const RsRay* rays, __global const uint* order, uint count,
+                                   __global RsHit* hits) {
+  uint i = get_global_id(0);
+  if (i >= count) return;
+  uint ray_index = order[i];
+  hits[i] = rs_traverse_robust(nodes, tris, rays[ray_index], 0, 0);
+}
+
+__kernel void trace_any_robust(__global const RsBvhNode* nodes, __global const RsTriangle* tris,
+                               __global const RsRay* rays, __global const uint* order, uint count,
+                               __global RsHit* hits) {
+  uint i = get_global_id(0);
+  if (i >= count) return;
+  uint ray_index = order[i];
+  hits[i] = rs_traverse_robust(nodes, tris, rays[ray_index], 1, 0);
+}
+
+__kernel void trace_closest_counted_robust(__global const RsBvhNode* nodes, __global const RsTriangle* tris,
+                                           __global const RsRay* rays, __global const uint* order, uint count,
+                                           __global RsHit* hits, __global uint* visits) {
+  uint i = get_global_id(0);
+  if (i >= count) return;
+  uint ray_index = order[i];
+  uint v = 0;
+  hits[i] = rs_traverse_robust(nodes, tris, rays[ray_index], 0, &v);
   visits[i] = v;
 }

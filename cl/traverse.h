@@ -4,8 +4,14 @@
  *
  * Algorithm: stack-based traversal of a binary BVH, one ray per work-item, nearest child first
  * (Aila & Laine 2009, "Understanding the Efficiency of Ray Traversal on GPUs", the "while-while"
- * loop without persistent threads). Slab test for boxes (Kay & Kajiya 1986, as in Williams et al.
- * 2005) and Möller–Trumbore for triangles (1997): the fast variant of DESIGN.md section 3.
+ * loop without persistent threads). Two variants share the loop (DESIGN.md section 3, docs/trace.md):
+ *  - fast:   slab test for boxes (Kay & Kajiya 1986, as in Williams et al. 2005) and Möller–Trumbore
+ *            for triangles (1997) — the usual GPU choice;
+ *  - robust: watertight ray/triangle test (Woop, Benthin & Wald 2013, JCGT 2(1)) and a conservative
+ *            slab test (Ize 2013, "Robust BVH Ray Traversal", JCGT 2(2)); no inf arithmetic, and
+ *            zero direction components handled without a division.
+ * The variant is an int argument (OpenCL C has no templates); the kernels pass a constant, so each
+ * kernel compiles to one variant only.
  */
 #ifndef RAYSORT_TRAVERSE_H
 #define RAYSORT_TRAVERSE_H
@@ -76,16 +82,180 @@ RS_INLINE int rs_intersect_triangle(RsTraversalRay r, RS_GLOBAL const RsTriangle
   return 1;
 }
 
-/* Closest hit (any_hit = 0) or first hit found (any_hit = 1, shadow rays).
+
+/* ---------------------------------------------------------------------------------------------
+ * Robust variant.
+ * ------------------------------------------------------------------------------------------- */
+
+/* Double precision for the watertight test's tie-break (Woop et al. 2013, section 3.3): products
+ * of two floats are exact in double, so an edge function recomputed in double has the exact sign.
+ * Devices without cl_khr_fp64 keep the float value: an edge function that rounds to exactly 0 then
+ * counts as "on the edge", which is still watertight (the ray is accepted by both triangles that
+ * share the edge, never by neither) but may pick a different one of two equally near triangles
+ * than the host reference, which always has double. */
+#ifdef __OPENCL_VERSION__
+#ifdef cl_khr_fp64
+#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+#define RS_HAS_FP64 1
+#else
+#define RS_HAS_FP64 0
+#endif
+#else
+#define RS_HAS_FP64 1
+#endif
+
+/* 1 + 2·γ(3), γ(n) = n·u / (1 − n·u), u = 2^-24: Ize's bound on the relative error of a slab
+ * distance (one subtraction and one product with a rounded reciprocal), applied to the far
+ * distance so that a ray that touches a box is never rejected (pbrt-v3, section 3.9.2). */
+#define RS_SLAB_FAR_SCALE 1.0000003576278687f
+/* A direction component below this fraction of the largest one is treated as exactly 0 (ray
+ * parallel to that slab), so 1/d stays below 1e20/max|d| and no slab distance can overflow for
+ * scene coordinates below 1e18. Over a distance t the ray moves at most t·1e-20·max|d| along that
+ * axis, far below the float spacing of anything at distance t. */
+#define RS_PARALLEL_FRACTION 1e-20f
+
+/* A ray prepared for the robust variant: the Woop et al. ray-space transform (kz = axis of the
+ * largest |d|, kx and ky the others, swapped when d[kz] < 0 to keep the winding; shear sx, sy, sz),
+ * the origin permuted to (o[kx], o[ky], o[kz]), and, for the slab test, 1/d per axis with
+ * parallel[a] = 1 (and inv_d = 0) where the component is treated as 0. valid = 0 for a zero or
+ * non-finite direction, which hits nothing. */
+typedef struct {
+  float o[3];      /* world-space origin, for the slab test */
+  float inv_d[3];  /* 1/d, 0 where parallel */
+  rs_i32 parallel[3];
+  rs_i32 kx, ky, kz;
+  float okx, oky, okz; /* origin in the permuted axis order */
+  float sx, sy, sz;
+  float tmin, tmax;
+  rs_i32 valid;
+} RsRobustRay;
+
+RS_INLINE RsRobustRay rs_prepare_robust_ray(RsRay ray) {
+  RsRobustRay r;
+  float ad[3];
+  for (int a = 0; a < 3; ++a) {
+    r.o[a] = ray.o[a];
+    ad[a] = rs_abs(ray.d[a]);
+  }
+  int kz = ad[0] > ad[1] ? (ad[0] > ad[2] ? 0 : 2) : (ad[1] > ad[2] ? 1 : 2);
+  float dmax = ad[kz];
+  /* dmax > 0 and finite (NaN fails every comparison; 3.4e38 is the largest finite float). */
+  r.valid = dmax > 0.0f && dmax <= 3.4028234e38f;
+  float threshold = dmax * RS_PARALLEL_FRACTION;
+  for (int a = 0; a < 3; ++a) {
+    r.parallel[a] = !(ad[a] > threshold);
+    r.inv_d[a] = r.parallel[a] ? 0.0f : 1.0f / ray.d[a];
+  }
+  int kx = kz == 2 ? 0 : kz + 1;
+  int ky = kx == 2 ? 0 : kx + 1;
+  if (ray.d[kz] < 0.0f) {
+    int k = kx;
+    kx = ky;
+    ky = k;
+  }
+  r.kx = kx;
+  r.ky = ky;
+  r.kz = kz;
+  r.okx = ray.o[kx];
+  r.oky = ray.o[ky];
+  r.okz = ray.o[kz];
+  float dz = r.valid ? ray.d[kz] : 1.0f;
+  r.sx = r.valid ? ray.d[kx] / dz : 0.0f;
+  r.sy = r.valid ? ray.d[ky] / dz : 0.0f;
+  r.sz = 1.0f / dz;
+  r.tmin = ray.tmin;
+  r.tmax = ray.tmax;
+  return r;
+}
+
+/* Conservative slab test (Ize 2013): each axis's far distance is scaled by 1 + 2γ(3). An axis
+ * the ray is parallel to contributes no distance, only the test bmin <= o <= bmax (inclusive, so
+ * a ray grazing a box face or starting on a slab plane stays in). Returns the entry distance and
+ * sets *hit when [entry, exit] overlaps [tmin, tmax]. */
+RS_INLINE float rs_intersect_box_robust(const RsRobustRay* r, RS_GLOBAL const RsBvhNode* n, float tmax, int* hit) {
+  float tnear = r->tmin;
+  float tfar = tmax;
+  int inside = 1;
+  for (int a = 0; a < 3; ++a) {
+    float t0 = (n->bmin[a] - r->o[a]) * r->inv_d[a];
+    float t1 = (n->bmax[a] - r->o[a]) * r->inv_d[a];
+    if (r->parallel[a]) {
+      inside = inside && n->bmin[a] <= r->o[a] && r->o[a] <= n->bmax[a];
+    } else {
+      tnear = rs_max(tnear, rs_min(t0, t1));
+      tfar = rs_min(tfar, rs_max(t0, t1) * RS_SLAB_FAR_SCALE);
+    }
+  }
+  *hit = inside && tnear <= tfar;
+  return tnear;
+}
+
+/* Watertight ray/triangle test (Woop, Benthin & Wald 2013), two-sided. The vertices are moved to
+ * ray space (translate by the origin, permute, shear so the ray runs along +z); the 2-D edge
+ * functions U, V, W of the sheared vertices then decide inside/outside. A vertex shared by two
+ * triangles is transformed to the same floats in both, so an edge's functions agree in sign across
+ * the edge; an edge function that rounds to exactly 0 is recomputed in double, where it is exact.
+ * Accepts when U, V, W do not have mixed signs; det = U + V + W == 0 (ray in the triangle's plane,
+ * or a degenerate triangle) never hits. t = T / det is bounded by the triangle's ray-space depth
+ * because U, V, W share a sign, so no division can overflow. */
+RS_INLINE int rs_intersect_triangle_robust(const RsRobustRay* r, RS_GLOBAL const RsTriangle* tri, float tmax,
+                                           float* t_out, float* u_out, float* v_out) {
+  const int kx = r->kx, ky = r->ky, kz = r->kz;
+  const float az0 = tri->v0[kz] - r->okz, bz0 = tri->v1[kz] - r->okz, cz0 = tri->v2[kz] - r->okz;
+  const float ax = (tri->v0[kx] - r->okx) - r->sx * az0, ay = (tri->v0[ky] - r->oky) - r->sy * az0;
+  const float bx = (tri->v1[kx] - r->okx) - r->sx * bz0, by = (tri->v1[ky] - r->oky) - r->sy * bz0;
+  const float cx = (tri->v2[kx] - r->okx) - r->sx * cz0, cy = (tri->v2[ky] - r->oky) - r->sy * cz0;
+  float u = cx * by - cy * bx;
+  float v = ax * cy - ay * cx;
+  float w = bx * ay - by * ax;
+#if RS_HAS_FP64
+  if (u == 0.0f || v == 0.0f || w == 0.0f) {
+    u = (float)((double)cx * (double)by - (double)cy * (double)bx);
+    v = (float)((double)ax * (double)cy - (double)ay * (double)cx);
+    w = (float)((double)bx * (double)ay - (double)by * (double)ax);
+  }
+#endif
+  if ((u < 0.0f || v < 0.0f || w < 0.0f) && (u > 0.0f || v > 0.0f || w > 0.0f)) return 0;
+  const float det = u + v + w;
+  if (det == 0.0f) return 0;
+  const float t_scaled = u * (r->sz * az0) + v * (r->sz * bz0) + w * (r->sz * cz0);
+  const float t = t_scaled / det;
+  if (!(t > r->tmin && t < tmax)) return 0;
+  /* A zero-area triangle can still pass the test above: the shear rounds its collinear vertices
+   * apart. Reject it by its world-space cross product, exact in double (differences and products
+   * of floats are exact there); only hits that would be accepted pay for this. */
+#if RS_HAS_FP64
+  {
+    const double a1x = (double)tri->v1[0] - (double)tri->v0[0], a1y = (double)tri->v1[1] - (double)tri->v0[1],
+                 a1z = (double)tri->v1[2] - (double)tri->v0[2];
+    const double a2x = (double)tri->v2[0] - (double)tri->v0[0], a2y = (double)tri->v2[1] - (double)tri->v0[1],
+                 a2z = (double)tri->v2[2] - (double)tri->v0[2];
+    if (a1y * a2z - a1z * a2y == 0.0 && a1z * a2x - a1x * a2z == 0.0 && a1x * a2y - a1y * a2x == 0.0) return 0;
+  }
+#else
+  const float e1x = tri->v1[0] - tri->v0[0], e1y = tri->v1[1] - tri->v0[1], e1z = tri->v1[2] - tri->v0[2];
+  const float e2x = tri->v2[0] - tri->v0[0], e2y = tri->v2[1] - tri->v0[1], e2z = tri->v2[2] - tri->v0[2];
+  if (e1y * e2z - e1z * e2y == 0.0f && e1z * e2x - e1x * e2z == 0.0f && e1x * e2y - e1y * e2x == 0.0f) return 0;
+#endif
+  /* Barycentrics of the hit record: u weights v1, v weights v2 (p = (1-u-v)·v0 + u·v1 + v·v2). */
+  *t_out = t;
+  *u_out = v / det;
+  *v_out = w / det;
+  return 1;
+}
+
+/* Closest hit (any_hit = 0) or first hit found (any_hit = 1, shadow rays), fast (robust = 0) or
+ * robust (robust = 1) variant.
  * *node_visits, when not null, counts the nodes whose box was fetched (for cost heatmaps).
  * trail, when not null, receives the id of every node the loop steps through, in order, up to
  * trail_cap entries; *trail_len gets the full step count (the SIMT model, host only: kernels pass
  * null and the compiler drops the recording). */
-RS_INLINE RsHit rs_traverse_recorded(RS_GLOBAL const RsBvhNode* nodes, RS_GLOBAL const RsTriangle* tris, RsRay ray,
-                                     int any_hit, rs_u32* node_visits, rs_u32* trail, rs_u32 trail_cap,
-                                     rs_u32* trail_len) {
+RS_INLINE RsHit rs_traverse_variant_recorded(RS_GLOBAL const RsBvhNode* nodes, RS_GLOBAL const RsTriangle* tris,
+                                             RsRay ray, int robust, int any_hit, rs_u32* node_visits, rs_u32* trail,
+                                             rs_u32 trail_cap, rs_u32* trail_len) {
   rs_u32 steps = 0;
   RsTraversalRay r = rs_prepare_ray(ray);
+  RsRobustRay rr = rs_prepare_robust_ray(ray);
   RsHit hit;
   hit.t = ray.tmax;
   hit.tri = RS_NO_HIT;
@@ -94,7 +264,11 @@ RS_INLINE RsHit rs_traverse_recorded(RS_GLOBAL const RsBvhNode* nodes, RS_GLOBAL
   rs_u32 visits = 1;
 
   int root_hit;
-  rs_intersect_box(r, &nodes[0], hit.t, &root_hit);
+  if (robust)
+    rs_intersect_box_robust(&rr, &nodes[0], hit.t, &root_hit);
+  else
+    rs_intersect_box(r, &nodes[0], hit.t, &root_hit);
+  if (robust && !rr.valid) root_hit = 0;
   if (!root_hit) {
     if (node_visits) *node_visits = visits;
     if (trail_len) *trail_len = 0;
@@ -111,7 +285,9 @@ RS_INLINE RsHit rs_traverse_recorded(RS_GLOBAL const RsBvhNode* nodes, RS_GLOBAL
     if (n->count > 0) {
       for (rs_u32 i = n->first; i < n->first + n->count; ++i) {
         float t, u, v;
-        if (rs_intersect_triangle(r, &tris[i], hit.t, &t, &u, &v)) {
+        int found = robust ? rs_intersect_triangle_robust(&rr, &tris[i], hit.t, &t, &u, &v)
+                           : rs_intersect_triangle(r, &tris[i], hit.t, &t, &u, &v);
+        if (found) {
           hit.t = t;
           hit.tri = tris[i].id;
           hit.u = u;
@@ -126,8 +302,10 @@ RS_INLINE RsHit rs_traverse_recorded(RS_GLOBAL const RsBvhNode* nodes, RS_GLOBAL
     } else {
       rs_u32 left = n->first;
       int hit_l, hit_r;
-      float t_l = rs_intersect_box(r, &nodes[left], hit.t, &hit_l);
-      float t_r = rs_intersect_box(r, &nodes[left + 1], hit.t, &hit_r);
+      float t_l = robust ? rs_intersect_box_robust(&rr, &nodes[left], hit.t, &hit_l)
+                         : rs_intersect_box(r, &nodes[left], hit.t, &hit_l);
+      float t_r = robust ? rs_intersect_box_robust(&rr, &nodes[left + 1], hit.t, &hit_r)
+                         : rs_intersect_box(r, &nodes[left + 1], hit.t, &hit_r);
       visits += 2;
       if (hit_l && hit_r) {
         /* Nearest child first; ties go left so the order is fixed. */
@@ -153,9 +331,21 @@ RS_INLINE RsHit rs_traverse_recorded(RS_GLOBAL const RsBvhNode* nodes, RS_GLOBAL
   return hit;
 }
 
+/* The fast variant with a trail (the SIMT model, host/bench/metrics.cpp). */
+RS_INLINE RsHit rs_traverse_recorded(RS_GLOBAL const RsBvhNode* nodes, RS_GLOBAL const RsTriangle* tris, RsRay ray,
+                                     int any_hit, rs_u32* node_visits, rs_u32* trail, rs_u32 trail_cap,
+                                     rs_u32* trail_len) {
+  return rs_traverse_variant_recorded(nodes, tris, ray, 0, any_hit, node_visits, trail, trail_cap, trail_len);
+}
+
 RS_INLINE RsHit rs_traverse(RS_GLOBAL const RsBvhNode* nodes, RS_GLOBAL const RsTriangle* tris, RsRay ray, int any_hit,
                             rs_u32* node_visits) {
-  return rs_traverse_recorded(nodes, tris, ray, any_hit, node_visits, 0, 0, 0);
+  return rs_traverse_variant_recorded(nodes, tris, ray, 0, any_hit, node_visits, 0, 0, 0);
+}
+
+RS_INLINE RsHit rs_traverse_robust(RS_GLOBAL const RsBvhNode* nodes, RS_GLOBAL const RsTriangle* tris, RsRay ray,
+                                   int any_hit, rs_u32* node_visits) {
+  return rs_traverse_variant_recorded(nodes, tris, ray, 1, any_hit, node_visits, 0, 0, 0);
 }
 
 #endif /* RAYSORT_TRAVERSE_H */

@@ -1,5 +1,7 @@
 // raysort trace: load a scene, build its BVH, generate the batches its effects imply, trace each
 // on the device and check every hit against the host reference (the same traversal source).
+// --variant robust|fast picks the traversal arithmetic (docs/trace.md); --variant both runs the two
+// back to back on every batch and prints the robust/fast speed ratio and how many hits differ.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -23,7 +25,37 @@ struct TraceArgs {
   CommonOptions common;
   unsigned reps = 3;
   unsigned warmup = 1;
+  std::string variant = "robust";
 };
+
+struct VariantRun {
+  Tracer::Run run;
+  std::size_t mismatches = 0;  // device vs the host reference of the same variant
+  std::size_t hit_count = 0;
+  double mrays = 0.0;
+};
+
+VariantRun trace_variant(Tracer& tracer, const Bvh& bvh, const ReferencedBatch& rb, const TraceArgs& args) {
+  const RayBatch& b = rb.batch;
+  VariantRun v;
+  v.run = tracer.run(b.rays, nullptr, b.any_hit(), args.warmup, args.reps);
+  // generate_batches' reference hits come from the fast variant; other variants trace their own.
+  const bool fast = tracer.variant() == TraceVariant::Fast;
+  std::vector<RsHit> own;
+  if (!fast) own = trace_reference(bvh, b.rays, nullptr, b.any_hit(), nullptr, tracer.variant());
+  const std::vector<RsHit>& ref = fast ? rb.reference_hits : own;
+  v.mismatches = count_hit_mismatches(v.run.hits, ref);
+  v.hit_count = std::count_if(ref.begin(), ref.end(), [](const RsHit& x) { return x.tri != RS_NO_HIT; });
+  v.mrays = v.run.median_ms > 0 ? static_cast<double>(b.size()) / (v.run.median_ms * 1e3) : 0.0;
+  return v;
+}
+
+// Rays whose hit triangle (or hit/miss) differs between two runs.
+std::size_t count_triangle_differences(const std::vector<RsHit>& a, const std::vector<RsHit>& b) {
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < std::min(a.size(), b.size()); ++i) n += a[i].tri != b[i].tri;
+  return n;
+}
 
 double ms_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -47,21 +79,42 @@ int run_trace(const TraceArgs& args) {
                spp);
     fmt::print("bvh      {} nodes, {} leaves, depth {}, built in {:.0f} ms\n", bvh.nodes.size(), bvh.leaf_count, bvh.depth,
                bvh.build_ms);
+    const bool both = args.variant == "both";
+    std::vector<TraceVariant> variants;
+    if (both)
+      variants = {TraceVariant::Fast, TraceVariant::Robust};
+    else
+      variants = {parse_trace_variant(args.variant)};
     double build_before = rt.build_ms();
-    Tracer tracer(rt, bvh);
+    std::vector<Tracer> tracers;
+    for (TraceVariant v : variants) tracers.emplace_back(rt, bvh, v);
     fmt::print("kernels  built in {:.0f} ms (reported apart from trace times)\n", rt.build_ms() - build_before);
-    fmt::print("{:<10} {:>10} {:>10} {:>10} {:>10} {:>11}\n", "batch", "rays", "ms", "MRays/s", "hits", "mismatches");
+    if (both) {
+      fmt::print("variant  fast and robust, back to back on each batch\n");
+      fmt::print("{:<10} {:>10} {:>9} {:>9} {:>9} {:>9} {:>8} {:>10} {:>8} {:>11}\n", "batch", "rays", "fast ms",
+                 "fast MR/s", "rob ms", "rob MR/s", "rob/fast", "hits", "tri diff", "mismatches");
+    } else {
+      fmt::print("variant  {}\n", trace_variant_name(variants[0]));
+      fmt::print("{:<10} {:>10} {:>10} {:>10} {:>10} {:>11}\n", "batch", "rays", "ms", "MRays/s", "hits", "mismatches");
+    }
 
     // The pipeline of DESIGN.md section 1, as far as the scene's effects ask.
     for (const ReferencedBatch& rb : generate_batches(scene, tris, bvh, gen)) {
       const RayBatch& b = rb.batch;
-      Tracer::Run run = tracer.run(b.rays, nullptr, b.any_hit(), args.warmup, args.reps);
-      std::size_t mismatches = count_hit_mismatches(run.hits, rb.reference_hits);
-      std::size_t hit_count = std::count_if(rb.reference_hits.begin(), rb.reference_hits.end(),
-                                            [](const RsHit& x) { return x.tri != RS_NO_HIT; });
-      double mrays = run.median_ms > 0 ? static_cast<double>(b.size()) / (run.median_ms * 1e3) : 0.0;
-      fmt::print("{:<10} {:>10} {:>10.2f} {:>10.2f} {:>10} {:>11}\n", b.name, b.size(), run.median_ms, mrays, hit_count,
-                 mismatches);
+      std::vector<VariantRun> runs;
+      for (Tracer& tracer : tracers) runs.push_back(trace_variant(tracer, bvh, rb, args));
+      std::size_t mismatches = 0;
+      for (const VariantRun& r : runs) mismatches += r.mismatches;
+      if (both) {
+        const VariantRun &f = runs[0], &r = runs[1];
+        fmt::print("{:<10} {:>10} {:>9.2f} {:>9.2f} {:>9.2f} {:>9.2f} {:>8.3f} {:>10} {:>8} {:>11}\n", b.name, b.size(),
+                   f.run.median_ms, f.mrays, r.run.median_ms, r.mrays, f.mrays > 0 ? r.mrays / f.mrays : 0.0,
+                   r.hit_count, count_triangle_differences(f.run.hits, r.run.hits), mismatches);
+      } else {
+        const VariantRun& r = runs[0];
+        fmt::print("{:<10} {:>10} {:>10.2f} {:>10.2f} {:>10} {:>11}\n", b.name, b.size(), r.run.median_ms, r.mrays,
+                   r.hit_count, mismatches);
+      }
       std::fflush(stdout);
       total_mismatches += mismatches;
     }
@@ -84,6 +137,10 @@ void register_trace_command(CLI::App& app) {
   add_common_options(*cmd, args->common);
   cmd->add_option("--reps", args->reps, "timed repetitions per batch (median reported)")->check(CLI::Range(1u, 1000u));
   cmd->add_option("--warmup", args->warmup, "untimed runs before timing");
+  cmd->add_option("--variant", args->variant,
+                  "traversal arithmetic: robust (watertight), fast (Moller-Trumbore), or both side by side")
+      ->check(CLI::IsMember({"robust", "fast", "both"}))
+      ->capture_default_str();
   cmd->callback([args] { set_command_exit_code(run_trace(*args)); });
 }
 

@@ -6,17 +6,27 @@
 #include <thread>
 
 #include "traverse.h"
+#include "util/error.h"
 
 namespace raysort {
 
-Tracer::Tracer(Runtime& rt, const Bvh& bvh) : rt_(rt) {
+TraceVariant parse_trace_variant(std::string_view name) {
+  if (name == "fast") return TraceVariant::Fast;
+  if (name == "robust") return TraceVariant::Robust;
+  throw Error("unknown trace variant '" + std::string(name) + "' (expected robust or fast)");
+}
+
+const char* trace_variant_name(TraceVariant v) { return v == TraceVariant::Robust ? "robust" : "fast"; }
+
+Tracer::Tracer(Runtime& rt, const Bvh& bvh, TraceVariant variant) : rt_(rt), variant_(variant) {
   nodes_ = rt.upload("bvh nodes", bvh.nodes);
   triangles_ = rt.upload("triangles", bvh.triangles);
   cl::Program program = rt.build({"cl/trace.cl"});
   cl_call("creating the trace kernels", [&] {
-    closest_ = cl::Kernel(program, "trace_closest");
-    any_ = cl::Kernel(program, "trace_any");
-    counted_ = cl::Kernel(program, "trace_closest_counted");
+    const bool robust = variant == TraceVariant::Robust;
+    closest_ = cl::Kernel(program, robust ? "trace_closest_robust" : "trace_closest");
+    any_ = cl::Kernel(program, robust ? "trace_any_robust" : "trace_any");
+    counted_ = cl::Kernel(program, robust ? "trace_closest_counted_robust" : "trace_closest_counted");
   });
   // PoCL: the work-group is a loop over work-items and its size barely matters (DESIGN.md 6);
   // GPUs want a few warps per group. 64 suits both and stays within every device's limit.
@@ -93,7 +103,7 @@ Tracer::Run Tracer::run(const std::vector<RsRay>& rays, const std::vector<std::u
 }
 
 std::vector<RsHit> trace_reference(const Bvh& bvh, const std::vector<RsRay>& rays, const std::uint32_t* order,
-                                   bool any_hit, std::vector<std::uint32_t>* node_visits) {
+                                   bool any_hit, std::vector<std::uint32_t>* node_visits, TraceVariant variant) {
   const std::size_t n = rays.size();
   std::vector<RsHit> hits(n);
   if (node_visits) node_visits->assign(n, 0);
@@ -101,8 +111,12 @@ std::vector<RsHit> trace_reference(const Bvh& bvh, const std::vector<RsRay>& ray
   auto work = [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
       rs_u32 visits = 0;
-      hits[i] = rs_traverse(bvh.nodes.data(), bvh.triangles.data(), rays[order ? order[i] : i], any_hit ? 1 : 0,
-                            node_visits ? &visits : nullptr);
+      const RsRay& ray = rays[order ? order[i] : i];
+      hits[i] = variant == TraceVariant::Robust
+                    ? rs_traverse_robust(bvh.nodes.data(), bvh.triangles.data(), ray, any_hit ? 1 : 0,
+                                         node_visits ? &visits : nullptr)
+                    : rs_traverse(bvh.nodes.data(), bvh.triangles.data(), ray, any_hit ? 1 : 0,
+                                  node_visits ? &visits : nullptr);
       if (node_visits) (*node_visits)[i] = visits;
     }
   };

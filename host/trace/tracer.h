@@ -2,6 +2,8 @@
 // Tracing a ray batch on the device (cl/trace.cl) and on the host (the reference twin, which
 // runs the same traversal source, cl/traverse.h).
 #include <cstdint>
+#include <string>
+#include <string_view>
 #include <vector>
 
 #include "bvh/bvh.h"
@@ -10,11 +12,22 @@
 
 namespace raysort {
 
+// Which traversal arithmetic runs (docs/trace.md). Fast: Möller–Trumbore and a plain slab test.
+// Robust: watertight triangle test (Woop et al. 2013) and a conservative slab test (Ize 2013).
+enum class TraceVariant { Fast, Robust };
+
+// "fast" / "robust"; parse throws an Error naming the accepted values.
+TraceVariant parse_trace_variant(std::string_view name);
+const char* trace_variant_name(TraceVariant v);
+
 // The scene's BVH on one device, with the trace kernels built. Upload once per scene; trace
 // many batches and orders.
 class Tracer {
  public:
-  Tracer(Runtime& rt, const Bvh& bvh);
+  // The default stays Fast until every caller chooses (the benchmark runner, the encoders).
+  Tracer(Runtime& rt, const Bvh& bvh, TraceVariant variant = TraceVariant::Fast);
+
+  TraceVariant variant() const { return variant_; }
 
   // Traces rays[order[i]] for i < count into hits[i] (trace order). any_hit: shadow rays.
   // Enqueues and returns the kernel's event without waiting.
@@ -40,12 +53,14 @@ class Tracer {
   cl::Buffer nodes_, triangles_;
   cl::Kernel closest_, any_, counted_;
   std::size_t local_ = 64;
+  TraceVariant variant_ = TraceVariant::Fast;
 };
 
 // Host reference: the same traversal (cl/traverse.h) on host threads. order may be null
 // (identity). hits[i] belongs to rays[order[i]].
 std::vector<RsHit> trace_reference(const Bvh& bvh, const std::vector<RsRay>& rays, const std::uint32_t* order,
-                                   bool any_hit, std::vector<std::uint32_t>* node_visits = nullptr);
+                                   bool any_hit, std::vector<std::uint32_t>* node_visits = nullptr,
+                                   TraceVariant variant = TraceVariant::Fast);
 
 // Number of positions whose hit records differ in any bit.
 std::size_t count_hit_mismatches(const std::vector<RsHit>& a, const std::vector<RsHit>& b);
