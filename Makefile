@@ -12,7 +12,7 @@ BENCH_SCENES ?= cornell,detail-room,landscape,multi-instance
 BENCH_RESOLUTION ?= 320x180
 BENCH_OUT ?= results/bench-quick
 
-.PHONY: all deps configure build test bench clean
+.PHONY: all deps configure build test bench clean fuzz test-sanitize
 
 all: build
 
@@ -37,6 +37,16 @@ bench: deps
 	$(BUILD)/raysort run --preset quick --resolution $(BENCH_RESOLUTION) --out $(BENCH_OUT)
 	@echo "tables: $(BENCH_OUT)/tables.md"
 
+# libFuzzer targets (fuzz/) for the OBJ loader and the scene parser, FUZZ_SECONDS each (default 60),
+# in build-fuzz with clang (installed from Debian when missing). Findings fail the target.
+FUZZ_SECONDS ?= 60
+fuzz:
+	FUZZ_BUILD=build-fuzz FUZZ_SECONDS=$(FUZZ_SECONDS) JOBS=$(JOBS) bash scripts/fuzz.sh
+
+# The host-side tests under AddressSanitizer + UndefinedBehaviorSanitizer (gcc, build-asan): every
+# test binary that needs no OpenCL device, and the device-free tests of bench_test and cli_test.
+test-sanitize: deps
+	bash scripts/test-sanitize.sh
 
 clean:
 	rm -rf $(BUILD)

@@ -324,3 +324,57 @@ TEST(SceneReal, SibenikAndBreakfastRoomLoad) {
     }
   }
 }
+
+// Issue 8: more bad scene files, each refused with the file, the line and the key.
+TEST(SceneToml, BadInputNamesFileLineAndKey) {
+  // A wrong type for a path, a table where a value belongs, a duplicate key (TOML syntax).
+  std::string obj_int = parse_error(replace(kValid, "generator = \"plane\"\n[mesh.params]\nsize_x = 4.0\nsize_z = 4.0\n",
+                                            "obj = 3\n"));
+  EXPECT_NE(obj_int.find("bad.toml:9:"), std::string::npos) << obj_int;
+  EXPECT_NE(obj_int.find("mesh[0].obj"), std::string::npos) << obj_int;
+  std::string dup = parse_error(replace(kValid, "fov_y = 40.0", "fov_y = 40.0\nfov_y = 41.0"));
+  EXPECT_NE(dup.find("bad.toml:6:"), std::string::npos) << dup;
+  std::string table = parse_error(replace(kValid, "fov_y = 40.0", "fov_y = { a = 1 }"));
+  EXPECT_NE(table.find("bad.toml:5:"), std::string::npos) << table;
+  EXPECT_NE(table.find("camera.fov_y"), std::string::npos) << table;
+  // Empty and binary files: refused in one line, naming the file.
+  for (const std::string& text : {std::string(""), std::string("\x01\x02\xff\xfe\0garbage", 12)}) {
+    std::string msg = parse_error(text);
+    EXPECT_NE(msg.find("bad.toml"), std::string::npos) << msg;
+    EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+  }
+}
+
+TEST(SceneToml, BadObjPathsNameTheSceneLineAndTheObj) {
+  fs::path dir = temp_dir("objpaths");
+  SceneOptions o;
+  o.scene_root = dir.string();
+  fs::create_directories(dir / "folder.obj");
+  write_file(dir / "broken.obj", "v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n");
+  auto with_obj = [&](const std::string& rel) {
+    return replace(kValid, "generator = \"plane\"\n[mesh.params]\nsize_x = 4.0\nsize_z = 4.0\n",
+                   "obj = \"" + rel + "\"\n");
+  };
+  auto error_of = [&](const std::string& text) -> std::string {
+    try {
+      parse_scene_toml(text, "bad.toml", o);
+    } catch (const Error& e) {
+      return e.what();
+    }
+    return "";
+  };
+  std::string folder = error_of(with_obj("folder.obj"));
+  EXPECT_NE(folder.find("bad.toml:9:"), std::string::npos) << folder;
+  EXPECT_NE(folder.find("names a directory"), std::string::npos) << folder;
+  std::string broken = error_of(with_obj("broken.obj"));
+  EXPECT_NE(broken.find("bad.toml:9: mesh 'floor'"), std::string::npos) << broken;
+  EXPECT_NE(broken.find("broken.obj:3: vertex 3 has a non-finite coordinate"), std::string::npos) << broken;
+  // A scene path that is a directory, or missing, through load_scene.
+  EXPECT_THROW(load_scene(dir.string() + "/folder.obj"), Error);
+  try {
+    load_scene((dir / "missing.toml").string());
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("scene file not found"), std::string::npos) << e.what();
+  }
+}

@@ -17,6 +17,7 @@ struct RunArgs {
   bool warmup_set = false;
   float lambda = -1, twopoint = -1;
   int direction_bits = -1;
+  double timeout_s = 0;
   RunOptions opts;
 };
 }  // namespace
@@ -31,17 +32,20 @@ void register_run_command(CLI::App& app) {
   cmd->add_option("--bits", a->bits, "key bits, e.g. 16,32,64")->delimiter(',');
   cmd->add_option("--top-bits", a->top_bits, "also sort by only the highest k bits (top-k cells)")->delimiter(',');
   cmd->add_option("--resolution", a->resolution, "WxH");
-  cmd->add_option("--spp", a->spp, "samples per pixel");
-  cmd->add_option("--reps", a->reps, "timed repetitions per cell");
+  auto* spp_opt = cmd->add_option("--spp", a->spp, "samples per pixel");
+  auto* reps_opt = cmd->add_option("--reps", a->reps, "timed repetitions per cell");
   cmd->add_option("--warmup", a->warmup, "untimed runs before timing")->each([a](const std::string&) { a->warmup_set = true; });
-  cmd->add_option("--seed", a->seed, "seed of the ray generator");
+  auto* seed_opt = cmd->add_option("--seed", a->seed, "seed of the ray generator");
   cmd->add_option("--lambda", a->lambda, "HAD lambda (paper Eq. 1; default 0.125)");
   cmd->add_option("--twopoint-length", a->twopoint, "TwoPoint ray length as a fraction of the largest extent (0.25)");
   cmd->add_option("--direction-bits", a->direction_bits, "HCC_DIR direction bits");
+  cmd->add_option("--timeout", a->timeout_s,
+                  "per-cell wall-clock limit in seconds (0: none); a cell over it is recorded as \"timeout\" "
+                  "(checked between repetitions: a kernel in flight runs to completion)");
   cmd->add_option("--out", a->opts.out, "result folder (default results/<device>/<preset>-<hash>)");
   cmd->add_option("--device", a->opts.device, "device index, cpu, gpu or part of its name (env RAYSORT_DEVICE)");
   cmd->add_option("--scene-root", a->opts.scene_root, "folder of the real scenes (env RAYSORT_SCENE_ROOT)");
-  cmd->callback([a, cmd] {
+  cmd->callback([a, cmd, spp_opt, reps_opt, seed_opt] {
     MatrixSpec spec;
     if (!a->preset.empty()) {
       spec = matrix_preset(a->preset);
@@ -61,13 +65,15 @@ void register_run_command(CLI::App& app) {
     }
     if (!a->top_bits.empty()) spec.top_bits = a->top_bits;
     if (!a->resolution.empty()) spec.resolution = a->resolution;
-    if (a->spp) spec.spp = a->spp;
-    if (a->reps) spec.reps = a->reps;
+    // Given values are taken as given (--reps 0 is refused by validate_matrix, not ignored).
+    if (spp_opt->count()) spec.spp = a->spp;
+    if (reps_opt->count()) spec.reps = a->reps;
     if (a->warmup_set) spec.warmup = a->warmup;
-    if (a->seed) spec.seed = a->seed;
+    if (seed_opt->count()) spec.seed = a->seed;
     if (a->lambda >= 0) spec.params.had_lambda = a->lambda;
     if (a->twopoint >= 0) spec.params.twopoint_length_fraction = a->twopoint;
     if (a->direction_bits >= 0) spec.params.direction_bits = static_cast<unsigned>(a->direction_bits);
+    spec.cell_timeout_s = a->timeout_s;
     // The command line as given, for meta.json.
     std::string line = "raysort run";
     for (auto* opt : cmd->get_options())

@@ -3,9 +3,11 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <regex>
 
+#include "scene/load.h"
 #include "util/error.h"
 
 namespace raysort {
@@ -87,8 +89,12 @@ void validate_matrix(const MatrixSpec& spec) {
   std::uint32_t w, h;
   parse_resolution(spec.resolution, w, h);
   if (spec.scenes.empty()) throw Error("no scenes selected (--scenes NAME[,NAME...] or --preset)");
+  for (const auto& scene : spec.scenes) check_scene_reference(scene);
+  if (spec.bits.empty()) throw Error("no key bits selected (--bits N[,N...])");
   if (spec.spp == 0) throw Error("--spp must be at least 1");
   if (spec.reps == 0) throw Error("--reps must be at least 1");
+  if (!(spec.cell_timeout_s >= 0) || !std::isfinite(spec.cell_timeout_s))
+    throw Error(fmt::format("--timeout {}: must be a number of seconds, 0 (none) or more", spec.cell_timeout_s));
   std::string valid;
   for (Encoder e : all_encoders()) valid += (valid.empty() ? "" : ", ") + std::string(encoder_name(e));
   std::regex batch_re("^(primary|shadow[0-9]+|bounce[1-9][0-9]*)$");

@@ -2,12 +2,14 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <csignal>
 #include <cstdlib>
 #include <cstring>
 #include <ctime>
+#include <filesystem>
 #include <fstream>
 #include <numeric>
 #include <optional>
@@ -75,6 +77,22 @@ struct BatchBuffers {
   cl::Buffer rays, identity, hits, keys32, keys64, values;
 };
 
+// Thrown inside a cell when it has run longer than MatrixSpec::cell_timeout_s.
+struct CellTimedOut {};
+
+// The per-cell wall-clock limit (--timeout). Checked between repetitions: an OpenCL kernel cannot
+// be interrupted portably, so a kernel in flight runs to completion, and the cell's remaining
+// repetitions are skipped.
+struct CellClock {
+  double limit_s;
+  std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
+  double elapsed_s() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); }
+  bool over() const { return limit_s > 0 && elapsed_s() > limit_s; }
+  std::string message() const {
+    return fmt::format("timed out: {:.3f} s, over --timeout {} s (remaining repetitions skipped)", elapsed_s(), limit_s);
+  }
+};
+
 template <class T>
 std::vector<std::uint64_t> widen(const std::vector<T>& v) {
   return std::vector<std::uint64_t>(v.begin(), v.end());
@@ -87,8 +105,35 @@ std::string default_result_dir(const MatrixSpec& spec, const std::string& device
   return fmt::format("results/{}/{}-{}", device_slug, spec.preset.empty() ? "run" : spec.preset, hash);
 }
 
+namespace {
+// Scene problems a run can find before any work starts: a scene file or OBJ given by path is
+// parsed (it is small next to a run); an embedded scene's OBJ files must exist under the root.
+void check_scenes_before_work(const MatrixSpec& spec, const RunOptions& opts) {
+  SceneOptions scene_opts;
+  scene_opts.scene_root = opts.scene_root;
+  scene_opts.width = scene_opts.height = 1;
+  std::vector<SceneListing> listed = list_scenes();
+  for (const auto& name : spec.scenes) {
+    auto it = std::find_if(listed.begin(), listed.end(), [&](const SceneListing& l) { return l.name == name; });
+    if (it == listed.end()) {
+      (void)load_scene(name, scene_opts);
+      continue;
+    }
+    const std::string root = resolve_scene_root(scene_opts);
+    for (const auto& rel : it->obj_files) {
+      std::error_code ec;
+      if (!std::filesystem::is_regular_file(std::filesystem::path(root) / rel, ec))
+        throw Error(fmt::format("scene {} needs {} under the scene root {}, which is not there; pass --scene-root DIR "
+                                "or set RAYSORT_SCENE_ROOT",
+                                name, rel, root));
+    }
+  }
+}
+}  // namespace
+
 RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
   validate_matrix(spec);
+  check_scenes_before_work(spec, opts);
   Runtime rt(select_device(opts.device));
   const DeviceInfo& dev = rt.info();
   RunSummary summary;
@@ -173,22 +218,28 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
       BatchBuffers buf;
       std::vector<std::uint32_t> identity(n);
       std::iota(identity.begin(), identity.end(), 0u);
-      buf.rays = rt.upload("rays of " + batch.name, batch.rays);
-      buf.identity = rt.upload("identity order", identity);
-      buf.hits = rt.buffer("hits", std::max<std::size_t>(1, n) * sizeof(RsHit));
-      buf.values = rt.buffer("sort values (ray order)", std::max<std::size_t>(1, n) * 4);
-      buf.keys32 = rt.buffer("32-bit keys", std::max<std::size_t>(1, n) * 4);
-      buf.keys64 = rt.buffer("64-bit keys", std::max<std::size_t>(1, n) * 8);
-
       // NoSort: the baseline every speedup on this batch is measured against, in this run.
       std::vector<double> nosort_times;
-      for (unsigned i = 0; i < spec.warmup + spec.reps; ++i) {
-        cl::Event ev = tracer.enqueue(buf.rays, buf.identity, n, any_hit, buf.hits);
-        cl_call("waiting for the NoSort trace", [&] { ev.wait(); });
-        if (i >= spec.warmup) nosort_times.push_back(event_ms(ev));
-      }
       std::vector<RsHit> nosort_hits;
-      rt.download("NoSort hits", buf.hits, nosort_hits, n);
+      CellClock nosort_clock{spec.cell_timeout_s};
+      std::string batch_error;  // a device fault in the batch's setup or baseline fails all its cells
+      try {
+        buf.rays = rt.upload("rays of " + batch.name, batch.rays);
+        buf.identity = rt.upload("identity order", identity);
+        buf.hits = rt.buffer("hits", std::max<std::size_t>(1, n) * sizeof(RsHit));
+        buf.values = rt.buffer("sort values (ray order)", std::max<std::size_t>(1, n) * 4);
+        buf.keys32 = rt.buffer("32-bit keys", std::max<std::size_t>(1, n) * 4);
+        buf.keys64 = rt.buffer("64-bit keys", std::max<std::size_t>(1, n) * 8);
+        for (unsigned i = 0; i < spec.warmup + spec.reps; ++i) {
+          cl::Event ev = tracer.enqueue(buf.rays, buf.identity, n, any_hit, buf.hits);
+          cl_call("waiting for the NoSort trace", [&] { ev.wait(); });
+          if (i >= spec.warmup) nosort_times.push_back(event_ms(ev));
+          if (nosort_clock.over()) break;
+        }
+        rt.download("NoSort hits", buf.hits, nosort_hits, n);
+      } catch (const Error& err) {
+        batch_error = err.what();
+      }
       const Timing nosort_trace = Timing::of(nosort_times);
       const SimtModel nosort_simt = simt_model(bvh, batch.rays, nullptr, any_hit);
       {
@@ -202,13 +253,19 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
         c.simt_lane_efficiency = nosort_simt.lane_efficiency;
         c.simt_distinct_per_visit = nosort_simt.distinct_nodes_per_visit;
         c.simt_lane_efficiency_ratio = c.simt_distinct_per_visit_ratio = 1.0;
-        c.hits_match_nosort = count_hit_mismatches(nosort_hits, it->reference_hits) == 0;
+        c.hits_match_nosort = batch_error.empty() && count_hit_mismatches(nosort_hits, it->reference_hits) == 0;
         c.order_is_permutation = true;
         c.keys_hash = fnv1a_hex(nullptr, 0);
         c.order_hash = fnv1a_hex(identity.data(), identity.size() * 4);
-        if (!c.hits_match_nosort) {
+        if (!batch_error.empty()) {
+          c.status = "failed";
+          c.error = batch_error;
+        } else if (!c.hits_match_nosort) {
           c.status = "failed";
           c.error = "device NoSort hits differ from the host reference traversal";
+        } else if (nosort_clock.over()) {
+          c.status = "timeout";
+          c.error = nosort_clock.message();
         }
         ++progress.done;
         if (!results.has(c.id())) {
@@ -216,7 +273,8 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
           ++summary.cells_run;
           summary.cells_failed += !c.ok();
         }
-        progress.line(fmt::format("{} {} NoSort: {:.2f} MRays/s", scene_name, batch_name, c.trace_mrays));
+        progress.line(c.ok() ? fmt::format("{} {} NoSort: {:.2f} MRays/s", scene_name, batch_name, c.trace_mrays)
+                             : fmt::format("{}: {}: {}", c.id(), c.status == "timeout" ? "TIMEOUT" : "FAILED", c.error));
       }
 
       for (Encoder e : encoders) {
@@ -234,7 +292,9 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
             ++summary.cells_skipped;
             continue;
           }
+          CellClock clock{spec.cell_timeout_s};
           try {
+            if (!batch_error.empty()) throw Error("the batch's setup failed: " + batch_error);
             encoder.prepare(e, bits);
             cl::Buffer& keys = bits > 32 ? buf.keys64 : buf.keys32;
             RadixSortConfig cfg;
@@ -264,6 +324,7 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
                 ts.push_back(st.ms);
                 tt.push_back(event_ms(ev_t));
               }
+              if (clock.over()) throw CellTimedOut{};
             }
             std::vector<std::uint32_t> order;
             std::vector<RsHit> hits;
@@ -322,6 +383,9 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
             // A device fault (allocation, build, launch) fails this cell; the run goes on.
             c.status = "failed";
             c.error = err.what();
+          } catch (const CellTimedOut&) {
+            c.status = "timeout";
+            c.error = clock.message();
           }
           results.add(c);
           ++summary.cells_run;
@@ -331,7 +395,7 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
           if (kill_after > 0 && summary.cells_run >= kill_after) std::raise(SIGKILL);
           progress.line(c.ok() ? fmt::format("{}: {:.2f} MRays/s ({:.2f}x), encode {:.2f} + sort {:.2f} ms, ANC {:.2f}",
                                              c.id(), c.trace_mrays, c.speedup, c.encode.median_ms, c.sort.median_ms, c.anc)
-                               : fmt::format("{}: FAILED: {}", c.id(), c.error));
+                               : fmt::format("{}: {}: {}", c.id(), c.status == "timeout" ? "TIMEOUT" : "FAILED", c.error));
         }
       }
     }

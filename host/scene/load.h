@@ -25,12 +25,24 @@ std::string resolve_scene_root(const SceneOptions& opts);
 // for an unknown name.
 Scene load_scene(const std::string& name_or_path, const SceneOptions& opts = {});
 
+// The lookup part of load_scene without loading: throws the same Error for an unknown name, a
+// missing file or a directory (so a command can refuse it before any work starts).
+void check_scene_reference(const std::string& name_or_path);
+
 // Parses scene TOML text; `origin` names it in error messages ("scenes/cornell.toml").
 Scene parse_scene_toml(const std::string& text, const std::string& origin, const SceneOptions& opts);
 
 // Loads an OBJ file into one mesh (all groups merged), with per-triangle material ids pointing
 // into `materials` (appended from the OBJ's MTL, Kd as albedo). Polygons are triangulated.
+// Refuses, with one line naming the file and the reason: a directory, a UTF-16 or binary file
+// (NUL bytes), a line over 1 MiB (checked while streaming, before the file is read whole), a
+// malformed or non-finite vertex, a face index out of range, a face of fewer than 3 vertices, and
+// a file without faces.
 Mesh load_obj(const std::string& path, std::vector<Material>& materials);
+
+// The same on OBJ text in memory; `origin` names it in messages, .mtl files are read from `mtl_dir`.
+Mesh parse_obj(const std::string& text, const std::string& origin, const std::string& mtl_dir,
+               std::vector<Material>& materials);
 
 struct SceneListing {
   std::string name;

@@ -7,11 +7,13 @@
 #include <tiny_obj_loader.h>
 
 #include <charconv>
+#include <cstdint>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <vector>
 
 #include "scene/load.h"
 #include "util/error.h"
@@ -20,12 +22,98 @@ namespace raysort {
 
 namespace {
 
+// OBJ is line-oriented text with short lines; tinyobjloader reads each line whole into memory, so
+// a corrupt or hostile file with a 1 GB line would cost 1 GB (and minutes). Lines longer than this
+// are refused before parsing.
+constexpr std::size_t kMaxObjLineBytes = std::size_t(1) << 20;
+
+// Byte-level checks on the text of an OBJ, fed in chunks (a file is streamed through a bounded
+// buffer before it is read whole): not UTF-16, no NUL byte (binary data), no overlong line.
+class TextCheck {
+ public:
+  explicit TextCheck(const std::string& origin) : origin_(origin) {}
+  void feed(const char* data, std::size_t n) {
+    if (offset_ == 0 && n >= 2 &&
+        ((data[0] == '\xFE' && data[1] == '\xFF') || (data[0] == '\xFF' && data[1] == '\xFE')))
+      throw Error(fmt::format(
+          "OBJ file {} is UTF-16 encoded; convert it to UTF-8 or ASCII (e.g. iconv -f UTF-16 -t UTF-8)", origin_));
+    for (std::size_t i = 0; i < n; ++i) {
+      char c = data[i];
+      if (c == '\n') {
+        ++line_;
+        line_bytes_ = 0;
+        continue;
+      }
+      if (c == '\0')
+        throw Error(fmt::format("OBJ file {}:{}: byte {} is NUL: this is binary data, not a text OBJ file; check the "
+                                "file (truncated download, wrong format?)",
+                                origin_, line_, offset_ + i));
+      if (++line_bytes_ > kMaxObjLineBytes)
+        throw Error(fmt::format("OBJ file {}:{}: line longer than {} MiB; OBJ lines are short, so the file is corrupt "
+                                "or not an OBJ file; fix the file",
+                                origin_, line_, kMaxObjLineBytes >> 20));
+    }
+    offset_ += n;
+  }
+
+ private:
+  const std::string& origin_;
+  std::size_t offset_ = 0, line_ = 1, line_bytes_ = 0;
+};
+
 std::string read_file(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw Error(fmt::format("OBJ file {} is a directory, not a file; give the path of the .obj file", path));
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error(fmt::format("cannot open OBJ file {}: {}", path, std::strerror(errno)));
+  // Stream through a bounded buffer first: a file with an overlong line is refused before it is
+  // read whole.
+  TextCheck check(path);
+  std::vector<char> chunk(std::size_t(1) << 16);
+  while (in) {
+    in.read(chunk.data(), static_cast<std::streamsize>(chunk.size()));
+    check.feed(chunk.data(), static_cast<std::size_t>(in.gcount()));
+  }
+  if (in.bad()) throw Error(fmt::format("cannot read OBJ file {}: {}", path, std::strerror(errno)));
+  in.clear();
+  in.seekg(0);
   std::ostringstream ss;
   ss << in.rdbuf();
   return std::move(ss).str();
+}
+
+// Checks the vertex index of every corner of an `f` line (p..e, after the "f"): an integer that
+// parses completely, not 0, and (when negative) not counting back past the first vertex defined so
+// far. tinyobjloader wraps an index like 99999999999999999999 to some int and reads "f a b c"
+// as index 0, with a misleading message.
+void check_face_line(const char* p, const char* e, const std::string& path, std::size_t line,
+                     std::size_t vertices_so_far) {
+  auto is_space = [](char c) { return c == ' ' || c == '\t' || c == '\r'; };
+  while (p < e) {
+    while (p < e && is_space(*p)) ++p;
+    if (p == e) break;
+    const char* tok = p;
+    while (p < e && !is_space(*p)) ++p;
+    std::string_view token(tok, static_cast<std::size_t>(p - tok));
+    std::string_view index = token.substr(0, token.find('/'));
+    long long v = 0;
+    auto [stop, ec] = std::from_chars(index.data(), index.data() + index.size(), v);
+    if (ec == std::errc::result_out_of_range || (ec == std::errc() && (v > INT32_MAX || v < -INT32_MAX)))
+      throw Error(fmt::format("{}:{}: face index '{}' is out of range; fix the file", path, line, token));
+    if (ec != std::errc() || stop != index.data() + index.size())
+      throw Error(fmt::format("{}:{}: face corner '{}' is malformed (expected v, v/vt, v//vn or v/vt/vn with "
+                              "integer indices); fix the file",
+                              path, line, token));
+    if (v == 0)
+      throw Error(fmt::format("{}:{}: face index 0 is invalid (OBJ indices start at 1; negative ones count back "
+                              "from the last vertex); fix the file",
+                              path, line));
+    if (v < 0 && static_cast<unsigned long long>(-v) > vertices_so_far)
+      throw Error(fmt::format("{}:{}: face index {} counts back past the first vertex ({} vertices defined so far); "
+                              "fix the file",
+                              path, line, v, vertices_so_far));
+  }
 }
 
 // Checks the first three coordinates of every `v` line: a number that parses completely and is
@@ -41,6 +129,10 @@ std::size_t check_vertex_lines(const std::string& text, const std::string& path)
     const char* e = text.data() + end;
     pos = end + 1;
     while (p < e && (*p == ' ' || *p == '\t')) ++p;
+    if (e - p >= 2 && p[0] == 'f' && (p[1] == ' ' || p[1] == '\t')) {
+      check_face_line(p + 2, e, path, line, vertex);
+      continue;
+    }
     if (e - p < 2 || p[0] != 'v' || (p[1] != ' ' && p[1] != '\t')) continue;
     p += 2;
     for (int axis = 0; axis < 3; ++axis) {
@@ -70,10 +162,14 @@ std::size_t check_vertex_lines(const std::string& text, const std::string& path)
 }  // namespace
 
 Mesh load_obj(const std::string& path, std::vector<Material>& materials) {
-  std::string text = read_file(path);
-  if (text.size() >= 2 && ((text[0] == '\xFE' && text[1] == '\xFF') || (text[0] == '\xFF' && text[1] == '\xFE')))
-    throw Error(fmt::format("OBJ file {} is UTF-16 encoded; convert it to UTF-8 or ASCII (e.g. iconv -f UTF-16 -t UTF-8)",
-                            path));
+  std::string dir = std::filesystem::path(path).parent_path().string();
+  return parse_obj(read_file(path), path, dir.empty() ? "." : dir, materials);
+}
+
+Mesh parse_obj(const std::string& text, const std::string& path, const std::string& mtl_dir,
+               std::vector<Material>& materials) {
+  if (text.empty()) throw Error(fmt::format("OBJ file {} is empty (0 bytes); give an OBJ file with faces", path));
+  TextCheck(path).feed(text.data(), text.size());
   std::size_t vertex_lines = check_vertex_lines(text, path);
 
   tinyobj::attrib_t attrib;
@@ -81,11 +177,12 @@ Mesh load_obj(const std::string& path, std::vector<Material>& materials) {
   std::vector<tinyobj::material_t> obj_materials;
   std::string warn, err;
   std::istringstream stream(text);
-  tinyobj::MaterialFileReader mtl_reader(std::filesystem::path(path).parent_path().string() + "/");
+  tinyobj::MaterialFileReader mtl_reader(mtl_dir + "/");
   bool ok = tinyobj::LoadObj(&attrib, &shapes, &obj_materials, &warn, &err, &stream, &mtl_reader,
                              /*triangulate=*/false);
   if (!ok || !err.empty()) {
     while (!err.empty() && (err.back() == '\n' || err.back() == '.')) err.pop_back();
+    for (std::size_t at; (at = err.find('\n')) != std::string::npos;) err.replace(at, 1, "; ");  // one line
     throw Error(fmt::format("cannot read OBJ file {}: {}; fix the file", path, err.empty() ? "parse error" : err));
   }
   if (warn.find("Degenerated face") != std::string::npos)

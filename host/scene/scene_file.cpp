@@ -201,6 +201,8 @@ class SceneBuilder {
       std::string root = resolve_scene_root(opts_);
       fs::path p = fs::path(rel).is_absolute() ? fs::path(rel) : fs::path(root) / rel;
       std::error_code ec;
+      if (fs::is_directory(p, ec))
+        t.fail("obj", fmt::format("names a directory, not an OBJ file: {}", p.lexically_normal().string()));
       if (!fs::is_regular_file(p, ec))
         t.fail("obj", fmt::format("names an OBJ file that does not exist: {} (scene root: {}); pass --scene-root DIR "
                                   "or set RAYSORT_SCENE_ROOT to the folder that holds '{}'",
@@ -387,25 +389,37 @@ Scene parse_scene_toml(const std::string& text, const std::string& origin, const
   return SceneBuilder(origin, opts).build(root);
 }
 
+void check_scene_reference(const std::string& name_or_path) {
+  if (name_or_path.find('/') == std::string::npos && !ends_with(name_or_path, ".toml") &&
+      !ends_with(name_or_path, ".obj") && find_embedded("scenes/" + name_or_path + ".toml"))
+    return;
+  std::error_code ec;
+  if (fs::is_directory(name_or_path, ec))
+    throw Error(fmt::format("scene '{}' is a directory; give a scene name, or the path of a .toml or .obj file",
+                            name_or_path));
+  bool exists = fs::is_regular_file(name_or_path, ec);
+  if (ends_with(name_or_path, ".toml")) {
+    if (!exists) throw Error(fmt::format("scene file not found: {}", name_or_path));
+    return;
+  }
+  if (ends_with(name_or_path, ".obj") || ends_with(name_or_path, ".OBJ")) {
+    if (!exists) throw Error(fmt::format("OBJ file not found: {}", name_or_path));
+    return;
+  }
+  throw Error(fmt::format("unknown scene '{}'; the known scenes are: {} (or give a path to a .toml or .obj file)",
+                          name_or_path, fmt::join(embedded_scene_names(), ", ")));
+}
+
 Scene load_scene(const std::string& name_or_path, const SceneOptions& opts) {
+  check_scene_reference(name_or_path);
   std::string embedded_path = "scenes/" + name_or_path + ".toml";
   if (name_or_path.find('/') == std::string::npos && !ends_with(name_or_path, ".toml") &&
       !ends_with(name_or_path, ".obj")) {
     if (auto text = find_embedded(embedded_path))
       return parse_scene_toml(std::string(*text), "embedded:" + embedded_path, opts);
   }
-  std::error_code ec;
-  bool exists = fs::is_regular_file(name_or_path, ec);
-  if (ends_with(name_or_path, ".toml")) {
-    if (!exists) throw Error(fmt::format("scene file not found: {}", name_or_path));
-    return parse_scene_toml(read_text_file(name_or_path), name_or_path, opts);
-  }
-  if (ends_with(name_or_path, ".obj") || ends_with(name_or_path, ".OBJ")) {
-    if (!exists) throw Error(fmt::format("OBJ file not found: {}", name_or_path));
-    return load_bare_obj(name_or_path, opts);
-  }
-  throw Error(fmt::format("unknown scene '{}'; the known scenes are: {} (or give a path to a .toml or .obj file)",
-                          name_or_path, fmt::join(embedded_scene_names(), ", ")));
+  if (ends_with(name_or_path, ".toml")) return parse_scene_toml(read_text_file(name_or_path), name_or_path, opts);
+  return load_bare_obj(name_or_path, opts);
 }
 
 std::vector<SceneListing> list_scenes() {

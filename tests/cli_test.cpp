@@ -1,0 +1,145 @@
+// The command line as a user meets it (issue 8): unknown names list the valid ones, impossible
+// combinations are refused in one line before any work starts, and device faults in a matrix run
+// (an allocation over the device limit, a cell over --timeout) fail only their cells.
+#include <gtest/gtest.h>
+#include <fcntl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "bench/result_set.h"
+#include "test_util.h"
+
+namespace fs = std::filesystem;
+using namespace raysort;
+
+namespace {
+
+struct CliResult {
+  int code = -1;
+  std::string err;  // stderr
+};
+
+// Runs the raysort binary with `args` (and `env` as NAME=VALUE), capturing stderr.
+CliResult run_cli(const std::vector<std::string>& args, const std::vector<std::string>& env = {}) {
+  fs::path err_file = fs::temp_directory_path() / ("raysort_cli_test_" + std::to_string(::getpid()) + ".err");
+  pid_t pid = fork();
+  if (pid == 0) {
+    for (const auto& e : env) ::putenv(const_cast<char*>(e.c_str()));
+    std::vector<char*> argv;
+    std::string bin = RAYSORT_BINARY;
+    argv.push_back(bin.data());
+    std::vector<std::string> copy = args;
+    for (auto& a : copy) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    int devnull = ::open("/dev/null", O_WRONLY);
+    int err = ::open(err_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    ::dup2(devnull, 1);
+    ::dup2(err, 2);
+    ::execv(bin.c_str(), argv.data());
+    _exit(127);
+  }
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  CliResult r;
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  std::ifstream in(err_file);
+  r.err.assign(std::istreambuf_iterator<char>(in), {});
+  fs::remove(err_file);
+  return r;
+}
+
+std::string temp_dir(const std::string& name) {
+  fs::path p = fs::temp_directory_path() / ("raysort_cli_test_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(p);
+  return p.string();
+}
+
+// Expects exit code != 0, exactly one line on stderr containing every one of `parts`, and (for
+// `run`) no result folder: refused before any work started.
+void expect_refused(std::vector<std::string> args, const std::vector<std::string>& parts) {
+  std::string out = temp_dir("refused");
+  if (args[0] == "run") args.insert(args.end(), {"--out", out});
+  CliResult r = run_cli(args);
+  std::string cmd;
+  for (auto& a : args) cmd += a + " ";
+  EXPECT_NE(r.code, 0) << cmd;
+  ASSERT_FALSE(r.err.empty()) << cmd;
+  EXPECT_EQ(r.err.find('\n'), r.err.size() - 1) << cmd << ": not one line:\n" << r.err;
+  for (const auto& p : parts) EXPECT_NE(r.err.find(p), std::string::npos) << cmd << ": no '" << p << "' in " << r.err;
+  EXPECT_FALSE(fs::exists(out)) << cmd << ": work started (result folder created)";
+}
+
+}  // namespace
+
+TEST(Cli, UnknownNamesListTheValidOnes) {
+  expect_refused({"run", "--scenes", "cornell", "--encoders", "nope"},
+                 {"unknown encoder 'nope'", "nosort", "mlhcc", "hcc-dir"});
+  expect_refused({"run", "--scenes", "nope"}, {"unknown scene 'nope'", "cornell", "landscape"});
+  expect_refused({"run", "--scenes", "cornell", "--batches", "nope"}, {"unknown batch 'nope'", "primary", "shadow<k>"});
+  expect_refused({"run", "--preset", "nope"}, {"unknown preset 'nope'", "quick", "paper"});
+  expect_refused({"run", "--scenes", "/nonexistent/x.obj"}, {"OBJ file not found: /nonexistent/x.obj"});
+  expect_refused({"run", "--scenes", "/tmp"}, {"'/tmp' is a directory"});
+  expect_refused({"trace", "--scene", "nope"}, {"unknown scene 'nope'", "cornell"});
+}
+
+TEST(Cli, ImpossibleCombinationsRefusedBeforeWork) {
+  expect_refused({"run", "--scenes", "cornell", "--resolution", "0x100"}, {"resolution '0x100'"});
+  expect_refused({"run", "--scenes", "cornell", "--resolution", "wide"}, {"resolution 'wide'"});
+  expect_refused({"run", "--scenes", "cornell", "--encoders", "origin", "--bits", "0"}, {"origin keys have 1 to 64 bits, not 0"});
+  expect_refused({"run", "--scenes", "cornell", "--bits", "65"}, {"65-bit keys", "not 65"});
+  expect_refused({"run", "--scenes", "cornell", "--encoders", "MLHCC", "--bits", "31"},
+                 {"encoder MLHCC with 31-bit keys", "even number of bits"});
+  expect_refused({"run", "--scenes", "cornell", "--top-bits", "40", "--bits", "32"}, {"--top-bits 40"});
+  expect_refused({"run", "--scenes", "cornell", "--reps", "0"}, {"--reps"});
+  expect_refused({"run", "--scenes", "cornell", "--timeout", "-1"}, {"--timeout -1"});
+  // A broken OBJ given by path is read before the run starts, not after the first scenes ran.
+  fs::path bad = fs::temp_directory_path() / ("raysort_cli_test_nan_" + std::to_string(::getpid()) + ".obj");
+  std::ofstream(bad) << "v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n";
+  expect_refused({"run", "--scenes", "cornell," + bad.string()}, {bad.string() + ":3: vertex 3 has a non-finite"});
+  fs::remove(bad);
+}
+
+// An allocation over the device's limit (forced with the RAYSORT_TEST_MAX_ALLOC_BYTES hook, here
+// for the one buffer that only the grid encoder's 64-bit cells allocate) fails that cell with a
+// message naming the buffer, its size and the limit; the cells after it still run.
+TEST(Cli, AllocationOverTheDeviceLimitFailsOnlyItsCell) {
+  std::string out = temp_dir("alloc");
+  CliResult r = run_cli({"run", "--scenes", "cornell", "--batches", "primary", "--encoders", "grid,origin", "--bits",
+                         "32,64", "--resolution", "16x16", "--reps", "1", "--warmup", "0", "--out", out},
+                        {"RAYSORT_TEST_MAX_ALLOC_BYTES=1:grid 64-bit cut boxes"});
+  EXPECT_EQ(r.code, 1) << r.err;  // a cell failed
+  ResultSet rs = ResultSet::load(out);
+  std::map<std::string, std::pair<std::string, std::string>> status;
+  for (const auto& c : rs.cells()) status[c.encoder + "/" + std::to_string(c.bits)] = {c.status, c.error};
+  ASSERT_EQ(status.size(), 5u) << r.err;  // NoSort + 2 encoders x 2 bits, each once
+  EXPECT_EQ(status[std::string(kBaselineEncoder) + "/0"].first, "ok");
+  for (const char* ok : {"grid/32", "origin/32", "origin/64"}) EXPECT_EQ(status[ok].first, "ok") << ok << status[ok].second;
+  EXPECT_EQ(status["grid/64"].first, "failed");
+  const std::string& msg = status["grid/64"].second;
+  EXPECT_NE(msg.find("allocating 'grid 64-bit cut boxes' ("), std::string::npos) << msg;
+  EXPECT_NE(msg.find("larger than the device's maximum allocation of 1 B"), std::string::npos) << msg;
+  fs::remove_all(out);
+}
+
+// A cell over --timeout is recorded as "timeout" and the run goes on to the next cell.
+TEST(Cli, CellOverTimeoutRecordedAsTimeout) {
+  std::string out = temp_dir("timeout");
+  CliResult r = run_cli({"run", "--scenes", "cornell", "--batches", "primary", "--encoders", "origin,costa", "--bits",
+                         "32", "--resolution", "16x16", "--reps", "2", "--warmup", "0", "--timeout", "0.000001",
+                         "--out", out});
+  EXPECT_EQ(r.code, 1) << r.err;
+  ResultSet rs = ResultSet::load(out);
+  ASSERT_EQ(rs.cells().size(), 3u) << r.err;
+  for (const auto& c : rs.cells()) {
+    EXPECT_EQ(c.status, "timeout") << c.id();
+    EXPECT_NE(c.error.find("over --timeout 1e-06 s"), std::string::npos) << c.error;
+  }
+  EXPECT_NE(r.err.find("TIMEOUT"), std::string::npos) << r.err;
+  fs::remove_all(out);
+}
