@@ -13,6 +13,7 @@ struct RunArgs {
   std::vector<std::string> scenes, batches, encoders;
   std::vector<unsigned> bits, top_bits;
   std::string resolution;
+  std::string variant;
   unsigned spp = 0, reps = 0, warmup = 0, seed = 0;
   bool warmup_set = false;
   float lambda = -1, twopoint = -1;
@@ -65,6 +66,7 @@ void register_run_command(CLI::App& app) {
     }
     if (!a->top_bits.empty()) spec.top_bits = a->top_bits;
     if (!a->resolution.empty()) spec.resolution = a->resolution;
+    if (!a->variant.empty()) spec.variant = a->variant;
     // Given values are taken as given (--reps 0 is refused by validate_matrix, not ignored).
     if (spp_opt->count()) spec.spp = a->spp;
     if (reps_opt->count()) spec.reps = a->reps;

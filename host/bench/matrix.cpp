@@ -93,6 +93,8 @@ void validate_matrix(const MatrixSpec& spec) {
   if (spec.bits.empty()) throw Error("no key bits selected (--bits N[,N...])");
   if (spec.spp == 0) throw Error("--spp must be at least 1");
   if (spec.reps == 0) throw Error("--reps must be at least 1");
+  if (spec.variant != "robust" && spec.variant != "fast")
+    throw Error(fmt::format("--variant '{}': the trace variants are robust and fast", spec.variant));
   if (!(spec.cell_timeout_s >= 0) || !std::isfinite(spec.cell_timeout_s))
     throw Error(fmt::format("--timeout {}: must be a number of seconds, 0 (none) or more", spec.cell_timeout_s));
   std::string valid;

@@ -26,7 +26,7 @@ struct MatrixSpec {
   unsigned reps = 5;
   unsigned warmup = 1;
   unsigned seed = 1;
-  std::string variant = "fast";
+  std::string variant = "robust";     // trace variant: robust (watertight) or fast
   EncoderParams params;
   double cell_timeout_s = 0;          // 0: none
 

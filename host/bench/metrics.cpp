@@ -72,7 +72,9 @@ SimtModel simt_model_from_trails(const std::vector<std::vector<std::uint32_t>>& 
   return finish(t);
 }
 
-SimtModel simt_model(const Bvh& bvh, const std::vector<RsRay>& rays, const std::uint32_t* order, bool any_hit) {
+SimtModel simt_model(const Bvh& bvh, const std::vector<RsRay>& rays, const std::uint32_t* order, bool any_hit,
+                     TraceVariant variant) {
+  const int robust = variant == TraceVariant::Robust ? 1 : 0;
   const std::size_t n = rays.size();
   const std::size_t warps = (n + kWarpSize - 1) / kWarpSize;
   const unsigned threads = std::max(1u, std::min(16u, std::thread::hardware_concurrency()));
@@ -90,8 +92,8 @@ SimtModel simt_model(const Bvh& bvh, const std::vector<RsRay>& rays, const std::
       for (std::size_t l = 0; l < kWarpSize && w * kWarpSize + l < n; ++l) {
         std::size_t i = w * kWarpSize + l;
         rs_u32 len = 0;
-        rs_traverse_recorded(bvh.nodes.data(), bvh.triangles.data(), rays[order ? order[i] : i], any_hit ? 1 : 0, nullptr,
-                             lane_trails[l].data(), cap, &len);
+        rs_traverse_variant_recorded(bvh.nodes.data(), bvh.triangles.data(), rays[order ? order[i] : i], robust,
+                                     any_hit ? 1 : 0, nullptr, lane_trails[l].data(), cap, &len);
         trimmed[l].assign(lane_trails[l].begin(), lane_trails[l].begin() + std::min(len, cap));
         lanes.push_back(&trimmed[l]);
       }

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "bvh/bvh.h"
+#include "trace/tracer.h"
 #include "shared.h"
 
 namespace raysort {
@@ -32,6 +33,7 @@ SimtModel simt_model_from_trails(const std::vector<std::vector<std::uint32_t>>& 
 
 // Traces rays[order[i]] with the host reference (cl/traverse.h) recording every ray's trail,
 // warp by warp on host threads, and returns the model. order null = identity.
-SimtModel simt_model(const Bvh& bvh, const std::vector<RsRay>& rays, const std::uint32_t* order, bool any_hit);
+SimtModel simt_model(const Bvh& bvh, const std::vector<RsRay>& rays, const std::uint32_t* order, bool any_hit,
+                     TraceVariant variant = TraceVariant::Fast);
 
 }  // namespace raysort

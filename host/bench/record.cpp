@@ -19,7 +19,7 @@ Timing Timing::of(std::vector<double> s) {
 std::string CellRecord::id() const {
   std::string s = fmt::format("{}/{}/{}/{}", scene, batch, encoder, bits);
   if (top_bits) s += fmt::format("/top{}", top_bits);
-  if (variant != "fast") s += "/" + variant;
+  if (variant != "robust") s += "/" + variant;
   if (access != "gather") s += "/" + access;
   return s;
 }

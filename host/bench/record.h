@@ -25,7 +25,7 @@ struct CellRecord {
   std::string scene, batch, encoder;
   unsigned bits = 0;       // key bits (0 for NoSort)
   unsigned top_bits = 0;   // sort by the highest top_bits only (0: all bits)
-  std::string variant = "fast";    // trace variant
+  std::string variant = "robust";  // trace variant ("robust" default, "fast")
   std::string access = "gather";   // rays read through the order (gather) or permuted
   std::uint64_t rays = 0;
 

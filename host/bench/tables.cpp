@@ -59,7 +59,7 @@ std::string render_tables(const std::vector<CellRecord>& cells, const nlohmann::
     md += fmt::format("Resolution {}, {} spp, {} repetitions after {} warm-up; trace variant {}.\n\n",
                       meta["matrix"].value("resolution", "?"), meta["matrix"].value("spp", 0),
                       meta["matrix"].value("reps", 0), meta["matrix"].value("warmup", 0),
-                      meta["matrix"].value("variant", "fast"));
+                      meta["matrix"].value("variant", "robust"));
   md += "Times are medians of OpenCL profiling events. Speedup = NoSort trace time / trace time on the same batch; "
         "net = NoSort trace / (encode + sort + trace). A cell whose sorted trace does not reproduce the NoSort hits "
         "exactly is listed under failed cells and has no speed.\n\n";
