@@ -263,3 +263,79 @@ __kernel void rs_scatter(__global const rs_key* restrict keys_in, __global const
   }
 #endif
 }
+
+#if RS_WG == 1
+/* MSD-first hybrid, CPU shape only (the host uses it for large N, see radix_sort.cpp). After one
+ * global stable counting pass on the most significant digit that varies (rs_count, rs_scan,
+ * rs_scatter into keys_a/values_a), every bucket of that digit is a contiguous range that only
+ * needs ordering by the lower digits. One work-group (one work-item) per bucket sorts its range
+ * by those digits with LSD passes while it sits in cache: one read takes the histograms of all
+ * of its passes (a histogram does not depend on the order of the keys), then every pass scatters
+ * the range stably from one buffer into the same range of the other (a -> b -> a ...). Bucket d
+ * is [offsets[d * tiles], offsets[(d + 1) * tiles]) of the scanned digit-major counts, the last
+ * one ends at n. pass_mask: bit p set for each lower pass p (digit bits [lo + p * RS_RADIX_BITS,
+ * ...)) that runs. With an odd number of passes the result is in keys_b/values_b, else in a. */
+#define RS_MAX_PASSES ((RS_KEY_BITS + RS_RADIX_BITS - 1) / RS_RADIX_BITS)
+/* One stable pass of a bucket, src -> dst, from the positions in `position`. */
+inline void rs_bucket_pass(__global const rs_key* restrict src_k, __global const uint* restrict src_v,
+                           __global rs_key* restrict dst_k, __global uint* restrict dst_v, uint begin, uint end,
+                           uint shift, uint mask, __local uint* restrict position) {
+  for (uint i = begin; i < end; ++i) {
+    const rs_key key = src_k[i];
+    const uint to = position[rs_digit(key, shift, mask)]++;
+    dst_k[to] = key;
+    dst_v[to] = src_v[i];
+  }
+}
+
+/* Histograms of passes [j0, j1) over [begin, end) of keys, turned into their start positions. */
+inline void rs_bucket_hist(__global const rs_key* restrict keys, uint begin, uint end, uint j0, uint j1,
+                           const uint* shifts, const uint* masks, __local uint* restrict hist) {
+  for (uint j = j0 * RS_RADIX; j < j1 * RS_RADIX; ++j) hist[j] = 0;
+  for (uint i = begin; i < end; ++i) {
+    const rs_key key = keys[i];
+    for (uint j = j0; j < j1; ++j) hist[j * RS_RADIX + rs_digit(key, shifts[j], masks[j])] += 1u;
+  }
+  for (uint j = j0; j < j1; ++j) {
+    uint running = begin;
+    for (uint e = 0; e < RS_RADIX; ++e) {
+      const uint c = hist[j * RS_RADIX + e];
+      hist[j * RS_RADIX + e] = running;
+      running += c;
+    }
+  }
+}
+
+/* Passes [j0, j1) of [begin, end), LSD order; pass j reads a when j is even, b when odd. */
+inline void rs_bucket_lsd(__global rs_key* keys_a, __global uint* values_a, __global rs_key* keys_b,
+                          __global uint* values_b, uint begin, uint end, uint j0, uint j1, const uint* shifts,
+                          const uint* masks, __local uint* hist) {
+  rs_bucket_hist((j0 & 1u) ? keys_b : keys_a, begin, end, j0, j1, shifts, masks, hist);
+  for (uint j = j0; j < j1; ++j) {
+    if (j & 1u)
+      rs_bucket_pass(keys_b, values_b, keys_a, values_a, begin, end, shifts[j], masks[j], hist + j * RS_RADIX);
+    else
+      rs_bucket_pass(keys_a, values_a, keys_b, values_b, begin, end, shifts[j], masks[j], hist + j * RS_RADIX);
+  }
+}
+
+__kernel void rs_bucket_sort(__global rs_key* keys_a, __global uint* values_a, __global rs_key* keys_b,
+                             __global uint* values_b, uint n, uint tiles, __global const uint* restrict offsets,
+                             uint lo, uint hi_bit, uint pass_mask) {
+  __local uint hist[RS_MAX_PASSES * RS_RADIX];
+  const uint d = get_group_id(0);
+  const uint begin = offsets[d * tiles];
+  const uint end = d + 1 < RS_RADIX ? offsets[(d + 1) * tiles] : n;
+  uint shifts[RS_MAX_PASSES];
+  uint masks[RS_MAX_PASSES];
+  uint np = 0;
+  for (uint p = 0; p < RS_MAX_PASSES; ++p) {
+    if ((pass_mask >> p) & 1u) {
+      shifts[np] = lo + p * RS_RADIX_BITS;
+      masks[np] = rs_mask(shifts[np], hi_bit);
+      ++np;
+    }
+  }
+  rs_bucket_lsd(keys_a, values_a, keys_b, values_b, begin, end, 0, np, shifts, masks, hist);
+}
+#endif

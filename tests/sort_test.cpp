@@ -69,6 +69,8 @@ struct Device {
   std::unique_ptr<Runtime> rt;
   std::unique_ptr<RadixSort> cpu_shape;  // RadixSortTuning::for_device (this device: a CPU)
   std::unique_ptr<RadixSort> gpu_shape;  // the work-group ranking path, forced onto this device
+  std::unique_ptr<RadixSort> hybrid;     // the CPU shape with the MSD-first hybrid at every size
+  std::unique_ptr<RadixSort> hybrid_any_skew;  // ... that never falls back to the LSD passes
 };
 
 Device& device() {
@@ -85,6 +87,13 @@ Device& device() {
     EXPECT_GT(tuning.work_group, 1u);
     EXPECT_LE(tuning.local_bytes(8), gpu.local_mem_bytes);
     d.gpu_shape = std::make_unique<RadixSort>(*d.rt, tuning);
+    RadixSortTuning hybrid = RadixSortTuning::for_device(d.rt->info());
+    if (hybrid.work_group == 1) {
+      hybrid.hybrid_min = 2;
+      d.hybrid = std::make_unique<RadixSort>(*d.rt, hybrid);
+      hybrid.hybrid_skew = 1;
+      d.hybrid_any_skew = std::make_unique<RadixSort>(*d.rt, hybrid);
+    }
     return d;
   }();
   return d;
@@ -138,6 +147,36 @@ TEST(Sort, GpuShapeMatchesStableSort) {
       }
   auto keys = make_keys(Shape::Uniform, (1u << 20) + 3, 64, 99);
   check(sorter, keys, {64, 0}, "gpu shape: 1M+3 uniform 64-bit keys");
+}
+
+TEST(Sort, HybridMatchesStableSort) {
+  // The MSD-first hybrid (large N on the CPU shape), forced at every size.
+  if (!device().hybrid) GTEST_SKIP() << "this device's shape has no hybrid path";
+  for (RadixSort* sorter : {device().hybrid.get(), device().hybrid_any_skew.get()})
+    for (unsigned bits : kKeyBits)
+      for (Shape shape : kShapes)
+        for (std::size_t n : {std::size_t(2), std::size_t(33), std::size_t(1000), std::size_t(65537),
+                              std::size_t(1u << 20) + 3}) {
+          auto keys = make_keys(shape, n, bits, 5000 * bits + n + static_cast<int>(shape));
+          check(*sorter, keys, {bits, 0},
+                fmt::format("hybrid (skew {}): {} keys of {} bits, n = {}", sorter->tuning().hybrid_skew, name(shape),
+                            bits, n));
+        }
+  // Skewed: most keys share the top digit (the fallback to LSD passes, or one huge bucket).
+  for (unsigned bits : {32u, 64u}) {
+    auto keys = make_keys(Shape::Uniform, 300007, bits, 77 + bits);
+    for (std::size_t i = 0; i < keys.size(); ++i)
+      if (i % 10 != 0) keys[i] &= mask_of(bits - 8);
+    for (RadixSort* sorter : {device().hybrid.get(), device().hybrid_any_skew.get()}) {
+      auto stats = check(*sorter, keys, {bits, 0}, fmt::format("hybrid, skewed {}-bit keys", bits));
+      EXPECT_EQ(stats.passes_run, sorter->passes({bits, 0}));
+    }
+  }
+  for (auto [bits, top] : {std::pair{16u, 9u}, {32u, 5u}, {32u, 13u}, {32u, 24u}, {64u, 21u}, {64u, 33u}, {64u, 64u}})
+    for (std::size_t n : {std::size_t(1000), std::size_t(300007)}) {
+      auto keys = make_keys(Shape::Uniform, n, bits, bits * 17 + top + n);
+      check(*device().hybrid, keys, {bits, top}, fmt::format("hybrid: top {} of {} bits, n = {}", top, bits, n));
+    }
 }
 
 TEST(Sort, TopBitsOrderByTheHighBitsOnly) {

@@ -177,7 +177,9 @@ void run_sortbench(const Options& opt) {
   const auto& t = sorter.tuning();
   fmt::print("radix sort: {}-bit digits, work-group {}, {}; programs built in {:.0f} ms\n", t.radix_bits,
              t.work_group,
-             t.work_group == 1 ? fmt::format("tiles of >= {} keys, {} per compute unit", t.min_tile, t.tiles_per_unit)
+             t.work_group == 1 ? fmt::format("tiles of >= {} keys, {} per compute unit{}", t.min_tile, t.tiles_per_unit,
+                                             t.hybrid() ? fmt::format(", MSD-first hybrid from {} pairs", t.hybrid_min)
+                                                        : std::string())
                                : fmt::format("{} keys per work-item", t.items),
              rt.build_ms());
   fmt::print("first launches (warm-up, both key widths): {:.0f} ms\n", sorter.warm_up());

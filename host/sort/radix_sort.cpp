@@ -27,7 +27,11 @@ std::string program_options(const RadixSortTuning& t, unsigned key_bits) {
 std::size_t RadixSortTuning::local_bytes(std::size_t key_bytes) const {
   const std::size_t radix = std::size_t(1) << radix_bits;
   const std::size_t count = radix * 4 + 2 * std::size_t(work_group) * key_bytes;
-  if (work_group == 1) return count;
+  if (work_group == 1) {
+    if (!hybrid()) return count;
+    const std::size_t max_passes = (key_bytes * 8 + radix_bits - 1) / radix_bits;
+    return std::max(count, max_passes * radix * 4);  // rs_bucket_sort's histograms
+  }
   const std::size_t scatter =
       std::size_t(work_group) * items * (key_bytes + 4) + radix * work_group * 4 + work_group * 4 + radix * 4;
   return std::max(count, scatter);
@@ -77,7 +81,7 @@ RadixSort::RadixSort(Runtime& rt) : RadixSort(rt, RadixSortTuning::for_device(rt
 RadixSort::RadixSort(Runtime& rt, const RadixSortTuning& tuning) : rt_(rt), tuning_(tuning) {
   auto pow2 = [](unsigned v) { return v >= 1 && (v & (v - 1)) == 0; };
   if (tuning_.radix_bits < 1 || tuning_.radix_bits > 12 || !pow2(tuning_.work_group) || tuning_.items < 1 ||
-      !pow2(tuning_.scan_work_group) || tuning_.reduce_work_group < 1)
+      !pow2(tuning_.scan_work_group) || tuning_.reduce_work_group < 1 || tuning_.hybrid_skew < 1)
     throw Error(fmt::format("radix sort: invalid tuning (radix_bits {}, work_group {}, items {}, scan_work_group {})",
                             tuning_.radix_bits, tuning_.work_group, tuning_.items, tuning_.scan_work_group));
   if (tuning_.local_bytes(8) > rt.info().local_mem_bytes)
@@ -93,6 +97,7 @@ RadixSort::RadixSort(Runtime& rt, const RadixSortTuning& tuning) : rt_(rt), tuni
       k.count = cl::Kernel(program, "rs_count");
       k.scan = cl::Kernel(program, "rs_scan");
       k.scatter = cl::Kernel(program, "rs_scatter");
+      if (tuning_.hybrid()) k.bucket_sort = cl::Kernel(program, "rs_bucket_sort");
     });
   }
 }
@@ -162,13 +167,18 @@ SortStats RadixSort::sort(cl::Buffer& keys, cl::Buffer& values, std::size_t coun
   const cl_uint hi = cfg.key_bits;
   events_.clear();
 
-  // First read of the keys: the lowest digit's tile counts, and which key bits vary at all.
+  // The MSD-first hybrid (large N on the CPU shape) wants the most significant digit's counts
+  // first; the plain LSD passes the lowest digit's.
+  const bool hybrid = t.hybrid() && count >= t.hybrid_min && total_passes >= 2;
+  int counted = hybrid ? static_cast<int>(total_passes) - 1 : 0;  // the pass whose counts are in counts_
+
+  // First read of the keys: one digit's tile counts, and which key bits vary at all.
   std::uint64_t varying = 0;
   cl_call("running the radix sort's first read", [&] {
     k.count_bounds.setArg(0, keys);
     k.count_bounds.setArg(1, n);
     k.count_bounds.setArg(2, n_items);
-    k.count_bounds.setArg(3, lo);
+    k.count_bounds.setArg(3, static_cast<cl_uint>(lo + counted * t.radix_bits));
     k.count_bounds.setArg(4, hi);
     k.count_bounds.setArg(5, counts_);
     k.count_bounds.setArg(6, tile_bounds_);
@@ -201,34 +211,83 @@ SortStats RadixSort::sort(cl::Buffer& keys, cl::Buffer& values, std::size_t coun
   cl::Buffer* src_values = &values;
   cl::Buffer* dst_keys = &keys_tmp_;
   cl::Buffer* dst_values = &values_tmp_;
+  auto count_pass = [&](cl_uint shift) {
+    k.count.setArg(0, *src_keys);
+    k.count.setArg(1, n);
+    k.count.setArg(2, n_items);
+    k.count.setArg(3, shift);
+    k.count.setArg(4, hi);
+    k.count.setArg(5, counts_);
+    enqueue(k.count, tiles * wg, wg);
+  };
+  auto scan_pass = [&] {
+    k.scan.setArg(0, counts_);
+    k.scan.setArg(1, static_cast<cl_uint>(bins));
+    enqueue(k.scan, t.scan_work_group, t.scan_work_group);
+  };
+  auto scatter_pass = [&](cl_uint shift) {
+    k.scatter.setArg(0, *src_keys);
+    k.scatter.setArg(1, *src_values);
+    k.scatter.setArg(2, *dst_keys);
+    k.scatter.setArg(3, *dst_values);
+    k.scatter.setArg(4, n);
+    k.scatter.setArg(5, n_items);
+    k.scatter.setArg(6, shift);
+    k.scatter.setArg(7, hi);
+    k.scatter.setArg(8, counts_);
+    enqueue(k.scatter, tiles * wg, wg);
+    std::swap(src_keys, dst_keys);
+    std::swap(src_values, dst_values);
+    ++stats.passes_run;
+  };
   cl_call("running the radix sort passes", [&] {
-    for (unsigned p : run) {
-      const cl_uint shift = lo + p * t.radix_bits;
-      if (p != 0) {  // the first read counted the lowest digit; every other pass counts its own
-        k.count.setArg(0, *src_keys);
-        k.count.setArg(1, n);
-        k.count.setArg(2, n_items);
-        k.count.setArg(3, shift);
-        k.count.setArg(4, hi);
-        k.count.setArg(5, counts_);
-        enqueue(k.count, tiles * wg, wg);
+    bool done = false;
+    if (hybrid && run.size() >= 2) {
+      // MSD-first: bucket by the highest varying digit, unless one bucket would hold too much.
+      const unsigned top = run.back();
+      const cl_uint top_shift = lo + top * t.radix_bits;
+      if (static_cast<int>(top) != counted) count_pass(top_shift);
+      counted = -1;  // scanned below: no pass can use these counts as they are
+      scan_pass();
+      bucket_offsets_.resize(bins);  // the scanned counts: bucket d starts at [d * tiles]
+      events_.emplace_back();
+      rt_.queue().enqueueReadBuffer(counts_, CL_TRUE, 0, bins * 4, bucket_offsets_.data(), nullptr, &events_.back());
+      std::size_t largest = 0;
+      for (std::size_t d = 0; d < radix; ++d) {
+        const std::size_t end = d + 1 < radix ? bucket_offsets_[(d + 1) * tiles] : count;
+        largest = std::max<std::size_t>(largest, end - bucket_offsets_[d * tiles]);
       }
-      k.scan.setArg(0, counts_);
-      k.scan.setArg(1, static_cast<cl_uint>(bins));
-      enqueue(k.scan, t.scan_work_group, t.scan_work_group);
-      k.scatter.setArg(0, *src_keys);
-      k.scatter.setArg(1, *src_values);
-      k.scatter.setArg(2, *dst_keys);
-      k.scatter.setArg(3, *dst_values);
-      k.scatter.setArg(4, n);
-      k.scatter.setArg(5, n_items);
-      k.scatter.setArg(6, shift);
-      k.scatter.setArg(7, hi);
-      k.scatter.setArg(8, counts_);
-      enqueue(k.scatter, tiles * wg, wg);
-      std::swap(src_keys, dst_keys);
-      std::swap(src_values, dst_values);
-      ++stats.passes_run;
+      if (largest * t.hybrid_skew <= count) {
+        scatter_pass(top_shift);  // keys -> scratch, bucketed stably by the top digit
+        cl_uint pass_mask = 0;
+        for (std::size_t i = 0; i + 1 < run.size(); ++i) pass_mask |= cl_uint(1) << run[i];
+        k.bucket_sort.setArg(0, *src_keys);
+        k.bucket_sort.setArg(1, *src_values);
+        k.bucket_sort.setArg(2, *dst_keys);
+        k.bucket_sort.setArg(3, *dst_values);
+        k.bucket_sort.setArg(4, n);
+        k.bucket_sort.setArg(5, static_cast<cl_uint>(tiles));
+        k.bucket_sort.setArg(6, counts_);
+        k.bucket_sort.setArg(7, lo);
+        k.bucket_sort.setArg(8, hi);
+        k.bucket_sort.setArg(9, pass_mask);
+        enqueue(k.bucket_sort, radix, 1);
+        for (std::size_t i = 0; i + 1 < run.size(); ++i) {  // the result lies where these passes leave it
+          std::swap(src_keys, dst_keys);
+          std::swap(src_values, dst_values);
+          ++stats.passes_run;
+        }
+        done = true;
+      }
+    }
+    if (!done) {
+      for (unsigned p : run) {
+        const cl_uint shift = lo + p * t.radix_bits;
+        if (static_cast<int>(p) != counted) count_pass(shift);  // each pass counts its own digit
+        counted = -1;  // ... except a first pass the first read (or the hybrid's check) counted
+        scan_pass();
+        scatter_pass(shift);
+      }
     }
     if (stats.passes_run % 2 == 1) {  // the result is in the scratch buffers: copy it home
       events_.emplace_back();

@@ -46,6 +46,14 @@ struct RadixSortTuning {
   unsigned min_tile = 4096;       // work_group == 1: smallest tile, in keys
   unsigned scan_work_group = 1;   // work-items of the single-group scan (a power of two)
   unsigned reduce_work_group = 64;
+  // work_group == 1 and radix_bits <= 8: from this many pairs on (0: never), an MSD-first hybrid.
+  // One global counting pass on the most significant varying digit splits the pairs into buckets,
+  // then each bucket is sorted by the lower digits with LSD passes while it sits in cache. Falls
+  // back to the global LSD passes when one bucket holds more than 1 / hybrid_skew of the pairs.
+  std::size_t hybrid_min = std::size_t(4) << 20;
+  unsigned hybrid_skew = 4;
+
+  bool hybrid() const { return work_group == 1 && radix_bits <= 8 && hybrid_min > 0; }
 
   static RadixSortTuning for_device(const DeviceInfo& device);
   // Local memory one tile of the scatter kernel needs (the largest of the kernels).
@@ -78,6 +86,7 @@ class RadixSort {
  private:
   struct Kernels {
     cl::Kernel count_bounds, reduce_bounds, count, scan, scatter;
+    cl::Kernel bucket_sort;  // the hybrid's per-bucket LSD passes (work_group == 1 only)
   };
   Kernels& kernels_for(const RadixSortConfig& cfg) { return cfg.wide_keys() ? wide_ : narrow_; }
   void enqueue(cl::Kernel& k, std::size_t global, std::size_t local);
@@ -96,6 +105,7 @@ class RadixSort {
   cl::Buffer keys_io_, values_io_;
   std::size_t keys_io_bytes_ = 0, values_io_bytes_ = 0;
   std::vector<cl::Event> events_;
+  std::vector<std::uint32_t> bucket_offsets_;
 };
 
 // The host twin: std::stable_sort of the pairs by the bits cfg sorts on. The device sort must give
