@@ -37,6 +37,8 @@ void register_run_command(CLI::App& app) {
   auto* reps_opt = cmd->add_option("--reps", a->reps, "timed repetitions per cell");
   cmd->add_option("--warmup", a->warmup, "untimed runs before timing")->each([a](const std::string&) { a->warmup_set = true; });
   auto* seed_opt = cmd->add_option("--seed", a->seed, "seed of the ray generator");
+  cmd->add_option("--variant", a->variant,
+                  "trace variants, comma-separated: robust (watertight, default), fast (Moller-Trumbore)");
   cmd->add_option("--lambda", a->lambda, "HAD lambda (paper Eq. 1; default 0.125)");
   cmd->add_option("--twopoint-length", a->twopoint, "TwoPoint ray length as a fraction of the largest extent (0.25)");
   cmd->add_option("--direction-bits", a->direction_bits, "HCC_DIR direction bits");

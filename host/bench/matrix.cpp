@@ -41,6 +41,19 @@ nlohmann::json MatrixSpec::to_json() const {
           {"direction_bits", params.direction_bits}};
 }
 
+std::vector<std::string> MatrixSpec::variant_list() const {
+  std::vector<std::string> out;
+  std::size_t start = 0;
+  while (start <= variant.size()) {
+    std::size_t comma = variant.find(',', start);
+    std::string item = variant.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    if (!item.empty() && std::find(out.begin(), out.end(), item) == out.end()) out.push_back(item);
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  return out;
+}
+
 std::vector<unsigned> MatrixSpec::bits_for(const std::string& scene) const {
   std::vector<unsigned> out = bits;
   if (std::find(key_length_scenes.begin(), key_length_scenes.end(), scene) != key_length_scenes.end())
@@ -93,8 +106,10 @@ void validate_matrix(const MatrixSpec& spec) {
   if (spec.bits.empty()) throw Error("no key bits selected (--bits N[,N...])");
   if (spec.spp == 0) throw Error("--spp must be at least 1");
   if (spec.reps == 0) throw Error("--reps must be at least 1");
-  if (spec.variant != "robust" && spec.variant != "fast")
-    throw Error(fmt::format("--variant '{}': the trace variants are robust and fast", spec.variant));
+  if (spec.variant_list().empty()) throw Error("--variant: name at least one trace variant (robust, fast)");
+  for (const auto& v : spec.variant_list())
+    if (v != "robust" && v != "fast")
+      throw Error(fmt::format("--variant '{}': the trace variants are robust and fast", v));
   if (!(spec.cell_timeout_s >= 0) || !std::isfinite(spec.cell_timeout_s))
     throw Error(fmt::format("--timeout {}: must be a number of seconds, 0 (none) or more", spec.cell_timeout_s));
   std::string valid;

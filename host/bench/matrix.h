@@ -26,7 +26,8 @@ struct MatrixSpec {
   unsigned reps = 5;
   unsigned warmup = 1;
   unsigned seed = 1;
-  std::string variant = "robust";     // trace variant: robust (watertight) or fast
+  std::string variant = "robust";     // trace variants, comma-separated: robust (watertight), fast
+  std::vector<std::string> variant_list() const;  // "robust,fast" -> {"robust", "fast"}
   EncoderParams params;
   double cell_timeout_s = 0;          // 0: none
 

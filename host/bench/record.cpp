@@ -59,7 +59,8 @@ void to_json(nlohmann::json& j, const CellRecord& r) {
                      {"hits_match_nosort", r.hits_match_nosort},
                      {"order_is_permutation", r.order_is_permutation},
                      {"keys_hash", r.keys_hash},
-                     {"order_hash", r.order_hash}};
+                     {"order_hash", r.order_hash},
+                     {"leaks_per_million", r.leaks_per_million}};
   timing_to_json(j, "encode", r.encode);
   timing_to_json(j, "sort", r.sort);
   timing_to_json(j, "trace", r.trace);
@@ -93,6 +94,7 @@ void from_json(const nlohmann::json& j, CellRecord& r) {
   j.at("order_is_permutation").get_to(r.order_is_permutation);
   j.at("keys_hash").get_to(r.keys_hash);
   j.at("order_hash").get_to(r.order_hash);
+  r.leaks_per_million = j.value("leaks_per_million", -1.0);  // added within format version 1
   timing_from_json(j, "encode", r.encode);
   timing_from_json(j, "sort", r.sort);
   timing_from_json(j, "trace", r.trace);

@@ -47,6 +47,11 @@ struct CellRecord {
   double simt_lane_efficiency_ratio = 0.0;      // vs NoSort on the same batch
   double simt_distinct_per_visit_ratio = 0.0;   // vs NoSort (lower is better)
 
+  // NoSort cells of a run with both trace variants: rays this variant misses that the other one
+  // hits, per million rays (for the fast variant: its leaks through shared edges and vertices).
+  // -1 when not measured.
+  double leaks_per_million = -1.0;
+
   // Checks and fingerprints (deterministic: equal on every device for the same command).
   bool hits_match_nosort = false;  // sorted trace scattered back == NoSort hits, bit for bit
   bool order_is_permutation = false;

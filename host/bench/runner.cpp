@@ -12,6 +12,8 @@
 #include <filesystem>
 #include <fstream>
 #include <numeric>
+#include <map>
+#include <memory>
 #include <optional>
 
 #include "bench/metrics.h"
@@ -168,9 +170,10 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
   std::vector<Encoder> encoders;
   for (auto& n : spec.encoders)
     if (auto e = parse_encoder(n); e && *e != Encoder::NoSort) encoders.push_back(*e);
+  const std::vector<std::string> variant_names = spec.variant_list();
   Progress progress;
   for (auto& s : spec.scenes)
-    progress.total += (spec.batches.empty() ? 3 : spec.batches.size()) *
+    progress.total += (spec.batches.empty() ? 3 : spec.batches.size()) * variant_names.size() *
                       (1 + encoders.size() * (spec.bits_for(s).size() + spec.top_bits.size()));
 
   const char* kill_env = std::getenv("RAYSORT_TEST_KILL_AFTER_CELLS");
@@ -199,8 +202,8 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
     auto batches = generate_batches(scene, tris, bvh, gen);
     // Both trace variants see the same rays: batches come from the fast host reference (render/
     // batches.h); each cell checks the device against the host reference of its own variant.
-    const TraceVariant variant = parse_trace_variant(spec.variant);
-    Tracer tracer(rt, bvh, variant);
+    std::map<std::string, std::unique_ptr<Tracer>> tracers;
+    for (const auto& v : variant_names) tracers[v] = std::make_unique<Tracer>(rt, bvh, parse_trace_variant(v));
     DeviceEncoder encoder(rt, bvh, scene.bounds(), spec.params);
     encoder.warm_up();
 
@@ -212,7 +215,9 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
       auto it = std::find_if(batches.begin(), batches.end(), [&](const ReferencedBatch& b) { return b.batch.name == batch_name; });
       if (it == batches.end()) {
         fmt::print(stderr, "note: scene {} has no batch {} (its effects do not imply it); skipped\n", scene_name, batch_name);
-        progress.total -= std::min(progress.total - progress.done, 1 + encoders.size() * (spec.bits_for(scene_name).size() + spec.top_bits.size()));
+        progress.total -= std::min(progress.total - progress.done,
+                                   variant_names.size() * (1 + encoders.size() * (spec.bits_for(scene_name).size() +
+                                                                                  spec.top_bits.size())));
         continue;
       }
       const RayBatch& batch = it->batch;
@@ -221,187 +226,206 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
       BatchBuffers buf;
       std::vector<std::uint32_t> identity(n);
       std::iota(identity.begin(), identity.end(), 0u);
-      // NoSort: the baseline every speedup on this batch is measured against, in this run.
-      std::vector<double> nosort_times;
-      std::vector<RsHit> nosort_hits;
-      CellClock nosort_clock{spec.cell_timeout_s};
-      std::string batch_error;  // a device fault in the batch's setup or baseline fails all its cells
-      try {
-        buf.rays = rt.upload("rays of " + batch.name, batch.rays);
-        buf.identity = rt.upload("identity order", identity);
-        buf.hits = rt.buffer("hits", std::max<std::size_t>(1, n) * sizeof(RsHit));
-        buf.values = rt.buffer("sort values (ray order)", std::max<std::size_t>(1, n) * 4);
-        buf.keys32 = rt.buffer("32-bit keys", std::max<std::size_t>(1, n) * 4);
-        buf.keys64 = rt.buffer("64-bit keys", std::max<std::size_t>(1, n) * 8);
-        for (unsigned i = 0; i < spec.warmup + spec.reps; ++i) {
-          cl::Event ev = tracer.enqueue(buf.rays, buf.identity, n, any_hit, buf.hits);
-          cl_call("waiting for the NoSort trace", [&] { ev.wait(); });
-          if (i >= spec.warmup) nosort_times.push_back(event_ms(ev));
-          if (nosort_clock.over()) break;
-        }
-        rt.download("NoSort hits", buf.hits, nosort_hits, n);
-      } catch (const Error& err) {
-        batch_error = err.what();
-      }
-      const Timing nosort_trace = Timing::of(nosort_times);
-      const SimtModel nosort_simt = simt_model(bvh, batch.rays, nullptr, any_hit, variant);
-      const std::vector<RsHit> variant_reference =
-          variant == TraceVariant::Fast ? it->reference_hits
-                                        : trace_reference(bvh, batch.rays, nullptr, any_hit, nullptr, variant);
-      {
-        CellRecord c;
-        c.scene = scene_name, c.batch = batch_name, c.encoder = kBaselineEncoder, c.bits = 0, c.rays = n;
-        c.variant = spec.variant;
-        c.trace = nosort_trace;
-        c.trace_mrays = nosort_trace.median_ms > 0 ? n / (nosort_trace.median_ms * 1e3) : 0;
-        c.speedup = c.net_speedup = 1.0;
-        c.anc = 0;
-        c.simt_lane_efficiency = nosort_simt.lane_efficiency;
-        c.simt_distinct_per_visit = nosort_simt.distinct_nodes_per_visit;
-        c.simt_lane_efficiency_ratio = c.simt_distinct_per_visit_ratio = 1.0;
-        c.hits_match_nosort = batch_error.empty() && count_hit_mismatches(nosort_hits, variant_reference) == 0;
-        c.order_is_permutation = true;
-        c.keys_hash = fnv1a_hex(nullptr, 0);
-        c.order_hash = fnv1a_hex(identity.data(), identity.size() * 4);
-        if (!batch_error.empty()) {
-          c.status = "failed";
-          c.error = batch_error;
-        } else if (!c.hits_match_nosort) {
-          c.status = "failed";
-          c.error = "device NoSort hits differ from the host reference traversal";
-        } else if (nosort_clock.over()) {
-          c.status = "timeout";
-          c.error = nosort_clock.message();
-        }
-        ++progress.done;
-        if (!results.has(c.id())) {
-          results.add(c);
-          ++summary.cells_run;
-          summary.cells_failed += !c.ok();
-        }
-        progress.line(c.ok() ? fmt::format("{} {} NoSort: {:.2f} MRays/s", scene_name, batch_name, c.trace_mrays)
-                             : fmt::format("{}: {}: {}", c.id(), c.status == "timeout" ? "TIMEOUT" : "FAILED", c.error));
-      }
-
-      for (Encoder e : encoders) {
-        std::vector<std::pair<unsigned, unsigned>> variants;  // (bits, top_bits)
-        auto bits_list = spec.bits_for(scene_name);
-        for (unsigned b : bits_list) variants.push_back({b, 0});
-        for (unsigned k : spec.top_bits) variants.push_back({bits_list.back(), k});
-        for (auto [bits, top] : variants) {
-          if (g_interrupted) break;
-          CellRecord c;
-          c.scene = scene_name, c.batch = batch_name, c.encoder = std::string(encoder_name(e)), c.bits = bits;
-          c.top_bits = top, c.rays = n, c.variant = spec.variant;
-          ++progress.done;
-          if (results.has(c.id())) {
-            ++summary.cells_skipped;
-            continue;
+      // Fast and robust references (the leak rate: rays one variant misses that the other hits).
+      std::map<std::string, std::vector<RsHit>> references;
+      references["fast"] = it->reference_hits;
+      if (std::find(variant_names.begin(), variant_names.end(), "robust") != variant_names.end())
+        references["robust"] = trace_reference(bvh, batch.rays, nullptr, any_hit, nullptr, TraceVariant::Robust);
+      auto leaks_per_million = [&](const std::string& v) {
+        if (references.size() < 2 || n == 0) return -1.0;
+        const auto& mine = references.at(v);
+        const auto& other = references.at(v == "fast" ? "robust" : "fast");
+        std::size_t leaks = 0;
+        for (std::uint32_t i = 0; i < n; ++i) leaks += mine[i].tri == RS_NO_HIT && other[i].tri != RS_NO_HIT;
+        return static_cast<double>(leaks) * 1e6 / static_cast<double>(n);
+      };
+      for (const std::string& variant_name : variant_names) {
+        const TraceVariant variant = parse_trace_variant(variant_name);
+        Tracer& tracer = *tracers.at(variant_name);
+        const std::vector<RsHit>& variant_reference = references.count(variant_name)
+                                                          ? references.at(variant_name)
+                                                          : (references[variant_name] = trace_reference(
+                                                                 bvh, batch.rays, nullptr, any_hit, nullptr, variant));
+        // NoSort: the baseline every speedup on this batch is measured against, in this run.
+        std::vector<double> nosort_times;
+        std::vector<RsHit> nosort_hits;
+        CellClock nosort_clock{spec.cell_timeout_s};
+        std::string batch_error;  // a device fault in the batch's setup or baseline fails all its cells
+        try {
+          buf.rays = rt.upload("rays of " + batch.name, batch.rays);
+          buf.identity = rt.upload("identity order", identity);
+          buf.hits = rt.buffer("hits", std::max<std::size_t>(1, n) * sizeof(RsHit));
+          buf.values = rt.buffer("sort values (ray order)", std::max<std::size_t>(1, n) * 4);
+          buf.keys32 = rt.buffer("32-bit keys", std::max<std::size_t>(1, n) * 4);
+          buf.keys64 = rt.buffer("64-bit keys", std::max<std::size_t>(1, n) * 8);
+          for (unsigned i = 0; i < spec.warmup + spec.reps; ++i) {
+            cl::Event ev = tracer.enqueue(buf.rays, buf.identity, n, any_hit, buf.hits);
+            cl_call("waiting for the NoSort trace", [&] { ev.wait(); });
+            if (i >= spec.warmup) nosort_times.push_back(event_ms(ev));
+            if (nosort_clock.over()) break;
           }
-          CellClock clock{spec.cell_timeout_s};
-          try {
-            if (!batch_error.empty()) throw Error("the batch's setup failed: " + batch_error);
-            encoder.prepare(e, bits);
-            cl::Buffer& keys = bits > 32 ? buf.keys64 : buf.keys32;
-            RadixSortConfig cfg;
-            cfg.key_bits = bits;
-            cfg.top_bits = top;
-            std::vector<double> te, ts, tt;
-            std::vector<std::uint64_t> unsorted;
-            for (unsigned i = 0; i < spec.warmup + spec.reps; ++i) {
-              cl::Event ev_e = encoder.enqueue(e, bits, buf.rays, buf.identity, n, keys, buf.values);
-              cl_call("waiting for the encode kernel", [&] { ev_e.wait(); });
-              if (i == 0) {  // fingerprint of the keys in generation order (outside timing)
-                if (bits > 32) {
-                  std::vector<std::uint64_t> k;
-                  rt.download("keys", keys, k, n);
-                  unsorted = k;
-                } else {
-                  std::vector<std::uint32_t> k;
-                  rt.download("keys", keys, k, n);
-                  unsorted = widen(k);
+          rt.download("NoSort hits", buf.hits, nosort_hits, n);
+        } catch (const Error& err) {
+          batch_error = err.what();
+        }
+        const Timing nosort_trace = Timing::of(nosort_times);
+        const SimtModel nosort_simt = simt_model(bvh, batch.rays, nullptr, any_hit, variant);
+        {
+          CellRecord c;
+          c.scene = scene_name, c.batch = batch_name, c.encoder = kBaselineEncoder, c.bits = 0, c.rays = n;
+          c.variant = variant_name;
+          c.trace = nosort_trace;
+          c.trace_mrays = nosort_trace.median_ms > 0 ? n / (nosort_trace.median_ms * 1e3) : 0;
+          c.speedup = c.net_speedup = 1.0;
+          c.anc = 0;
+          c.simt_lane_efficiency = nosort_simt.lane_efficiency;
+          c.simt_distinct_per_visit = nosort_simt.distinct_nodes_per_visit;
+          c.simt_lane_efficiency_ratio = c.simt_distinct_per_visit_ratio = 1.0;
+          c.leaks_per_million = leaks_per_million(variant_name);
+          c.hits_match_nosort = batch_error.empty() && count_hit_mismatches(nosort_hits, variant_reference) == 0;
+          c.order_is_permutation = true;
+          c.keys_hash = fnv1a_hex(nullptr, 0);
+          c.order_hash = fnv1a_hex(identity.data(), identity.size() * 4);
+          if (!batch_error.empty()) {
+            c.status = "failed";
+            c.error = batch_error;
+          } else if (!c.hits_match_nosort) {
+            c.status = "failed";
+            c.error = "device NoSort hits differ from the host reference traversal";
+          } else if (nosort_clock.over()) {
+            c.status = "timeout";
+            c.error = nosort_clock.message();
+          }
+          ++progress.done;
+          if (!results.has(c.id())) {
+            results.add(c);
+            ++summary.cells_run;
+            summary.cells_failed += !c.ok();
+          }
+          progress.line(c.ok() ? fmt::format("{} {} NoSort: {:.2f} MRays/s", scene_name, batch_name, c.trace_mrays)
+                               : fmt::format("{}: {}: {}", c.id(), c.status == "timeout" ? "TIMEOUT" : "FAILED", c.error));
+        }
+
+        for (Encoder e : encoders) {
+          std::vector<std::pair<unsigned, unsigned>> variants;  // (bits, top_bits)
+          auto bits_list = spec.bits_for(scene_name);
+          for (unsigned b : bits_list) variants.push_back({b, 0});
+          for (unsigned k : spec.top_bits) variants.push_back({bits_list.back(), k});
+          for (auto [bits, top] : variants) {
+            if (g_interrupted) break;
+            CellRecord c;
+            c.scene = scene_name, c.batch = batch_name, c.encoder = std::string(encoder_name(e)), c.bits = bits;
+            c.top_bits = top, c.rays = n, c.variant = variant_name;
+            ++progress.done;
+            if (results.has(c.id())) {
+              ++summary.cells_skipped;
+              continue;
+            }
+            CellClock clock{spec.cell_timeout_s};
+            try {
+              if (!batch_error.empty()) throw Error("the batch's setup failed: " + batch_error);
+              encoder.prepare(e, bits);
+              cl::Buffer& keys = bits > 32 ? buf.keys64 : buf.keys32;
+              RadixSortConfig cfg;
+              cfg.key_bits = bits;
+              cfg.top_bits = top;
+              std::vector<double> te, ts, tt;
+              std::vector<std::uint64_t> unsorted;
+              for (unsigned i = 0; i < spec.warmup + spec.reps; ++i) {
+                cl::Event ev_e = encoder.enqueue(e, bits, buf.rays, buf.identity, n, keys, buf.values);
+                cl_call("waiting for the encode kernel", [&] { ev_e.wait(); });
+                if (i == 0) {  // fingerprint of the keys in generation order (outside timing)
+                  if (bits > 32) {
+                    std::vector<std::uint64_t> k;
+                    rt.download("keys", keys, k, n);
+                    unsorted = k;
+                  } else {
+                    std::vector<std::uint32_t> k;
+                    rt.download("keys", keys, k, n);
+                    unsorted = widen(k);
+                  }
+                }
+                SortStats st = sorter.sort(keys, buf.values, n, cfg);
+                cl::Event ev_t = tracer.enqueue(buf.rays, buf.values, n, any_hit, buf.hits);
+                cl_call("waiting for the sorted trace", [&] { ev_t.wait(); });
+                if (i >= spec.warmup) {
+                  te.push_back(event_ms(ev_e));
+                  ts.push_back(st.ms);
+                  tt.push_back(event_ms(ev_t));
+                }
+                if (clock.over()) throw CellTimedOut{};
+              }
+              std::vector<std::uint32_t> order;
+              std::vector<RsHit> hits;
+              std::vector<std::uint64_t> sorted_keys;
+              rt.download("sorted order", buf.values, order, n);
+              rt.download("sorted hits", buf.hits, hits, n);
+              if (bits > 32) {
+                rt.download("sorted keys", keys, sorted_keys, n);
+              } else {
+                std::vector<std::uint32_t> k;
+                rt.download("sorted keys", keys, k, n);
+                sorted_keys = widen(k);
+              }
+              // Checks: the order is a permutation, and hits scattered back equal NoSort's.
+              std::vector<std::uint8_t> seen(n, 0);
+              bool perm = true;
+              for (auto v : order) {
+                if (v >= n || seen[v]++) {
+                  perm = false;
+                  break;
                 }
               }
-              SortStats st = sorter.sort(keys, buf.values, n, cfg);
-              cl::Event ev_t = tracer.enqueue(buf.rays, buf.values, n, any_hit, buf.hits);
-              cl_call("waiting for the sorted trace", [&] { ev_t.wait(); });
-              if (i >= spec.warmup) {
-                te.push_back(event_ms(ev_e));
-                ts.push_back(st.ms);
-                tt.push_back(event_ms(ev_t));
+              std::size_t bad = 0;
+              if (perm)
+                for (std::uint32_t i = 0; i < n; ++i)
+                  bad += std::memcmp(&hits[i], &nosort_hits[order[i]], sizeof(RsHit)) != 0;
+              c.order_is_permutation = perm;
+              c.hits_match_nosort = perm && bad == 0;
+              c.keys_hash = fnv1a_hex(unsorted.data(), unsorted.size() * 8);
+              c.order_hash = fnv1a_hex(order.data(), order.size() * 4);
+              if (!c.hits_match_nosort) {
+                c.status = "failed";
+                c.error = perm ? fmt::format("{} of {} hits differ from NoSort after scattering back", bad, n)
+                               : "the sorted order is not a permutation of the rays";
+              } else {
+                c.encode = Timing::of(te);
+                c.sort = Timing::of(ts);
+                c.trace = Timing::of(tt);
+                double t = c.trace.median_ms;
+                c.trace_mrays = t > 0 ? n / (t * 1e3) : 0;
+                c.speedup = t > 0 ? nosort_trace.median_ms / t : 0;
+                double total = c.encode.median_ms + c.sort.median_ms + t;
+                c.net_speedup = total > 0 ? nosort_trace.median_ms / total : 0;
+                c.overhead_pct = t > 0 ? (c.encode.median_ms + c.sort.median_ms) / t * 100.0 : 0;
+                c.anc = average_number_of_codes(sorted_keys);
+                SimtModel m = simt_model(bvh, batch.rays, order.data(), any_hit, variant);
+                c.simt_lane_efficiency = m.lane_efficiency;
+                c.simt_distinct_per_visit = m.distinct_nodes_per_visit;
+                c.simt_lane_efficiency_ratio =
+                    nosort_simt.lane_efficiency > 0 ? m.lane_efficiency / nosort_simt.lane_efficiency : 0;
+                c.simt_distinct_per_visit_ratio = nosort_simt.distinct_nodes_per_visit > 0
+                                                      ? m.distinct_nodes_per_visit / nosort_simt.distinct_nodes_per_visit
+                                                      : 0;
               }
-              if (clock.over()) throw CellTimedOut{};
-            }
-            std::vector<std::uint32_t> order;
-            std::vector<RsHit> hits;
-            std::vector<std::uint64_t> sorted_keys;
-            rt.download("sorted order", buf.values, order, n);
-            rt.download("sorted hits", buf.hits, hits, n);
-            if (bits > 32) {
-              rt.download("sorted keys", keys, sorted_keys, n);
-            } else {
-              std::vector<std::uint32_t> k;
-              rt.download("sorted keys", keys, k, n);
-              sorted_keys = widen(k);
-            }
-            // Checks: the order is a permutation, and hits scattered back equal NoSort's.
-            std::vector<std::uint8_t> seen(n, 0);
-            bool perm = true;
-            for (auto v : order) {
-              if (v >= n || seen[v]++) {
-                perm = false;
-                break;
-              }
-            }
-            std::size_t bad = 0;
-            if (perm)
-              for (std::uint32_t i = 0; i < n; ++i)
-                bad += std::memcmp(&hits[i], &nosort_hits[order[i]], sizeof(RsHit)) != 0;
-            c.order_is_permutation = perm;
-            c.hits_match_nosort = perm && bad == 0;
-            c.keys_hash = fnv1a_hex(unsorted.data(), unsorted.size() * 8);
-            c.order_hash = fnv1a_hex(order.data(), order.size() * 4);
-            if (!c.hits_match_nosort) {
+            } catch (const Error& err) {
+              // A device fault (allocation, build, launch) fails this cell; the run goes on.
               c.status = "failed";
-              c.error = perm ? fmt::format("{} of {} hits differ from NoSort after scattering back", bad, n)
-                             : "the sorted order is not a permutation of the rays";
-            } else {
-              c.encode = Timing::of(te);
-              c.sort = Timing::of(ts);
-              c.trace = Timing::of(tt);
-              double t = c.trace.median_ms;
-              c.trace_mrays = t > 0 ? n / (t * 1e3) : 0;
-              c.speedup = t > 0 ? nosort_trace.median_ms / t : 0;
-              double total = c.encode.median_ms + c.sort.median_ms + t;
-              c.net_speedup = total > 0 ? nosort_trace.median_ms / total : 0;
-              c.overhead_pct = t > 0 ? (c.encode.median_ms + c.sort.median_ms) / t * 100.0 : 0;
-              c.anc = average_number_of_codes(sorted_keys);
-              SimtModel m = simt_model(bvh, batch.rays, order.data(), any_hit, variant);
-              c.simt_lane_efficiency = m.lane_efficiency;
-              c.simt_distinct_per_visit = m.distinct_nodes_per_visit;
-              c.simt_lane_efficiency_ratio =
-                  nosort_simt.lane_efficiency > 0 ? m.lane_efficiency / nosort_simt.lane_efficiency : 0;
-              c.simt_distinct_per_visit_ratio = nosort_simt.distinct_nodes_per_visit > 0
-                                                    ? m.distinct_nodes_per_visit / nosort_simt.distinct_nodes_per_visit
-                                                    : 0;
+              c.error = err.what();
+            } catch (const CellTimedOut&) {
+              c.status = "timeout";
+              c.error = clock.message();
             }
-          } catch (const Error& err) {
-            // A device fault (allocation, build, launch) fails this cell; the run goes on.
-            c.status = "failed";
-            c.error = err.what();
-          } catch (const CellTimedOut&) {
-            c.status = "timeout";
-            c.error = clock.message();
+            results.add(c);
+            ++summary.cells_run;
+            summary.cells_failed += !c.ok();
+            // Test hook (tests/bench_test.cpp): die by SIGKILL right after the N-th new cell, a
+            // deterministic kill point for the resume test.
+            if (kill_after > 0 && summary.cells_run >= kill_after) std::raise(SIGKILL);
+            progress.line(c.ok() ? fmt::format("{}: {:.2f} MRays/s ({:.2f}x), encode {:.2f} + sort {:.2f} ms, ANC {:.2f}",
+                                               c.id(), c.trace_mrays, c.speedup, c.encode.median_ms, c.sort.median_ms, c.anc)
+                                 : fmt::format("{}: {}: {}", c.id(), c.status == "timeout" ? "TIMEOUT" : "FAILED", c.error));
           }
-          results.add(c);
-          ++summary.cells_run;
-          summary.cells_failed += !c.ok();
-          // Test hook (tests/bench_test.cpp): die by SIGKILL right after the N-th new cell, a
-          // deterministic kill point for the resume test.
-          if (kill_after > 0 && summary.cells_run >= kill_after) std::raise(SIGKILL);
-          progress.line(c.ok() ? fmt::format("{}: {:.2f} MRays/s ({:.2f}x), encode {:.2f} + sort {:.2f} ms, ANC {:.2f}",
-                                             c.id(), c.trace_mrays, c.speedup, c.encode.median_ms, c.sort.median_ms, c.anc)
-                               : fmt::format("{}: {}: {}", c.id(), c.status == "timeout" ? "TIMEOUT" : "FAILED", c.error));
         }
       }
     }

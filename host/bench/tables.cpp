@@ -28,10 +28,14 @@ std::vector<std::string> ordered(const std::vector<CellRecord>& cells, const nlo
   return present;
 }
 
+// The variant the main tables show (the first one the matrix lists); a robust-vs-fast section
+// compares the variants when a run has both.
+std::string g_main_variant;
+
 const CellRecord* find(const std::vector<CellRecord>& cells, const std::string& scene, const std::string& batch,
-                       const std::string& encoder, unsigned bits) {
+                       const std::string& encoder, unsigned bits, const std::string& variant = g_main_variant) {
   for (auto& c : cells)
-    if (c.scene == scene && c.batch == batch && c.encoder == encoder && c.top_bits == 0 &&
+    if (c.scene == scene && c.batch == batch && c.encoder == encoder && c.top_bits == 0 && c.variant == variant &&
         (c.encoder == kBaselineEncoder || c.bits == bits))
       return &c;
   return nullptr;
@@ -64,6 +68,11 @@ std::string render_tables(const std::vector<CellRecord>& cells, const nlohmann::
         "net = NoSort trace / (encode + sort + trace). A cell whose sorted trace does not reproduce the NoSort hits "
         "exactly is listed under failed cells and has no speed.\n\n";
 
+  g_main_variant = cells.empty() ? std::string("robust") : cells.front().variant;
+  if (meta.contains("matrix") && meta["matrix"].contains("variant")) {
+    std::string v = meta["matrix"]["variant"].get<std::string>();
+    g_main_variant = v.substr(0, v.find(','));
+  }
   auto scenes = ordered(cells, meta, "scenes", &CellRecord::scene);
   auto batches = ordered(cells, meta, "batches", &CellRecord::batch);
   auto encoders = ordered(cells, meta, "encoders", &CellRecord::encoder);
@@ -199,6 +208,35 @@ std::string render_tables(const std::vector<CellRecord>& cells, const nlohmann::
       if (c.top_bits > 0 && c.ok())
         md += fmt::format("| {} | {:.2f} | {:.2f} ({:.2f}) | {:.2f} | {:.2f} |\n", c.id(), c.sort.median_ms, c.trace_mrays,
                           c.speedup, c.net_speedup, c.anc);
+    md += "\n";
+  }
+
+  // Robust vs fast (issue 7): what watertightness costs, and what the fast variant leaks.
+  std::set<std::string> variants;
+  for (auto& c : cells) variants.insert(c.variant);
+  if (variants.count("robust") && variants.count("fast")) {
+    md += "## Robust vs fast trace: what watertight intersection costs\n\n"
+          "NoSort trace MRays/s of each variant on the same rays, their ratio, and leaks per million rays "
+          "(rays the variant misses that the other one hits: the fast variant's leaks through shared edges and "
+          "vertices). Best = the best encoder's speedup at the overview key length in that variant.\n\n"
+          "| scene | batch | fast MRays/s | robust MRays/s | robust/fast | fast leaks/M | robust leaks/M | best fast | best robust |\n"
+          "|---|---|---:|---:|---:|---:|---:|---|---|\n";
+    for (auto& s : scenes)
+      for (auto& batch : batches) {
+        auto* f = find(cells, s, batch, kBaselineEncoder, 0, "fast");
+        auto* r = find(cells, s, batch, kBaselineEncoder, 0, "robust");
+        if (!f || !r || !f->ok() || !r->ok()) continue;
+        auto best = [&](const std::string& v) {
+          const CellRecord* b = nullptr;
+          for (auto& e : encoders)
+            if (auto* c = find(cells, s, batch, e, overview_bits, v); c && c->ok() && e != kBaselineEncoder)
+              if (!b || c->speedup > b->speedup) b = c;
+          return b ? fmt::format("{} {:.2f}", b->encoder, b->speedup) : std::string("–");
+        };
+        md += fmt::format("| {} | {} | {:.2f} | {:.2f} | {:.3f} | {:.1f} | {:.1f} | {} | {} |\n", s, batch, f->trace_mrays,
+                          r->trace_mrays, f->trace_mrays > 0 ? r->trace_mrays / f->trace_mrays : 0.0, f->leaks_per_million,
+                          r->leaks_per_million, best("fast"), best("robust"));
+      }
     md += "\n";
   }
 
