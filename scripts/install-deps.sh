@@ -6,7 +6,7 @@ set -euo pipefail
 PACKAGES=(
   build-essential cmake pkg-config git
   ocl-icd-opencl-dev opencl-c-headers opencl-clhpp-headers pocl-opencl-icd clinfo
-  #: OpenImageIO's CMake config refuses to load without its binaries
+  # fonts-dejavu-core: the font the result-set plots are labelled with
   libtinyobjloader-dev libopenimageio-dev fonts-dejavu-core
   googletest libgtest-dev libbenchmark-dev
   libcli11-dev nlohmann-json3-dev libtomlplusplus-dev libfmt-dev
