@@ -203,6 +203,11 @@ TEST(Matrix, EndToEndAndResume) {
   EXPECT_NE(tables.find("## Key length, cornell"), std::string::npos);
   EXPECT_NE(tables.find("## Top-k sorting"), std::string::npos);
   EXPECT_TRUE(fs::exists(opts.out + "/overhead-vs-gain-bounce1.png"));
+  // meta.json fingerprints every cell's keys and order.
+  auto meta = nlohmann::json::parse(read_file(opts.out + "/meta.json"));
+  ASSERT_TRUE(meta.contains("fingerprints"));
+  EXPECT_EQ(meta["fingerprints"].size(), rs.cells().size());
+  EXPECT_EQ(meta["fingerprints"]["cornell/bounce1/hcc/32"]["keys"], rs.find("cornell/bounce1/hcc/32")->keys_hash);
   RunSummary again = run_matrix(spec, opts);
   EXPECT_EQ(again.cells_run, 0u);
   EXPECT_EQ(again.cells_skipped, s.cells_run - 2 * 3);  // NoSort cells are re-measured, not skipped

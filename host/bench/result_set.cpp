@@ -119,6 +119,13 @@ void ResultSet::write_views() const {
     csv += csv_row(c) + "\n";
   }
   write_file_atomically((fs::path(dir_) / "cells.json").string(), arr.dump(2) + "\n");
+  // meta.json carries a fingerprint of every cell's keys and order, so two devices (or commits) can
+  // be checked for identical encodings at a glance (`raysort compare --fail-if keys_hash!=` per cell).
+  nlohmann::json meta = meta_;
+  nlohmann::json fingerprints = nlohmann::json::object();
+  for (auto& c : all) fingerprints[c.id()] = {{"keys", c.keys_hash}, {"order", c.order_hash}};
+  meta["fingerprints"] = fingerprints;
+  write_file_atomically((fs::path(dir_) / "meta.json").string(), meta.dump(2) + "\n");
   write_file_atomically((fs::path(dir_) / "cells.csv").string(), csv);
   write_file_atomically((fs::path(dir_) / "tables.md").string(), render_tables(all, meta_));
 }

@@ -398,6 +398,9 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
                 double total = c.encode.median_ms + c.sort.median_ms + t;
                 c.net_speedup = total > 0 ? nosort_trace.median_ms / total : 0;
                 c.overhead_pct = t > 0 ? (c.encode.median_ms + c.sort.median_ms) / t * 100.0 : 0;
+                // ANC of the codes the sort used: a top-k sort orders by the highest k bits only.
+                if (top > 0)
+                  for (auto& k : sorted_keys) k >>= (bits - top);
                 c.anc = average_number_of_codes(sorted_keys);
                 SimtModel m = simt_model(bvh, batch.rays, order.data(), any_hit, variant);
                 c.simt_lane_efficiency = m.lane_efficiency;
