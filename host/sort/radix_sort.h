@@ -50,7 +50,7 @@ struct RadixSortTuning {
   // One global counting pass on the most significant varying digit splits the pairs into buckets,
   // then each bucket is sorted by the lower digits with LSD passes while it sits in cache. Falls
   // back to the global LSD passes when one bucket holds more than 1 / hybrid_skew of the pairs.
-  std::size_t hybrid_min = std::size_t(4) << 20;
+  std::size_t hybrid_min = std::size_t(1) << 20;
   unsigned hybrid_skew = 4;
 
   bool hybrid() const { return work_group == 1 && radix_bits <= 8 && hybrid_min > 0; }
