@@ -12,62 +12,33 @@
  */
 #include "traverse.h"
 
-__kernel void trace_closest(__global const RsBvhNode* nodes, __global const RsTriangle* tris,
-                            __global const RsRay* rays, __global const uint* order, uint count,
-                            __global RsHit* hits) {
-  uint i = get_global_id(0);
-  if (i >= count) return;
-  uint ray_index = order[i];
-  hits[i] = rs_traverse(nodes, tris, rays[ray_index], 0, 0);
-}
+/* Each variant gets the same three kernels: closest hit, any hit (shadow rays), and an
+ * instrumented closest hit that also writes the number of BVH nodes each ray fetched.
+ * TRAVERSE is rs_traverse (fast) or rs_traverse_robust (watertight), both in traverse.h. */
+#define RS_TRACE_KERNELS(SUFFIX, TRAVERSE)                                                                   \
+  __kernel void trace_closest##SUFFIX(__global const RsBvhNode* nodes, __global const RsTriangle* tris,       \
+                                      __global const RsRay* rays, __global const uint* order, uint count,     \
+                                      __global RsHit* hits) {                                                 \
+    uint i = get_global_id(0);                                                                                \
+    if (i >= count) return;                                                                                   \
+    hits[i] = TRAVERSE(nodes, tris, rays[order[i]], 0, 0);                                                    \
+  }                                                                                                           \
+  __kernel void trace_any##SUFFIX(__global const RsBvhNode* nodes, __global const RsTriangle* tris,           \
+                                  __global const RsRay* rays, __global const uint* order, uint count,         \
+                                  __global RsHit* hits) {                                                     \
+    uint i = get_global_id(0);                                                                                \
+    if (i >= count) return;                                                                                   \
+    hits[i] = TRAVERSE(nodes, tris, rays[order[i]], 1, 0);                                                    \
+  }                                                                                                           \
+  __kernel void trace_closest_counted##SUFFIX(__global const RsBvhNode* nodes, __global const RsTriangle* tris, \
+                                              __global const RsRay* rays, __global const uint* order,         \
+                                              uint count, __global RsHit* hits, __global uint* visits) {      \
+    uint i = get_global_id(0);                                                                                \
+    if (i >= count) return;                                                                                   \
+    uint v = 0;                                                                                               \
+    hits[i] = TRAVERSE(nodes, tris, rays[order[i]], 0, &v);                                                   \
+    visits[i] = v;                                                                                            \
+  }
 
-__kernel void trace_any(__global const RsBvhNode* nodes, __global const RsTriangle* tris,
-                        __global const RsRay* rays, __global const uint* order, uint count,
-                        __global RsHit* hits) {
-  uint i = get_global_id(0);
-  if (i >= count) return;
-  uint ray_index = order[i];
-  hits[i] = rs_traverse(nodes, tris, rays[ray_index], 1, 0);
-}
-
-/* Instrumented closest hit: also writes the number of BVH nodes each ray fetched. */
-__kernel void trace_closest_counted(__global const RsBvhNode* nodes, __global const RsTriangle* tris,
-                                    __global const RsRay* rays, __global const uint* order, uint count,
-                                    __global RsHit* hits, __global uint* visits) {
-  uint i = get_global_id(0);
-  if (i >= count) return;
-  uint ray_index = order[i];
-  uint v = 0;
-  hits[i] = rs_traverse(nodes, tris, rays[ray_index], 0, &v);
-  visits[i] = v;
-}
-
-
-__kernel void trace_closest_robust(__global const RsBvhNode* nodes, __global const RsTriangle* tris,
-                                   __global const RsRay* rays, __global const uint* order, uint count,
-                                   __global RsHit* hits) {
-  uint i = get_global_id(0);
-  if (i >= count) return;
-  uint ray_index = order[i];
-  hits[i] = rs_traverse_robust(nodes, tris, rays[ray_index], 0, 0);
-}
-
-__kernel void trace_any_robust(__global const RsBvhNode* nodes, __global const RsTriangle* tris,
-                               __global const RsRay* rays, __global const uint* order, uint count,
-                               __global RsHit* hits) {
-  uint i = get_global_id(0);
-  if (i >= count) return;
-  uint ray_index = order[i];
-  hits[i] = rs_traverse_robust(nodes, tris, rays[ray_index], 1, 0);
-}
-
-__kernel void trace_closest_counted_robust(__global const RsBvhNode* nodes, __global const RsTriangle* tris,
-                                           __global const RsRay* rays, __global const uint* order, uint count,
-                                           __global RsHit* hits, __global uint* visits) {
-  uint i = get_global_id(0);
-  if (i >= count) return;
-  uint ray_index = order[i];
-  uint v = 0;
-  hits[i] = rs_traverse_robust(nodes, tris, rays[ray_index], 0, &v);
-  visits[i] = v;
-}
+RS_TRACE_KERNELS(, rs_traverse)
+RS_TRACE_KERNELS(_robust, rs_traverse_robust)

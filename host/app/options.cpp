@@ -4,20 +4,10 @@
 
 #include <cstdio>
 
-#include "util/error.h"
+#include "bench/matrix.h"  // parse_resolution
 
 namespace raysort {
 
-namespace {
-void parse_resolution(const std::string& s, std::uint32_t& w, std::uint32_t& h) {
-  unsigned a = 0, b = 0;
-  char x = 0;
-  if (std::sscanf(s.c_str(), "%u%c%u", &a, &x, &b) != 3 || (x != 'x' && x != 'X') || a == 0 || b == 0)
-    throw Error(fmt::format("--resolution '{}': expected WIDTHxHEIGHT with both at least 1, e.g. 1920x1080", s));
-  w = a;
-  h = b;
-}
-}  // namespace
 
 SceneOptions CommonOptions::scene_options() const {
   SceneOptions o;

@@ -6,16 +6,6 @@
 
 namespace raysort {
 
-Timing Timing::of(std::vector<double> s) {
-  Timing t;
-  if (s.empty()) return t;
-  std::sort(s.begin(), s.end());
-  t.median_ms = s.size() % 2 ? s[s.size() / 2] : 0.5 * (s[s.size() / 2 - 1] + s[s.size() / 2]);
-  t.min_ms = s.front();
-  t.max_ms = s.back();
-  return t;
-}
-
 std::string CellRecord::id() const {
   std::string s = fmt::format("{}/{}/{}/{}", scene, batch, encoder, bits);
   if (top_bits) s += fmt::format("/top{}", top_bits);

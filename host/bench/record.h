@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "util/timing.h"
+
 namespace raysort {
 
 // Bump when the meaning or layout of a field changes; readers refuse other versions clearly.
@@ -15,10 +17,6 @@ constexpr int kResultFormatVersion = 1;
 // The encoder name of the baseline cells (rays traced in generation order): encoder_name(NoSort).
 inline constexpr const char* kBaselineEncoder = "nosort";
 
-struct Timing {
-  double median_ms = 0.0, min_ms = 0.0, max_ms = 0.0;
-  static Timing of(std::vector<double> samples);  // median/min/max of the samples
-};
 
 struct CellRecord {
   // Identity of the cell.

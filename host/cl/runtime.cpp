@@ -296,6 +296,10 @@ cl::Program Runtime::build(const std::vector<std::string>& files, const std::str
 
 cl::Program Runtime::build_source(const std::string& source, const std::string& names, const std::string& extra_options) {
   std::string opts = build_options(extra_options);
+  // One build per (options, source) and runtime: every scene's Tracer and DeviceEncoder, and every
+  // test, asks for the same programs.
+  std::string key = opts + '\n' + source;
+  if (auto it = programs_.find(key); it != programs_.end()) return it->second;
   auto t0 = std::chrono::steady_clock::now();
   cl::Program program;
   cl_call("creating program " + names, [&] { program = cl::Program(context_, source); });
@@ -319,6 +323,7 @@ cl::Program Runtime::build_source(const std::string& source, const std::string& 
                               names, cl_error_name(err), info_.name, info_.platform_name, opts, trim(log)),
                   err);
   }
+  programs_.emplace(std::move(key), program);
   return program;
 }
 

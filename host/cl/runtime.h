@@ -4,6 +4,7 @@
 #include <CL/opencl.hpp>
 
 #include <cstdint>
+#include <map>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -91,6 +92,7 @@ class Runtime {
   // Builds a program from kernel files (e.g. {"cl/trace.cl"}) with the standard options
   // (OpenCL C 1.2, correctly rounded divide/sqrt where supported) plus `extra_options`.
   // On failure throws an Error holding the full build log, the options and the device.
+  // A program already built with the same source and options is returned without rebuilding.
   cl::Program build(const std::vector<std::string>& files, const std::string& extra_options = "");
   // Builds a program from source text; `name` identifies it in errors.
   cl::Program build_source(const std::string& source, const std::string& name, const std::string& extra_options = "");
@@ -122,6 +124,7 @@ class Runtime {
   cl::Context context_;
   cl::CommandQueue queue_;
   double build_ms_ = 0.0;
+  std::map<std::string, cl::Program> programs_;  // built programs by options + source
 };
 
 }  // namespace raysort

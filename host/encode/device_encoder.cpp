@@ -4,6 +4,7 @@
 #include <numeric>
 
 #include "encode/encode.h"
+#include "util/timing.h"
 
 namespace raysort {
 
@@ -146,11 +147,8 @@ DeviceEncoder::Run DeviceEncoder::run(Encoder e, unsigned bits, const std::vecto
     if (i >= warmup && n > 0) times.push_back(event_ms(ev));
   }
   Run r;
-  if (!times.empty()) {
-    std::sort(times.begin(), times.end());
-    r.median_ms = times[times.size() / 2];
-    r.min_ms = times.front();
-  }
+  const Timing t = Timing::of(std::move(times));
+  r.median_ms = t.median_ms, r.min_ms = t.min_ms;
   if (bits > 32) {
     rt_.download("keys", key_buf, r.keys, n);
   } else {

@@ -6,6 +6,7 @@
 #include <thread>
 
 #include "traverse.h"
+#include "util/timing.h"
 #include "util/error.h"
 
 namespace raysort {
@@ -33,17 +34,9 @@ Tracer::Tracer(Runtime& rt, const Bvh& bvh, TraceVariant variant) : rt_(rt), var
   local_ = std::min<std::size_t>(64, rt.info().max_work_group_size);
 }
 
-cl::Event Tracer::enqueue(const cl::Buffer& rays, const cl::Buffer& order, std::uint32_t count, bool any_hit,
-                          const cl::Buffer& hits) {
-  cl::Kernel& k = any_hit ? any_ : closest_;
+cl::Event Tracer::launch(cl::Kernel& k, std::uint32_t count, const std::string& doing) {
   cl::Event ev;
-  cl_call(std::string("tracing ") + std::to_string(count) + (any_hit ? " shadow rays" : " rays"), [&] {
-    k.setArg(0, nodes_);
-    k.setArg(1, triangles_);
-    k.setArg(2, rays);
-    k.setArg(3, order);
-    k.setArg(4, count);
-    k.setArg(5, hits);
+  cl_call(doing, [&] {
     if (count > 0)
       rt_.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(Runtime::padded(count, local_)), cl::NDRange(local_),
                                        nullptr, &ev);
@@ -53,24 +46,33 @@ cl::Event Tracer::enqueue(const cl::Buffer& rays, const cl::Buffer& order, std::
   return ev;
 }
 
+// Arguments 0-5 of every trace kernel: nodes, triangles, rays, order, count, hits.
+static void set_trace_args(cl::Kernel& k, const cl::Buffer& nodes, const cl::Buffer& triangles, const cl::Buffer& rays,
+                           const cl::Buffer& order, std::uint32_t count, const cl::Buffer& hits) {
+  k.setArg(0, nodes);
+  k.setArg(1, triangles);
+  k.setArg(2, rays);
+  k.setArg(3, order);
+  k.setArg(4, count);
+  k.setArg(5, hits);
+}
+
+cl::Event Tracer::enqueue(const cl::Buffer& rays, const cl::Buffer& order, std::uint32_t count, bool any_hit,
+                          const cl::Buffer& hits) {
+  cl::Kernel& k = any_hit ? any_ : closest_;
+  std::string doing = std::string("tracing ") + std::to_string(count) + (any_hit ? " shadow rays" : " rays");
+  cl_call(doing, [&] { set_trace_args(k, nodes_, triangles_, rays, order, count, hits); });
+  return launch(k, count, doing);
+}
+
 cl::Event Tracer::enqueue_counted(const cl::Buffer& rays, const cl::Buffer& order, std::uint32_t count,
                                   const cl::Buffer& hits, const cl::Buffer& visits) {
-  cl::Event ev;
-  cl_call("tracing " + std::to_string(count) + " rays (instrumented)", [&] {
-    counted_.setArg(0, nodes_);
-    counted_.setArg(1, triangles_);
-    counted_.setArg(2, rays);
-    counted_.setArg(3, order);
-    counted_.setArg(4, count);
-    counted_.setArg(5, hits);
+  std::string doing = "tracing " + std::to_string(count) + " rays (instrumented)";
+  cl_call(doing, [&] {
+    set_trace_args(counted_, nodes_, triangles_, rays, order, count, hits);
     counted_.setArg(6, visits);
-    if (count > 0)
-      rt_.queue().enqueueNDRangeKernel(counted_, cl::NullRange, cl::NDRange(Runtime::padded(count, local_)),
-                                       cl::NDRange(local_), nullptr, &ev);
-    else
-      rt_.queue().enqueueMarkerWithWaitList(nullptr, &ev);
   });
-  return ev;
+  return launch(counted_, count, doing);
 }
 
 Tracer::Run Tracer::run(const std::vector<RsRay>& rays, const std::vector<std::uint32_t>* order, bool any_hit,
@@ -92,12 +94,8 @@ Tracer::Run Tracer::run(const std::vector<RsRay>& rays, const std::vector<std::u
     if (i >= warmup && n > 0) times.push_back(event_ms(ev));
   }
   Run r;
-  if (!times.empty()) {
-    std::sort(times.begin(), times.end());
-    r.median_ms = times[times.size() / 2];
-    r.min_ms = times.front();
-    r.max_ms = times.back();
-  }
+  const Timing t = Timing::of(std::move(times));
+  r.median_ms = t.median_ms, r.min_ms = t.min_ms, r.max_ms = t.max_ms;
   rt_.download("hits", hit_buf, r.hits, n);
   return r;
 }

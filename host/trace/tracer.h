@@ -49,6 +49,8 @@ class Tracer {
           unsigned reps = 1);
 
  private:
+  cl::Event launch(cl::Kernel& k, std::uint32_t count, const std::string& doing);
+
   Runtime& rt_;
   cl::Buffer nodes_, triangles_;
   cl::Kernel closest_, any_, counted_;
