@@ -95,6 +95,107 @@ typedef struct {
   rs_u32 pad1;
 } RsTriangle;
 
+/* ---------------------------------------------------------------------------------------------
+ * Four-lane vectors for the 4-wide BVH (cl/traverse.h). OpenCL's float4/int4 on the device; on the
+ * host a 16-byte struct with the same layout and per-lane IEEE operations, so the same source gives
+ * the same bits. Comparisons give -1 (true) / 0 (false) per lane, as OpenCL's do. min/max are
+ * selects (a < b ? a : b), not fmin/fmax: no NaN special case, one instruction on SSE.
+ * ------------------------------------------------------------------------------------------- */
+#ifdef __OPENCL_VERSION__
+typedef float4 rs_f4;
+typedef int4 rs_i4;
+RS_INLINE rs_f4 rs4_splat(float x) { return (float4)(x); }
+RS_INLINE rs_f4 rs4_min(rs_f4 a, rs_f4 b) { return select(b, a, a < b); }
+RS_INLINE rs_f4 rs4_max(rs_f4 a, rs_f4 b) { return select(b, a, a > b); }
+RS_INLINE rs_f4 rs4_select(rs_f4 if_false, rs_f4 if_true, rs_i4 m) { return select(if_false, if_true, m); }
+/* Bit i set when lane i is true. */
+RS_INLINE int rs4_bits(rs_i4 m) { return (m.s0 & 1) | (m.s1 & 2) | (m.s2 & 4) | (m.s3 & 8); }
+RS_INLINE void rs4_store(rs_f4 a, float* p) { vstore4(a, 0, p); }
+RS_INLINE rs_f4 rs4_load(const float* p) { return vload4(0, p); }
+#else
+typedef struct alignas(16) rs_f4 {
+  float s[4];
+} rs_f4;
+typedef struct alignas(16) rs_i4 {
+  rs_i32 s[4];
+} rs_i4;
+#define RS4_BINARY(T, R, op)                                 \
+  RS_INLINE R operator op(T a, T b) {                        \
+    R r;                                                     \
+    for (int i = 0; i < 4; ++i) r.s[i] = a.s[i] op b.s[i];   \
+    return r;                                                \
+  }
+#define RS4_COMPARE(op)                                                        \
+  RS_INLINE rs_i4 operator op(rs_f4 a, rs_f4 b) {                              \
+    rs_i4 r;                                                                   \
+    for (int i = 0; i < 4; ++i) r.s[i] = a.s[i] op b.s[i] ? -1 : 0;            \
+    return r;                                                                  \
+  }                                                                            \
+  RS_INLINE rs_i4 operator op(rs_f4 a, float b) { return a op rs_f4{{b, b, b, b}}; }
+RS4_BINARY(rs_f4, rs_f4, +)
+RS4_BINARY(rs_f4, rs_f4, -)
+RS4_BINARY(rs_f4, rs_f4, *)
+RS4_BINARY(rs_f4, rs_f4, /)
+RS4_BINARY(rs_i4, rs_i4, &)
+RS4_BINARY(rs_i4, rs_i4, |)
+RS4_COMPARE(<)
+RS4_COMPARE(>)
+RS4_COMPARE(<=)
+RS4_COMPARE(>=)
+RS4_COMPARE(==)
+RS4_COMPARE(!=)
+#undef RS4_BINARY
+#undef RS4_COMPARE
+RS_INLINE rs_f4 rs4_splat(float x) { return rs_f4{{x, x, x, x}}; }
+RS_INLINE rs_f4 operator*(rs_f4 a, float b) { return a * rs4_splat(b); }
+RS_INLINE rs_f4 operator*(float a, rs_f4 b) { return rs4_splat(a) * b; }
+RS_INLINE rs_f4 operator-(rs_f4 a, float b) { return a - rs4_splat(b); }
+RS_INLINE rs_f4 operator-(float a, rs_f4 b) { return rs4_splat(a) - b; }
+RS_INLINE rs_f4 rs4_select(rs_f4 if_false, rs_f4 if_true, rs_i4 m) {
+  rs_f4 r;
+  for (int i = 0; i < 4; ++i) r.s[i] = m.s[i] < 0 ? if_true.s[i] : if_false.s[i];
+  return r;
+}
+RS_INLINE rs_f4 rs4_min(rs_f4 a, rs_f4 b) { return rs4_select(b, a, a < b); }
+RS_INLINE rs_f4 rs4_max(rs_f4 a, rs_f4 b) { return rs4_select(b, a, a > b); }
+RS_INLINE int rs4_bits(rs_i4 m) { return (m.s[0] & 1) | (m.s[1] & 2) | (m.s[2] & 4) | (m.s[3] & 8); }
+RS_INLINE void rs4_store(rs_f4 a, float* p) {
+  for (int i = 0; i < 4; ++i) p[i] = a.s[i];
+}
+RS_INLINE rs_f4 rs4_load(const float* p) { return rs_f4{{p[0], p[1], p[2], p[3]}}; }
+#endif
+
+/* A node of the 4-wide BVH the trace kernels traverse, 128 bytes (two cache lines): the boxes of
+ * up to four children, one axis bound per vector ("SoA", so one vector operation tests four
+ * boxes), then per child: valid (-1 / 0) and a reference:
+ *   RS_WIDE_LEAF clear: index of an inner node;
+ *   RS_WIDE_LEAF set:   a leaf, packets [first, first + count) with first = (ref & ~RS_WIDE_LEAF) >> 2
+ *                       and count = (ref & 3) + 1.
+ * Node 0 is the root. host/bvh/wide.cpp collapses the binary BVH into this layout. */
+#define RS_WIDE_LEAF 0x80000000u
+typedef struct {
+  rs_f4 lo_x, hi_x, lo_y, hi_y, lo_z, hi_z;
+  rs_i4 valid;
+  rs_u32 child[4];
+} RsWideNode;
+
+/* Four triangles of a leaf, 192 bytes, one vertex coordinate per vector so one pass of the
+ * intersection test serves four triangles. id[i] = the triangle's index in the scene's flat list
+ * (RS_NO_HIT in an empty lane); valid = -1 for a real triangle; nondegenerate = -1 unless the
+ * triangle has exactly zero area (its cross product is 0 in exact arithmetic), which the robust
+ * test must reject and which is cheaper to decide once on the host. */
+typedef struct {
+  rs_f4 v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z;
+  rs_i4 valid;
+  rs_i4 nondegenerate;
+  rs_u32 id[4];
+} RsTriPacket;
+
+/* Traversal stack entries for the 4-wide BVH. Every wide node spans two levels of the binary
+ * tree (host/bvh/wide.cpp), so its depth is at most ceil(RS_STACK_SIZE / 2) = 32, and a node
+ * pushes at most three children: 3 * 32 = 96 entries suffice. */
+#define RS_WIDE_STACK_SIZE 96
+
 /* A pinhole camera, 64 bytes. tan_half_fov_y is computed on the host once (no transcendentals
  * on the device). right/up are unit vectors; right is scaled by the aspect ratio at use. */
 typedef struct {

@@ -6,7 +6,8 @@
  * One ray per work-item; the ray is read through an index buffer, ray[order[i]], so a sorted
  * order needs no copy of the rays, and its hit is written to hits[i] (trace order). The host
  * scatters hits back with the same order when it compares against NoSort.
- * The traversal itself lives in traverse.h, shared with the host reference.
+ * The traversal itself (rs_traverse_wide: the 4-wide BVH of host/bvh/wide.cpp) lives in
+ * traverse.h, shared with the host reference.
  * The global size is padded to a multiple of the local size (PoCL 3.1 has no non-uniform
  * work-groups), so every kernel guards on count.
  */
@@ -14,23 +15,23 @@
 
 /* Each variant gets the same three kernels: closest hit, any hit (shadow rays), and an
  * instrumented closest hit that also writes the number of BVH nodes each ray fetched.
- * TRAVERSE is rs_traverse (fast) or rs_traverse_robust (watertight), both in traverse.h. */
-#define RS_TRACE_KERNELS(SUFFIX, TRAVERSE)                                                                   \
-  __kernel void trace_closest##SUFFIX(__global const RsBvhNode* nodes, __global const RsTriangle* tris,       \
+ * ROBUST is 0 (fast) or 1 (watertight): a constant, so each kernel compiles one variant. */
+#define RS_TRACE_KERNELS(SUFFIX, TRAVERSE)                                                                    \
+  __kernel void trace_closest##SUFFIX(__global const NODE* nodes, __global const LEAF* tris,                    \
                                       __global const RsRay* rays, __global const uint* order, uint count,     \
                                       __global RsHit* hits) {                                                 \
     uint i = get_global_id(0);                                                                                \
     if (i >= count) return;                                                                                   \
     hits[i] = TRAVERSE(nodes, tris, rays[order[i]], 0, 0);                                                    \
   }                                                                                                           \
-  __kernel void trace_any##SUFFIX(__global const RsBvhNode* nodes, __global const RsTriangle* tris,           \
+  __kernel void trace_any##SUFFIX(__global const NODE* nodes, __global const LEAF* tris,                        \
                                   __global const RsRay* rays, __global const uint* order, uint count,         \
                                   __global RsHit* hits) {                                                     \
     uint i = get_global_id(0);                                                                                \
     if (i >= count) return;                                                                                   \
     hits[i] = TRAVERSE(nodes, tris, rays[order[i]], 1, 0);                                                    \
   }                                                                                                           \
-  __kernel void trace_closest_counted##SUFFIX(__global const RsBvhNode* nodes, __global const RsTriangle* tris, \
+  __kernel void trace_closest_counted##SUFFIX(__global const NODE* nodes, __global const LEAF* tris,            \
                                               __global const RsRay* rays, __global const uint* order,         \
                                               uint count, __global RsHit* hits, __global uint* visits) {      \
     uint i = get_global_id(0);                                                                                \
@@ -40,5 +41,20 @@
     visits[i] = v;                                                                                            \
   }
 
-RS_TRACE_KERNELS(, rs_traverse)
-RS_TRACE_KERNELS(_robust, rs_traverse_robust)
+/* The 4-wide BVH (the default layout). */
+#define NODE RsWideNode
+#define LEAF RsTriPacket
+#define RS_WIDE_FAST(n, t, r, any, v) rs_traverse_wide(n, t, r, 0, any, v)
+#define RS_WIDE_ROBUST(n, t, r, any, v) rs_traverse_wide(n, t, r, 1, any, v)
+RS_TRACE_KERNELS(, RS_WIDE_FAST)
+RS_TRACE_KERNELS(_robust, RS_WIDE_ROBUST)
+#undef NODE
+#undef LEAF
+
+/* The binary BVH, kept to measure what the wide layout gains (raysort trace --bvh binary). */
+#define NODE RsBvhNode
+#define LEAF RsTriangle
+RS_TRACE_KERNELS(_binary, rs_traverse)
+RS_TRACE_KERNELS(_binary_robust, rs_traverse_robust)
+#undef NODE
+#undef LEAF

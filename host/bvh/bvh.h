@@ -17,6 +17,17 @@ struct BvhBuildOptions {
   std::uint32_t max_leaf_size = 8;   // a leaf never holds more (forced split)
   float traversal_cost = 1.0f;       // SAH constants (relative to one triangle test)
   float intersection_cost = 1.0f;
+  std::uint32_t leaf_block = 1;      // triangles tested together (SAH counts leaf cost in blocks)
+};
+
+// The 4-wide form the trace kernels traverse (RsWideNode / RsTriPacket in cl/shared.h), collapsed
+// from the binary tree: a wide node holds its binary node's grandchildren, or a child itself when
+// that child is a leaf. Same boxes, same leaves; only the branching factor changes.
+struct WideBvh {
+  std::vector<RsWideNode> nodes;     // node 0 is the root (always an inner node)
+  std::vector<RsTriPacket> packets;  // leaf triangles, four to a packet
+  std::uint32_t depth = 0;           // inner wide nodes on the longest root-to-leaf path
+  bool empty() const { return nodes.empty(); }
 };
 
 struct Bvh {
@@ -24,7 +35,8 @@ struct Bvh {
   std::vector<RsTriangle> triangles;  // leaf order; triangles[k].id = index in the scene's flat list
   std::uint32_t depth = 0;            // longest root-to-leaf path, in edges
   std::uint32_t leaf_count = 0;
-  double build_ms = 0.0;
+  WideBvh wide;                       // the same tree, 4-wide (what the trace kernels read)
+  double build_ms = 0.0;              // binned SAH build + collapse to 4-wide
   Aabb bounds() const;                // the root's box
   bool is_leaf(std::uint32_t n) const { return nodes[n].count > 0; }
 };
@@ -33,6 +45,13 @@ struct Bvh {
 // over the flattened triangles. Deterministic: the same triangles give the same tree.
 // Depth stays below RS_STACK_SIZE: past kMaxSahDepth levels, nodes split at the object median.
 Bvh build_bvh(const Scene::Flat& tris, const BvhBuildOptions& opts = {});
+
+// Collapses a binary BVH to the 4-wide layout. Throws an Error if a leaf needs more than four
+// packets (max_leaf_size > 16) or the stack bound RS_WIDE_STACK_SIZE could be exceeded.
+WideBvh collapse_to_wide(const Bvh& bvh);
+
+// bvh.wide, or a collapse of bvh when it has none (a binary tree built by hand in a test).
+const WideBvh& wide_of(const Bvh& bvh, WideBvh& scratch);
 
 // Checks the invariants the kernels rely on: every triangle in exactly one leaf, every child box
 // inside its parent, leaf sizes within max_leaf_size, depth below the stack bound, children in

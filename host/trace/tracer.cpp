@@ -19,15 +19,33 @@ TraceVariant parse_trace_variant(std::string_view name) {
 
 const char* trace_variant_name(TraceVariant v) { return v == TraceVariant::Robust ? "robust" : "fast"; }
 
-Tracer::Tracer(Runtime& rt, const Bvh& bvh, TraceVariant variant) : rt_(rt), variant_(variant) {
-  nodes_ = rt.upload("bvh nodes", bvh.nodes);
-  triangles_ = rt.upload("triangles", bvh.triangles);
+TraceLayout parse_trace_layout(std::string_view name) {
+  if (name == "wide") return TraceLayout::Wide;
+  if (name == "binary") return TraceLayout::Binary;
+  throw Error("unknown BVH layout '" + std::string(name) + "' (expected wide or binary)");
+}
+
+const char* trace_layout_name(TraceLayout l) { return l == TraceLayout::Binary ? "binary" : "wide"; }
+
+Tracer::Tracer(Runtime& rt, const Bvh& bvh, TraceVariant variant, TraceLayout layout)
+    : rt_(rt), variant_(variant), layout_(layout) {
+  if (layout == TraceLayout::Wide) {
+    WideBvh scratch;
+    const WideBvh& wide = wide_of(bvh, scratch);
+    nodes_ = rt.upload("4-wide bvh nodes", wide.nodes);
+    triangles_ = rt.upload("triangle packets", wide.packets);
+  } else {
+    nodes_ = rt.upload("bvh nodes", bvh.nodes);
+    triangles_ = rt.upload("triangles", bvh.triangles);
+  }
   cl::Program program = rt.build({"cl/trace.cl"});
   cl_call("creating the trace kernels", [&] {
-    const bool robust = variant == TraceVariant::Robust;
-    closest_ = cl::Kernel(program, robust ? "trace_closest_robust" : "trace_closest");
-    any_ = cl::Kernel(program, robust ? "trace_any_robust" : "trace_any");
-    counted_ = cl::Kernel(program, robust ? "trace_closest_counted_robust" : "trace_closest_counted");
+    // Kernel names: trace_{closest,any,closest_counted}[_binary][_robust] (cl/trace.cl).
+    const std::string suffix = std::string(layout == TraceLayout::Binary ? "_binary" : "") +
+                               (variant == TraceVariant::Robust ? "_robust" : "");
+    closest_ = cl::Kernel(program, ("trace_closest" + suffix).c_str());
+    any_ = cl::Kernel(program, ("trace_any" + suffix).c_str());
+    counted_ = cl::Kernel(program, ("trace_closest_counted" + suffix).c_str());
   });
   // PoCL: the work-group is a loop over work-items and its size barely matters (DESIGN.md 6);
   // GPUs want a few warps per group. 64 suits both and stays within every device's limit.
@@ -101,20 +119,25 @@ Tracer::Run Tracer::run(const std::vector<RsRay>& rays, const std::vector<std::u
 }
 
 std::vector<RsHit> trace_reference(const Bvh& bvh, const std::vector<RsRay>& rays, const std::uint32_t* order,
-                                   bool any_hit, std::vector<std::uint32_t>* node_visits, TraceVariant variant) {
+                                   bool any_hit, std::vector<std::uint32_t>* node_visits, TraceVariant variant,
+                                   TraceLayout layout) {
   const std::size_t n = rays.size();
   std::vector<RsHit> hits(n);
   if (node_visits) node_visits->assign(n, 0);
   const unsigned threads = std::max(1u, std::min(16u, std::thread::hardware_concurrency()));
+  WideBvh scratch;
+  const WideBvh& wide = layout == TraceLayout::Wide ? wide_of(bvh, scratch) : scratch;
+  const int robust = variant == TraceVariant::Robust ? 1 : 0;
   auto work = [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
       rs_u32 visits = 0;
       const RsRay& ray = rays[order ? order[i] : i];
-      hits[i] = variant == TraceVariant::Robust
-                    ? rs_traverse_robust(bvh.nodes.data(), bvh.triangles.data(), ray, any_hit ? 1 : 0,
-                                         node_visits ? &visits : nullptr)
-                    : rs_traverse(bvh.nodes.data(), bvh.triangles.data(), ray, any_hit ? 1 : 0,
-                                  node_visits ? &visits : nullptr);
+      rs_u32* v = node_visits ? &visits : nullptr;
+      if (layout == TraceLayout::Wide)
+        hits[i] = rs_traverse_wide(wide.nodes.data(), wide.packets.data(), ray, robust, any_hit ? 1 : 0, v);
+      else
+        hits[i] = robust ? rs_traverse_robust(bvh.nodes.data(), bvh.triangles.data(), ray, any_hit ? 1 : 0, v)
+                         : rs_traverse(bvh.nodes.data(), bvh.triangles.data(), ray, any_hit ? 1 : 0, v);
       if (node_visits) (*node_visits)[i] = visits;
     }
   };

@@ -20,14 +20,24 @@ enum class TraceVariant { Fast, Robust };
 TraceVariant parse_trace_variant(std::string_view name);
 const char* trace_variant_name(TraceVariant v);
 
+// Which tree the kernels walk: the 4-wide collapse of the BVH (the default, host/bvh/wide.cpp) or
+// the binary BVH itself (kept to measure what the wide layout gains; docs/trace.md).
+enum class TraceLayout { Wide, Binary };
+
+// "wide" / "binary"; parse throws an Error naming the accepted values.
+TraceLayout parse_trace_layout(std::string_view name);
+const char* trace_layout_name(TraceLayout l);
+
 // The scene's BVH on one device, with the trace kernels built. Upload once per scene; trace
 // many batches and orders.
 class Tracer {
  public:
   // The default stays Fast until every caller chooses (the benchmark runner, the encoders).
-  Tracer(Runtime& rt, const Bvh& bvh, TraceVariant variant = TraceVariant::Fast);
+  Tracer(Runtime& rt, const Bvh& bvh, TraceVariant variant = TraceVariant::Fast,
+         TraceLayout layout = TraceLayout::Wide);
 
   TraceVariant variant() const { return variant_; }
+  TraceLayout layout() const { return layout_; }
 
   // Traces rays[order[i]] for i < count into hits[i] (trace order). any_hit: shadow rays.
   // Enqueues and returns the kernel's event without waiting.
@@ -56,13 +66,15 @@ class Tracer {
   cl::Kernel closest_, any_, counted_;
   std::size_t local_ = 64;
   TraceVariant variant_ = TraceVariant::Fast;
+  TraceLayout layout_ = TraceLayout::Wide;
 };
 
 // Host reference: the same traversal (cl/traverse.h) on host threads. order may be null
-// (identity). hits[i] belongs to rays[order[i]].
+// (identity). hits[i] belongs to rays[order[i]]. node_visits: per ray, the nodes visited (wide
+// nodes and leaves for the wide layout, boxes fetched for the binary one).
 std::vector<RsHit> trace_reference(const Bvh& bvh, const std::vector<RsRay>& rays, const std::uint32_t* order,
                                    bool any_hit, std::vector<std::uint32_t>* node_visits = nullptr,
-                                   TraceVariant variant = TraceVariant::Fast);
+                                   TraceVariant variant = TraceVariant::Fast, TraceLayout layout = TraceLayout::Wide);
 
 // Number of positions whose hit records differ in any bit.
 std::size_t count_hit_mismatches(const std::vector<RsHit>& a, const std::vector<RsHit>& b);

@@ -1,0 +1,124 @@
+// Collapsing the binary BVH into the 4-wide layout of the trace kernels (cl/shared.h, RsWideNode).
+// Each wide node takes the two levels below a binary node: a child that is a leaf fills one slot,
+// an inner child gives its two children. So every wide level spans two binary levels, which is
+// what bounds the kernels' stack (RS_WIDE_STACK_SIZE): depth <= ceil(binary depth / 2) and at
+// most three pending siblings per level.
+#include <algorithm>
+#include <string>
+
+#include "bvh/bvh.h"
+#include "util/error.h"
+
+namespace raysort {
+
+namespace {
+
+// Zero area in exact arithmetic: differences and products of floats are exact in double, so this
+// is the robust test's degenerate-triangle check (cl/traverse.h), decided once here.
+bool exactly_degenerate(const RsTriangle& t) {
+  const double a1x = double(t.v1[0]) - t.v0[0], a1y = double(t.v1[1]) - t.v0[1], a1z = double(t.v1[2]) - t.v0[2];
+  const double a2x = double(t.v2[0]) - t.v0[0], a2y = double(t.v2[1]) - t.v0[1], a2z = double(t.v2[2]) - t.v0[2];
+  return a1y * a2z - a1z * a2y == 0.0 && a1z * a2x - a1x * a2z == 0.0 && a1x * a2y - a1y * a2x == 0.0;
+}
+
+void set_lane(rs_f4& v, int lane, float x) { v.s[lane] = x; }
+
+class Collapser {
+ public:
+  explicit Collapser(const Bvh& bvh) : bvh_(bvh) {}
+
+  WideBvh run() {
+    if (bvh_.triangles.empty() || bvh_.nodes.empty()) {
+      out_.nodes.push_back(RsWideNode{});  // a root with no valid child: every ray misses
+      out_.depth = 1;
+      return std::move(out_);
+    }
+    if (bvh_.is_leaf(0))
+      make_node({0u}, 1);  // a one-leaf tree still gets an inner root
+    else
+      make_node(slots_of(0), 1);
+    if (3 * out_.depth > RS_WIDE_STACK_SIZE)
+      throw Error("4-wide BVH of depth " + std::to_string(out_.depth) + " could overflow the trace stack (" +
+                  std::to_string(RS_WIDE_STACK_SIZE) + " entries); the binary BVH is deeper than its bound");
+    return std::move(out_);
+  }
+
+ private:
+  // The binary nodes a wide node over inner binary node n holds: its children, or their children.
+  std::vector<std::uint32_t> slots_of(std::uint32_t n) const {
+    std::vector<std::uint32_t> slots;
+    for (std::uint32_t c = bvh_.nodes[n].first; c < bvh_.nodes[n].first + 2; ++c) {
+      if (bvh_.is_leaf(c)) {
+        slots.push_back(c);
+      } else {
+        slots.push_back(bvh_.nodes[c].first);
+        slots.push_back(bvh_.nodes[c].first + 1);
+      }
+    }
+    return slots;
+  }
+
+  std::uint32_t make_node(const std::vector<std::uint32_t>& slots, std::uint32_t depth) {
+    out_.depth = std::max(out_.depth, depth);
+    const auto index = static_cast<std::uint32_t>(out_.nodes.size());
+    out_.nodes.push_back(RsWideNode{});
+    RsWideNode w{};  // lanes past slots.size(): valid = 0, empty boxes, child 0 (never read)
+    for (std::size_t i = 0; i < slots.size(); ++i) {
+      const RsBvhNode& b = bvh_.nodes[slots[i]];
+      const int lane = static_cast<int>(i);
+      set_lane(w.lo_x, lane, b.bmin[0]), set_lane(w.hi_x, lane, b.bmax[0]);
+      set_lane(w.lo_y, lane, b.bmin[1]), set_lane(w.hi_y, lane, b.bmax[1]);
+      set_lane(w.lo_z, lane, b.bmin[2]), set_lane(w.hi_z, lane, b.bmax[2]);
+      w.valid.s[i] = -1;
+      w.child[i] = bvh_.is_leaf(slots[i]) ? make_leaf(b) : make_node(slots_of(slots[i]), depth + 1);
+    }
+    out_.nodes[index] = w;  // after the children: the vector may have grown meanwhile
+    return index;
+  }
+
+  std::uint32_t make_leaf(const RsBvhNode& leaf) {
+    const auto first = static_cast<std::uint32_t>(out_.packets.size());
+    const std::uint32_t packets = (leaf.count + 3) / 4;
+    if (packets > 4)
+      throw Error("BVH leaf of " + std::to_string(leaf.count) +
+                  " triangles does not fit the 4-wide layout (at most 16 per leaf: lower max_leaf_size)");
+    if (first >= (1u << 29)) throw Error("scene too large for the 4-wide BVH layout (2^31 triangles)");
+    for (std::uint32_t p = 0; p < packets; ++p) {
+      RsTriPacket pk{};
+      for (int lane = 0; lane < 4; ++lane) {
+        const std::uint32_t k = leaf.first + 4 * p + static_cast<std::uint32_t>(lane);
+        if (k >= leaf.first + leaf.count) {
+          pk.id[lane] = RS_NO_HIT;  // valid = 0: never hit
+          continue;
+        }
+        const RsTriangle& t = bvh_.triangles[k];
+        set_lane(pk.v0x, lane, t.v0[0]), set_lane(pk.v0y, lane, t.v0[1]), set_lane(pk.v0z, lane, t.v0[2]);
+        set_lane(pk.v1x, lane, t.v1[0]), set_lane(pk.v1y, lane, t.v1[1]), set_lane(pk.v1z, lane, t.v1[2]);
+        set_lane(pk.v2x, lane, t.v2[0]), set_lane(pk.v2y, lane, t.v2[1]), set_lane(pk.v2z, lane, t.v2[2]);
+        pk.valid.s[lane] = -1;
+        pk.nondegenerate.s[lane] = exactly_degenerate(t) ? 0 : -1;
+        pk.id[lane] = t.id;
+      }
+      out_.packets.push_back(pk);
+    }
+    return RS_WIDE_LEAF | (first << 2) | (packets - 1);
+  }
+
+  const Bvh& bvh_;
+  WideBvh out_;
+};
+
+}  // namespace
+
+WideBvh collapse_to_wide(const Bvh& bvh) { return Collapser(bvh).run(); }
+
+const WideBvh& wide_of(const Bvh& bvh, WideBvh& scratch) {
+  if (!bvh.wide.empty()) return bvh.wide;
+  scratch = collapse_to_wide(bvh);
+  return scratch;
+}
+
+static_assert(sizeof(RsWideNode) == 128, "RsWideNode layout (cl/shared.h)");
+static_assert(sizeof(RsTriPacket) == 192, "RsTriPacket layout (cl/shared.h)");
+
+}  // namespace raysort
