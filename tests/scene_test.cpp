@@ -378,3 +378,55 @@ TEST(SceneToml, BadObjPathsNameTheSceneLineAndTheObj) {
     EXPECT_NE(std::string(e.what()).find("scene file not found"), std::string::npos) << e.what();
   }
 }
+
+// Issue 6: materials and effects. A [[material]] (albedo, mirror) named by a mesh; invalid effect
+// declarations refused with the file, the line and the key.
+TEST(SceneEffects, MaterialsAreNamedByMeshes) {
+  Scene s = parse_scene_toml(replace(kValid, "[[mesh]]\nname = \"floor\"\n",
+                                     "[[material]]\nname = \"chrome\"\nalbedo = [0.9, 0.9, 0.9]\nmirror = true\n\n"
+                                     "[[mesh]]\nname = \"floor\"\nmaterial = \"chrome\"\n"),
+                             "ok.toml", {});
+  ASSERT_EQ(s.materials.size(), 2u);  // the default material stays at index 0
+  EXPECT_TRUE(s.materials[1].mirror);
+  EXPECT_EQ(s.materials[1].albedo, (Vec3{0.9f, 0.9f, 0.9f}));
+  auto flat = s.flatten();
+  for (auto m : flat.material) EXPECT_EQ(m, 1);
+}
+
+TEST(SceneEffects, InvalidDeclarationsNameFileLineAndKey) {
+  struct Case {
+    std::string text, where, key;
+  };
+  const std::string mesh = "[[mesh]]\nname = \"floor\"\n";
+  const std::vector<Case> cases = {
+      // an unknown material, listing the ones there are
+      {replace(kValid, mesh, "[[material]]\nname = \"white\"\n" + mesh + "material = \"whte\"\n"), "bad.toml:11:",
+       "mesh[0].material"},
+      {replace(kValid, mesh, mesh + "material = \"white\"\n"), "bad.toml:9:", "mesh[0].material"},
+      {replace(kValid, mesh, "[[material]]\nname = \"w\"\nalbedo = [1.5, 0.5, 0.5]\n" + mesh), "bad.toml:9:",
+       "material[0].albedo"},
+      {replace(kValid, mesh, "[[material]]\nname = \"w\"\nmirror = 1\n" + mesh), "bad.toml:9:", "material[0].mirror"},
+      {replace(kValid, mesh, "[[material]]\nname = \"w\"\n[[material]]\nname = \"w\"\n" + mesh), "bad.toml:10:",
+       "material[1].name"},
+      {replace(kValid, mesh, "[[material]]\nname = \"w\"\n" + mesh + "material = \"w\"\nalbedo = [0.5, 0.5, 0.5]\n"),
+       "bad.toml:11:", "mesh[0].material"},
+      // lights
+      {replace(kValid, "radius = 0.05", "radius = -0.05"), "bad.toml:16:", "sphere_light[0].radius"},
+      {kValid + "power = -3.0\n", "bad.toml:17:", "sphere_light[0].power"},
+      {kValid + "color = [1.0, -1.0, 1.0]\n", "bad.toml:17:", "sphere_light[0].color"},
+      {kValid + "[sky]\nzenith = [1.0, 1.0, 1.0]\n", "bad.toml:17:", "sky"},
+      // effects: depth < 0, too many shadow rays, zero samples, roulette out of (0, 1]
+      {kValid + "[effects]\nmax_bounces = -1\n", "bad.toml:18:", "effects.max_bounces"},
+      {kValid + "[effects]\nrussian_roulette_start = -2\n", "bad.toml:18:", "effects.russian_roulette_start"},
+      {kValid + "[effects]\nshadow_rays_per_bounce = 65\n", "bad.toml:18:", "effects.shadow_rays_per_bounce"},
+      {kValid + "[effects]\nsamples_per_pixel = 0\n", "bad.toml:18:", "effects.samples_per_pixel"},
+      {kValid + "[effects]\nrussian_roulette_survival = 0.0\n", "bad.toml:18:", "effects.russian_roulette_survival"},
+      {kValid + "[effects]\nmax_bounce = 2\n", "bad.toml:18:", "effects.max_bounce"},
+  };
+  for (const auto& c : cases) {
+    std::string msg = parse_error(c.text);
+    EXPECT_NE(msg.find(c.where), std::string::npos) << c.key << ": " << msg;
+    EXPECT_NE(msg.find(c.key), std::string::npos) << c.key << ": " << msg;
+  }
+  EXPECT_NE(parse_error(cases[0].text).find("white"), std::string::npos);  // the known materials
+}

@@ -1,22 +1,29 @@
-// raysort render: a picture of a scene, optionally with the boxes that the box-set encoders put
-// their key bits on, drawn as orange wireframes like the "cut node boundaries" figure of Xiang et
-// al. ("Faster Ray Tracing through Hierarchy Cut Code", section 6), so a user can see where the
-// bits go. The picture itself is a simple shading of primary hits (host reference traversal):
-//   1. shade_primary  — one ray per pixel through the pixel centre, albedo × (ambient + |cos|)
-//   2. overlay_boxes  — each box's 12 edges projected through the scene camera
-//   3. write_png      — OpenImageIO
+// raysort render: what the benchmark traces, as pictures.
+//   1. the converged image of the scene's light transport: the wavefront path tracer
+//      (render/pathtrace.h, cl/shade.cl) on the device, or its host twin with --host, sample passes
+//      averaged per pixel; written as EXR (linear radiance) and PNG (exposure, sRGB);
+//   2. a traversal-cost heatmap: BVH nodes visited per pixel and sample by the closest-hit rays of
+//      every depth (primary and bounces), as a PNG;
+//   3. with --overlay, the boxes that the box-set encoders put their key bits on, drawn as orange
+//      wireframes like the "cut node boundaries" figure of Xiang et al. ("Faster Ray Tracing through
+//      Hierarchy Cut Code", section 6) over a simple preview shading of primary hits (host
+//      reference traversal), albedo x (ambient + |cos|), so the boxes read clearly.
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <memory>
+#include <optional>
 
 #include "app/commands.h"
 #include "app/options.h"
 #include "bvh/bvh.h"
 #include "bvh/cut.h"
 #include "encode/encode.h"
+#include "render/pathtrace.h"
 #include "render/rays.h"
 #include "scene/load.h"
 #include "trace/tracer.h"
@@ -31,7 +38,9 @@ struct RenderArgs {
   std::string overlay = "none";  // none | hcc | mlhcc | grid
   unsigned bits = 32;
   std::string out;
-  CommonOptions common;  // scene root and resolution
+  float exposure = 0.0f;  // PNG only: radiance x 2^exposure before sRGB encoding
+  bool host = false;      // the host twin instead of the device
+  CommonOptions common;   // device, scene root, resolution, spp, seed
 };
 
 // A linear RGB image, row-major from the top-left pixel.
@@ -125,11 +134,11 @@ void overlay_boxes(Image& img, const RsCamera& cam, const std::vector<Aabb>& box
   }
 }
 
-// 3. PNG (or any format OpenImageIO knows by the file's extension), sRGB-encoded 8 bits.
-void write_png(const Image& img, const std::string& path) {
+// PNG (or any format OpenImageIO knows by the file's extension), sRGB-encoded 8 bits.
+void write_png(const Image& img, const std::string& path, float scale = 1.0f) {
   std::vector<unsigned char> bytes(img.rgb.size());
   for (std::size_t i = 0; i < img.rgb.size(); ++i) {
-    const float c = std::clamp(img.rgb[i], 0.0f, 1.0f);
+    const float c = std::clamp(img.rgb[i] * scale, 0.0f, 1.0f);
     const float srgb = c <= 0.0031308f ? 12.92f * c : 1.055f * std::pow(c, 1.0f / 2.4f) - 0.055f;
     bytes[i] = static_cast<unsigned char>(std::lround(srgb * 255.0f));
   }
@@ -138,6 +147,92 @@ void write_png(const Image& img, const std::string& path) {
   OIIO::ImageSpec spec(static_cast<int>(img.width), static_cast<int>(img.height), 3, OIIO::TypeDesc::UINT8);
   if (!out->open(path, spec) || !out->write_image(OIIO::TypeDesc::UINT8, bytes.data()) || !out->close())
     throw Error(fmt::format("writing '{}' failed: {}", path, out->geterror()));
+}
+
+// Linear radiance as 32-bit float RGB (OpenEXR through OpenImageIO).
+void write_exr(const Image& img, const std::string& path) {
+  auto out = OIIO::ImageOutput::create(path);
+  if (!out) throw Error(fmt::format("cannot write '{}': {}", path, OIIO::geterror()));
+  OIIO::ImageSpec spec(static_cast<int>(img.width), static_cast<int>(img.height), 3, OIIO::TypeDesc::FLOAT);
+  if (!out->open(path, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, img.rgb.data()) || !out->close())
+    throw Error(fmt::format("writing '{}' failed: {}", path, out->geterror()));
+}
+
+// Heatmap colours: black -> purple -> orange -> yellow -> white (an inferno-like ramp), t in [0, 1].
+Vec3 heat_color(float t) {
+  static const Vec3 stops[] = {{0.0f, 0.0f, 0.02f}, {0.33f, 0.06f, 0.43f}, {0.87f, 0.32f, 0.23f},
+                               {0.99f, 0.75f, 0.2f}, {1.0f, 1.0f, 0.9f}};
+  t = std::clamp(t, 0.0f, 1.0f) * 4.0f;
+  const int i = std::min(3, static_cast<int>(t));
+  const float f = t - static_cast<float>(i);
+  Vec3 c;
+  for (int a = 0; a < 3; ++a) c[a] = stops[i][a] + (stops[i + 1][a] - stops[i][a]) * f;
+  return c;
+}
+
+// 1.-2. The path-traced image and the per-pixel traversal cost, in sample passes of at most
+// ~2 M paths (bounded device memory at any resolution and spp).
+struct Rendered {
+  Image image;
+  std::vector<double> cost;  // nodes visited per pixel and sample
+  std::vector<BatchCount> first_pass;
+  std::size_t rays = 0;
+  double ms = 0.0;
+};
+
+Rendered path_trace(const RenderArgs& args, const Scene& scene, const Scene::Flat& tris, const Bvh& bvh,
+                    const RayGenOptions& gen) {
+  const ShadeInputs in = make_shade_inputs(scene, tris, gen);
+  const std::size_t pixels = std::size_t{in.width} * in.height;
+  const auto per_pass = static_cast<std::uint32_t>(std::max<std::size_t>(1, (std::size_t{2} << 20) / pixels));
+  std::unique_ptr<Runtime> rt;
+  std::unique_ptr<DevicePathTracer> device;
+  if (args.host) {
+    fmt::print("device   host twin (--host)\n");
+  } else {
+    rt = std::make_unique<Runtime>(select_device(args.common.device));
+    fmt::print("device   {} ({})\n", rt->info().name, rt->info().platform_name);
+    device = std::make_unique<DevicePathTracer>(*rt, bvh, in);
+  }
+  Rendered r;
+  r.image = {in.width, in.height, std::vector<float>(pixels * 3, 0.0f)};
+  r.cost.assign(pixels, 0.0);
+  std::vector<double> sum(pixels * 3, 0.0);
+  const auto t0 = std::chrono::steady_clock::now();
+  for (std::uint32_t s = 0; s < in.spp; s += per_pass) {
+    FrameOptions fo;
+    fo.sample_begin = s;
+    fo.sample_count = per_pass;
+    fo.count_visits = true;
+    Frame f = device ? device->trace_frame(fo) : trace_frame_host(in, bvh, fo);
+    if (s == 0) r.first_pass = f.batches;
+    for (const auto& b : f.batches) r.rays += b.rays;
+    for (std::size_t path = 0; path < f.visits.size(); ++path) {
+      const std::size_t pixel = path / f.spp;
+      for (int c = 0; c < 3; ++c) sum[3 * pixel + c] += f.radiance[3 * path + c];
+      r.cost[pixel] += f.visits[path];
+    }
+  }
+  r.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  for (std::size_t i = 0; i < sum.size(); ++i) r.image.rgb[i] = static_cast<float>(sum[i] / in.spp);
+  for (double& c : r.cost) c /= in.spp;
+  return r;
+}
+
+// The colour ramp spans the 1st to the 99th percentile of the cost, so a few extreme pixels do not
+// flatten the picture.
+Image heatmap(const std::vector<double>& cost, std::uint32_t width, std::uint32_t height, double& low, double& top) {
+  std::vector<double> sorted(cost);
+  std::sort(sorted.begin(), sorted.end());
+  auto percentile = [&](std::size_t p) { return sorted.empty() ? 0.0 : sorted[std::min(sorted.size() - 1, sorted.size() * p / 100)]; };
+  low = percentile(1);
+  top = std::max(low + 1.0, percentile(99));
+  Image img{width, height, std::vector<float>(cost.size() * 3)};
+  for (std::size_t i = 0; i < cost.size(); ++i) {
+    const Vec3 c = heat_color(static_cast<float>((cost[i] - low) / (top - low)));
+    img.rgb[3 * i] = c[0], img.rgb[3 * i + 1] = c[1], img.rgb[3 * i + 2] = c[2];
+  }
+  return img;
 }
 
 int run_render(const RenderArgs& args) {
@@ -150,13 +245,42 @@ int run_render(const RenderArgs& args) {
   const RsCamera cam = make_camera(scene.camera, w, h);
   fmt::print("scene    {}: {} triangles, bvh {} nodes, {} leaves\n", scene.name, tris.size(), bvh.nodes.size(),
              bvh.leaf_count);
-  Image img = shade_primary(scene, tris, bvh, cam);
-
-  std::vector<Aabb> boxes;
+  // Output names: <base>.png / .exr / -cost.png [/ -<overlay>.png], base = --out without extension.
+  std::string base = scene.name;
+  if (!args.out.empty()) {
+    const std::filesystem::path out(args.out), dir = out.parent_path();
+    base = (dir / out.stem()).string();
+    std::error_code ec;
+    if (!dir.empty()) std::filesystem::create_directories(dir, ec);
+  }
+  std::optional<Encoder> encoder;
   if (args.overlay != "none") {
-    const auto encoder = parse_encoder(args.overlay);
+    encoder = parse_encoder(args.overlay);
     if (!encoder || (*encoder != Encoder::HCC && *encoder != Encoder::MLHCC && *encoder != Encoder::RegularGrid))
       throw Error(fmt::format("--overlay '{}': expected none, hcc, mlhcc or grid", args.overlay));
+  }
+
+  const Rendered r = path_trace(args, scene, tris, bvh, gen);
+  const std::uint32_t spp = gen.spp ? gen.spp : scene.effects.samples_per_pixel;
+  fmt::print("frame    {}x{}, {} spp: {} rays in {:.0f} ms ({:.2f} MRays/s incl. shading and compaction)\n", w, h, spp,
+             r.rays, r.ms, r.ms > 0 ? static_cast<double>(r.rays) / r.ms / 1e3 : 0.0);
+  for (const auto& b : r.first_pass) fmt::print("  {:<10} {:>10} rays\n", b.name, b.rays);
+  write_exr(r.image, base + ".exr");
+  write_png(r.image, base + ".png", std::exp2(args.exposure));
+  double low = 0.0, top = 1.0;
+  write_png(heatmap(r.cost, w, h, low, top), base + "-cost.png");
+  double mean = 0.0;
+  for (double c : r.cost) mean += c;
+  mean /= std::max<std::size_t>(1, r.cost.size());
+  fmt::print("wrote    {0}.exr, {0}.png ({1}x{2}, exposure {3:+g})\n", base, w, h, args.exposure);
+  fmt::print("wrote    {}-cost.png: BVH nodes visited per pixel and sample, closest-hit rays of every depth; "
+             "mean {:.1f}; black = {:.0f} (1st percentile) and below, white = {:.0f} (99th) and above\n",
+             base, mean, low, top);
+  if (!encoder) return 0;
+
+  Image img = shade_primary(scene, tris, bvh, cam);
+  std::vector<Aabb> boxes;
+  {
     EncodeScene es(bvh, bvh.bounds());
     check_key_bits(*encoder, args.bits, es.params());
     if (*encoder == Encoder::RegularGrid) {
@@ -188,10 +312,9 @@ int run_render(const RenderArgs& args) {
     }
     overlay_boxes(img, cam, boxes, 1e-4f * std::max(1e-30f, bvh.bounds().largest_extent()));
   }
-  const std::string out = args.out.empty() ? scene.name + (args.overlay == "none" ? "" : "-" + args.overlay) + ".png"
-                                           : args.out;
+  const std::string out = base + "-" + args.overlay + ".png";
   write_png(img, out);
-  fmt::print("wrote    {} ({}x{})\n", out, w, h);
+  fmt::print("wrote    {} ({}x{}, preview shading with the {} boxes)\n", out, w, h, args.overlay);
   return 0;
 }
 
@@ -199,17 +322,20 @@ int run_render(const RenderArgs& args) {
 
 void register_render_command(CLI::App& app) {
   auto args = std::make_shared<RenderArgs>();
-  auto* cmd = app.add_subcommand("render", "render a scene to a PNG, optionally with the HCC cut boxes drawn on it");
+  auto* cmd = app.add_subcommand("render", "path-trace a scene (EXR + PNG) with a traversal-cost heatmap, optionally "
+                                           "with the HCC cut boxes drawn on a preview");
   cmd->add_option("--scene", args->scene, "scene name, .toml or .obj path")->required();
-  cmd->add_option("--overlay", args->overlay, "boxes to draw: none, hcc (cut nodes), mlhcc (top-level), grid")
+  cmd->add_option("--overlay", args->overlay,
+                  "boxes to draw on <base>-<overlay>.png: none, hcc (cut nodes), mlhcc (top-level), grid")
       ->capture_default_str();
   cmd->add_option("--bits", args->bits, "key length the cut is chosen for (one box per bit)")
       ->capture_default_str()
       ->check(CLI::Range(1u, 64u));
-  cmd->add_option("--out", args->out, "output image (default: <scene>[-<overlay>].png)");
-  cmd->add_option("--resolution", args->common.resolution, "image size WxH (default: the scene's)");
-  cmd->add_option("--scene-root", args->common.scene_root,
-                  "folder the scene files' OBJ paths are relative to (env RAYSORT_SCENE_ROOT)");
+  cmd->add_option("--out", args->out,
+                  "base of the output names: <base>.png, <base>.exr, <base>-cost.png (default: the scene's name)");
+  cmd->add_option("--exposure", args->exposure, "PNG exposure in stops (radiance x 2^exposure)")->capture_default_str();
+  cmd->add_flag("--host", args->host, "run the host twin of the path tracer instead of the OpenCL device");
+  add_common_options(*cmd, args->common);
   cmd->callback([args] { set_command_exit_code(run_render(*args)); });
 }
 

@@ -1,27 +1,30 @@
 #include "render/batches.h"
 
-#include "trace/tracer.h"
+#include "render/pathtrace.h"
 
 namespace raysort {
 
 std::vector<ReferencedBatch> generate_batches(const Scene& scene, const Scene::Flat& tris, const Bvh& bvh,
                                               const RayGenOptions& opts) {
+  const ShadeInputs in = make_shade_inputs(scene, tris, opts);
   std::vector<ReferencedBatch> out;
-  RayBatch current = generate_primary(scene, opts);
-  while (!current.rays.empty()) {
-    auto hits = trace_reference(bvh, current.rays, nullptr, false);
-    RayBatch shadow = generate_shadow(scene, tris, current, hits, opts);
-    RayBatch next;
-    const bool more = current.bounce < scene.effects.max_bounces;
-    if (more) next = generate_bounce(scene, tris, current, hits, opts);
-    out.push_back({std::move(current), std::move(hits)});
-    if (!shadow.rays.empty()) {
-      auto shadow_hits = trace_reference(bvh, shadow.rays, nullptr, true);
-      out.push_back({std::move(shadow), std::move(shadow_hits)});
+  FrameOptions frame;
+  frame.sink = [&](const TracedBatch& b) {
+    ReferencedBatch rb;
+    rb.batch.name = batch_name(b.kind, b.bounce);
+    rb.batch.kind = b.kind;
+    rb.batch.bounce = b.bounce;
+    rb.batch.rays = b.rays;
+    rb.batch.pixel.reserve(b.states.size());
+    rb.batch.sample.reserve(b.states.size());
+    for (const RsPathState& s : b.states) {
+      rb.batch.pixel.push_back(s.path / in.spp);
+      rb.batch.sample.push_back(s.path % in.spp);
     }
-    if (!more) break;
-    current = std::move(next);
-  }
+    rb.reference_hits = b.hits;
+    out.push_back(std::move(rb));
+  };
+  trace_frame_host(in, bvh, frame);
   return out;
 }
 

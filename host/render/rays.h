@@ -36,20 +36,10 @@ struct RayGenOptions {
 // The camera struct the kernels and the shared ray generator use.
 RsCamera make_camera(const Camera& cam, std::uint32_t width, std::uint32_t height);
 
-// Primary rays: width × height × spp, pixel-major (all samples of a pixel together).
-RayBatch generate_primary(const Scene& scene, const RayGenOptions& opts);
-
-// From the closest hits of `batch` (a primary or bounce batch; hits[i] belongs to batch.rays[i]):
-// next-event shadow rays toward the scene's sphere lights (light chosen by power; rays toward
-// lights below the surface are not generated), shadow_rays_per_bounce per hit. Empty when the
-// scene has no sphere lights or declares no shadow rays.
-RayBatch generate_shadow(const Scene& scene, const Scene::Flat& tris, const RayBatch& batch,
-                         const std::vector<RsHit>& hits, const RayGenOptions& opts);
-
-// Diffuse bounce rays from the hits of `batch` (cosine-weighted about the geometric normal),
-// after Russian roulette from the scene's declared start depth. Misses and terminated paths are
-// compacted out, so batch sizes shrink with depth.
-RayBatch generate_bounce(const Scene& scene, const Scene::Flat& tris, const RayBatch& batch,
-                         const std::vector<RsHit>& hits, const RayGenOptions& opts);
+// The rays themselves come from the wavefront path tracer (render/pathtrace.h, cl/shade.h):
+// primary rays width x height x spp, pixel-major (all samples of a pixel together); shadow<k> =
+// next-event rays toward the sphere lights (light chosen by power) from the diffuse hits of bounce k;
+// bounce<k> = the surviving paths after Russian roulette, misses and terminated paths compacted out.
+// render/batches.h captures them for the benchmark.
 
 }  // namespace raysort

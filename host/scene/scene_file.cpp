@@ -93,11 +93,29 @@ class SceneBuilder {
 
   Scene build(const toml::table& root) {
     TomlTable top(origin_, root, "",
-                  {"name", "description", "camera", "mesh", "instance", "scatter", "sphere_light", "sky", "effects"});
+                  {"name", "description", "camera", "material", "mesh", "instance", "scatter", "sphere_light", "sky",
+                   "effects"});
     Scene s;
     s.file = origin_;
     s.name = top.string("name", fs::path(origin_).stem().string());
     s.description = top.string("description", "");
+
+    // Named materials first, so meshes can refer to them.
+    auto materials = top.table_array("material");
+    for (std::size_t i = 0; i < materials.size(); ++i) {
+      TomlTable t(origin_, *materials[i], fmt::format("material[{}]", i), {"name", "albedo", "mirror"});
+      Material m;
+      m.name = t.string("name");
+      if (m.name.empty()) t.fail("name", "must not be empty");
+      if (material_names_.count(m.name))
+        t.fail("name", fmt::format("'{}' is already the name of another material; material names must be unique", m.name));
+      m.albedo = read_color(t, "albedo", m.albedo);
+      for (float a : m.albedo)
+        if (a > 1.0f) t.fail("albedo", "must not exceed 1 (a surface cannot reflect more light than it receives)");
+      m.mirror = t.boolean("mirror", false);
+      material_names_[m.name] = static_cast<std::int32_t>(s.materials.size());
+      s.materials.push_back(m);
+    }
 
     auto meshes = top.table_array("mesh");
     if (meshes.empty())
@@ -184,7 +202,7 @@ class SceneBuilder {
   // Reads one [[mesh]]; returns its `draw` flag.
   bool read_mesh(Scene& s, const toml::table& table, std::size_t index) {
     TomlTable t(origin_, table, fmt::format("mesh[{}]", index),
-                {"name", "obj", "generator", "seed", "params", "albedo", "draw"});
+                {"name", "obj", "generator", "seed", "params", "albedo", "material", "draw"});
     std::string name = t.string("name");
     if (name.empty()) t.fail("name", "must not be empty");
     if (mesh_names_.count(name))
@@ -246,12 +264,28 @@ class SceneBuilder {
       }
     }
     mesh.name = name;
+    if (t.has("albedo") && t.has("material"))
+      t.fail("material", "conflicts with 'albedo'; give the albedo in the [[material]] or drop the material");
     if (t.has("albedo")) {
       Material m;
       m.name = name;
       m.albedo = read_color(t, "albedo", {0.7f, 0.7f, 0.7f});
+      for (float a : m.albedo)
+        if (a > 1.0f) t.fail("albedo", "must not exceed 1 (a surface cannot reflect more light than it receives)");
       s.materials.push_back(m);
       mesh.material.assign(mesh.triangles.size(), static_cast<std::int32_t>(s.materials.size() - 1));
+    } else if (t.has("material")) {
+      std::string mat = t.string("material");
+      auto it = material_names_.find(mat);
+      if (it == material_names_.end()) {
+        std::vector<std::string> names;
+        for (auto& [n, i] : material_names_) names.push_back(n);
+        t.fail("material", names.empty()
+                               ? fmt::format("names an unknown material '{}'; the scene declares no [[material]]", mat)
+                               : fmt::format("names an unknown material '{}'; the scene's materials are: {}", mat,
+                                             fmt::join(names, ", ")));
+      }
+      mesh.material.assign(mesh.triangles.size(), it->second);
     }
     mesh_names_[name] = static_cast<std::uint32_t>(s.meshes.size());
     s.meshes.push_back(std::move(mesh));
@@ -336,6 +370,7 @@ class SceneBuilder {
   std::string origin_;
   const SceneOptions& opts_;
   std::map<std::string, std::uint32_t> mesh_names_;
+  std::map<std::string, std::int32_t> material_names_;  // [[material]] name -> index in Scene::materials
 };
 
 std::vector<std::string> embedded_scene_names() {
