@@ -12,6 +12,9 @@ PACKAGES=(
   libcli11-dev nlohmann-json3-dev libtomlplusplus-dev libfmt-dev
   #: optional: Boost.Compute (header-only) is the sortbench's reference GPU-library sort
   libboost-dev
+  #: optional: Embree 3, the CPU anchor of `raysort trace --reference embree` (CMake RAYSORT_EMBREE=AUTO
+  #: uses it when found; the build and tests work without it)
+  libembree-dev
 )
 
 SUDO=""

@@ -2,19 +2,26 @@
 // on the device and check every hit against the host reference (the same traversal source).
 // --variant robust|fast picks the traversal arithmetic (docs/trace.md); --variant both runs the two
 // back to back on every batch and prints the robust/fast speed ratio and how many hits differ.
+// --reference embree traces every batch with Embree 3 as well, side by side in this process, and
+// prints its MRays/s, ours/Embree, and how many hits agree (docs/trace.md, "Embree anchor").
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <chrono>
 #include <numeric>
+#include <optional>
 
 #include "app/commands.h"
 #include "app/options.h"
 #include "bvh/bvh.h"
 #include "cl/runtime.h"
+#ifdef RAYSORT_HAVE_EMBREE
+#include "embree/embree_reference.h"
+#endif
 #include "render/batches.h"
 #include "scene/load.h"
 #include "trace/tracer.h"
+#include "util/error.h"
 
 namespace raysort {
 
@@ -26,7 +33,27 @@ struct TraceArgs {
   unsigned reps = 3;
   unsigned warmup = 1;
   std::string variant = "robust";
+  std::string reference;  // "" or "embree"
 };
+
+#ifdef RAYSORT_HAVE_EMBREE
+// Embree's run of one batch, timed as ours is (warmup, then the median over reps).
+struct EmbreeRun {
+  EmbreeScene::Run run;
+  double mrays = 0.0;
+  std::vector<HitAgreement> agreement;  // one per variant run, in the same order
+};
+
+EmbreeRun trace_embree(const EmbreeScene& embree, const ReferencedBatch& rb, const std::vector<Tracer::Run*>& ours,
+                       const TraceArgs& args) {
+  const RayBatch& b = rb.batch;
+  EmbreeRun e;
+  e.run = embree.run(b.rays, b.any_hit(), args.warmup, args.reps);
+  e.mrays = e.run.median_ms > 0 ? static_cast<double>(b.size()) / (e.run.median_ms * 1e3) : 0.0;
+  for (const Tracer::Run* r : ours) e.agreement.push_back(compare_with_embree(r->hits, e.run.hits, b.any_hit()));
+  return e;
+}
+#endif
 
 struct VariantRun {
   Tracer::Run run;
@@ -62,9 +89,14 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
 }
 
 int run_trace(const TraceArgs& args) {
+  const bool with_embree = args.reference == "embree";
+#ifndef RAYSORT_HAVE_EMBREE
+  if (with_embree) throw Error("this build has no Embree: install libembree-dev and reconfigure");
+#endif
   Runtime rt(select_device(args.common.device));
   fmt::print("device   {} ({}, {})\n", rt.info().name, rt.info().platform_name, rt.info().driver_version);
   std::size_t total_mismatches = 0;
+  std::size_t disagreeing_batches = 0;
   for (const auto& scene_name : args.scenes) {
     auto t0 = std::chrono::steady_clock::now();
     Scene scene = load_scene(scene_name, args.common.scene_options());
@@ -89,13 +121,28 @@ int run_trace(const TraceArgs& args) {
     std::vector<Tracer> tracers;
     for (TraceVariant v : variants) tracers.emplace_back(rt, bvh, v);
     fmt::print("kernels  built in {:.0f} ms (reported apart from trace times)\n", rt.build_ms() - build_before);
+#ifdef RAYSORT_HAVE_EMBREE
+    std::optional<EmbreeScene> embree;
+    if (with_embree) {
+      embree.emplace(tris);
+      fmt::print("embree   Embree {}, {} threads, rtcIntersect1 / rtcOccluded1, build quality high: BVH built in {:.0f} ms "
+                 "(ours {:.0f} ms = {:.2f}x Embree's)\n",
+                 EmbreeScene::version(), embree->threads(), embree->build_ms(), bvh.build_ms,
+                 embree->build_ms() > 0 ? bvh.build_ms / embree->build_ms() : 0.0);
+    }
+    const char* emb_head = with_embree ? "   emb ms  emb MR/s" : "";
+#else
+    const char* emb_head = "";
+#endif
     if (both) {
       fmt::print("variant  fast and robust, back to back on each batch\n");
-      fmt::print("{:<10} {:>10} {:>9} {:>9} {:>9} {:>9} {:>8} {:>10} {:>8} {:>11}\n", "batch", "rays", "fast ms",
-                 "fast MR/s", "rob ms", "rob MR/s", "rob/fast", "hits", "tri diff", "mismatches");
+      fmt::print("{:<10} {:>10} {:>9} {:>9} {:>9} {:>9} {:>8} {:>10} {:>8} {:>11}{}{}\n", "batch", "rays", "fast ms",
+                 "fast MR/s", "rob ms", "rob MR/s", "rob/fast", "hits", "tri diff", "mismatches", emb_head,
+                 with_embree ? " fast/emb  rob/emb  same %  +ties %" : "");
     } else {
       fmt::print("variant  {}\n", trace_variant_name(variants[0]));
-      fmt::print("{:<10} {:>10} {:>10} {:>10} {:>10} {:>11}\n", "batch", "rays", "ms", "MRays/s", "hits", "mismatches");
+      fmt::print("{:<10} {:>10} {:>10} {:>10} {:>10} {:>11}{}{}\n", "batch", "rays", "ms", "MRays/s", "hits", "mismatches",
+                 emb_head, with_embree ? " ours/emb  same %  +ties %" : "");
     }
 
     // The pipeline of DESIGN.md section 1, as far as the scene's effects ask.
@@ -105,25 +152,62 @@ int run_trace(const TraceArgs& args) {
       for (Tracer& tracer : tracers) runs.push_back(trace_variant(tracer, bvh, rb, args));
       std::size_t mismatches = 0;
       for (const VariantRun& r : runs) mismatches += r.mismatches;
+      // Embree's columns: its median ms and MRays/s, ours/Embree per variant, the lowest agreement.
+      std::string emb_cols;
+      std::vector<std::string> emb_notes;
+#ifdef RAYSORT_HAVE_EMBREE
+      if (embree) {
+        std::vector<Tracer::Run*> ours;
+        for (VariantRun& r : runs) ours.push_back(&r.run);
+        EmbreeRun e = trace_embree(*embree, rb, ours, args);
+        emb_cols = fmt::format(" {:>8.2f} {:>9.2f}", e.run.median_ms, e.mrays);
+        double worst = 1.0, worst_ties = 1.0;
+        bool below = false;
+        for (std::size_t i = 0; i < runs.size(); ++i) {
+          emb_cols += fmt::format(" {:>8.3f}", e.mrays > 0 ? runs[i].mrays / e.mrays : 0.0);
+          const HitAgreement& a = e.agreement[i];
+          worst = std::min(worst, a.fraction());
+          worst_ties = std::min(worst_ties, a.fraction_with_ties());
+          below = below || a.fraction_with_ties() < kEmbreeMinAgreement;
+          if (a.differences())
+            emb_notes.push_back(fmt::format("{:<10} {}{} of {} rays differ from Embree: {}", "",
+                                            both ? fmt::format("{}: ", trace_variant_name(tracers[i].variant())) : "",
+                                            a.differences(), a.rays, a.describe()));
+        }
+        emb_cols += fmt::format(" {:>7.3f} {:>7.3f}", 100.0 * worst, 100.0 * worst_ties);
+        if (below) {
+          ++disagreeing_batches;
+          emb_notes.push_back(fmt::format("{:<10} below the required {:.1f} % agreement with Embree (same triangle or a tie)",
+                                          "", 100.0 * kEmbreeMinAgreement));
+        }
+      }
+#endif
       if (both) {
         const VariantRun &f = runs[0], &r = runs[1];
-        fmt::print("{:<10} {:>10} {:>9.2f} {:>9.2f} {:>9.2f} {:>9.2f} {:>8.3f} {:>10} {:>8} {:>11}\n", b.name, b.size(),
+        fmt::print("{:<10} {:>10} {:>9.2f} {:>9.2f} {:>9.2f} {:>9.2f} {:>8.3f} {:>10} {:>8} {:>11}{}\n", b.name, b.size(),
                    f.run.median_ms, f.mrays, r.run.median_ms, r.mrays, f.mrays > 0 ? r.mrays / f.mrays : 0.0,
-                   r.hit_count, count_triangle_differences(f.run.hits, r.run.hits), mismatches);
+                   r.hit_count, count_triangle_differences(f.run.hits, r.run.hits), mismatches, emb_cols);
       } else {
         const VariantRun& r = runs[0];
-        fmt::print("{:<10} {:>10} {:>10.2f} {:>10.2f} {:>10} {:>11}\n", b.name, b.size(), r.run.median_ms, r.mrays,
-                   r.hit_count, mismatches);
+        fmt::print("{:<10} {:>10} {:>10.2f} {:>10.2f} {:>10} {:>11}{}\n", b.name, b.size(), r.run.median_ms, r.mrays,
+                   r.hit_count, mismatches, emb_cols);
       }
+      for (const auto& note : emb_notes) fmt::print("{}\n", note);
       std::fflush(stdout);
       total_mismatches += mismatches;
     }
   }
+  int code = 0;
   if (total_mismatches > 0) {
     fmt::print(stderr, "raysort: {} hits differ from the host reference\n", total_mismatches);
-    return 1;
+    code = 1;
   }
-  return 0;
+  if (disagreeing_batches > 0) {
+    fmt::print(stderr, "raysort: {} batches agree with Embree on fewer than 99.9 % of rays (same triangle or a tie)\n",
+               disagreeing_batches);
+    code = 1;
+  }
+  return code;
 }
 
 }  // namespace
@@ -141,6 +225,10 @@ void register_trace_command(CLI::App& app) {
                   "traversal arithmetic: robust (watertight), fast (Moller-Trumbore), or both side by side")
       ->check(CLI::IsMember({"robust", "fast", "both"}))
       ->capture_default_str();
+  cmd->add_option("--reference", args->reference,
+                  "also trace every batch with this CPU reference, side by side: embree (Embree 3, all host threads; "
+                  "needs a build with libembree-dev)")
+      ->check(CLI::IsMember({"embree"}));
   cmd->callback([args] { set_command_exit_code(run_trace(*args)); });
 }
 

@@ -1,0 +1,220 @@
+// The Embree anchor (issue 9, docs/trace.md "Embree anchor"). With Embree (RAYSORT_HAVE_EMBREE):
+// Embree's hits agree with ours on the same triangle for >= 99.9 % of the rays of every batch of
+// the procedural scenes, for both traversal variants, and `raysort trace --reference embree` runs.
+// Without it: `--reference embree` fails with one clear message and a non-zero exit.
+#include <gtest/gtest.h>
+#include <fcntl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <vector>
+
+#include "bvh/bvh.h"
+#include "render/batches.h"
+#include "scene/load.h"
+#include "trace/tracer.h"
+#ifdef RAYSORT_HAVE_EMBREE
+#include "embree/embree_reference.h"
+#endif
+
+namespace fs = std::filesystem;
+
+namespace raysort {
+
+namespace {
+
+struct CliResult {
+  int code = -1;
+  std::string out, err;
+};
+
+// Runs the raysort binary with `args`, capturing stdout and stderr.
+CliResult run_cli(const std::vector<std::string>& args) {
+  const std::string stem = "raysort_embree_test_" + std::to_string(::getpid());
+  const fs::path out_file = fs::temp_directory_path() / (stem + ".out");
+  const fs::path err_file = fs::temp_directory_path() / (stem + ".err");
+  pid_t pid = fork();
+  if (pid == 0) {
+    std::string bin = RAYSORT_BINARY;
+    std::vector<std::string> copy = args;
+    std::vector<char*> argv{bin.data()};
+    for (auto& a : copy) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    int out = ::open(out_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    int err = ::open(err_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    ::dup2(out, 1);
+    ::dup2(err, 2);
+    ::execv(bin.c_str(), argv.data());
+    _exit(127);
+  }
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  CliResult r;
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  std::ifstream out(out_file), err(err_file);
+  r.out.assign(std::istreambuf_iterator<char>(out), {});
+  r.err.assign(std::istreambuf_iterator<char>(err), {});
+  fs::remove(out_file);
+  fs::remove(err_file);
+  return r;
+}
+
+}  // namespace
+
+#ifdef RAYSORT_HAVE_EMBREE
+
+namespace {
+
+RsRay ray(float ox, float oy, float oz, float dx, float dy, float dz, float tmax = RS_T_FAR, float tmin = 0.0f) {
+  RsRay r{};
+  r.o[0] = ox, r.o[1] = oy, r.o[2] = oz, r.tmin = tmin;
+  r.d[0] = dx, r.d[1] = dy, r.d[2] = dz, r.tmax = tmax;
+  return r;
+}
+
+// Every batch of the scene's pipeline, for both variants: same triangle for >= 99.9 % of rays.
+void expect_agreement(const Scene& scene, const RayGenOptions& gen) {
+  Scene::Flat tris = scene.flatten();
+  Bvh bvh = build_bvh(tris);
+  EmbreeScene embree(tris);
+  bool primary = false, shadow = false, bounce = false;
+  for (const ReferencedBatch& rb : generate_batches(scene, tris, bvh, gen)) {
+    const RayBatch& b = rb.batch;
+    primary |= b.kind == BatchKind::Primary;
+    shadow |= b.kind == BatchKind::Shadow;
+    bounce |= b.kind == BatchKind::Bounce;
+    ASSERT_GE(b.size(), 1000u) << scene.name << " " << b.name << ": too few rays for a 0.1 % tolerance";
+    std::vector<RsHit> emb = embree.trace(b.rays, b.any_hit());
+    for (TraceVariant v : {TraceVariant::Fast, TraceVariant::Robust}) {
+      // generate_batches' reference hits are the fast variant's.
+      std::vector<RsHit> ours = v == TraceVariant::Fast ? rb.reference_hits
+                                                        : trace_reference(bvh, b.rays, nullptr, b.any_hit(), nullptr, v);
+      HitAgreement a = compare_with_embree(ours, emb, b.any_hit());
+      EXPECT_GE(a.fraction(), kEmbreeMinAgreement)
+          << scene.name << " " << b.name << " " << trace_variant_name(v) << ": " << a.describe();
+      // Same triangle, same distance: the ray semantics match (not just the triangle ids).
+      if (!b.any_hit()) {
+        EXPECT_LT(a.max_rel_dt, 1e-4) << scene.name << " " << b.name << " " << trace_variant_name(v);
+      }
+      std::size_t hits = 0;
+      for (const RsHit& h : ours) hits += h.tri != RS_NO_HIT;
+      if (!b.any_hit()) {
+        EXPECT_GT(hits, 0u) << scene.name << " " << b.name << ": a batch that hits nothing tests little";
+      }
+    }
+  }
+  EXPECT_TRUE(primary && shadow && bounce) << scene.name << ": expected primary, shadow and bounce batches";
+}
+
+}  // namespace
+
+TEST(Embree, HandCheckedRaysMatchOurs) {
+  // A unit quad at z = 0 and a smaller one behind it at z = -1.
+  Scene s;
+  s.name = "two-quads";
+  Mesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0.25f, 0.25f, -1}, {0.75f, 0.25f, -1}, {0.75f, 0.75f, -1}, {0.25f, 0.75f, -1}};
+  m.triangles = {{0, 1, 2}, {0, 2, 3}, {4, 5, 6}, {4, 6, 7}};
+  s.meshes.push_back(m);
+  Scene::Flat tris = s.flatten();
+  Bvh bvh = build_bvh(tris);
+  EmbreeScene embree(tris, 2);
+  EXPECT_EQ(embree.threads(), 2u);
+  std::vector<RsRay> rays = {
+      ray(0.3f, 0.6f, 1.0f, 0, 0, -1),             // front quad at t = 1
+      ray(0.6f, 0.3f, -2.0f, 0, 0, 1),             // from behind (two-sided): back quad at t = 1
+      ray(2.0f, 2.0f, 1.0f, 0, 0, -1),             // misses
+      ray(0.3f, 0.6f, 1.0f, 0, 0, -1, 0.5f),       // tmax before the front quad: miss
+      ray(0.3f, 0.6f, 1.0f, 0, 0, -1, RS_T_FAR, 1.5f),  // tmin past the front quad: the back one at t = 2
+      ray(0.3f, 0.4f, 1.0f, 0, 0, -1, 1.8f, 1.5f),  // both quads outside (tmin, tmax): miss
+      ray(0.1f, 0.9f, 5.0f, -0.0f, 0.0f, -1),      // axis-parallel with a -0 component
+      ray(0.5f, 0.5f, 0.5f, 0, 0, 1),              // pointing away: miss
+  };
+  for (TraceVariant v : {TraceVariant::Fast, TraceVariant::Robust}) {
+    std::vector<RsHit> ours = trace_reference(bvh, rays, nullptr, false, nullptr, v);
+    std::vector<RsHit> emb = embree.trace(rays, false);
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      EXPECT_EQ(ours[i].tri, emb[i].tri) << "ray " << i << " " << trace_variant_name(v);
+      if (ours[i].tri != RS_NO_HIT && ours[i].tri == emb[i].tri) {
+        EXPECT_NEAR(ours[i].t, emb[i].t, 1e-6f) << "ray " << i;
+        EXPECT_NEAR(ours[i].u, emb[i].u, 1e-6f) << "ray " << i;
+        EXPECT_NEAR(ours[i].v, emb[i].v, 1e-6f) << "ray " << i;
+      }
+    }
+    EXPECT_EQ(emb[4].t, 2.0f);
+    HitAgreement a = compare_with_embree(ours, emb, false);
+    EXPECT_EQ(a.same, rays.size()) << a.describe();
+    // Shadow rays: occluded or not, as ours says.
+    std::vector<RsHit> ours_any = trace_reference(bvh, rays, nullptr, true, nullptr, v);
+    std::vector<RsHit> emb_any = embree.trace(rays, true);
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      EXPECT_EQ(ours_any[i].tri != RS_NO_HIT, emb_any[i].tri != RS_NO_HIT) << "shadow ray " << i;
+      EXPECT_TRUE(emb_any[i].tri == RS_NO_HIT || emb_any[i].tri == kEmbreeOccluded);
+    }
+  }
+}
+
+TEST(Embree, AgreementCountsEveryKind) {
+  // same; tie inside both triangles; tie on an edge (u or v or 1-u-v = 0); other triangle farther;
+  // ours hit / Embree missed; Embree hit / ours missed; both missed.
+  std::vector<RsHit> ours = {{1, 0, 0.2f, 0.2f}, {1, 1, 0.3f, 0.3f}, {1, 5, 0.0f, 0.5f}, {1, 1, 0.3f, 0.3f},
+                             {1, 2, 0.2f, 0.2f}, {9, RS_NO_HIT, 0, 0},      {9, RS_NO_HIT, 0, 0}};
+  std::vector<RsHit> emb = {{1, 0, 0.2f, 0.2f}, {1, 2, 0.3f, 0.3f}, {1, 6, 0.5f, 0.0f}, {2, 3, 0.3f, 0.3f},
+                            {9, RS_NO_HIT, 0, 0}, {3, 4, 0.2f, 0.2f},     {9, RS_NO_HIT, 0, 0}};
+  HitAgreement a = compare_with_embree(ours, emb, false);
+  EXPECT_EQ(a.rays, 7u);
+  EXPECT_EQ(a.same, 2u);
+  EXPECT_EQ(a.tie_overlap, 1u);
+  EXPECT_EQ(a.tie_edge, 1u);
+  EXPECT_EQ(a.other_tri, 1u);
+  EXPECT_EQ(a.ours_only, 1u);
+  EXPECT_EQ(a.embree_only, 1u);
+  EXPECT_EQ(a.differences(), 5u);
+  EXPECT_DOUBLE_EQ(a.fraction_with_ties(), 4.0 / 7.0);
+  EXPECT_NE(a.describe().find("shared edge"), std::string::npos) << a.describe();
+  EXPECT_NE(a.describe().find("coplanar"), std::string::npos) << a.describe();
+  HitAgreement s = compare_with_embree(ours, emb, true);  // shadow: only occluded vs free counts
+  EXPECT_EQ(s.same, 5u);
+  EXPECT_EQ(s.ours_only, 1u);
+  EXPECT_EQ(s.embree_only, 1u);
+}
+
+TEST(Embree, CornellAgreesOnPrimaryShadowAndBounce) {
+  RayGenOptions gen;
+  gen.width = 96;
+  gen.height = 72;
+  gen.spp = 2;
+  expect_agreement(load_scene("cornell"), gen);
+}
+
+TEST(Embree, DetailRoomAgreesOnPrimaryShadowAndBounce) {
+  RayGenOptions gen;
+  gen.width = 160;
+  gen.height = 90;
+  expect_agreement(load_scene("detail-room"), gen);
+}
+
+TEST(Embree, TraceCommandComparesWithEmbree) {
+  CliResult r = run_cli({"trace", "--scene", "cornell", "--resolution", "64x48", "--variant", "both", "--reps", "1",
+                         "--reference", "embree"});
+  EXPECT_EQ(r.code, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find("Embree 3."), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("+ties %"), std::string::npos) << r.out;
+}
+
+#else  // no Embree in this build
+
+TEST(Embree, TraceRefusesWithoutEmbree) {
+  CliResult r = run_cli({"trace", "--scene", "cornell", "--resolution", "32x18", "--reference", "embree"});
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.err.find("this build has no Embree: install libembree-dev and reconfigure"), std::string::npos) << r.err;
+  EXPECT_EQ(r.out.find("batch"), std::string::npos) << "refused before any tracing:\n" << r.out;
+}
+
+#endif
+
+}  // namespace raysort
