@@ -12,7 +12,7 @@ BENCH_SCENES ?= cornell,detail-room,landscape,multi-instance
 BENCH_RESOLUTION ?= 320x180
 BENCH_OUT ?= results/bench-quick
 
-.PHONY: all deps configure build test bench clean fuzz test-sanitize
+.PHONY: all deps configure build test bench clean fuzz test-sanitize test-slurm
 
 all: build
 
@@ -47,6 +47,15 @@ fuzz:
 # test binary that needs no OpenCL device, and the device-free tests of bench_test and cli_test.
 test-sanitize: deps
 	bash scripts/test-sanitize.sh
+
+# Opt-in, not part of `make test` (docs/slurm.md): brings up a one-node Slurm cluster on this
+# machine (munge, slurmctld, slurmd from Debian, installed by the script; needs root or sudo), runs
+# the quick preset at 48x27 as SLURM_SHARDS shards plus the merge job, and checks the merged result
+# against a single-machine run cell for cell. The daemons are stopped on every exit.
+SLURM_SHARDS ?= 3
+test-slurm: deps
+	$(MAKE) build
+	bash tests/slurm/slurm-test.sh $(BUILD)/raysort $(SLURM_SHARDS)
 
 clean:
 	rm -rf $(BUILD)

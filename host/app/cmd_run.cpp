@@ -3,7 +3,9 @@
 
 #include "app/commands.h"
 #include "bench/runner.h"
+#include "bench/shard.h"
 #include "encode/encode.h"
+#include "util/error.h"
 
 namespace raysort {
 
@@ -19,6 +21,8 @@ struct RunArgs {
   float lambda = -1, twopoint = -1;
   int direction_bits = -1;
   double timeout_s = 0;
+  std::string shard;
+  unsigned shard_plan = 0;
   RunOptions opts;
 };
 }  // namespace
@@ -48,6 +52,12 @@ void register_run_command(CLI::App& app) {
   cmd->add_option("--out", a->opts.out, "result folder (default results/<device>/<preset>-<hash>)");
   cmd->add_option("--device", a->opts.device, "device index, cpu, gpu or part of its name (env RAYSORT_DEVICE)");
   cmd->add_option("--scene-root", a->opts.scene_root, "folder of the real scenes (env RAYSORT_SCENE_ROOT)");
+  auto* shard_opt = cmd->add_option("--shard", a->shard,
+                                    "run only shard i of N (i/N, numbered from 1: 1/4 ... 4/4), a deterministic share "
+                                    "of the cells balanced by estimated cost; merge the shards with raysort merge");
+  cmd->add_option("--shard-plan", a->shard_plan,
+                  "print which cells each of N shards would run, with their estimated costs, and exit")
+      ->excludes(shard_opt);
   cmd->callback([a, cmd, spp_opt, reps_opt, seed_opt] {
     MatrixSpec spec;
     if (!a->preset.empty()) {
@@ -84,6 +94,13 @@ void register_run_command(CLI::App& app) {
       if (opt->count() > 0 && opt->get_name() != "--help")
         for (auto& r : opt->results()) line += " " + opt->get_name() + " " + r;
     a->opts.command = line;
+    if (!a->shard.empty()) a->opts.shard = ShardSpec::parse(a->shard);
+    if (cmd->count("--shard-plan")) {
+      if (a->shard_plan == 0) throw Error("--shard-plan N: the number of shards must be at least 1");
+      validate_matrix(spec);
+      fmt::print("{}", format_plan(plan_matrix_shards(spec, a->opts.scene_root, a->shard_plan), a->shard_plan));
+      return;
+    }
     RunSummary s = run_matrix(spec, a->opts);
     fmt::print("{} cells run, {} already done (skipped), {} failed; results in {}\n", s.cells_run, s.cells_skipped,
                s.cells_failed, s.out_dir);

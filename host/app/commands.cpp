@@ -18,6 +18,7 @@ void register_commands(CLI::App& app) {
   register_encode_command(app);
   register_run_command(app);
   register_compare_command(app);
+  register_merge_command(app);
 }
 
 }  // namespace raysort

@@ -46,6 +46,34 @@ void read_cells(const std::string& dir, std::map<std::string, CellRecord>& cells
   }
 }
 
+// "i/N" of a shard's meta.json, or "" for a full run.
+std::string shard_name(const nlohmann::json& meta) {
+  if (!meta.contains("shard")) return "";
+  return fmt::format("{}/{}", meta["shard"].value("index", 0u), meta["shard"].value("count", 0u));
+}
+
+// A shard resumes only into its own folder, with the same plan (bench/shard.h).
+void check_same_shard(const nlohmann::json& old, const nlohmann::json& meta, const std::string& dir) {
+  const std::string was = shard_name(old), now = shard_name(meta);
+  if (was == now) {
+    if (!was.empty() && old["shard"].value("plan_hash", "") != meta["shard"].value("plan_hash", ""))
+      throw Error(fmt::format("{} holds shard {} of another plan of this matrix (the scene files changed since it "
+                              "started); choose another --out folder (or delete it to start over)",
+                              dir, was));
+    return;
+  }
+  if (was.empty())
+    throw Error(fmt::format("{} holds a full (unsharded) run of this matrix, not shard {}; give each shard its own "
+                            "--out folder",
+                            dir, now));
+  if (now.empty())
+    throw Error(fmt::format("{} holds shard {} of this matrix; resume it with --shard {}, or choose another --out "
+                            "folder for a full run",
+                            dir, was, was));
+  throw Error(fmt::format("{} holds shard {} of this matrix, not shard {}; give each shard its own --out folder", dir,
+                          was, now));
+}
+
 }  // namespace
 
 ResultSet ResultSet::open_for_run(const std::string& dir, const nlohmann::json& meta) {
@@ -68,6 +96,7 @@ ResultSet ResultSet::open_for_run(const std::string& dir, const nlohmann::json& 
       throw Error(fmt::format("{} holds results of a different matrix configuration; choose another --out folder "
                               "(or delete it to start over)",
                               dir));
+    check_same_shard(old, meta, dir);
     read_cells(dir, rs.cells_);
     // Keep the original meta (first start), but record that the run was resumed.
     rs.meta_ = old;
@@ -102,6 +131,20 @@ void ResultSet::add(const CellRecord& cell) {
   write_file_atomically((fs::path(dir_) / "cells" / cell_file_name(cell.id())).string(), j.dump(2) + "\n");
   cells_[cell.id()] = cell;
   write_views();
+}
+
+void ResultSet::add_all(const std::vector<CellRecord>& cells) {
+  for (const auto& cell : cells) {
+    nlohmann::json j = cell;
+    write_file_atomically((fs::path(dir_) / "cells" / cell_file_name(cell.id())).string(), j.dump(2) + "\n");
+    cells_[cell.id()] = cell;
+  }
+  write_views();
+}
+
+void ResultSet::set_meta(const std::string& key, const nlohmann::json& value) {
+  meta_[key] = value;
+  write_views();  // rewrites meta.json
 }
 
 std::vector<CellRecord> ResultSet::cells() const {

@@ -16,7 +16,8 @@ namespace raysort {
 class ResultSet {
  public:
   // Opens DIR for a run with this meta, creating it if needed. If DIR already holds a result set,
-  // its "matrix" entry must equal meta["matrix"] (same configuration) or an Error says so;
+  // its "matrix" entry must equal meta["matrix"] (same configuration), and its "shard" entry
+  // (bench/shard.h) name the same shard of the same plan, or an Error says so;
   // its finished cells are kept and reported by has().
   static ResultSet open_for_run(const std::string& dir, const nlohmann::json& meta);
   // Reads a finished (or partial) result set. Throws Error for a missing set or another format.
@@ -26,6 +27,10 @@ class ResultSet {
   const CellRecord* find(const std::string& cell_id) const;
   // Writes the cell's file atomically, then the regenerated views.
   void add(const CellRecord& cell);
+  // The same for many cells, with the views written once at the end (raysort merge).
+  void add_all(const std::vector<CellRecord>& cells);
+  // Sets one entry of meta.json and rewrites it (a shard's "absent_cells").
+  void set_meta(const std::string& key, const nlohmann::json& value);
   std::vector<CellRecord> cells() const;  // sorted by id
   const nlohmann::json& meta() const { return meta_; }
   const std::string& dir() const { return dir_; }

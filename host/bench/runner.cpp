@@ -15,6 +15,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <set>
 
 #include "bench/metrics.h"
 #include "bench/result_set.h"
@@ -102,10 +103,16 @@ std::vector<std::uint64_t> widen(const std::vector<T>& v) {
 
 }  // namespace
 
-std::string default_result_dir(const MatrixSpec& spec, const std::string& device_slug) {
+std::string default_result_dir(const MatrixSpec& spec, const std::string& device_slug, const ShardSpec& shard) {
   const std::string matrix = spec.to_json().dump();
   std::string hash = fnv1a_hex(matrix.data(), matrix.size()).substr(0, 8);
-  return fmt::format("results/{}/{}-{}", device_slug, spec.preset.empty() ? "run" : spec.preset, hash);
+  std::string dir = fmt::format("results/{}/{}-{}", device_slug, spec.preset.empty() ? "run" : spec.preset, hash);
+  return shard.active() ? fmt::format("{}-shard{}of{}", dir, shard.index, shard.count) : dir;
+}
+
+std::vector<PlannedCell> plan_matrix_shards(const MatrixSpec& spec, const std::string& scene_root, unsigned count) {
+  return plan_shards(matrix_cells(spec, [&](const std::string& scene) { return load_scene_facts(scene, spec, scene_root); }),
+                     count);
 }
 
 namespace {
@@ -137,10 +144,25 @@ void check_scenes_before_work(const MatrixSpec& spec, const RunOptions& opts) {
 RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
   validate_matrix(spec);
   check_scenes_before_work(spec, opts);
+  // A shard plans the whole matrix (every shard computes the same plan) and keeps its own cells;
+  // the baseline of a batch is measured by every shard that has a cell of it (speedups compare
+  // with a NoSort trace on the same machine), and recorded by the shard that owns the NoSort cell.
+  std::vector<PlannedCell> plan;
+  std::set<std::string> mine, mine_scenes, mine_batches;  // cell ids; scenes; "scene/batch/variant"
+  if (opts.shard.active()) {
+    plan = plan_matrix_shards(spec, opts.scene_root, opts.shard.count);
+    for (const auto& c : plan)
+      if (c.shard == opts.shard.index) {
+        mine.insert(c.id);
+        mine_scenes.insert(c.scene);
+        mine_batches.insert(c.scene + "/" + c.batch + "/" + c.variant);
+      }
+  }
+  auto in_shard = [&](const std::string& id) { return !opts.shard.active() || mine.count(id) > 0; };
   Runtime rt(select_device(opts.device));
   const DeviceInfo& dev = rt.info();
   RunSummary summary;
-  summary.out_dir = opts.out.empty() ? default_result_dir(spec, dev.slug()) : opts.out;
+  summary.out_dir = opts.out.empty() ? default_result_dir(spec, dev.slug(), opts.shard) : opts.out;
 
   nlohmann::json meta = {
       {"format_version", kResultFormatVersion},
@@ -163,8 +185,11 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
       {"date", utc_now()},
       {"seeds", {{"rays", spec.seed}}},
   };
+  if (opts.shard.active()) meta["shard"] = shard_meta(spec, opts.shard, plan);
   ResultSet results = ResultSet::open_for_run(summary.out_dir, meta);
-  fmt::print(stderr, "raysort run: {} on {}; results in {}\n", spec.preset.empty() ? "custom matrix" : spec.preset,
+  fmt::print(stderr, "raysort run: {}{} on {}; results in {}\n", spec.preset.empty() ? "custom matrix" : spec.preset,
+             opts.shard.active() ? fmt::format(", shard {} ({} of {} cells)", opts.shard.str(), mine.size(), plan.size())
+                                 : "",
              dev.name, summary.out_dir);
 
   // Cells per scene (the batch list is only known after generation; count requested ones).
@@ -176,6 +201,8 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
   for (auto& s : spec.scenes)
     progress.total += (spec.batches.empty() ? 3 : spec.batches.size()) * variant_names.size() *
                       (1 + encoders.size() * (spec.bits_for(s).size() + spec.top_bits.size()));
+  if (opts.shard.active()) progress.total = mine.size();
+  std::vector<std::string> absent;  // a shard's planned cells whose batch turned out not to exist
 
   const char* kill_env = std::getenv("RAYSORT_TEST_KILL_AFTER_CELLS");
   const std::size_t kill_after = kill_env ? std::strtoul(kill_env, nullptr, 10) : 0;
@@ -196,6 +223,7 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
 
   for (const auto& scene_name : spec.scenes) {
     if (g_interrupted) break;
+    if (opts.shard.active() && !mine_scenes.count(scene_name)) continue;
     Scene scene = load_scene(scene_name, scene_opts);
     Scene::Flat tris = scene.flatten();
     Bvh bvh = build_bvh(tris);
@@ -216,6 +244,16 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
       auto it = std::find_if(batches.begin(), batches.end(), [&](const ReferencedBatch& b) { return b.batch.name == batch_name; });
       if (it == batches.end()) {
         fmt::print(stderr, "note: scene {} has no batch {} (its effects do not imply it); skipped\n", scene_name, batch_name);
+        if (opts.shard.active()) {
+          std::size_t lost = 0;
+          for (const auto& c : plan)
+            if (c.shard == opts.shard.index && c.scene == scene_name && c.batch == batch_name) {
+              absent.push_back(c.id);
+              ++lost;
+            }
+          progress.total -= std::min(progress.total - progress.done, lost);
+          continue;
+        }
         progress.total -= std::min(progress.total - progress.done,
                                    variant_names.size() * (1 + encoders.size() * (spec.bits_for(scene_name).size() +
                                                                                   spec.top_bits.size())));
@@ -245,6 +283,7 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
         return static_cast<double>(leaks) * 1e6 / static_cast<double>(n);
       };
       for (const std::string& variant_name : variant_names) {
+        if (opts.shard.active() && !mine_batches.count(scene_name + "/" + batch_name + "/" + variant_name)) continue;
         const TraceVariant variant = parse_trace_variant(variant_name);
         Tracer& tracer = *tracers.at(variant_name);
         const std::vector<RsHit>& variant_reference = *references.at(variant_name);
@@ -298,14 +337,16 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
             c.status = "timeout";
             c.error = nosort_clock.message();
           }
-          ++progress.done;
-          if (!results.has(c.id())) {
-            results.add(c);
-            ++summary.cells_run;
-            summary.cells_failed += !c.ok();
+          if (in_shard(c.id())) {
+            ++progress.done;
+            if (!results.has(c.id())) {
+              results.add(c);
+              ++summary.cells_run;
+              summary.cells_failed += !c.ok();
+            }
+            progress.line(c.ok() ? fmt::format("{} {} NoSort: {:.2f} MRays/s", scene_name, batch_name, c.trace_mrays)
+                                 : fmt::format("{}: {}: {}", c.id(), c.status == "timeout" ? "TIMEOUT" : "FAILED", c.error));
           }
-          progress.line(c.ok() ? fmt::format("{} {} NoSort: {:.2f} MRays/s", scene_name, batch_name, c.trace_mrays)
-                               : fmt::format("{}: {}: {}", c.id(), c.status == "timeout" ? "TIMEOUT" : "FAILED", c.error));
         }
 
         for (Encoder e : encoders) {
@@ -318,6 +359,7 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
             CellRecord c;
             c.scene = scene_name, c.batch = batch_name, c.encoder = std::string(encoder_name(e)), c.bits = bits;
             c.top_bits = top, c.rays = n, c.variant = variant_name;
+            if (!in_shard(c.id())) continue;
             ++progress.done;
             if (results.has(c.id())) {
               ++summary.cells_skipped;
@@ -437,6 +479,12 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
   }
   std::signal(SIGINT, previous);
   std::signal(SIGTERM, SIG_DFL);
+  if (!absent.empty()) {
+    // raysort merge counts these as accounted for (no shard can produce them).
+    std::set<std::string> all(absent.begin(), absent.end());
+    for (const auto& id : results.meta().value("absent_cells", std::vector<std::string>{})) all.insert(id);
+    results.set_meta("absent_cells", std::vector<std::string>(all.begin(), all.end()));
+  }
   results.write_views();
   results.write_plots();
   summary.interrupted = g_interrupted;

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "bench/matrix.h"
+#include "bench/shard.h"
 
 namespace raysort {
 
@@ -15,6 +16,7 @@ struct RunOptions {
   std::string scene_root;  // for real scenes
   std::string out;         // result folder; empty: results/<device-slug>/<preset>-<matrix hash>
   std::string command;     // the command line, for meta.json
+  ShardSpec shard;         // --shard i/N: run only this shard's cells (bench/shard.h)
 };
 
 struct RunSummary {
@@ -25,7 +27,10 @@ struct RunSummary {
 
 RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts);
 
-// The default result folder for a matrix on a device.
-std::string default_result_dir(const MatrixSpec& spec, const std::string& device_slug);
+// The default result folder for a matrix (or one shard of it) on a device.
+std::string default_result_dir(const MatrixSpec& spec, const std::string& device_slug, const ShardSpec& shard = {});
+
+// The shard plan of a matrix (bench/shard.h), loading its scenes for their sizes and effects.
+std::vector<PlannedCell> plan_matrix_shards(const MatrixSpec& spec, const std::string& scene_root, unsigned count);
 
 }  // namespace raysort

@@ -1,0 +1,222 @@
+#include "bench/merge.h"
+
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <set>
+
+#include "bench/result_set.h"
+#include "util/error.h"
+
+namespace raysort {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// "resolution \"48x27\" vs \"320x180\"; reps 1 vs 3": the keys of two matrix entries that differ.
+std::string matrix_differences(const nlohmann::json& a, const nlohmann::json& b) {
+  std::set<std::string> keys;
+  for (auto& [k, v] : a.items()) keys.insert(k);
+  for (auto& [k, v] : b.items()) keys.insert(k);
+  std::string out;
+  for (const auto& k : keys) {
+    nlohmann::json va = a.value(k, nlohmann::json()), vb = b.value(k, nlohmann::json());
+    if (va != vb) out += fmt::format("{}{} {} vs {}", out.empty() ? "" : "; ", k, va.dump(), vb.dump());
+  }
+  return out;
+}
+
+std::string device_name(const nlohmann::json& meta) {
+  const auto& d = meta.value("device", nlohmann::json::object());
+  return fmt::format("'{}' (driver {})", d.value("name", "?"), d.value("driver", "?"));
+}
+
+std::string build_name(const nlohmann::json& meta) {
+  return fmt::format("raysort {} commit {}", meta.value("raysort_version", "?"), meta.value("git_commit", "?"));
+}
+
+struct Input {
+  std::string dir;
+  ResultSet set;
+  unsigned index = 0, count = 0;
+};
+
+}  // namespace
+
+MergeSummary merge_result_sets(const std::vector<std::string>& inputs, const std::string& out,
+                               const std::string& command) {
+  if (inputs.empty()) throw Error("raysort merge: name the shards' result folders to merge, e.g. shards/* -o merged");
+  std::error_code ec;
+  if (fs::exists(out, ec) && !(fs::is_directory(out, ec) && fs::is_empty(out, ec)))
+    throw Error(fmt::format("-o {}: the folder already exists and is not empty; merge into a new folder (merge never "
+                            "overwrites results)",
+                            out));
+
+  std::vector<std::string> problems;
+  std::vector<Input> sets;
+  for (const auto& dir : inputs) {
+    try {
+      ResultSet rs = ResultSet::load(dir);
+      const nlohmann::json& meta = rs.meta();
+      if (!meta.contains("shard")) {
+        problems.push_back(fmt::format("{} is not a shard (its meta.json has no \"shard\"); merge takes the result sets "
+                                       "of `raysort run ... --shard i/N`",
+                                       dir));
+        continue;
+      }
+      const unsigned index = meta["shard"].value("index", 0u), count = meta["shard"].value("count", 0u);
+      sets.push_back({dir, std::move(rs), index, count});
+    } catch (const Error& e) {
+      problems.push_back(e.what());
+    }
+  }
+
+  // Configuration: everything must match the first shard.
+  for (std::size_t i = 1; i < sets.size(); ++i) {
+    const Input& ref = sets[0];
+    const Input& in = sets[i];
+    const nlohmann::json &a = ref.set.meta(), &b = in.set.meta();
+    if (a.value("matrix", nlohmann::json()) != b.value("matrix", nlohmann::json()))
+      problems.push_back(fmt::format("{} ran another matrix than {} ({}); merge only the shards of one `raysort run` "
+                                     "command (the same options, each with its own --shard i/N)",
+                                     in.dir, ref.dir, matrix_differences(b["matrix"], a["matrix"])));
+    else if (in.count != ref.count)
+      problems.push_back(fmt::format("{} is shard {}/{} but {} is shard {}/{}; merge the shards of one --shard i/N "
+                                     "split",
+                                     in.dir, in.index, in.count, ref.dir, ref.index, ref.count));
+    else if (a["shard"].value("plan_hash", "") != b["shard"].value("plan_hash", ""))
+      problems.push_back(fmt::format("{} planned its shards differently from {} (the scene files differ between the "
+                                     "machines that ran them); run every shard against the same scene files",
+                                     in.dir, ref.dir));
+    if (a.value("device", nlohmann::json()) != b.value("device", nlohmann::json()))
+      problems.push_back(fmt::format("{} ran on device {} but {} on {}; one matrix is measured on one kind of device: "
+                                     "rerun that shard on the same kind of node (one Slurm partition)",
+                                     in.dir, device_name(b), ref.dir, device_name(a)));
+    if (build_name(a) != build_name(b))
+      problems.push_back(fmt::format("{} was run by {} but {} by {}; rerun that shard with the same raysort build",
+                                     in.dir, build_name(b), ref.dir, build_name(a)));
+  }
+  std::map<unsigned, std::string> shard_dir;  // shard index -> input folder
+  for (const auto& in : sets) {
+    auto [it, fresh] = shard_dir.emplace(in.index, in.dir);
+    if (!fresh)
+      problems.push_back(fmt::format("{} and {} are both shard {}/{}; pass each shard once", it->second, in.dir,
+                                     in.index, in.count));
+  }
+  if (!problems.empty() || sets.empty()) {
+    std::string text = fmt::format("cannot merge into {}:", out);
+    for (const auto& p : problems) text += "\n  - " + p;
+    throw Error(text);
+  }
+
+  // Coverage: every planned cell exactly once (or absent: its batch does not exist).
+  const nlohmann::json& plan = sets[0].set.meta()["shard"].value("plan", nlohmann::json::object());
+  std::map<std::string, const Input*> owner;
+  std::map<std::pair<std::string, std::string>, std::vector<std::string>> duplicates;  // (a, b) -> cells
+  std::map<std::string, std::vector<std::string>> unplanned;                           // dir -> cells
+  std::set<std::string> absent;
+  std::vector<CellRecord> cells;
+  for (const auto& in : sets) {
+    for (const auto& id : in.set.meta().value("absent_cells", std::vector<std::string>{})) absent.insert(id);
+    for (auto& c : in.set.cells()) {
+      const std::string id = c.id();
+      if (!plan.contains(id)) {
+        unplanned[in.dir].push_back(id);
+        continue;
+      }
+      auto [it, fresh] = owner.emplace(id, &in);
+      if (!fresh) {
+        duplicates[{it->second->dir, in.dir}].push_back(id);
+        continue;
+      }
+      cells.push_back(std::move(c));
+    }
+  }
+  for (const auto& [dir, ids] : unplanned)
+    problems.push_back(fmt::format("{} holds {} cell(s) the plan of this matrix does not have (e.g. {}); it is not a "
+                                   "shard of this run: remove those cells or that input",
+                                   dir, ids.size(), ids[0]));
+  for (const auto& [dirs, ids] : duplicates)
+    problems.push_back(fmt::format("{} and {} both hold {} cell(s) (e.g. {}); each cell must come from one shard: "
+                                   "merge each shard's own result set once",
+                                   dirs.first, dirs.second, ids.size(), ids[0]));
+  std::map<unsigned, std::vector<std::string>> missing;  // shard -> cells
+  std::map<unsigned, std::size_t> planned_per_shard;
+  for (const auto& [id, shard] : plan.items()) {
+    ++planned_per_shard[shard.get<unsigned>()];
+    if (!owner.count(id) && !absent.count(id)) missing[shard.get<unsigned>()].push_back(id);
+  }
+  const unsigned count = sets[0].count;
+  for (const auto& [shard, ids] : missing) {
+    auto it = shard_dir.find(shard);
+    if (it == shard_dir.end()) {
+      problems.push_back(fmt::format("no input is shard {}/{} ({} cells missing, e.g. {}); add its result folder to "
+                                     "the merge, or run it (`raysort run ... --shard {}/{}`)",
+                                     shard, count, ids.size(), ids[0], shard, count));
+      continue;
+    }
+    const Input& in = *std::find_if(sets.begin(), sets.end(), [&](const Input& s) { return s.dir == it->second; });
+    problems.push_back(fmt::format("{} (shard {}/{}) lacks {} of its {} cells (e.g. {}): the shard did not finish; "
+                                   "resume it by running its command again (`{}`), then merge again",
+                                   in.dir, shard, count, ids.size(), planned_per_shard[shard], ids[0],
+                                   in.set.meta().value("command", "raysort run ... --shard i/N")));
+  }
+  if (!problems.empty()) {
+    std::string text = fmt::format("cannot merge into {}:", out);
+    for (const auto& p : problems) text += "\n  - " + p;
+    throw Error(text);
+  }
+
+  // The merged meta: the first shard's, without what belonged to one shard, plus where it came from.
+  nlohmann::json meta = sets[0].set.meta();
+  nlohmann::json from = nlohmann::json::array();
+  for (const auto& [index, dir] : shard_dir) {
+    const auto& m = std::find_if(sets.begin(), sets.end(), [&](const Input& s) { return s.dir == dir; })->set.meta();
+    from.push_back({{"dir", dir},
+                    {"shard", fmt::format("{}/{}", index, count)},
+                    {"command", m.value("command", "")},
+                    {"date", m.value("date", "")},
+                    {"host_cpu", m.value("host_cpu", "")},
+                    {"resumed", m.value("resumed", 0)}});
+  }
+  for (const char* key : {"shard", "resumed", "fingerprints", "absent_cells"}) meta.erase(key);
+  meta["command"] = command;
+  meta["merged_from"] = from;
+  meta["sharding"] = {{"count", count}, {"plan_hash", sets[0].set.meta()["shard"].value("plan_hash", "")}};
+  if (!absent.empty()) meta["absent_cells"] = std::vector<std::string>(absent.begin(), absent.end());
+
+  // Built beside OUT (same file system, so the rename is atomic), then renamed into place.
+  fs::path target = fs::absolute(fs::path(out).lexically_normal());
+  if (target.filename().empty()) target = target.parent_path();  // "merged/" names the folder "merged"
+  const fs::path parent = target.parent_path();
+  fs::create_directories(parent, ec);
+  if (ec) throw Error(fmt::format("-o {}: cannot create its parent folder ({})", out, ec.message()));
+  const fs::path tmp = parent / fmt::format(".{}.merging-{}", target.filename().string(), ::getpid());
+  fs::remove_all(tmp, ec);
+  try {
+    ResultSet merged = ResultSet::open_for_run(tmp.string(), meta);
+    merged.add_all(cells);
+    merged.write_plots();
+    if (fs::exists(target)) fs::remove(target);  // an empty folder (checked above)
+    fs::rename(tmp, target);
+  } catch (const fs::filesystem_error& e) {
+    fs::remove_all(tmp, ec);
+    throw Error(fmt::format("-o {}: cannot write the merged result set ({}); nothing was written", out, e.what()));
+  } catch (...) {
+    fs::remove_all(tmp, ec);
+    throw;
+  }
+  MergeSummary s;
+  s.cells = cells.size();
+  s.absent = absent.size();
+  for (const auto& c : cells) s.failed += !c.ok();
+  s.shard_count = count;
+  return s;
+}
+
+}  // namespace raysort
