@@ -111,6 +111,8 @@ RS_INLINE rs_f4 rs4_select(rs_f4 if_false, rs_f4 if_true, rs_i4 m) { return sele
 /* Bit i set when lane i is true. */
 RS_INLINE int rs4_bits(rs_i4 m) { return (m.s0 & 1) | (m.s1 & 2) | (m.s2 & 4) | (m.s3 & 8); }
 RS_INLINE void rs4_store(rs_f4 a, float* p) { vstore4(a, 0, p); }
+/* Index of the lowest set bit of x != 0 (OpenCL 1.2 has clz but no ctz). */
+RS_INLINE int rs_lowest_bit(int x) { return 31 - clz(x & -x); }
 RS_INLINE rs_f4 rs4_load(const float* p) { return vload4(0, p); }
 #else
 typedef struct alignas(16) rs_f4 {
@@ -159,10 +161,74 @@ RS_INLINE rs_f4 rs4_select(rs_f4 if_false, rs_f4 if_true, rs_i4 m) {
 RS_INLINE rs_f4 rs4_min(rs_f4 a, rs_f4 b) { return rs4_select(b, a, a < b); }
 RS_INLINE rs_f4 rs4_max(rs_f4 a, rs_f4 b) { return rs4_select(b, a, a > b); }
 RS_INLINE int rs4_bits(rs_i4 m) { return (m.s[0] & 1) | (m.s[1] & 2) | (m.s[2] & 4) | (m.s[3] & 8); }
+RS_INLINE int rs_lowest_bit(int x) { return std::countr_zero(static_cast<unsigned>(x)); }
 RS_INLINE void rs4_store(rs_f4 a, float* p) {
   for (int i = 0; i < 4; ++i) p[i] = a.s[i];
 }
 RS_INLINE rs_f4 rs4_load(const float* p) { return rs_f4{{p[0], p[1], p[2], p[3]}}; }
+#endif
+
+/* Eight-lane vectors in the same style (the encoders' cut-box tests, cl/keys.h): OpenCL's
+ * float8/int8 on the device, a 32-byte struct with per-lane IEEE operations on the host. min/max are
+ * selects, as rs4_min/rs4_max. */
+#ifdef __OPENCL_VERSION__
+typedef float8 rs_f8;
+typedef int8 rs_i8;
+RS_INLINE rs_f8 rs8_splat(float x) { return (float8)(x); }
+RS_INLINE rs_f8 rs8_min(rs_f8 a, rs_f8 b) { return select(b, a, a < b); }
+RS_INLINE rs_f8 rs8_max(rs_f8 a, rs_f8 b) { return select(b, a, a > b); }
+/* Bit i set when lane i is true. */
+RS_INLINE int rs8_bits(rs_i8 m) {
+  int8 b = m & (int8)(1, 2, 4, 8, 16, 32, 64, 128);
+  int4 h = b.lo | b.hi;
+  int2 q = h.lo | h.hi;
+  return q.s0 | q.s1;
+}
+#else
+typedef struct alignas(32) rs_f8 {
+  float s[8];
+} rs_f8;
+typedef struct alignas(32) rs_i8 {
+  rs_i32 s[8];
+} rs_i8;
+#define RS8_BINARY(T, R, op)                                 \
+  RS_INLINE R operator op(T a, T b) {                        \
+    R r;                                                     \
+    for (int i = 0; i < 8; ++i) r.s[i] = a.s[i] op b.s[i];   \
+    return r;                                                \
+  }
+#define RS8_COMPARE(op)                                                        \
+  RS_INLINE rs_i8 operator op(rs_f8 a, rs_f8 b) {                              \
+    rs_i8 r;                                                                   \
+    for (int i = 0; i < 8; ++i) r.s[i] = a.s[i] op b.s[i] ? -1 : 0;            \
+    return r;                                                                  \
+  }
+RS8_BINARY(rs_f8, rs_f8, +)
+RS8_BINARY(rs_f8, rs_f8, -)
+RS8_BINARY(rs_f8, rs_f8, *)
+RS8_BINARY(rs_i8, rs_i8, &)
+RS8_BINARY(rs_i8, rs_i8, |)
+RS8_COMPARE(<)
+RS8_COMPARE(>)
+RS8_COMPARE(<=)
+#undef RS8_BINARY
+#undef RS8_COMPARE
+RS_INLINE rs_f8 rs8_splat(float x) { return rs_f8{{x, x, x, x, x, x, x, x}}; }
+RS_INLINE rs_f8 rs8_min(rs_f8 a, rs_f8 b) {
+  rs_f8 r;
+  for (int i = 0; i < 8; ++i) r.s[i] = a.s[i] < b.s[i] ? a.s[i] : b.s[i];
+  return r;
+}
+RS_INLINE rs_f8 rs8_max(rs_f8 a, rs_f8 b) {
+  rs_f8 r;
+  for (int i = 0; i < 8; ++i) r.s[i] = a.s[i] > b.s[i] ? a.s[i] : b.s[i];
+  return r;
+}
+RS_INLINE int rs8_bits(rs_i8 m) {
+  int b = 0;
+  for (int i = 0; i < 8; ++i) b |= m.s[i] & (1 << i);
+  return b;
+}
 #endif
 
 /* A node of the 4-wide BVH the trace kernels traverse, 128 bytes (two cache lines): the boxes of
