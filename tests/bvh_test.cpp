@@ -90,3 +90,55 @@ TEST(Bvh, Deterministic) {
 }
 
 }  // namespace raysort
+
+// The 4-wide tree the trace kernels walk (host/bvh/wide.cpp): same leaves and boxes, bounded stack.
+namespace raysort {
+
+class ProceduralWideBvh : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(ProceduralWideBvh, CollapseKeepsEveryTriangleAndBox) {
+  Scene::Flat tris = load_scene(GetParam()).flatten();
+  Bvh bvh = build_bvh(tris);
+  EXPECT_EQ(validate_wide(bvh.wide, bvh), "");
+  // Two binary levels per wide level: the bound the kernels' stack relies on.
+  EXPECT_LE(bvh.wide.depth, (bvh.depth + 1) / 2 + 1);
+  EXPECT_LE(3 * bvh.wide.depth, static_cast<std::uint32_t>(RS_WIDE_STACK_SIZE));
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, ProceduralWideBvh,
+                         ::testing::Values("cornell", "detail-room", "landscape", "multi-instance"));
+
+TEST(WideBvh, OneLeafAndEmptyTrees) {
+  Bvh one = build_bvh(flat_from({{{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}}}));
+  ASSERT_TRUE(one.is_leaf(0));
+  EXPECT_EQ(validate_wide(one.wide, one), "");
+  EXPECT_EQ(one.wide.nodes.size(), 1u);
+  EXPECT_EQ(one.wide.nodes[0].valid.s[0], -1);
+  EXPECT_EQ(one.wide.nodes[0].valid.s[1], 0);
+
+  Bvh none;  // build_bvh refuses an empty scene; the collapse still gives a root that misses
+  none.nodes.push_back({});
+  none.wide = collapse_to_wide(none);
+  ASSERT_EQ(none.wide.nodes.size(), 1u);
+  for (int lane = 0; lane < 4; ++lane) EXPECT_EQ(none.wide.nodes[0].valid.s[lane], 0);
+}
+
+TEST(WideBvh, ValidatorCatchesABrokenCollapse) {
+  Scene::Flat tris = load_scene("cornell").flatten();
+  Bvh bvh = build_bvh(tris);
+  WideBvh broken = bvh.wide;
+  for (auto& pk : broken.packets)
+    if (pk.valid.s[0]) {
+      pk.valid.s[0] = 0;  // drop one triangle
+      break;
+    }
+  EXPECT_NE(validate_wide(broken, bvh), "");
+  broken = bvh.wide;
+  broken.nodes[0].lo_x.s[0] = broken.nodes[0].hi_x.s[0];  // a box too small for what it holds
+  EXPECT_NE(validate_wide(broken, bvh), "");
+  broken = bvh.wide;
+  broken.depth = RS_WIDE_STACK_SIZE;  // past the stack bound
+  EXPECT_NE(validate_wide(broken, bvh), "");
+}
+
+}  // namespace raysort

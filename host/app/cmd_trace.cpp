@@ -33,6 +33,7 @@ struct TraceArgs {
   unsigned reps = 3;
   unsigned warmup = 1;
   std::string variant = "robust";
+  std::string layout = "wide";
   std::string reference;  // "" or "embree"
 };
 
@@ -66,10 +67,11 @@ VariantRun trace_variant(Tracer& tracer, const Bvh& bvh, const ReferencedBatch& 
   const RayBatch& b = rb.batch;
   VariantRun v;
   v.run = tracer.run(b.rays, nullptr, b.any_hit(), args.warmup, args.reps);
-  // generate_batches' reference hits come from the fast variant; other variants trace their own.
-  const bool fast = tracer.variant() == TraceVariant::Fast;
+  // generate_batches' reference hits come from the fast variant on the wide layout; other
+  // variants and layouts trace their own.
+  const bool fast = tracer.variant() == TraceVariant::Fast && tracer.layout() == TraceLayout::Wide;
   std::vector<RsHit> own;
-  if (!fast) own = trace_reference(bvh, b.rays, nullptr, b.any_hit(), nullptr, tracer.variant());
+  if (!fast) own = trace_reference(bvh, b.rays, nullptr, b.any_hit(), nullptr, tracer.variant(), tracer.layout());
   const std::vector<RsHit>& ref = fast ? rb.reference_hits : own;
   v.mismatches = count_hit_mismatches(v.run.hits, ref);
   v.hit_count = std::count_if(ref.begin(), ref.end(), [](const RsHit& x) { return x.tri != RS_NO_HIT; });
@@ -119,7 +121,8 @@ int run_trace(const TraceArgs& args) {
       variants = {parse_trace_variant(args.variant)};
     double build_before = rt.build_ms();
     std::vector<Tracer> tracers;
-    for (TraceVariant v : variants) tracers.emplace_back(rt, bvh, v);
+    const TraceLayout layout = parse_trace_layout(args.layout);
+    for (TraceVariant v : variants) tracers.emplace_back(rt, bvh, v, layout);
     fmt::print("kernels  built in {:.0f} ms (reported apart from trace times)\n", rt.build_ms() - build_before);
 #ifdef RAYSORT_HAVE_EMBREE
     std::optional<EmbreeScene> embree;
@@ -135,12 +138,12 @@ int run_trace(const TraceArgs& args) {
     const char* emb_head = "";
 #endif
     if (both) {
-      fmt::print("variant  fast and robust, back to back on each batch\n");
+      fmt::print("variant  fast and robust, back to back on each batch ({} BVH)\n", trace_layout_name(layout));
       fmt::print("{:<10} {:>10} {:>9} {:>9} {:>9} {:>9} {:>8} {:>10} {:>8} {:>11}{}{}\n", "batch", "rays", "fast ms",
                  "fast MR/s", "rob ms", "rob MR/s", "rob/fast", "hits", "tri diff", "mismatches", emb_head,
                  with_embree ? " fast/emb  rob/emb  same %  +ties %" : "");
     } else {
-      fmt::print("variant  {}\n", trace_variant_name(variants[0]));
+      fmt::print("variant  {} ({} BVH)\n", trace_variant_name(variants[0]), trace_layout_name(layout));
       fmt::print("{:<10} {:>10} {:>10} {:>10} {:>10} {:>11}{}{}\n", "batch", "rays", "ms", "MRays/s", "hits", "mismatches",
                  emb_head, with_embree ? " ours/emb  same %  +ties %" : "");
     }
@@ -224,6 +227,10 @@ void register_trace_command(CLI::App& app) {
   cmd->add_option("--variant", args->variant,
                   "traversal arithmetic: robust (watertight), fast (Moller-Trumbore), or both side by side")
       ->check(CLI::IsMember({"robust", "fast", "both"}))
+      ->capture_default_str();
+  cmd->add_option("--layout", args->layout,
+                  "BVH the kernels walk: wide (4-wide, the default) or binary (to measure what the wide layout gains)")
+      ->check(CLI::IsMember({"wide", "binary"}))
       ->capture_default_str();
   cmd->add_option("--reference", args->reference,
                   "also trace every batch with this CPU reference, side by side: embree (Embree 3, all host threads; "

@@ -50,6 +50,12 @@ Bvh build_bvh(const Scene::Flat& tris, const BvhBuildOptions& opts = {});
 // packets (max_leaf_size > 16) or the stack bound RS_WIDE_STACK_SIZE could be exceeded.
 WideBvh collapse_to_wide(const Bvh& bvh);
 
+// Checks the wide tree against its binary source: every triangle in exactly one valid packet lane
+// (with its vertices and id), each child box equal to a binary node's box, every reference in
+// range, every inner node reached once, and 3 * depth within RS_WIDE_STACK_SIZE. Returns an empty
+// string when all hold, else a description of the first violation.
+std::string validate_wide(const WideBvh& wide, const Bvh& bvh);
+
 // bvh.wide, or a collapse of bvh when it has none (a binary tree built by hand in a test).
 const WideBvh& wide_of(const Bvh& bvh, WideBvh& scratch);
 

@@ -118,6 +118,71 @@ const WideBvh& wide_of(const Bvh& bvh, WideBvh& scratch) {
   return scratch;
 }
 
+std::string validate_wide(const WideBvh& wide, const Bvh& bvh) {
+  if (wide.nodes.empty()) return "no root";
+  if (3 * wide.depth > RS_WIDE_STACK_SIZE) return "depth " + std::to_string(wide.depth) + " exceeds the stack bound";
+  std::vector<std::uint32_t> seen_tri(bvh.triangles.size(), 0), seen_node(wide.nodes.size(), 0);
+  // Binary boxes, to check that each wide child box is one of them.
+  auto same_box = [](const RsWideNode& w, int lane, const RsBvhNode& b) {
+    return w.lo_x.s[lane] == b.bmin[0] && w.lo_y.s[lane] == b.bmin[1] && w.lo_z.s[lane] == b.bmin[2] &&
+           w.hi_x.s[lane] == b.bmax[0] && w.hi_y.s[lane] == b.bmax[1] && w.hi_z.s[lane] == b.bmax[2];
+  };
+  // Map each triangle id to its binary leaf, so a leaf reference can be matched to its box.
+  std::vector<std::uint32_t> leaf_of_tri(bvh.triangles.size(), 0);
+  for (std::uint32_t n = 0; n < bvh.nodes.size(); ++n)
+    if (bvh.is_leaf(n))
+      for (std::uint32_t k = bvh.nodes[n].first; k < bvh.nodes[n].first + bvh.nodes[n].count; ++k)
+        leaf_of_tri[bvh.triangles[k].id] = n;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> todo{{0u, 1u}};  // (node, depth)
+  seen_node[0] = 1;
+  while (!todo.empty()) {
+    auto [ni, depth] = todo.back();
+    todo.pop_back();
+    if (depth > wide.depth) return "node " + std::to_string(ni) + " deeper than the recorded depth";
+    const RsWideNode& w = wide.nodes[ni];
+    for (int lane = 0; lane < 4; ++lane) {
+      if (w.valid.s[lane] == 0) continue;
+      const std::uint32_t ref = w.child[lane];
+      if (!(ref & RS_WIDE_LEAF)) {
+        if (ref >= wide.nodes.size() || seen_node[ref]++) return "inner reference " + std::to_string(ref) + " bad or shared";
+        const RsWideNode& c = wide.nodes[ref];
+        for (int k = 0; k < 4; ++k)  // the child's boxes lie inside the lane's box
+          if (c.valid.s[k] && (c.lo_x.s[k] < w.lo_x.s[lane] || c.lo_y.s[k] < w.lo_y.s[lane] ||
+                               c.lo_z.s[k] < w.lo_z.s[lane] || c.hi_x.s[k] > w.hi_x.s[lane] ||
+                               c.hi_y.s[k] > w.hi_y.s[lane] || c.hi_z.s[k] > w.hi_z.s[lane]))
+            return "node " + std::to_string(ref) + " sticks out of its parent's box";
+        todo.push_back({ref, depth + 1});
+        continue;
+      }
+      const std::uint32_t first = (ref & ~RS_WIDE_LEAF) >> 2, end = first + (ref & 3u) + 1u;
+      if (end > wide.packets.size()) return "leaf packets out of range";
+      bool box_checked = false;
+      for (std::uint32_t p = first; p < end; ++p)
+        for (int k = 0; k < 4; ++k) {
+          const RsTriPacket& pk = wide.packets[p];
+          if (pk.valid.s[k] == 0) continue;
+          const std::uint32_t id = pk.id[k];
+          if (id >= seen_tri.size() || seen_tri[id]++) return "triangle " + std::to_string(id) + " bad or in two lanes";
+          if (!box_checked && !same_box(w, lane, bvh.nodes[leaf_of_tri[id]]))
+            return "leaf box of node " + std::to_string(ni) + " lane " + std::to_string(lane) + " is not its leaf's box";
+          box_checked = true;
+        }
+    }
+  }
+  for (std::size_t i = 0; i < seen_tri.size(); ++i)
+    if (seen_tri[i] != 1) return "triangle " + std::to_string(i) + " in no packet";
+  for (const RsTriangle& t : bvh.triangles) {
+    bool found = false;  // vertices copied exactly (a linear scan per triangle: tests only)
+    for (const RsTriPacket& pk : wide.packets)
+      for (int k = 0; k < 4 && !found; ++k)
+        found = pk.valid.s[k] && pk.id[k] == t.id && pk.v0x.s[k] == t.v0[0] && pk.v1y.s[k] == t.v1[1] &&
+                pk.v2z.s[k] == t.v2[2];
+    if (!found) return "vertices of triangle " + std::to_string(t.id) + " not copied";
+    if (bvh.triangles.size() > 2000) break;  // spot check on big scenes
+  }
+  return "";
+}
+
 static_assert(sizeof(RsWideNode) == 128, "RsWideNode layout (cl/shared.h)");
 static_assert(sizeof(RsTriPacket) == 192, "RsTriPacket layout (cl/shared.h)");
 
