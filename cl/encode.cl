@@ -7,11 +7,26 @@
  * keys.h, shared with the host twin (host/encode/), so both give the same bits.
  *
  * Every kernel exists twice: *_k32 writes uint keys (key bits ≤ 32), *_k64 ulong keys.
- * Cut nodes (HCC, RegularGrid cells, MLHCC top nodes) are copied to local memory once per
- * work-group before any ray reads them (Xiang et al. Alg. 1, line 1); the barrier sits before the
- * count guard, in uniform control flow.
+ * Cut nodes (HCC, RegularGrid cells, MLHCC top nodes) come as eight-box SoA groups (RsCutGroup,
+ * keys.h) in __constant memory: every work-item reads the same boxes, which GPUs broadcast from the
+ * constant cache, and PoCL needs no per-group copy or barrier (Xiang et al. Alg. 1, line 1, keeps
+ * them in shared memory; the constant cache plays that part here). MLHCC's low-level rows (one per
+ * ray, chosen by its first top-level hit) stay in global memory.
  */
 #include "keys.h"
+
+/* One kernel per spatial encoder (encode_origin_k32, ...): a straight-line body PoCL can vectorise
+ * across work-items. encode_spatial_* (encoder as an argument) is kept for comparison. */
+#define RS_DEFINE_SPATIAL_KERNEL(NAME, SUFFIX, KEY_T)                                                    \
+  __kernel void encode_##NAME##_##SUFFIX(__global const RsEncodeFrame* frame, __global const RsRay* rays, \
+                                         __global const uint* order, uint count, uint bits,             \
+                                         __global KEY_T* keys, __global uint* values) {                 \
+    uint i = get_global_id(0);                                                                           \
+    if (i >= count) return;                                                                              \
+    RsEncodeFrame f = *frame;                                                                            \
+    keys[i] = (KEY_T)rs_key_from_code(rs_##NAME##_code(&f, rays[order[i]]), bits);                       \
+    values[i] = i;                                                                                       \
+  }
 
 #define RS_DEFINE_ENCODE_KERNELS(SUFFIX, KEY_T)                                                             \
   __kernel void encode_nosort_##SUFFIX(uint count, __global KEY_T* keys, __global uint* values) {        \
@@ -30,32 +45,31 @@
     keys[i] = (KEY_T)rs_key_from_code(rs_spatial_code(encoder, &f, rays[order[i]]), bits);               \
     values[i] = i;                                                                                       \
   }                                                                                                      \
+  RS_DEFINE_SPATIAL_KERNEL(origin, SUFFIX, KEY_T)                                                        \
+  RS_DEFINE_SPATIAL_KERNEL(reis, SUFFIX, KEY_T)                                                          \
+  RS_DEFINE_SPATIAL_KERNEL(costa, SUFFIX, KEY_T)                                                         \
+  RS_DEFINE_SPATIAL_KERNEL(aila, SUFFIX, KEY_T)                                                          \
+  RS_DEFINE_SPATIAL_KERNEL(twopoint, SUFFIX, KEY_T)                                                      \
                                                                                                          \
-  __kernel void encode_box_set_##SUFFIX(__global const RsBox* boxes, uint box_count, uint field,         \
+  __kernel void encode_box_set_##SUFFIX(__constant const RsCutGroup* groups, uint box_count, uint field, \
                                         uint dir_bits, __global const RsRay* rays,                       \
                                         __global const uint* order, uint count, uint bits,               \
                                         __global KEY_T* keys, __global uint* values) {                   \
-    __local RsBox cut[RS_MAX_KEY_BITS];                                                                  \
-    for (uint j = get_local_id(0); j < box_count; j += get_local_size(0)) cut[j] = boxes[j];             \
-    barrier(CLK_LOCAL_MEM_FENCE);                                                                        \
     uint i = get_global_id(0);                                                                           \
     if (i >= count) return;                                                                              \
-    rs_u64 code = rs_box_set_code(rays[order[i]], cut, box_count, field, dir_bits);                      \
+    rs_u64 code = rs_box_set_code(rays[order[i]], groups, box_count, field, dir_bits);                   \
     keys[i] = (KEY_T)rs_key_from_code(code, bits);                                                       \
     values[i] = i;                                                                                       \
   }                                                                                                      \
                                                                                                          \
-  __kernel void encode_two_level_##SUFFIX(__global const RsBox* top, uint top_count,                     \
-                                          __global const RsBox* low, __global const uint* low_count,     \
+  __kernel void encode_two_level_##SUFFIX(__constant const RsCutGroup* top, uint top_count,              \
+                                          __global const RsCutGroup* low, __global const uint* low_count,\
                                           uint half_bits, __global const RsRay* rays,                    \
                                           __global const uint* order, uint count, uint bits,             \
                                           __global KEY_T* keys, __global uint* values) {                 \
-    __local RsBox top_cut[RS_MAX_KEY_BITS];                                                              \
-    for (uint j = get_local_id(0); j < top_count; j += get_local_size(0)) top_cut[j] = top[j];           \
-    barrier(CLK_LOCAL_MEM_FENCE);                                                                        \
     uint i = get_global_id(0);                                                                           \
     if (i >= count) return;                                                                              \
-    rs_u64 code = rs_two_level_cut_code(rays[order[i]], top_cut, top_count, low, low_count, half_bits);  \
+    rs_u64 code = rs_two_level_cut_code(rays[order[i]], top, top_count, low, low_count, half_bits);      \
     keys[i] = (KEY_T)rs_key_from_code(code, bits);                                                       \
     values[i] = i;                                                                                       \
   }                                                                                                      \

@@ -34,9 +34,16 @@
 #ifdef __OPENCL_VERSION__
 #define RS_LOCAL __local
 #define RS_U64(x) ((ulong)(x))
+#define RS_CONSTANT __constant
+/* Key code is inlined into the kernels, so PoCL sees one straight-line work-item body. */
+#define RS_KEY_INLINE inline __attribute__((always_inline))
+RS_KEY_INLINE rs_u32 rs_clz64(rs_u64 x) { return (rs_u32)clz(x); }
 #else
 #define RS_LOCAL
+#define RS_CONSTANT
 #define RS_U64(x) ((rs_u64)(x))
+#define RS_KEY_INLINE inline
+RS_KEY_INLINE rs_u32 rs_clz64(rs_u64 x) { return (rs_u32)std::countl_zero(x); }
 #endif
 
 /* Encoder ids: the values of the host's enum class Encoder (host/encode/encode.h). */
@@ -80,7 +87,7 @@ typedef struct {
  * ------------------------------------------------------------------------------------------- */
 
 /* clamp(floor(t·2^n), 0, 2^n − 1) for n ≤ 24 (2^n exact in float). NaN maps to 0. */
-RS_INLINE rs_u32 rs_quantize(float t, rs_u32 n) {
+RS_KEY_INLINE rs_u32 rs_quantize(float t, rs_u32 n) {
   float cells = (float)(1u << n);
   float q = rs_floor(t * cells);
   q = rs_max(0.0f, rs_min(q, cells - 1.0f));
@@ -88,7 +95,7 @@ RS_INLINE rs_u32 rs_quantize(float t, rs_u32 n) {
 }
 
 /* The n-bit cell of coordinate p on axis a of the scene box. */
-RS_INLINE rs_u32 rs_quantize_axis(const RsEncodeFrame* f, int a, float p, rs_u32 n) {
+RS_KEY_INLINE rs_u32 rs_quantize_axis(const RsEncodeFrame* f, int a, float p, rs_u32 n) {
   return rs_quantize((p - f->box_min[a]) * f->inv_extent[a], n);
 }
 
@@ -98,7 +105,7 @@ typedef struct {
   rs_u32 used;
 } RsBitWriter;
 
-RS_INLINE RsBitWriter rs_bit_writer(void) {
+RS_KEY_INLINE RsBitWriter rs_bit_writer(void) {
   RsBitWriter w;
   w.code = 0;
   w.used = 0;
@@ -106,7 +113,7 @@ RS_INLINE RsBitWriter rs_bit_writer(void) {
 }
 
 /* Appends the low n bits of v (n ≤ 32), most significant first; bits past 64 are dropped. */
-RS_INLINE void rs_put_bits(RsBitWriter* w, rs_u32 v, rs_u32 n) {
+RS_KEY_INLINE void rs_put_bits(RsBitWriter* w, rs_u32 v, rs_u32 n) {
   if (w->used >= 64u || n == 0u) return;
   rs_u64 bits = RS_U64(v) & ((RS_U64(1) << n) - 1u);
   rs_u32 room = 64u - w->used;
@@ -120,10 +127,10 @@ RS_INLINE void rs_put_bits(RsBitWriter* w, rs_u32 v, rs_u32 n) {
 }
 
 /* Bit `level` (0 = most significant) of an n-bit quantized coordinate. */
-RS_INLINE rs_u32 rs_level_bit(rs_u32 q, rs_u32 n, rs_u32 level) { return (q >> (n - 1u - level)) & 1u; }
+RS_KEY_INLINE rs_u32 rs_level_bit(rs_u32 q, rs_u32 n, rs_u32 level) { return (q >> (n - 1u - level)) & 1u; }
 
 /* The key of b bits (1 ≤ b ≤ 64): the code's top b bits. */
-RS_INLINE rs_u64 rs_key_from_code(rs_u64 code, rs_u32 bits) { return bits >= 64u ? code : code >> (64u - bits); }
+RS_KEY_INLINE rs_u64 rs_key_from_code(rs_u64 code, rs_u32 bits) { return bits >= 64u ? code : code >> (64u - bits); }
 
 /* ---------------------------------------------------------------------------------------------
  * Ray fields.
@@ -135,37 +142,79 @@ RS_INLINE rs_u64 rs_key_from_code(rs_u64 code, rs_u32 bits) { return bits >= 64u
 #define RS_TWOPOINT_LEVELS 11u  /* 6·11 = 66 ≥ 64 */
 
 /* Origin cells (n bits per axis). */
-RS_INLINE void rs_quantize_point(const RsEncodeFrame* f, RsVec3 p, rs_u32 n, rs_u32 q[3]) {
+RS_KEY_INLINE void rs_quantize_point(const RsEncodeFrame* f, RsVec3 p, rs_u32 n, rs_u32 q[3]) {
   q[0] = rs_quantize_axis(f, 0, p.x, n);
   q[1] = rs_quantize_axis(f, 1, p.y, n);
   q[2] = rs_quantize_axis(f, 2, p.z, n);
 }
 
 /* The unit direction: d / |d| (a zero direction stays zero). */
-RS_INLINE RsVec3 rs_unit_direction(RsRay r) { return rs_normalize(rs_vec3(r.d[0], r.d[1], r.d[2])); }
+RS_KEY_INLINE RsVec3 rs_unit_direction(RsRay r) {
+  /* rs_normalize (cl/shared.h), the same arithmetic in the same order, with one select per
+   * component instead of a select of the whole vector (which PoCL's vectoriser cannot widen). */
+  const float x = r.d[0], y = r.d[1], z = r.d[2];
+  const float len = rs_sqrt(x * x + y * y + z * z);
+  const int ok = len > 0.0f;
+  const float s = 1.0f / (ok ? len : 1.0f);
+  return rs_vec3(ok ? x * s : x, ok ? y * s : y, ok ? z * s : z);
+}
 
 /* Spherical direction cells: q[0] = φ = atan2(dy, dx)/2π + ½, q[1] = θ = acos(dz)/π, n bits each. */
-RS_INLINE void rs_quantize_spherical(RsVec3 d, rs_u32 n, rs_u32 q[2]) {
+RS_KEY_INLINE void rs_quantize_spherical(RsVec3 d, rs_u32 n, rs_u32 q[2]) {
   float phi = rs_atan2(d.y, d.x) * RS_INV_2PI_F + 0.5f;
   float theta = rs_acos(d.z) * RS_INV_PI_F;
   q[0] = rs_quantize(phi, n);
   q[1] = rs_quantize(theta, n);
 }
 
-/* Appends Morton levels [first, first + levels) of the 3 coordinates q (n bits each), x y z. */
-RS_INLINE void rs_put_morton3(RsBitWriter* w, const rs_u32 q[3], rs_u32 n, rs_u32 first, rs_u32 levels) {
-  for (rs_u32 l = first; l < first + levels; ++l)
-    rs_put_bits(w, (rs_level_bit(q[0], n, l) << 2) | (rs_level_bit(q[1], n, l) << 1) | rs_level_bit(q[2], n, l), 3u);
+/* Bit interleaving without loops ("part1by2"/"part1by1" magic-number spreading on 64 bits): the
+ * codes below are exactly those of appending Morton levels one bit at a time, most significant
+ * first, and dropping bits past 64 (docs/encoders.md; tests/encode_test.cpp keeps that bitwise
+ * formulation as a reference and compares). */
+
+/* Bit k of v (v < 2^21) moves to bit 3k. */
+RS_KEY_INLINE rs_u64 rs_spread3(rs_u32 v) {
+  rs_u64 x = RS_U64(v) & RS_U64(0x1fffff);
+  x = (x | (x << 32)) & RS_U64(0x1f00000000ffff);
+  x = (x | (x << 16)) & RS_U64(0x1f0000ff0000ff);
+  x = (x | (x << 8)) & RS_U64(0x100f00f00f00f00f);
+  x = (x | (x << 4)) & RS_U64(0x10c30c30c30c30c3);
+  x = (x | (x << 2)) & RS_U64(0x1249249249249249);
+  return x;
 }
 
-/* Appends `levels` levels of the spherical cells (φ, θ), φ first. */
-RS_INLINE void rs_put_spherical(RsBitWriter* w, const rs_u32 q[2], rs_u32 n, rs_u32 levels) {
-  for (rs_u32 l = 0; l < levels; ++l) rs_put_bits(w, (rs_level_bit(q[0], n, l) << 1) | rs_level_bit(q[1], n, l), 2u);
+/* Bit k of v moves to bit 2k. */
+RS_KEY_INLINE rs_u64 rs_spread2(rs_u32 v) {
+  rs_u64 x = RS_U64(v);
+  x = (x | (x << 16)) & RS_U64(0x0000ffff0000ffff);
+  x = (x | (x << 8)) & RS_U64(0x00ff00ff00ff00ff);
+  x = (x | (x << 4)) & RS_U64(0x0f0f0f0f0f0f0f0f);
+  x = (x | (x << 2)) & RS_U64(0x3333333333333333);
+  x = (x | (x << 1)) & RS_U64(0x5555555555555555);
+  return x;
+}
+
+/* Bit k of v (v < 2^10) moves to bit 6k. */
+RS_KEY_INLINE rs_u64 rs_spread6(rs_u32 v) { return rs_spread2((rs_u32)rs_spread3(v)); }
+
+/* The 3-D Morton code of (x, y, z), each below 2^21: bit k of x at 3k + 2, of y at 3k + 1, of z
+ * at 3k, i.e. levels most significant first, x y z per level. */
+RS_KEY_INLINE rs_u64 rs_morton3(rs_u32 x, rs_u32 y, rs_u32 z) {
+  return (rs_spread3(x) << 2) | (rs_spread3(y) << 1) | rs_spread3(z);
+}
+
+/* The 2-D Morton code of (a, b): a's bits above b's, per level. */
+RS_KEY_INLINE rs_u64 rs_morton2(rs_u32 a, rs_u32 b) { return (rs_spread2(a) << 1) | rs_spread2(b); }
+
+/* The 6-D Morton code of six coordinates below 2^10, a0 most significant per level. */
+RS_KEY_INLINE rs_u64 rs_morton6(rs_u32 a0, rs_u32 a1, rs_u32 a2, rs_u32 a3, rs_u32 a4, rs_u32 a5) {
+  return (rs_spread6(a0) << 5) | (rs_spread6(a1) << 4) | (rs_spread6(a2) << 3) | (rs_spread6(a3) << 2) |
+         (rs_spread6(a4) << 1) | rs_spread6(a5);
 }
 
 /* Far end of a ray's segment inside the scene box: the slab-test exit distance (same reciprocal
  * as traversal), capped by tmax. */
-RS_INLINE float rs_scene_exit(const RsEncodeFrame* f, RsTraversalRay r) {
+RS_KEY_INLINE float rs_scene_exit(const RsEncodeFrame* f, RsTraversalRay r) {
   float tx0 = (f->box_min[0] - r.o.x) * r.inv_d.x, tx1 = (f->box_max[0] - r.o.x) * r.inv_d.x;
   float ty0 = (f->box_min[1] - r.o.y) * r.inv_d.y, ty1 = (f->box_max[1] - r.o.y) * r.inv_d.y;
   float tz0 = (f->box_min[2] - r.o.z) * r.inv_d.z, tz1 = (f->box_max[2] - r.o.z) * r.inv_d.z;
@@ -176,41 +225,36 @@ RS_INLINE float rs_scene_exit(const RsEncodeFrame* f, RsTraversalRay r) {
  * Spatial codes (Meister et al. 2020, section 3; Xiang et al. section 3.2 and section 5).
  * ------------------------------------------------------------------------------------------- */
 
-/* Origin: the 3-D Morton code of the origin, x y z per level. */
-RS_INLINE rs_u64 rs_origin_code(const RsEncodeFrame* f, RsRay r) {
+/* Origin: the 3-D Morton code of the origin, x y z per level: levels 0..20 (63 bits), then x of
+ * level 21 (y and z of level 21 fall past bit 0). */
+RS_KEY_INLINE rs_u64 rs_origin_code(const RsEncodeFrame* f, RsRay r) {
   rs_u32 q[3];
   rs_quantize_point(f, rs_load3(r.o), RS_ORIGIN_LEVELS, q);
-  RsBitWriter w = rs_bit_writer();
-  rs_put_morton3(&w, q, RS_ORIGIN_LEVELS, 0u, RS_ORIGIN_LEVELS);
-  return w.code;
+  return (rs_morton3(q[0] >> 1, q[1] >> 1, q[2] >> 1) << 1) | (q[0] & 1u);
 }
 
-/* Reis et al. 2017 (origin → direction): 22 origin Morton bits, then 21 levels of (φ, θ). */
-RS_INLINE rs_u64 rs_reis_code(const RsEncodeFrame* f, RsRay r) {
+/* Reis et al. 2017 (origin → direction): 22 origin Morton bits (7 levels and x of level 7), then
+ * 21 levels of (φ, θ). */
+RS_KEY_INLINE rs_u64 rs_reis_code(const RsEncodeFrame* f, RsRay r) {
   rs_u32 q[3], s[2];
   rs_quantize_point(f, rs_load3(r.o), RS_ORIGIN_LEVELS, q);
   rs_quantize_spherical(rs_unit_direction(r), RS_DIRECTION_LEVELS, s);
-  RsBitWriter w = rs_bit_writer();
-  rs_put_morton3(&w, q, RS_ORIGIN_LEVELS, 0u, 7u);
-  rs_put_bits(&w, rs_level_bit(q[0], RS_ORIGIN_LEVELS, 7u), 1u);
-  rs_put_spherical(&w, s, RS_DIRECTION_LEVELS, RS_DIRECTION_LEVELS);
-  return w.code;
+  const rs_u32 k = RS_ORIGIN_LEVELS - 7u; /* the low bits below the 7 top levels */
+  return (rs_morton3(q[0] >> k, q[1] >> k, q[2] >> k) << 43) | (RS_U64((q[0] >> (k - 1u)) & 1u) << 42) |
+         rs_morton2(s[0], s[1]);
 }
 
 /* Costa et al. 2015 (direction → origin): 4 levels of (φ, θ), 15 origin Morton levels, 11 zeros. */
-RS_INLINE rs_u64 rs_costa_code(const RsEncodeFrame* f, RsRay r) {
+RS_KEY_INLINE rs_u64 rs_costa_code(const RsEncodeFrame* f, RsRay r) {
   rs_u32 q[3], s[2];
   rs_quantize_point(f, rs_load3(r.o), 15u, q);
   rs_quantize_spherical(rs_unit_direction(r), 4u, s);
-  RsBitWriter w = rs_bit_writer();
-  rs_put_spherical(&w, s, 4u, 4u);
-  rs_put_morton3(&w, q, 15u, 0u, 15u);
-  return w.code;
+  return (rs_morton2(s[0], s[1]) << 56) | (rs_morton3(q[0], q[1], q[2]) << 11);
 }
 
 /* Aila & Karras 2010 ("Aila_Compact" of Meister et al.): 3 origin Morton levels, then 9 groups of
  * [origin level 3+i: x y z | direction level i: x y z of (d + 1)/2]; the last bit is 0. */
-RS_INLINE rs_u64 rs_aila_code(const RsEncodeFrame* f, RsRay r) {
+RS_KEY_INLINE rs_u64 rs_aila_code(const RsEncodeFrame* f, RsRay r) {
   const rs_u32 on = 12u, dn = RS_AILA_DIR_LEVELS;
   rs_u32 q[3], dq[3];
   rs_quantize_point(f, rs_load3(r.o), on, q);
@@ -218,19 +262,16 @@ RS_INLINE rs_u64 rs_aila_code(const RsEncodeFrame* f, RsRay r) {
   dq[0] = rs_quantize((d.x + 1.0f) * 0.5f, dn);
   dq[1] = rs_quantize((d.y + 1.0f) * 0.5f, dn);
   dq[2] = rs_quantize((d.z + 1.0f) * 0.5f, dn);
-  RsBitWriter w = rs_bit_writer();
-  rs_put_morton3(&w, q, on, 0u, 3u);
-  for (rs_u32 i = 0; i < dn; ++i) {
-    rs_put_morton3(&w, q, on, 3u + i, 1u);
-    rs_put_morton3(&w, dq, dn, i, 1u);
-  }
-  return w.code;
+  const rs_u32 low = (1u << (on - 3u)) - 1u; /* origin levels 3..11 (9 = dn bits) */
+  return (rs_morton3(q[0] >> (on - 3u), q[1] >> (on - 3u), q[2] >> (on - 3u)) << 55) |
+         (rs_morton6(q[0] & low, q[1] & low, q[2] & low, dq[0], dq[1], dq[2]) << 1);
 }
 
 /* TwoPoint (Moon et al. 2010; Meister et al. 2020, fixed-length estimate): 6-D Morton code of the
  * origin a and b = a + L·d, L = max(0, min(twopoint_length, tmax, scene-box exit)); b is clamped
- * to the box by the quantization. Per level: a.x a.y a.z b.x b.y b.z. */
-RS_INLINE rs_u64 rs_twopoint_code(const RsEncodeFrame* f, RsRay ray) {
+ * to the box by the quantization. Per level: a.x a.y a.z b.x b.y b.z; levels 0..9 (60 bits), then
+ * a.x a.y a.z b.x of level 10. */
+RS_KEY_INLINE rs_u64 rs_twopoint_code(const RsEncodeFrame* f, RsRay ray) {
   const rs_u32 n = RS_TWOPOINT_LEVELS;
   RsTraversalRay r = rs_prepare_ray(ray);
   float len = rs_max(0.0f, rs_min(f->twopoint_length, rs_scene_exit(f, r)));
@@ -238,24 +279,18 @@ RS_INLINE rs_u64 rs_twopoint_code(const RsEncodeFrame* f, RsRay ray) {
   rs_u32 qa[3], qb[3];
   rs_quantize_point(f, r.o, n, qa);
   rs_quantize_point(f, b, n, qb);
-  RsBitWriter w = rs_bit_writer();
-  for (rs_u32 l = 0; l < n; ++l) {
-    rs_put_morton3(&w, qa, n, l, 1u);
-    rs_put_morton3(&w, qb, n, l, 1u);
-  }
-  return w.code;
+  return (rs_morton6(qa[0] >> 1, qa[1] >> 1, qa[2] >> 1, qb[0] >> 1, qb[1] >> 1, qb[2] >> 1) << 4) |
+         RS_U64(((qa[0] & 1u) << 3) | ((qa[1] & 1u) << 2) | ((qa[2] & 1u) << 1) | (qb[0] & 1u));
 }
 
 /* d direction bits (HCC_DIR): the top d bits of the Reis direction field, (φ, θ) interleaved. */
-RS_INLINE rs_u64 rs_direction_bits(RsRay r, rs_u32 d) {
+RS_KEY_INLINE rs_u64 rs_direction_bits(RsRay r, rs_u32 d) {
   rs_u32 s[2];
   rs_quantize_spherical(rs_unit_direction(r), RS_DIRECTION_LEVELS, s);
-  RsBitWriter w = rs_bit_writer();
-  rs_put_spherical(&w, s, RS_DIRECTION_LEVELS, RS_DIRECTION_LEVELS);
-  return rs_key_from_code(w.code, d);
+  return rs_key_from_code(rs_morton2(s[0], s[1]) << (64u - 2u * RS_DIRECTION_LEVELS), d);
 }
 
-RS_INLINE rs_u64 rs_spatial_code(int encoder, const RsEncodeFrame* f, RsRay r) {
+RS_KEY_INLINE rs_u64 rs_spatial_code(int encoder, const RsEncodeFrame* f, RsRay r) {
   switch (encoder) {
     case RS_ENC_ORIGIN: return rs_origin_code(f, r);
     case RS_ENC_REIS: return rs_reis_code(f, r);
@@ -272,8 +307,10 @@ RS_INLINE rs_u64 rs_spatial_code(int encoder, const RsEncodeFrame* f, RsRay r) {
 
 /* Does the segment [tmin, tmax] of r overlap box b? The same slab arithmetic, in the same order,
  * as rs_intersect_box in traverse.h (which takes a __global node; this takes a box by value so it
- * works on local-memory cut nodes): a cut-node bit is 1 exactly when traversal would enter it. */
-RS_INLINE int rs_segment_overlaps_box(RsTraversalRay r, RsBox b) {
+ * works on local-memory cut nodes): a cut-node bit is 1 exactly when traversal would enter it.
+ * (The key kernels test eight boxes at once, rs_cut_group_bits; this one-box form is kept for
+ * reference and tests.) */
+RS_KEY_INLINE int rs_segment_overlaps_box(RsTraversalRay r, RsBox b) {
   float tx0 = (b.bmin[0] - r.o.x) * r.inv_d.x, tx1 = (b.bmax[0] - r.o.x) * r.inv_d.x;
   float ty0 = (b.bmin[1] - r.o.y) * r.inv_d.y, ty1 = (b.bmax[1] - r.o.y) * r.inv_d.y;
   float tz0 = (b.bmin[2] - r.o.z) * r.inv_d.z, tz1 = (b.bmax[2] - r.o.z) * r.inv_d.z;
@@ -282,36 +319,97 @@ RS_INLINE int rs_segment_overlaps_box(RsTraversalRay r, RsBox b) {
   return tnear <= tfar;
 }
 
-/* HCC / RegularGrid / HCC_DIR: bit 63 − i = overlap with boxes[i], i < n (n ≤ 64 − dir_bits);
- * then dir_bits direction bits right below the box field of `field` bits (HCC_DIR). */
-RS_INLINE rs_u64 rs_box_set_code(RsRay ray, RS_LOCAL const RsBox* boxes, rs_u32 n, rs_u32 field, rs_u32 dir_bits) {
+/* Eight cut boxes, one axis bound per vector (SoA), 192 bytes, so one pass of the slab test serves
+ * eight boxes. Lanes are in reverse bit order: lane l of group g holds box 8g + 7 − l, so that
+ * rs8_bits puts box i at bit 63 − i of the code once shifted by 56 − 8g. Lanes past the last box
+ * are zero boxes whose bits are masked off. Built on the host (host/encode/encode.cpp,
+ * rs_cut_groups). */
+#define RS_CUT_LANES 8u
+typedef struct {
+  rs_f8 lo_x, hi_x, lo_y, hi_y, lo_z, hi_z;
+} RsCutGroup;
+#define RS_MAX_CUT_GROUPS (RS_MAX_KEY_BITS / RS_CUT_LANES)
+
+/* A ray broadcast to eight lanes. */
+typedef struct {
+  rs_f8 ox, oy, oz, ix, iy, iz, tmin, tmax;
+} RsCutRay;
+
+RS_KEY_INLINE RsCutRay rs_cut_ray(RsTraversalRay r) {
+  RsCutRay c;
+  c.ox = rs8_splat(r.o.x), c.oy = rs8_splat(r.o.y), c.oz = rs8_splat(r.o.z);
+  c.ix = rs8_splat(r.inv_d.x), c.iy = rs8_splat(r.inv_d.y), c.iz = rs8_splat(r.inv_d.z);
+  c.tmin = rs8_splat(r.tmin), c.tmax = rs8_splat(r.tmax);
+  return c;
+}
+
+/* rs_segment_overlaps_box on the eight boxes of g, same arithmetic per lane; bit l = lane l.
+ * min/max are selects instead of fmin/fmax: both pick the smaller (larger) of two non-NaN values
+ * and may differ only in the sign of a zero result, which no later comparison sees; no lane is
+ * NaN, since rays are finite and inv_d comes from rs_safe_rcp (finite, non-zero). */
+RS_KEY_INLINE int rs_cut_group_bits(const RsCutRay* r, RsCutGroup g) {
+  rs_f8 tx0 = (g.lo_x - r->ox) * r->ix, tx1 = (g.hi_x - r->ox) * r->ix;
+  rs_f8 ty0 = (g.lo_y - r->oy) * r->iy, ty1 = (g.hi_y - r->oy) * r->iy;
+  rs_f8 tz0 = (g.lo_z - r->oz) * r->iz, tz1 = (g.hi_z - r->oz) * r->iz;
+  rs_f8 tnear = rs8_max(rs8_max(rs8_min(tx0, tx1), rs8_min(ty0, ty1)), rs8_max(rs8_min(tz0, tz1), r->tmin));
+  rs_f8 tfar = rs8_min(rs8_min(rs8_max(tx0, tx1), rs8_max(ty0, ty1)), rs8_min(rs8_max(tz0, tz1), r->tmax));
+  return rs8_bits(tnear <= tfar);
+}
+
+/* The top n bits of a 64-bit word (n ≤ 64). */
+RS_KEY_INLINE rs_u64 rs_top_bits_mask(rs_u32 n) { return n >= 64u ? ~RS_U64(0) : ~((~RS_U64(0)) >> n); }
+
+/* Bit 63 − i = the segment overlaps box i of the groups g, i < n (n ≤ 64). One definition per
+ * address space (OpenCL C 1.2 has no generic pointers): _p private/host, _l local, _c constant,
+ * _g global. */
+#define RS_DEFINE_CUT_BITS(SUFFIX, SPACE)                                                        \
+  RS_KEY_INLINE rs_u64 rs_cut_bits_##SUFFIX(const RsCutRay* r, SPACE const RsCutGroup* g, rs_u32 n) { \
+    rs_u64 code = 0;                                                                             \
+    const rs_u32 groups = (n + RS_CUT_LANES - 1u) / RS_CUT_LANES;                                \
+    for (rs_u32 k = 0; k < groups; ++k)                                                          \
+      code |= RS_U64((rs_u32)rs_cut_group_bits(r, g[k])) << (64u - RS_CUT_LANES - RS_CUT_LANES * k); \
+    return code & rs_top_bits_mask(n);                                                           \
+  }
+#ifdef __OPENCL_VERSION__
+RS_DEFINE_CUT_BITS(l, __local)
+RS_DEFINE_CUT_BITS(c, __constant)
+RS_DEFINE_CUT_BITS(g, __global)
+#define RS_CUT_BITS_TOP rs_cut_bits_c
+#else
+RS_DEFINE_CUT_BITS(p, )
+#define RS_CUT_BITS_TOP rs_cut_bits_p
+#define rs_cut_bits_g rs_cut_bits_p
+#endif
+
+/* The space the box-set kernels read the cut groups from (HCC, grid, HCC_DIR, MLHCC top level). */
+#define RS_CUT_SPACE RS_CONSTANT
+
+/* HCC / RegularGrid / HCC_DIR: bit 63 − i = overlap with box i of the groups, i < n
+ * (n ≤ 64 − dir_bits); then dir_bits direction bits right below the box field of `field` bits
+ * (HCC_DIR). */
+RS_KEY_INLINE rs_u64 rs_box_set_code(RsRay ray, RS_CUT_SPACE const RsCutGroup* groups, rs_u32 n, rs_u32 field,
+                                     rs_u32 dir_bits) {
   RsTraversalRay r = rs_prepare_ray(ray);
-  rs_u64 code = 0;
-  for (rs_u32 i = 0; i < n; ++i)
-    if (rs_segment_overlaps_box(r, boxes[i])) code |= RS_U64(1) << (63u - i);
+  RsCutRay c = rs_cut_ray(r);
+  rs_u64 code = RS_CUT_BITS_TOP(&c, groups, n);
   if (dir_bits > 0u) code |= rs_direction_bits(ray, dir_bits) << (64u - field - dir_bits);
   return code;
 }
 
 /* MLHCC (Xiang et al. section 4.3): the top `half_bits` bits are the HCC of the top-level cut; the
  * representative top node is the first one hit (top nodes are in descending HAD order); the next
- * `half_bits` bits are the HCC of its low-level cut: low[rep·half_bits + j], j < low_count[rep]. No top node
- * hit: the low bits are 0. */
-RS_INLINE rs_u64 rs_two_level_cut_code(RsRay ray, RS_LOCAL const RsBox* top, rs_u32 n_top, RS_GLOBAL const RsBox* low,
-                                       RS_GLOBAL const rs_u32* low_count, rs_u32 half_bits) {
+ * `half_bits` bits are the HCC of its low-level cut: row rep of `low` (groups_per_row groups each),
+ * boxes j < low_count[rep]. No top node hit: the low bits are 0. */
+RS_KEY_INLINE rs_u64 rs_two_level_cut_code(RsRay ray, RS_CUT_SPACE const RsCutGroup* top, rs_u32 n_top,
+                                           RS_GLOBAL const RsCutGroup* low, RS_GLOBAL const rs_u32* low_count,
+                                           rs_u32 half_bits) {
   RsTraversalRay r = rs_prepare_ray(ray);
-  rs_u64 code = 0;
-  rs_u32 rep = 0xFFFFFFFFu;
-  for (rs_u32 i = 0; i < n_top; ++i) {
-    if (rs_segment_overlaps_box(r, top[i])) {
-      code |= RS_U64(1) << (63u - i);
-      if (rep == 0xFFFFFFFFu) rep = i;
-    }
-  }
-  if (rep != 0xFFFFFFFFu) {
-    rs_u32 m = low_count[rep];
-    for (rs_u32 j = 0; j < m; ++j)
-      if (rs_segment_overlaps_box(r, low[rep * half_bits + j])) code |= RS_U64(1) << (63u - half_bits - j);
+  RsCutRay c = rs_cut_ray(r);
+  rs_u64 code = RS_CUT_BITS_TOP(&c, top, n_top);
+  if (code != 0u) {
+    const rs_u32 rep = rs_clz64(code);
+    const rs_u32 groups_per_row = (half_bits + RS_CUT_LANES - 1u) / RS_CUT_LANES;
+    code |= rs_cut_bits_g(&c, low + rep * groups_per_row, low_count[rep]) >> half_bits;
   }
   return code;
 }
@@ -321,7 +419,7 @@ RS_INLINE rs_u64 rs_two_level_cut_code(RsRay ray, RS_LOCAL const RsBox* top, rs_
  * left and the right child's tests (rs_intersect_box, the trace kernels' test, against the
  * current closest hit); leaves test their triangles, which shortens the segment as in a trace.
  * 1 = hit, most significant first; a traversal that ends early leaves 0s. */
-RS_INLINE rs_u64 rs_prefix_path_code(RS_GLOBAL const RsBvhNode* nodes, RS_GLOBAL const RsTriangle* tris, RsRay ray,
+RS_KEY_INLINE rs_u64 rs_prefix_path_code(RS_GLOBAL const RsBvhNode* nodes, RS_GLOBAL const RsTriangle* tris, RsRay ray,
                                      rs_u32 bits) {
   RsTraversalRay r = rs_prepare_ray(ray);
   float tmax = ray.tmax;

@@ -4,8 +4,11 @@
 // rays that miss everything, a single-leaf BVH, a flat scene, 1e6 and 1e-4 scene scales).
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
+#include <random>
 #include <set>
 
 #include "bvh/bvh.h"
@@ -450,6 +453,237 @@ TEST(Encode, LargeAndSmallSceneScales) {
     if (k == 1.0f) base_distinct = distinct;
     EXPECT_GT(distinct, base_distinct / 2) << "scale " << k;
     EXPECT_GT(distinct, 10u) << "scale " << k;
+  }
+}
+
+// The key code before the branch-free rewrite, kept as the reference: Morton levels appended one
+// bit at a time through a bit writer (bits past 64 dropped), and one scalar slab test per cut box
+// (rs_segment_overlaps_box) over AoS boxes. The rewritten code (magic-number bit spreading, eight
+// boxes per SoA slab test) must give the same code for every ray.
+namespace ref {
+
+RsBitWriter writer() { return rs_bit_writer(); }
+void put_morton3(RsBitWriter* w, const rs_u32 q[3], rs_u32 n, rs_u32 first, rs_u32 levels) {
+  for (rs_u32 l = first; l < first + levels; ++l)
+    rs_put_bits(w, (rs_level_bit(q[0], n, l) << 2) | (rs_level_bit(q[1], n, l) << 1) | rs_level_bit(q[2], n, l), 3u);
+}
+void put_spherical(RsBitWriter* w, const rs_u32 q[2], rs_u32 n, rs_u32 levels) {
+  for (rs_u32 l = 0; l < levels; ++l) rs_put_bits(w, (rs_level_bit(q[0], n, l) << 1) | rs_level_bit(q[1], n, l), 2u);
+}
+RsVec3 unit_direction(const RsRay& r) { return rs_normalize(rs_vec3(r.d[0], r.d[1], r.d[2])); }
+void spherical(RsVec3 d, rs_u32 n, rs_u32 q[2]) {
+  q[0] = rs_quantize(rs_atan2(d.y, d.x) * RS_INV_2PI_F + 0.5f, n);
+  q[1] = rs_quantize(rs_acos(d.z) * RS_INV_PI_F, n);
+}
+rs_u64 origin(const RsEncodeFrame* f, const RsRay& r) {
+  rs_u32 q[3];
+  rs_quantize_point(f, rs_load3(r.o), RS_ORIGIN_LEVELS, q);
+  RsBitWriter w = writer();
+  put_morton3(&w, q, RS_ORIGIN_LEVELS, 0u, RS_ORIGIN_LEVELS);
+  return w.code;
+}
+rs_u64 reis(const RsEncodeFrame* f, const RsRay& r) {
+  rs_u32 q[3], s[2];
+  rs_quantize_point(f, rs_load3(r.o), RS_ORIGIN_LEVELS, q);
+  spherical(unit_direction(r), RS_DIRECTION_LEVELS, s);
+  RsBitWriter w = writer();
+  put_morton3(&w, q, RS_ORIGIN_LEVELS, 0u, 7u);
+  rs_put_bits(&w, rs_level_bit(q[0], RS_ORIGIN_LEVELS, 7u), 1u);
+  put_spherical(&w, s, RS_DIRECTION_LEVELS, RS_DIRECTION_LEVELS);
+  return w.code;
+}
+rs_u64 costa(const RsEncodeFrame* f, const RsRay& r) {
+  rs_u32 q[3], s[2];
+  rs_quantize_point(f, rs_load3(r.o), 15u, q);
+  spherical(unit_direction(r), 4u, s);
+  RsBitWriter w = writer();
+  put_spherical(&w, s, 4u, 4u);
+  put_morton3(&w, q, 15u, 0u, 15u);
+  return w.code;
+}
+rs_u64 aila(const RsEncodeFrame* f, const RsRay& r) {
+  const rs_u32 on = 12u, dn = RS_AILA_DIR_LEVELS;
+  rs_u32 q[3], dq[3];
+  rs_quantize_point(f, rs_load3(r.o), on, q);
+  RsVec3 d = unit_direction(r);
+  dq[0] = rs_quantize((d.x + 1.0f) * 0.5f, dn);
+  dq[1] = rs_quantize((d.y + 1.0f) * 0.5f, dn);
+  dq[2] = rs_quantize((d.z + 1.0f) * 0.5f, dn);
+  RsBitWriter w = writer();
+  put_morton3(&w, q, on, 0u, 3u);
+  for (rs_u32 i = 0; i < dn; ++i) {
+    put_morton3(&w, q, on, 3u + i, 1u);
+    put_morton3(&w, dq, dn, i, 1u);
+  }
+  return w.code;
+}
+rs_u64 twopoint(const RsEncodeFrame* f, const RsRay& ray) {
+  const rs_u32 n = RS_TWOPOINT_LEVELS;
+  RsTraversalRay r = rs_prepare_ray(ray);
+  float len = rs_max(0.0f, rs_min(f->twopoint_length, rs_scene_exit(f, r)));
+  RsVec3 b = rs_add(r.o, rs_scale(r.d, len));
+  rs_u32 qa[3], qb[3];
+  rs_quantize_point(f, r.o, n, qa);
+  rs_quantize_point(f, b, n, qb);
+  RsBitWriter w = writer();
+  for (rs_u32 l = 0; l < n; ++l) {
+    put_morton3(&w, qa, n, l, 1u);
+    put_morton3(&w, qb, n, l, 1u);
+  }
+  return w.code;
+}
+rs_u64 direction_bits(const RsRay& r, rs_u32 d) {
+  rs_u32 s[2];
+  spherical(unit_direction(r), RS_DIRECTION_LEVELS, s);
+  RsBitWriter w = writer();
+  put_spherical(&w, s, RS_DIRECTION_LEVELS, RS_DIRECTION_LEVELS);
+  return rs_key_from_code(w.code, d);
+}
+rs_u64 box_set(const RsRay& ray, const RsBox* boxes, rs_u32 n, rs_u32 field, rs_u32 dir_bits) {
+  RsTraversalRay r = rs_prepare_ray(ray);
+  rs_u64 code = 0;
+  for (rs_u32 i = 0; i < n; ++i)
+    if (rs_segment_overlaps_box(r, boxes[i])) code |= rs_u64(1) << (63u - i);
+  if (dir_bits > 0u) code |= direction_bits(ray, dir_bits) << (64u - field - dir_bits);
+  return code;
+}
+rs_u64 two_level(const RsRay& ray, const RsBox* top, rs_u32 n_top, const RsBox* low, const rs_u32* low_count,
+                 rs_u32 half_bits) {
+  RsTraversalRay r = rs_prepare_ray(ray);
+  rs_u64 code = 0;
+  rs_u32 rep = 0xFFFFFFFFu;
+  for (rs_u32 i = 0; i < n_top; ++i)
+    if (rs_segment_overlaps_box(r, top[i])) {
+      code |= rs_u64(1) << (63u - i);
+      if (rep == 0xFFFFFFFFu) rep = i;
+    }
+  if (rep != 0xFFFFFFFFu)
+    for (rs_u32 j = 0; j < low_count[rep]; ++j)
+      if (rs_segment_overlaps_box(r, low[rep * half_bits + j])) code |= rs_u64(1) << (63u - half_bits - j);
+  return code;
+}
+
+std::uint64_t key(Encoder e, unsigned bits, const EncodeScene& s, const RsRay& r) {
+  const RsEncodeFrame* f = &s.frame();
+  rs_u64 code = 0;
+  switch (e) {
+    case Encoder::Origin: code = origin(f, r); break;
+    case Encoder::Reis: code = reis(f, r); break;
+    case Encoder::Costa: code = costa(f, r); break;
+    case Encoder::Aila: code = aila(f, r); break;
+    case Encoder::TwoPoint: code = twopoint(f, r); break;
+    case Encoder::RegularGrid:
+    case Encoder::HCC:
+    case Encoder::HCC_DIR: {
+      const auto& boxes = s.box_set(e, bits);
+      const unsigned dir = e == Encoder::HCC_DIR ? s.params().direction_bits : 0u;
+      code = box_set(r, boxes.data(), static_cast<rs_u32>(boxes.size()), bits - dir, dir);
+      break;
+    }
+    case Encoder::MLHCC: {
+      const auto& t = s.two_level(bits);
+      code = two_level(r, t.top.data(), static_cast<rs_u32>(t.top.size()), t.low.data(), t.low_count.data(), t.half);
+      break;
+    }
+    default: return encode_ray(e, bits, s, r);
+  }
+  return rs_key_from_code(code, bits);
+}
+
+}  // namespace ref
+
+namespace {
+
+// Rays on the edges: origins on box faces, corners and cut-box corners, inside and outside the
+// scene box; directions along axes, with ±0 components, unnormalised, tiny and random; finite and
+// short segments.
+std::vector<RsRay> edge_rays(const EncodeScene& s, const Aabb& box, std::size_t random_count) {
+  std::mt19937 rng(1234);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  std::vector<std::array<float, 3>> points;
+  for (int c = 0; c < 8; ++c)
+    points.push_back({c & 1 ? box.max[0] : box.min[0], c & 2 ? box.max[1] : box.min[1], c & 4 ? box.max[2] : box.min[2]});
+  for (unsigned bits : {16u, 64u})
+    for (const RsBox& b : s.box_set(Encoder::HCC, bits)) {
+      points.push_back({b.bmin[0], b.bmin[1], b.bmin[2]});
+      points.push_back({b.bmax[0], b.bmax[1], b.bmax[2]});
+      points.push_back({b.bmin[0], 0.5f * (b.bmin[1] + b.bmax[1]), b.bmax[2]});
+    }
+  const std::vector<std::array<float, 3>> dirs = {
+      {1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}, {-0.0f, 0, 1}, {0, -0.0f, -1},
+      {1, 1, 1}, {-3, 2, 0.5f}, {1e-20f, -1e-20f, 1}, {0, 0, 0}, {0.6f, -0.8f, 0}};
+  std::vector<RsRay> rays;
+  for (const auto& p : points)
+    for (const auto& d : dirs) {
+      rays.push_back(ray(p[0], p[1], p[2], d[0], d[1], d[2]));
+      rays.push_back(ray(p[0], p[1], p[2], d[0], d[1], d[2], 0.01f * box.largest_extent()));
+    }
+  for (std::size_t i = 0; i < random_count; ++i) {
+    float o[3], d[3];
+    for (int a = 0; a < 3; ++a) {
+      const float ext = box.max[a] - box.min[a];
+      o[a] = box.min[a] + (1.4f * u(rng) - 0.2f) * ext;
+      d[a] = 2.0f * u(rng) - 1.0f;
+      if (u(rng) < 0.05f) d[a] = u(rng) < 0.5f ? 0.0f : -0.0f;
+    }
+    const float tmax = u(rng) < 0.3f ? u(rng) * box.largest_extent() : RS_T_FAR;
+    rays.push_back(ray(o[0], o[1], o[2], d[0], d[1], d[2], tmax));
+  }
+  return rays;
+}
+
+}  // namespace
+
+// The rewritten key code (branch-free Morton codes, SoA cut groups) equals the bitwise reference on
+// edge and random rays, for every encoder but PPC (unchanged) at many key lengths; kernel == host
+// on the same rays.
+TEST(Encode, SameKeysAsTheBitwiseReference) {
+  Scene scene = load_scene("detail-room");
+  Scene::Flat tris = scene.flatten();
+  Bvh bvh = build_bvh(tris);
+  const Aabb box = bvh.bounds();
+  DeviceEncoder dev(testing::runtime(), bvh, box);
+  const EncodeScene& s = dev.scene();
+  const std::vector<RsRay> rays = edge_rays(s, box, 20000);
+  for (Encoder e : all_encoders()) {
+    if (e == Encoder::PPC || e == Encoder::NoSort) continue;
+    for (unsigned bits : {2u, 7u, 13u, 16u, 24u, 31u, 32u, 33u, 40u, 50u, 63u, 64u}) {
+      if (!key_bits_problem(e, bits, s.params()).empty()) continue;
+      const auto keys = encode_on_host(e, bits, s, rays);
+      std::size_t bad = 0, first = 0;
+      for (std::size_t i = 0; i < rays.size(); ++i)
+        if (keys[i] != ref::key(e, bits, s, rays[i]) && bad++ == 0) first = i;
+      EXPECT_EQ(bad, 0u) << encoder_name(e) << "/" << bits << " first mismatch at ray " << first << ": "
+                         << std::hex << keys[first] << " vs reference " << ref::key(e, bits, s, rays[first]);
+    }
+  }
+  expect_all_encoders_bit_exact(dev, rays, "edge rays");
+}
+
+// Cut groups: lane l of group g holds box 8g + 7 − l; the eight-box test gives each box's scalar
+// slab test, for box counts that do not fill the last group, and missing lanes never set bits.
+TEST(Encode, CutGroupsMatchTheScalarSlabTest) {
+  std::mt19937 rng(99);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  for (rs_u32 n : {1u, 5u, 8u, 13u, 31u, 32u, 57u, 64u}) {
+    std::vector<RsBox> boxes(n);
+    for (RsBox& b : boxes)
+      for (int a = 0; a < 3; ++a) {
+        const float x = u(rng), y = u(rng);
+        b.bmin[a] = std::min(x, y), b.bmax[a] = a == 2 && u(rng) < 0 ? b.bmin[a] : std::max(x, y);  // some flat
+      }
+    const auto groups = rs_cut_groups(boxes.data(), boxes.size());
+    ASSERT_EQ(groups.size(), (n + 7) / 8);
+    for (int k = 0; k < 2000; ++k) {
+      RsRay r = ray(u(rng), u(rng), u(rng), u(rng), u(rng), k % 7 == 0 ? 0.0f : u(rng), k % 3 ? RS_T_FAR : 0.5f);
+      if (k % 11 == 0) std::memcpy(r.o, boxes[k % n].bmin, sizeof r.o);  // on a box corner
+      const RsTraversalRay tr = rs_prepare_ray(r);
+      const RsCutRay c = rs_cut_ray(tr);
+      rs_u64 expect = 0;
+      for (rs_u32 i = 0; i < n; ++i)
+        if (rs_segment_overlaps_box(tr, boxes[i])) expect |= rs_u64(1) << (63u - i);
+      ASSERT_EQ(rs_cut_bits_p(&c, groups.data(), n), expect) << "n " << n << " ray " << k;
+    }
   }
 }
 

@@ -31,10 +31,15 @@ DeviceEncoder::DeviceEncoder(Runtime& rt, const Bvh& bvh, const Aabb& scene_box,
       k->box_set = cl::Kernel(program, (std::string("encode_box_set_") + suffix).c_str());
       k->two_level = cl::Kernel(program, (std::string("encode_two_level_") + suffix).c_str());
       k->prefix_path = cl::Kernel(program, (std::string("encode_prefix_path_") + suffix).c_str());
+      k->origin = cl::Kernel(program, (std::string("encode_origin_") + suffix).c_str());
+      k->reis = cl::Kernel(program, (std::string("encode_reis_") + suffix).c_str());
+      k->costa = cl::Kernel(program, (std::string("encode_costa_") + suffix).c_str());
+      k->aila = cl::Kernel(program, (std::string("encode_aila_") + suffix).c_str());
+      k->twopoint = cl::Kernel(program, (std::string("encode_twopoint_") + suffix).c_str());
     }
   });
-  // Box-set kernels copy up to 64 boxes to local memory per group; 64 work-items suit PoCL (the
-  // group is a loop) and GPUs (two warps) alike.
+  // 64 work-items suit PoCL (the group is a loop; 256 measured no faster) and GPUs (two warps).
+  // Cut boxes are read from __constant memory (broadcast on GPUs; no copy or barrier on PoCL).
   local_ = std::min<std::size_t>(64, rt.info().max_work_group_size);
 }
 
@@ -46,12 +51,12 @@ const DeviceEncoder::Uploaded& DeviceEncoder::uploaded(Encoder e, unsigned bits)
   const std::string what = std::string(encoder_name(e)) + " " + std::to_string(bits) + "-bit ";
   if (is_box_set(e)) {
     const auto& boxes = scene_.box_set(e, bits);
-    u.a = rt_.upload(what + "cut boxes", boxes);
+    u.a = rt_.upload(what + "cut boxes", scene_.box_groups(e, bits));
     u.n = static_cast<std::uint32_t>(boxes.size());
   } else if (e == Encoder::MLHCC) {
     const auto& t = scene_.two_level(bits);
-    u.a = rt_.upload(what + "top-level cut boxes", t.top);
-    u.b = rt_.upload(what + "low-level cut boxes", t.low);
+    u.a = rt_.upload(what + "top-level cut boxes", t.top_groups);
+    u.b = rt_.upload(what + "low-level cut boxes", t.low_groups);
     u.c = rt_.upload(what + "low-level cut sizes", t.low_count);
     u.n = static_cast<std::uint32_t>(t.top.size());
   }
@@ -77,12 +82,15 @@ cl::Event DeviceEncoder::enqueue(Encoder e, unsigned bits, const cl::Buffer& ray
             if (e == Encoder::NoSort) {
               k = &ks.nosort;
             } else if (is_spatial(e)) {
-              k = &ks.spatial;
+              k = e == Encoder::Origin  ? &ks.origin
+                  : e == Encoder::Reis  ? &ks.reis
+                  : e == Encoder::Costa ? &ks.costa
+                  : e == Encoder::Aila  ? &ks.aila
+                                        : &ks.twopoint;
               k->setArg(arg++, frame_);
               k->setArg(arg++, rays);
               k->setArg(arg++, order);
               k->setArg(arg++, count);
-              k->setArg(arg++, static_cast<cl_int>(e));
             } else if (is_box_set(e)) {
               const cl_uint dir = e == Encoder::HCC_DIR ? scene_.params().direction_bits : 0u;
               k = &ks.box_set;
@@ -167,7 +175,9 @@ double DeviceEncoder::warm_up() {
   ray.tmax = RS_T_FAR;
   std::vector<RsRay> rays(4, ray);
   for (unsigned bits : {32u, 64u})
-    for (Encoder e : {Encoder::NoSort, Encoder::Origin, Encoder::HCC, Encoder::MLHCC, Encoder::PPC}) run(e, bits, rays);
+    for (Encoder e : {Encoder::NoSort, Encoder::Origin, Encoder::Reis, Encoder::Costa, Encoder::Aila, Encoder::TwoPoint,
+                      Encoder::HCC, Encoder::MLHCC, Encoder::PPC})
+      run(e, bits, rays);
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 

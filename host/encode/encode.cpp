@@ -11,7 +11,8 @@
 
 namespace raysort {
 
-static_assert(sizeof(RsBox) == 24 && sizeof(RsEncodeFrame) == 48, "device struct layouts (cl/keys.h)");
+static_assert(sizeof(RsBox) == 24 && sizeof(RsEncodeFrame) == 48 && sizeof(RsCutGroup) == 192,
+              "device struct layouts (cl/keys.h)");
 
 std::string_view encoder_name(Encoder e) {
   switch (e) {
@@ -89,6 +90,19 @@ RsBox to_rs_box(const Aabb& b) {
   return r;
 }
 
+std::vector<RsCutGroup> rs_cut_groups(const RsBox* boxes, std::size_t n) {
+  const std::size_t lanes = RS_CUT_LANES;
+  std::vector<RsCutGroup> groups((n + lanes - 1) / lanes, RsCutGroup{});
+  for (std::size_t i = 0; i < n; ++i) {
+    RsCutGroup& g = groups[i / lanes];
+    const std::size_t l = lanes - 1 - i % lanes;
+    g.lo_x.s[l] = boxes[i].bmin[0], g.hi_x.s[l] = boxes[i].bmax[0];
+    g.lo_y.s[l] = boxes[i].bmin[1], g.hi_y.s[l] = boxes[i].bmax[1];
+    g.lo_z.s[l] = boxes[i].bmin[2], g.hi_z.s[l] = boxes[i].bmax[2];
+  }
+  return groups;
+}
+
 EncodeScene::EncodeScene(const Bvh& bvh, const Aabb& scene_box, const EncoderParams& params)
     : bvh_(&bvh), params_(params), box_(scene_box.empty() ? Aabb{{0, 0, 0}, {0, 0, 0}} : scene_box) {
   for (int a = 0; a < 3; ++a) {
@@ -124,6 +138,14 @@ const std::vector<RsBox>& EncodeScene::box_set(Encoder e, unsigned bits) const {
   return box_sets_.emplace(key, std::move(boxes)).first->second;
 }
 
+const std::vector<RsCutGroup>& EncodeScene::box_groups(Encoder e, unsigned bits) const {
+  const auto key = std::make_pair(static_cast<int>(e), bits);
+  auto it = box_groups_.find(key);
+  if (it != box_groups_.end()) return it->second;
+  const auto& boxes = box_set(e, bits);
+  return box_groups_.emplace(key, rs_cut_groups(boxes.data(), boxes.size())).first->second;
+}
+
 const EncodeScene::TwoLevel& EncodeScene::two_level(unsigned bits) const {
   auto it = two_levels_.find(bits);
   if (it != two_levels_.end()) return it->second;
@@ -137,6 +159,11 @@ const EncodeScene::TwoLevel& EncodeScene::two_level(unsigned bits) const {
     const auto& low = t.cut.low[i];
     t.low_count.push_back(static_cast<rs_u32>(low.size()));
     for (std::size_t j = 0; j < low.size(); ++j) t.low[i * t.half + j] = to_rs_box(node_box(bvh_->nodes[low[j]]));
+  }
+  t.top_groups = rs_cut_groups(t.top.data(), t.top.size());
+  for (std::size_t i = 0; i < t.top.size(); ++i) {
+    const auto row = rs_cut_groups(t.low.data() + i * t.half, t.half);
+    t.low_groups.insert(t.low_groups.end(), row.begin(), row.end());
   }
   return two_levels_.emplace(bits, std::move(t)).first->second;
 }
@@ -154,13 +181,14 @@ std::uint64_t encode_ray(Encoder e, unsigned bits, const EncodeScene& scene, con
     case Encoder::HCC:
     case Encoder::HCC_DIR: {
       const auto& boxes = scene.box_set(e, bits);
+      const auto& groups = scene.box_groups(e, bits);
       const unsigned dir = e == Encoder::HCC_DIR ? scene.params().direction_bits : 0u;
       return rs_key_from_code(
-          rs_box_set_code(ray, boxes.data(), static_cast<rs_u32>(boxes.size()), bits - dir, dir), bits);
+          rs_box_set_code(ray, groups.data(), static_cast<rs_u32>(boxes.size()), bits - dir, dir), bits);
     }
     case Encoder::MLHCC: {
       const auto& t = scene.two_level(bits);
-      return rs_key_from_code(rs_two_level_cut_code(ray, t.top.data(), static_cast<rs_u32>(t.top.size()), t.low.data(),
+      return rs_key_from_code(rs_two_level_cut_code(ray, t.top_groups.data(), static_cast<rs_u32>(t.top.size()), t.low_groups.data(),
                                                     t.low_count.data(), t.half),
                               bits);
     }
@@ -175,7 +203,7 @@ std::vector<std::uint64_t> encode_on_host(Encoder e, unsigned bits, const Encode
                                           const std::vector<RsRay>& rays) {
   check_key_bits(e, bits, scene.params());
   // Build the cached cut data before the threads read it.
-  if (e == Encoder::RegularGrid || e == Encoder::HCC || e == Encoder::HCC_DIR) scene.box_set(e, bits);
+  if (e == Encoder::RegularGrid || e == Encoder::HCC || e == Encoder::HCC_DIR) scene.box_groups(e, bits);
   if (e == Encoder::MLHCC) scene.two_level(bits);
   std::vector<std::uint64_t> keys(rays.size());
   auto work = [&](std::size_t begin, std::size_t end) {

@@ -73,6 +73,8 @@ class EncodeScene {
   const std::vector<std::uint32_t>& hcc_cut(unsigned size) const;
   // The boxes of a box-set encoder (HCC, RegularGrid, HCC_DIR) for keys of `bits` bits, bit order.
   const std::vector<RsBox>& box_set(Encoder e, unsigned bits) const;
+  // The same boxes as eight-box SoA groups (rs_cut_groups), what the key code reads.
+  const std::vector<RsCutGroup>& box_groups(Encoder e, unsigned bits) const;
   // MLHCC for keys of `bits` bits: top boxes (≤ half), low boxes [top.size() × half] (row i: the
   // low cut of top i, zero-padded), low counts per top node.
   struct TwoLevel {
@@ -80,6 +82,8 @@ class EncodeScene {
     TwoLevelCut cut;
     std::vector<RsBox> top, low;
     std::vector<rs_u32> low_count;
+    // top and each row of low as eight-box groups (rs_cut_groups): ceil(half / 8) groups per row.
+    std::vector<RsCutGroup> top_groups, low_groups;
   };
   const TwoLevel& two_level(unsigned bits) const;
 
@@ -91,10 +95,14 @@ class EncodeScene {
   std::vector<double> had_;
   mutable std::map<unsigned, std::vector<std::uint32_t>> hcc_cuts_;
   mutable std::map<std::pair<int, unsigned>, std::vector<RsBox>> box_sets_;
+  mutable std::map<std::pair<int, unsigned>, std::vector<RsCutGroup>> box_groups_;
   mutable std::map<unsigned, TwoLevel> two_levels_;
 };
 
 RsBox to_rs_box(const Aabb& b);
+// Boxes [0, n) transposed into ceil(n / 8) RsCutGroups (cl/keys.h: lane l of group g = box
+// 8g + 7 − l; missing boxes are zero boxes, masked off by the key code).
+std::vector<RsCutGroup> rs_cut_groups(const RsBox* boxes, std::size_t n);
 
 // The key of one ray (host twin of the kernels; same source for the key arithmetic).
 std::uint64_t encode_ray(Encoder e, unsigned bits, const EncodeScene& scene, const RsRay& ray);
@@ -145,6 +153,7 @@ class DeviceEncoder {
   cl::Buffer frame_, nodes_, triangles_;
   struct Kernels {
     cl::Kernel nosort, spatial, box_set, two_level, prefix_path;
+    cl::Kernel origin, reis, costa, aila, twopoint;  // one kernel per spatial encoder
   } k32_, k64_;
   std::map<std::pair<int, unsigned>, Uploaded> uploads_;
   std::size_t local_ = 64;
