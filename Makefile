@@ -34,6 +34,10 @@ test: deps
 bench: deps
 	$(MAKE) build
 	$(BUILD)/raysort trace --scene $(BENCH_SCENES) --resolution $(BENCH_RESOLUTION)
+	@# The default folder is scratch (gitignored) and starts fresh each time: one left by an older
+	@# build may hold another matrix configuration, which `run` refuses to resume into. A folder
+	@# given as BENCH_OUT=... is never deleted (run resumes into it, or says why it cannot).
+	$(if $(filter results/bench-quick,$(BENCH_OUT)),rm -rf results/bench-quick,@true)
 	$(BUILD)/raysort run --preset quick --resolution $(BENCH_RESOLUTION) --out $(BENCH_OUT)
 	@echo "tables: $(BENCH_OUT)/tables.md"
 
