@@ -20,39 +20,8 @@ using namespace raysort;
 
 namespace {
 
-struct CliResult {
-  int code = -1;
-  std::string err;  // stderr
-};
-
-// Runs the raysort binary with `args` (and `env` as NAME=VALUE), capturing stderr.
-CliResult run_cli(const std::vector<std::string>& args, const std::vector<std::string>& env = {}) {
-  fs::path err_file = fs::temp_directory_path() / ("raysort_cli_test_" + std::to_string(::getpid()) + ".err");
-  pid_t pid = fork();
-  if (pid == 0) {
-    for (const auto& e : env) ::putenv(const_cast<char*>(e.c_str()));
-    std::vector<char*> argv;
-    std::string bin = RAYSORT_BINARY;
-    argv.push_back(bin.data());
-    std::vector<std::string> copy = args;
-    for (auto& a : copy) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    int devnull = ::open("/dev/null", O_WRONLY);
-    int err = ::open(err_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    ::dup2(devnull, 1);
-    ::dup2(err, 2);
-    ::execv(bin.c_str(), argv.data());
-    _exit(127);
-  }
-  int status = 0;
-  ::waitpid(pid, &status, 0);
-  CliResult r;
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  std::ifstream in(err_file);
-  r.err.assign(std::istreambuf_iterator<char>(in), {});
-  fs::remove(err_file);
-  return r;
-}
+using raysort::testing::CliResult;
+using raysort::testing::run_cli;
 
 std::string temp_dir(const std::string& name) {
   fs::path p = fs::temp_directory_path() / ("raysort_cli_test_" + name + "_" + std::to_string(::getpid()));

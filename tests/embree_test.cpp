@@ -16,6 +16,7 @@
 #include "bvh/bvh.h"
 #include "render/batches.h"
 #include "scene/load.h"
+#include "test_util.h"
 #include "trace/tracer.h"
 #ifdef RAYSORT_HAVE_EMBREE
 #include "embree/embree_reference.h"
@@ -27,41 +28,8 @@ namespace raysort {
 
 namespace {
 
-struct CliResult {
-  int code = -1;
-  std::string out, err;
-};
-
-// Runs the raysort binary with `args`, capturing stdout and stderr.
-CliResult run_cli(const std::vector<std::string>& args) {
-  const std::string stem = "raysort_embree_test_" + std::to_string(::getpid());
-  const fs::path out_file = fs::temp_directory_path() / (stem + ".out");
-  const fs::path err_file = fs::temp_directory_path() / (stem + ".err");
-  pid_t pid = fork();
-  if (pid == 0) {
-    std::string bin = RAYSORT_BINARY;
-    std::vector<std::string> copy = args;
-    std::vector<char*> argv{bin.data()};
-    for (auto& a : copy) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    int out = ::open(out_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    int err = ::open(err_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    ::dup2(out, 1);
-    ::dup2(err, 2);
-    ::execv(bin.c_str(), argv.data());
-    _exit(127);
-  }
-  int status = 0;
-  ::waitpid(pid, &status, 0);
-  CliResult r;
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  std::ifstream out(out_file), err(err_file);
-  r.out.assign(std::istreambuf_iterator<char>(out), {});
-  r.err.assign(std::istreambuf_iterator<char>(err), {});
-  fs::remove(out_file);
-  fs::remove(err_file);
-  return r;
-}
+using raysort::testing::CliResult;
+using raysort::testing::run_cli;
 
 }  // namespace
 

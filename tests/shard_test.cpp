@@ -21,6 +21,7 @@
 #include "bench/merge.h"
 #include "bench/result_set.h"
 #include "bench/shard.h"
+#include "test_util.h"
 #include "util/atomic_file.h"
 #include "util/error.h"
 
@@ -150,38 +151,7 @@ TEST(ShardPlan, QuickPresetPlanEqualsTheCellsOfAFullRun) {
 
 namespace {
 
-struct Cli {
-  int code = -1;
-  std::string out, err;
-};
-
-Cli raysort_cli(const std::vector<std::string>& args) {
-  const std::string base = (fs::temp_directory_path() / ("raysort_shard_test_" + std::to_string(::getpid()))).string();
-  pid_t pid = fork();
-  if (pid == 0) {
-    std::vector<char*> argv;
-    std::string bin = RAYSORT_BINARY;
-    argv.push_back(bin.data());
-    std::vector<std::string> copy = args;
-    for (auto& a : copy) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    int out = ::open((base + ".out").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    int err = ::open((base + ".err").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    ::dup2(out, 1);
-    ::dup2(err, 2);
-    ::execv(bin.c_str(), argv.data());
-    _exit(127);
-  }
-  int status = 0;
-  ::waitpid(pid, &status, 0);
-  Cli r;
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  r.out = read_file(base + ".out");
-  r.err = read_file(base + ".err");
-  fs::remove(base + ".out");
-  fs::remove(base + ".err");
-  return r;
-}
+using Cli = raysort::testing::CliResult;
 
 // What must be equal between a sharded and a full run: everything but the timings.
 std::map<std::string, std::string> deterministic(const ResultSet& rs) {
@@ -205,7 +175,7 @@ void expect_merge_refused(const std::vector<fs::path>& inputs, const fs::path& o
   std::vector<std::string> args{"merge"};
   for (auto& in : inputs) args.push_back(in.string());
   args.insert(args.end(), {"-o", out.string()});
-  Cli r = raysort_cli(args);
+  Cli r = raysort::testing::run_cli(args);
   EXPECT_NE(r.code, 0) << r.err;
   expect_contains(r.err, parts);
   EXPECT_FALSE(fs::exists(out)) << "a refused merge wrote " << out;
@@ -225,7 +195,7 @@ TEST(ShardedRun, MergeOfShardsEqualsTheFullRunAndRefusesWhatIsNotOneRun) {
   auto run = [&](std::vector<std::string> extra) {
     std::vector<std::string> args = matrix;
     args.insert(args.end(), extra.begin(), extra.end());
-    return raysort_cli(args);
+    return raysort::testing::run_cli(args);
   };
 
   // The plan, printed without running anything.
@@ -276,7 +246,7 @@ TEST(ShardedRun, MergeOfShardsEqualsTheFullRunAndRefusesWhatIsNotOneRun) {
 
   // The merge equals the full run cell for cell (deterministic figures exactly, timings present).
   const fs::path merged = root / "merged";
-  Cli m = raysort_cli({"merge", shards[2].string(), shards[0].string(), shards[1].string(), "-o", merged.string()});
+  Cli m = raysort::testing::run_cli({"merge", shards[2].string(), shards[0].string(), shards[1].string(), "-o", merged.string()});
   ASSERT_EQ(m.code, 0) << m.err;
   EXPECT_NE(m.out.find("merged 28 cells of 3 shards"), std::string::npos) << m.out;
   ResultSet a = ResultSet::load((root / "full").string()), b = ResultSet::load(merged.string());
@@ -321,14 +291,14 @@ TEST(ShardedRun, MergeOfShardsEqualsTheFullRunAndRefusesWhatIsNotOneRun) {
   expect_merge_refused({shards[0], shards[1], altered("plan", [](auto& j) { j["shard"]["plan_hash"] = "x"; })}, out,
                        {(root / "plan").string(), "planned its shards differently", "same scene files"});
   // Several problems at once: each on its own line.
-  Cli many = raysort_cli({"merge", shards[0].string(), (root / "dev").string(), (root / "commit").string(), "-o",
+  Cli many = raysort::testing::run_cli({"merge", shards[0].string(), (root / "dev").string(), (root / "commit").string(), "-o",
                           out.string()});
   EXPECT_NE(many.code, 0);
   EXPECT_GE(std::count(many.err.begin(), many.err.end(), '\n'), 3) << many.err;
   expect_contains(many.err, {"NVIDIA H100", "commit 0123456789ab"});
   // An existing result set is never overwritten.
   const std::string before = read_file((merged / "cells.csv").string());
-  Cli onto = raysort_cli({"merge", shards[0].string(), shards[1].string(), shards[2].string(), "-o", merged.string()});
+  Cli onto = raysort::testing::run_cli({"merge", shards[0].string(), shards[1].string(), shards[2].string(), "-o", merged.string()});
   EXPECT_NE(onto.code, 0);
   expect_contains(onto.err, {merged.string(), "not empty", "new folder"});
   EXPECT_EQ(read_file((merged / "cells.csv").string()), before);

@@ -1,12 +1,18 @@
 #pragma once
 // Helpers shared by the tests: the OpenCL device under test, and the scene-root policy for tests
 // that need real scenes (skip with a message when the folder is absent, fail under CI=true).
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "cl/runtime.h"
 #include "scene/load.h"
@@ -26,6 +32,50 @@ inline bool under_ci() {
 
 // The real-scene root, or "" (after GTEST_SKIP or a failure) when it is absent.
 inline std::string real_scene_root() { return resolve_scene_root({}); }
+
+// What the raysort binary printed and its exit code (128 + signal when killed by one).
+struct CliResult {
+  int code = -1;
+  std::string out, err;
+};
+
+// Runs the raysort binary (RAYSORT_BINARY, set by CMake for every test) with `args`, and `env` as
+// NAME=VALUE entries added to its environment, capturing stdout and stderr.
+inline CliResult run_cli(const std::vector<std::string>& args, const std::vector<std::string>& env = {}) {
+  static int calls = 0;
+  const std::string stem = (std::filesystem::temp_directory_path() /
+                            ("raysort_test_" + std::to_string(::getpid()) + "_" + std::to_string(++calls)))
+                               .string();
+  const std::string out_file = stem + ".out", err_file = stem + ".err";
+  pid_t pid = fork();
+  if (pid == 0) {
+    for (const auto& e : env) ::putenv(const_cast<char*>(e.c_str()));
+    std::string bin = RAYSORT_BINARY;
+    std::vector<std::string> copy = args;
+    std::vector<char*> argv{bin.data()};
+    for (auto& a : copy) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    int out = ::open(out_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    int err = ::open(err_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    ::dup2(out, 1);
+    ::dup2(err, 2);
+    ::execv(bin.c_str(), argv.data());
+    _exit(127);
+  }
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  CliResult r;
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  auto slurp = [](const std::string& f) {
+    std::ifstream in(f);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  r.out = slurp(out_file);
+  r.err = slurp(err_file);
+  std::filesystem::remove(out_file);
+  std::filesystem::remove(err_file);
+  return r;
+}
 
 }  // namespace raysort::testing
 
