@@ -16,7 +16,7 @@
 #include "keys.h"
 
 /* One kernel per spatial encoder (encode_origin_k32, ...): a straight-line body PoCL can vectorise
- * across work-items. encode_spatial_* (encoder as an argument) is kept for comparison. */
+ * across work-items (a single kernel switching on the encoder did not vectorise). */
 #define RS_DEFINE_SPATIAL_KERNEL(NAME, SUFFIX, KEY_T)                                                    \
   __kernel void encode_##NAME##_##SUFFIX(__global const RsEncodeFrame* frame, __global const RsRay* rays, \
                                          __global const uint* order, uint count, uint bits,             \
@@ -36,15 +36,6 @@
     values[i] = i;                                                                                       \
   }                                                                                                      \
                                                                                                          \
-  __kernel void encode_spatial_##SUFFIX(__global const RsEncodeFrame* frame, __global const RsRay* rays, \
-                                        __global const uint* order, uint count, int encoder, uint bits,  \
-                                        __global KEY_T* keys, __global uint* values) {                   \
-    uint i = get_global_id(0);                                                                           \
-    if (i >= count) return;                                                                              \
-    RsEncodeFrame f = *frame;                                                                            \
-    keys[i] = (KEY_T)rs_key_from_code(rs_spatial_code(encoder, &f, rays[order[i]]), bits);               \
-    values[i] = i;                                                                                       \
-  }                                                                                                      \
   RS_DEFINE_SPATIAL_KERNEL(origin, SUFFIX, KEY_T)                                                        \
   RS_DEFINE_SPATIAL_KERNEL(reis, SUFFIX, KEY_T)                                                          \
   RS_DEFINE_SPATIAL_KERNEL(costa, SUFFIX, KEY_T)                                                         \

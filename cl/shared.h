@@ -125,32 +125,35 @@ typedef struct alignas(16) rs_f4 {
 typedef struct alignas(16) rs_i4 {
   rs_i32 s[4];
 } rs_i4;
-#define RS4_BINARY(T, R, op)                                 \
+/* Per-lane operators of the host lane structs (N lanes; comparisons give -1 / 0 like OpenCL's).
+ * Defined once here and used for the 8-lane structs below too. */
+#define RS_LANES_BINARY(T, R, N, op)                         \
   RS_INLINE R operator op(T a, T b) {                        \
     R r;                                                     \
-    for (int i = 0; i < 4; ++i) r.s[i] = a.s[i] op b.s[i];   \
+    for (int i = 0; i < N; ++i) r.s[i] = a.s[i] op b.s[i];   \
     return r;                                                \
   }
-#define RS4_COMPARE(op)                                                        \
-  RS_INLINE rs_i4 operator op(rs_f4 a, rs_f4 b) {                              \
-    rs_i4 r;                                                                   \
-    for (int i = 0; i < 4; ++i) r.s[i] = a.s[i] op b.s[i] ? -1 : 0;            \
+#define RS_LANES_COMPARE(F, I, N, op)                                          \
+  RS_INLINE I operator op(F a, F b) {                                          \
+    I r;                                                                       \
+    for (int i = 0; i < N; ++i) r.s[i] = a.s[i] op b.s[i] ? -1 : 0;            \
     return r;                                                                  \
-  }                                                                            \
+  }
+#define RS4_COMPARE(op)                  \
+  RS_LANES_COMPARE(rs_f4, rs_i4, 4, op) \
   RS_INLINE rs_i4 operator op(rs_f4 a, float b) { return a op rs_f4{{b, b, b, b}}; }
-RS4_BINARY(rs_f4, rs_f4, +)
-RS4_BINARY(rs_f4, rs_f4, -)
-RS4_BINARY(rs_f4, rs_f4, *)
-RS4_BINARY(rs_f4, rs_f4, /)
-RS4_BINARY(rs_i4, rs_i4, &)
-RS4_BINARY(rs_i4, rs_i4, |)
+RS_LANES_BINARY(rs_f4, rs_f4, 4, +)
+RS_LANES_BINARY(rs_f4, rs_f4, 4, -)
+RS_LANES_BINARY(rs_f4, rs_f4, 4, *)
+RS_LANES_BINARY(rs_f4, rs_f4, 4, /)
+RS_LANES_BINARY(rs_i4, rs_i4, 4, &)
+RS_LANES_BINARY(rs_i4, rs_i4, 4, |)
 RS4_COMPARE(<)
 RS4_COMPARE(>)
 RS4_COMPARE(<=)
 RS4_COMPARE(>=)
 RS4_COMPARE(==)
 RS4_COMPARE(!=)
-#undef RS4_BINARY
 #undef RS4_COMPARE
 RS_INLINE rs_f4 rs4_splat(float x) { return rs_f4{{x, x, x, x}}; }
 RS_INLINE rs_f4 operator*(rs_f4 a, float b) { return a * rs4_splat(b); }
@@ -195,28 +198,16 @@ typedef struct alignas(32) rs_f8 {
 typedef struct alignas(32) rs_i8 {
   rs_i32 s[8];
 } rs_i8;
-#define RS8_BINARY(T, R, op)                                 \
-  RS_INLINE R operator op(T a, T b) {                        \
-    R r;                                                     \
-    for (int i = 0; i < 8; ++i) r.s[i] = a.s[i] op b.s[i];   \
-    return r;                                                \
-  }
-#define RS8_COMPARE(op)                                                        \
-  RS_INLINE rs_i8 operator op(rs_f8 a, rs_f8 b) {                              \
-    rs_i8 r;                                                                   \
-    for (int i = 0; i < 8; ++i) r.s[i] = a.s[i] op b.s[i] ? -1 : 0;            \
-    return r;                                                                  \
-  }
-RS8_BINARY(rs_f8, rs_f8, +)
-RS8_BINARY(rs_f8, rs_f8, -)
-RS8_BINARY(rs_f8, rs_f8, *)
-RS8_BINARY(rs_i8, rs_i8, &)
-RS8_BINARY(rs_i8, rs_i8, |)
-RS8_COMPARE(<)
-RS8_COMPARE(>)
-RS8_COMPARE(<=)
-#undef RS8_BINARY
-#undef RS8_COMPARE
+RS_LANES_BINARY(rs_f8, rs_f8, 8, +)
+RS_LANES_BINARY(rs_f8, rs_f8, 8, -)
+RS_LANES_BINARY(rs_f8, rs_f8, 8, *)
+RS_LANES_BINARY(rs_i8, rs_i8, 8, &)
+RS_LANES_BINARY(rs_i8, rs_i8, 8, |)
+RS_LANES_COMPARE(rs_f8, rs_i8, 8, <)
+RS_LANES_COMPARE(rs_f8, rs_i8, 8, >)
+RS_LANES_COMPARE(rs_f8, rs_i8, 8, <=)
+#undef RS_LANES_BINARY
+#undef RS_LANES_COMPARE
 RS_INLINE rs_f8 rs8_splat(float x) { return rs_f8{{x, x, x, x, x, x, x, x}}; }
 RS_INLINE rs_f8 rs8_min(rs_f8 a, rs_f8 b) {
   rs_f8 r;

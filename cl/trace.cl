@@ -41,6 +41,9 @@
     visits[i] = v;                                                                                            \
   }
 
+/* One layout per build (host/trace/tracer.cpp passes -DRS_TRACE_BINARY for the binary one), so a
+ * run compiles only the kernels it launches. */
+#ifndef RS_TRACE_BINARY
 /* The 4-wide BVH (the default layout). */
 #define NODE RsWideNode
 #define LEAF RsTriPacket
@@ -51,10 +54,12 @@ RS_TRACE_KERNELS(_robust, RS_WIDE_ROBUST)
 #undef NODE
 #undef LEAF
 
-/* The binary BVH, kept to measure what the wide layout gains (raysort trace --bvh binary). */
+#else
+/* The binary BVH, kept to measure what the wide layout gains (raysort trace --layout binary). */
 #define NODE RsBvhNode
 #define LEAF RsTriangle
 RS_TRACE_KERNELS(_binary, rs_traverse)
 RS_TRACE_KERNELS(_binary_robust, rs_traverse_robust)
 #undef NODE
 #undef LEAF
+#endif

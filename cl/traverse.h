@@ -27,6 +27,16 @@ typedef struct {
   float tmax;
 } RsTraversalRay;
 
+/* The hit record of a ray that has hit nothing (yet): t = tmax, no triangle. */
+RS_INLINE RsHit rs_miss(float tmax) {
+  RsHit h;
+  h.t = tmax;
+  h.tri = RS_NO_HIT;
+  h.u = 0.0f;
+  h.v = 0.0f;
+  return h;
+}
+
 /* 1/d with zero components mapped to a huge finite reciprocal of the same sign, so no inf or
  * NaN ever enters the slab test (the kernels must not depend on inf arithmetic). */
 RS_INLINE float rs_safe_rcp(float d) {
@@ -256,11 +266,7 @@ RS_INLINE RsHit rs_traverse_variant_recorded(RS_GLOBAL const RsBvhNode* nodes, R
   rs_u32 steps = 0;
   RsTraversalRay r = rs_prepare_ray(ray);
   RsRobustRay rr = rs_prepare_robust_ray(ray);
-  RsHit hit;
-  hit.t = ray.tmax;
-  hit.tri = RS_NO_HIT;
-  hit.u = 0.0f;
-  hit.v = 0.0f;
+  RsHit hit = rs_miss(ray.tmax);
   rs_u32 visits = 1;
 
   int root_hit;
@@ -494,11 +500,7 @@ RS_INLINE RsHit rs_traverse_wide(RS_GLOBAL const RsWideNode* nodes, RS_GLOBAL co
                                  int robust, int any_hit, rs_u32* node_visits) {
   RsTraversalRay r = rs_prepare_ray(ray);
   RsRobustRay rr = rs_prepare_robust_ray(ray);
-  RsHit hit;
-  hit.t = ray.tmax;
-  hit.tri = RS_NO_HIT;
-  hit.u = 0.0f;
-  hit.v = 0.0f;
+  RsHit hit = rs_miss(ray.tmax);
   rs_u32 visits = 0;
   rs_u32 stack[RS_WIDE_STACK_SIZE];
   float stack_t[RS_WIDE_STACK_SIZE];

@@ -79,11 +79,6 @@ Bvh build_bvh(const Scene::Flat& tris, const BvhBuildOptions& opts) {
   std::vector<float> right_area(nbins);
   std::vector<std::uint32_t> right_count(nbins);
 
-  // SAH cost of n triangles: one intersection test per block of leaf_block (4: the trace kernels
-  // test a packet of four triangles at once, so a leaf of 3 costs what a leaf of 4 does).
-  const std::uint32_t block = std::max<std::uint32_t>(1, opts.leaf_block);
-  auto blocks = [block](std::uint32_t n) { return static_cast<float>((n + block - 1) / block); };
-
   while (!stack.empty()) {
     Task task = stack.back();
     stack.pop_back();
@@ -149,7 +144,7 @@ Bvh build_bvh(const Scene::Flat& tris, const BvhBuildOptions& opts) {
           left.grow(bin_box[a * nbins + b]);
           left_n += bin_count[a * nbins + b];
           if (left_n == 0 || right_count[b + 1] == 0) continue;
-          float cost = left.area() * blocks(left_n) + right_area[b + 1] * blocks(right_count[b + 1]);
+          float cost = left.area() * static_cast<float>(left_n) + right_area[b + 1] * static_cast<float>(right_count[b + 1]);
           if (cost < best_cost) {
             best_cost = cost;
             best_axis = a;
@@ -161,7 +156,7 @@ Bvh build_bvh(const Scene::Flat& tris, const BvhBuildOptions& opts) {
 
     std::uint32_t mid = 0;
     const float parent_area = bounds.area();
-    const float leaf_cost = opts.intersection_cost * blocks(count);
+    const float leaf_cost = opts.intersection_cost * static_cast<float>(count);
     const float split_cost = best_axis >= 0 && parent_area > 0.0f
                                  ? opts.traversal_cost + opts.intersection_cost * best_cost / parent_area
                                  : 3.0e38f;

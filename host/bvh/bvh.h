@@ -17,7 +17,6 @@ struct BvhBuildOptions {
   std::uint32_t max_leaf_size = 8;   // a leaf never holds more (forced split)
   float traversal_cost = 1.0f;       // SAH constants (relative to one triangle test)
   float intersection_cost = 1.0f;
-  std::uint32_t leaf_block = 1;      // triangles tested together (SAH counts leaf cost in blocks)
 };
 
 // The 4-wide form the trace kernels traverse (RsWideNode / RsTriPacket in cl/shared.h), collapsed

@@ -27,15 +27,12 @@ DeviceEncoder::DeviceEncoder(Runtime& rt, const Bvh& bvh, const Aabb& scene_box,
   cl_call("creating the encode kernels", [&] {
     for (auto [k, suffix] : {std::pair{&k32_, "k32"}, std::pair{&k64_, "k64"}}) {
       k->nosort = cl::Kernel(program, (std::string("encode_nosort_") + suffix).c_str());
-      k->spatial = cl::Kernel(program, (std::string("encode_spatial_") + suffix).c_str());
       k->box_set = cl::Kernel(program, (std::string("encode_box_set_") + suffix).c_str());
       k->two_level = cl::Kernel(program, (std::string("encode_two_level_") + suffix).c_str());
       k->prefix_path = cl::Kernel(program, (std::string("encode_prefix_path_") + suffix).c_str());
-      k->origin = cl::Kernel(program, (std::string("encode_origin_") + suffix).c_str());
-      k->reis = cl::Kernel(program, (std::string("encode_reis_") + suffix).c_str());
-      k->costa = cl::Kernel(program, (std::string("encode_costa_") + suffix).c_str());
-      k->aila = cl::Kernel(program, (std::string("encode_aila_") + suffix).c_str());
-      k->twopoint = cl::Kernel(program, (std::string("encode_twopoint_") + suffix).c_str());
+      for (Encoder e : all_encoders())
+        if (is_spatial(e))
+          k->spatial[e] = cl::Kernel(program, ("encode_" + std::string(encoder_name(e)) + "_" + suffix).c_str());
     }
   });
   // 64 work-items suit PoCL (the group is a loop; 256 measured no faster) and GPUs (two warps).
@@ -82,11 +79,7 @@ cl::Event DeviceEncoder::enqueue(Encoder e, unsigned bits, const cl::Buffer& ray
             if (e == Encoder::NoSort) {
               k = &ks.nosort;
             } else if (is_spatial(e)) {
-              k = e == Encoder::Origin  ? &ks.origin
-                  : e == Encoder::Reis  ? &ks.reis
-                  : e == Encoder::Costa ? &ks.costa
-                  : e == Encoder::Aila  ? &ks.aila
-                                        : &ks.twopoint;
+              k = &ks.spatial.at(e);
               k->setArg(arg++, frame_);
               k->setArg(arg++, rays);
               k->setArg(arg++, order);

@@ -152,8 +152,8 @@ class DeviceEncoder {
   EncodeScene scene_;
   cl::Buffer frame_, nodes_, triangles_;
   struct Kernels {
-    cl::Kernel nosort, spatial, box_set, two_level, prefix_path;
-    cl::Kernel origin, reis, costa, aila, twopoint;  // one kernel per spatial encoder
+    cl::Kernel nosort, box_set, two_level, prefix_path;
+    std::map<Encoder, cl::Kernel> spatial;  // one kernel per spatial encoder: encode_<name>_k32/k64
   } k32_, k64_;
   std::map<std::pair<int, unsigned>, Uploaded> uploads_;
   std::size_t local_ = 64;

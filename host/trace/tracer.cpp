@@ -38,7 +38,7 @@ Tracer::Tracer(Runtime& rt, const Bvh& bvh, TraceVariant variant, TraceLayout la
     nodes_ = rt.upload("bvh nodes", bvh.nodes);
     triangles_ = rt.upload("triangles", bvh.triangles);
   }
-  cl::Program program = rt.build({"cl/trace.cl"});
+  cl::Program program = rt.build({"cl/trace.cl"}, layout == TraceLayout::Binary ? "-DRS_TRACE_BINARY" : "");
   cl_call("creating the trace kernels", [&] {
     // Kernel names: trace_{closest,any,closest_counted}[_binary][_robust] (cl/trace.cl).
     const std::string suffix = std::string(layout == TraceLayout::Binary ? "_binary" : "") +
