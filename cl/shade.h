@@ -84,6 +84,15 @@ typedef struct {
   rs_u32 path;
 } RsPathState;
 
+RS_INLINE RsPathState rs_path_state(RsVec3 weight, rs_u32 path) {
+  RsPathState st;
+  st.weight[0] = weight.x;
+  st.weight[1] = weight.y;
+  st.weight[2] = weight.z;
+  st.path = path;
+  return st;
+}
+
 RS_INLINE rs_u32 rs_path_pixel(RsShadeParams p, rs_u32 path) { return path / p.spp; }
 RS_INLINE rs_u32 rs_path_sample(RsShadeParams p, rs_u32 path) { return p.sample_begin + path % p.spp; }
 
@@ -180,12 +189,7 @@ RS_INLINE void rs_shade(RS_GLOBAL const RsShadeTriangle* tris, RS_GLOBAL const R
       RsVec3 c = rs_scale(rs_mul(rs_mul(throughput, albedo), rs_load3(light.color)), g);
       rs_u32 slot = i * p.shadow_per_hit + k;
       shadow_rays[slot] = rs_make_ray(origin, w, dist);
-      RsPathState st;
-      st.weight[0] = c.x;
-      st.weight[1] = c.y;
-      st.weight[2] = c.z;
-      st.path = state.path;
-      shadow_states[slot] = st;
+      shadow_states[slot] = rs_path_state(c, state.path);
       shadow_valid[slot] = 1u;
     }
   }
@@ -205,12 +209,7 @@ RS_INLINE void rs_shade(RS_GLOBAL const RsShadeTriangle* tris, RS_GLOBAL const R
   RsVec3 tp = rs_mul(throughput, albedo);
   if (roulette) tp = rs_scale(tp, 1.0f / p.rr_survival);
   bounce_rays[i] = rs_make_ray(origin, dir, RS_T_FAR);
-  RsPathState st;
-  st.weight[0] = tp.x;
-  st.weight[1] = tp.y;
-  st.weight[2] = tp.z;
-  st.path = state.path;
-  bounce_states[i] = st;
+  bounce_states[i] = rs_path_state(tp, state.path);
   bounce_valid[i] = 1u;
 }
 
