@@ -28,9 +28,13 @@ RS_INLINE float rs_atan_unit(float z) {
 }
 
 /* atan2(y, x) in [−π, π]. Signs are read with < 0, so −0 counts as +0: directions with a −0
- * component get the same angle (and key) as with +0. atan2(0, 0) = 0. */
+ * component get the same angle (and key) as with +0. atan2(0, 0) = 0.
+ * |y| is written (y < 0 ? −y : y), not fabs: with fabs on both, the x and y chains are identical
+ * and PoCL's SLP pass packs them into a 2-lane vector, which keeps its work-group vectoriser from
+ * running the encode kernels 8 rays at a time (3x slower). The value differs only for y = −0,
+ * which gives the same result bits (tests/encode_test.cpp checks against the fabs form). */
 RS_INLINE float rs_atan2(float y, float x) {
-  float ax = rs_abs(x), ay = rs_abs(y);
+  float ax = rs_abs(x), ay = y < 0.0f ? -y : y;
   float hi = rs_max(ax, ay), lo = rs_min(ax, ay);
   if (hi == 0.0f) return 0.0f;
   float a = rs_atan_unit(lo / hi);

@@ -118,6 +118,41 @@ TEST(EncodeMath, AtanAndAcosAreCloseToLibm) {
   EXPECT_EQ(rs_atan2(-0.0f, -1.0f), rs_atan2(0.0f, -1.0f));  // −0 counts as +0
 }
 
+// rs_atan2 reads |y| as (y < 0 ? −y : y), not fabs, so that PoCL's SLP pass does not pair the x
+// and y chains into a 2-lane vector (which stops it vectorising the encode kernels across rays).
+// The two differ only for y = −0 (−0 instead of +0), which must not change a single result bit:
+// compare with the fabs formulation on special values and 2 M random bit patterns.
+TEST(EncodeMath, Atan2BitsEqualTheFabsFormulation) {
+  auto fabs_atan2 = [](float y, float x) {
+    float ax = rs_abs(x), ay = rs_abs(y);
+    float hi = rs_max(ax, ay), lo = rs_min(ax, ay);
+    if (hi == 0.0f) return 0.0f;
+    float a = rs_atan_unit(lo / hi);
+    if (ay > ax) a = 1.57079632679490f - a;
+    if (x < 0.0f) a = RS_PI_F - a;
+    return y < 0.0f ? -a : a;
+  };
+  std::vector<float> values = {0.0f, -0.0f, 1e-45f, -1e-45f, 1e-38f, -1e-38f, 0.5f, -0.5f, 1.0f, -1.0f, 3e38f, -3e38f};
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<std::uint32_t> bits;
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+  for (int i = 0; i < 1000; ++i) values.push_back(unit(rng));
+  auto same = [&](float y, float x) {
+    const float a = fabs_atan2(y, x), b = rs_atan2(y, x);
+    return std::memcmp(&a, &b, sizeof a) == 0;
+  };
+  for (float y : values)
+    for (float x : values) ASSERT_TRUE(same(y, x)) << "y=" << y << " x=" << x;
+  for (int i = 0; i < 2000000; ++i) {
+    std::uint32_t a = bits(rng), b = bits(rng);
+    float y, x;
+    std::memcpy(&y, &a, sizeof y);
+    std::memcpy(&x, &b, sizeof x);
+    if (std::isnan(y) || std::isnan(x)) continue;
+    ASSERT_TRUE(same(y, x)) << "y=" << y << " x=" << x;
+  }
+}
+
 TEST(Encode, NamesRoundTrip) {
   EXPECT_EQ(all_encoders().size(), 11u);
   for (Encoder e : all_encoders()) {
