@@ -200,6 +200,23 @@ RS_INLINE float rs_intersect_box_robust(const RsRobustRay* r, RS_GLOBAL const Rs
   return tnear;
 }
 
+/* The rounding error bound of the watertight test's t (Pharr, Jakob & Humphreys, "Physically Based
+ * Rendering", 4th ed., section 6.8.4, "Conservative ray–triangle t values"): from the largest
+ * ray-space coordinates of the three vertices (x, y after the shear, z scaled by sz), the largest
+ * edge function and |det|. A hit at t <= this bound may in truth lie behind the origin: a ray
+ * leaving a surface could otherwise hit the triangle it leaves, which the slab test of a tight
+ * leaf box happens to hide but a leaf holding a small subtree does not. γ(n) = n·u / (1 − n·u),
+ * u = 2^-24. */
+#define RS_GAMMA2 1.1920930e-7f
+#define RS_GAMMA3 1.7881395e-7f
+#define RS_GAMMA5 2.9802326e-7f
+RS_INLINE float rs_robust_t_bound(float max_xt, float max_yt, float max_zt, float max_e, float abs_det) {
+  const float delta_z = RS_GAMMA3 * max_zt;
+  const float delta_x = RS_GAMMA5 * (max_xt + max_zt), delta_y = RS_GAMMA5 * (max_yt + max_zt);
+  const float delta_e = 2.0f * (RS_GAMMA2 * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
+  return 3.0f * (RS_GAMMA3 * max_e * max_zt + delta_e * max_zt + delta_z * max_e) / abs_det;
+}
+
 /* Watertight ray/triangle test (Woop, Benthin & Wald 2013), two-sided. The vertices are moved to
  * ray space (translate by the origin, permute, shear so the ray runs along +z); the 2-D edge
  * functions U, V, W of the sheared vertices then decide inside/outside. A vertex shared by two
@@ -228,9 +245,17 @@ RS_INLINE int rs_intersect_triangle_robust(const RsRobustRay* r, RS_GLOBAL const
   if ((u < 0.0f || v < 0.0f || w < 0.0f) && (u > 0.0f || v > 0.0f || w > 0.0f)) return 0;
   const float det = u + v + w;
   if (det == 0.0f) return 0;
-  const float t_scaled = u * (r->sz * az0) + v * (r->sz * bz0) + w * (r->sz * cz0);
+  const float azt = r->sz * az0, bzt = r->sz * bz0, czt = r->sz * cz0;
+  const float t_scaled = u * azt + v * bzt + w * czt;
   const float t = t_scaled / det;
   if (!(t > r->tmin && t < tmax)) return 0;
+  {
+    const float max_xt = rs_max(rs_max(rs_abs(ax), rs_abs(bx)), rs_abs(cx));
+    const float max_yt = rs_max(rs_max(rs_abs(ay), rs_abs(by)), rs_abs(cy));
+    const float max_zt = rs_max(rs_max(rs_abs(azt), rs_abs(bzt)), rs_abs(czt));
+    const float max_e = rs_max(rs_max(rs_abs(u), rs_abs(v)), rs_abs(w));
+    if (!(t > rs_robust_t_bound(max_xt, max_yt, max_zt, max_e, rs_abs(det)))) return 0;
+  }
   /* A zero-area triangle can still pass the test above: the shear rounds its collinear vertices
    * apart. Reject it by its world-space cross product, exact in double (differences and products
    * of floats are exact there); only hits that would be accepted pay for this. */
@@ -480,8 +505,24 @@ RS_INLINE int rs_packet_intersect_robust(const RsRobustRay* r, RS_GLOBAL const R
   int bits = rs4_bits(p->valid & p->nondegenerate & (det != 0.0f)) & ~mixed;
   if (!bits) return 0;
   const rs_f4 safe_det = rs4_select(det, rs4_splat(1.0f), det == 0.0f);
-  const rs_f4 t = (u * (r->sz * az) + v * (r->sz * bz) + w * (r->sz * cz)) / safe_det;
+  const rs_f4 azt = r->sz * az, bzt = r->sz * bz, czt = r->sz * cz;
+  const rs_f4 t = (u * azt + v * bzt + w * czt) / safe_det;
   bits &= rs4_bits((t > r->tmin) & (t < tmax));
+  if (!bits) return 0;
+  {
+    /* rs_robust_t_bound, lane by lane (|x| as max(x, 0 − x)). */
+#define RS4_ABS(x) rs4_max((x), 0.0f - (x))
+    const rs_f4 max_xt = rs4_max(rs4_max(RS4_ABS(ax), RS4_ABS(bx)), RS4_ABS(cx));
+    const rs_f4 max_yt = rs4_max(rs4_max(RS4_ABS(ay), RS4_ABS(by)), RS4_ABS(cy));
+    const rs_f4 max_zt = rs4_max(rs4_max(RS4_ABS(azt), RS4_ABS(bzt)), RS4_ABS(czt));
+    const rs_f4 max_e = rs4_max(rs4_max(RS4_ABS(u), RS4_ABS(v)), RS4_ABS(w));
+    const rs_f4 delta_z = RS_GAMMA3 * max_zt;
+    const rs_f4 delta_x = RS_GAMMA5 * (max_xt + max_zt), delta_y = RS_GAMMA5 * (max_yt + max_zt);
+    const rs_f4 delta_e = 2.0f * (RS_GAMMA2 * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
+    const rs_f4 bound = 3.0f * (RS_GAMMA3 * max_e * max_zt + delta_e * max_zt + delta_z * max_e) / RS4_ABS(safe_det);
+#undef RS4_ABS
+    bits &= rs4_bits(t > bound);
+  }
   *t_out = t;
   *u_out = v / safe_det;
   *v_out = w / safe_det;
