@@ -2,6 +2,8 @@
 // and depth, on every procedural scene and on degenerate inputs.
 #include <gtest/gtest.h>
 
+#include <functional>
+
 #include <cstring>
 
 #include "bvh/bvh.h"
@@ -121,6 +123,37 @@ TEST(WideBvh, OneLeafAndEmptyTrees) {
   none.wide = collapse_to_wide(none);
   ASSERT_EQ(none.wide.nodes.size(), 1u);
   for (int lane = 0; lane < 4; ++lane) EXPECT_EQ(none.wide.nodes[0].valid.s[lane], 0);
+}
+
+// A binary subtree of at most four triangles becomes one wide leaf (one full packet): no inner wide
+// node holds four triangles or fewer, and the tree has fewer packets than the binary tree has leaves.
+TEST(WideBvh, SmallSubtreesBecomeOnePacket) {
+  Scene::Flat tris = load_scene("cornell").flatten();
+  Bvh bvh = build_bvh(tris);
+  ASSERT_EQ(validate_wide(bvh.wide, bvh), "");
+  std::function<std::uint32_t(std::uint32_t)> below = [&](std::uint32_t ref) -> std::uint32_t {
+    if (ref & RS_WIDE_LEAF) {
+      const std::uint32_t first = (ref & ~RS_WIDE_LEAF) >> 2, end = first + (ref & 3u) + 1u;
+      std::uint32_t n = 0;
+      for (std::uint32_t p = first; p < end; ++p)
+        for (int k = 0; k < 4; ++k) n += bvh.wide.packets[p].valid.s[k] != 0;
+      return n;
+    }
+    std::uint32_t n = 0;
+    for (int lane = 0; lane < 4; ++lane)
+      if (bvh.wide.nodes[ref].valid.s[lane]) n += below(bvh.wide.nodes[ref].child[lane]);
+    return n;
+  };
+  std::size_t inner_lanes = 0;
+  for (const RsWideNode& w : bvh.wide.nodes)
+    for (int lane = 0; lane < 4; ++lane)
+      if (w.valid.s[lane] && !(w.child[lane] & RS_WIDE_LEAF)) {
+        ++inner_lanes;
+        EXPECT_GT(below(w.child[lane]), 4u);
+      }
+  EXPECT_GT(inner_lanes, 0u);
+  EXPECT_EQ(below(0), tris.v0.size());
+  EXPECT_LT(bvh.wide.packets.size(), bvh.leaf_count);
 }
 
 TEST(WideBvh, ValidatorCatchesABrokenCollapse) {
