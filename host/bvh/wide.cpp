@@ -1,6 +1,6 @@
 // Collapsing the binary BVH into the 4-wide layout of the trace kernels (cl/shared.h, RsWideNode).
-// Each wide node takes the two levels below a binary node: a child that is a leaf (or a subtree of
-// at most four triangles, which becomes one leaf packet) fills one slot, an inner child gives its
+// Each wide node takes the two levels below a binary node: a child that is a leaf (or a small
+// subtree that becomes one leaf packet, see leafish) fills one slot, an inner child gives its
 // two children. So every wide level spans two binary levels, which is
 // what bounds the kernels' stack (RS_WIDE_STACK_SIZE): depth <= ceil(binary depth / 2) and at
 // most three pending siblings per level.
@@ -9,6 +9,7 @@
 #include <string>
 
 #include "bvh/bvh.h"
+#include "bvh/had.h"
 #include "util/error.h"
 
 namespace raysort {
@@ -31,6 +32,7 @@ class Collapser {
     // Triangle range of every binary subtree (the builder keeps a subtree's triangles contiguous).
     sub_first_.assign(bvh.nodes.size(), 0);
     sub_count_.assign(bvh.nodes.size(), 0);
+    leaf_area_.assign(bvh.nodes.size(), 0.0);
     if (!bvh.triangles.empty() && !bvh.nodes.empty()) ranges(0);
   }
 
@@ -55,21 +57,29 @@ class Collapser {
     const RsBvhNode& b = bvh_.nodes[n];
     if (b.count > 0) {
       sub_first_[n] = b.first, sub_count_[n] = b.count;
+      leaf_area_[n] = node_surface_area(b);
       return;
     }
     ranges(b.first), ranges(b.first + 1);
     const std::uint32_t l = b.first, r = b.first + 1;
     sub_first_[n] = std::min(sub_first_[l], sub_first_[r]);
     sub_count_[n] = sub_count_[l] + sub_count_[r];
+    leaf_area_[n] = leaf_area_[l] + leaf_area_[r];
     const std::uint32_t end = std::max(sub_first_[l] + sub_count_[l], sub_first_[r] + sub_count_[r]);
     if (end - sub_first_[n] != sub_count_[n]) sub_count_[n] = 0xffffffffu;  // not contiguous: never merged
   }
-  // A binary subtree of at most four triangles becomes one wide leaf: a single, full packet under
-  // the subtree's box, instead of two or three half-empty packets under their own boxes (the SAH
-  // builder's leaves hold about two triangles). Fewer node lanes and packet fetches per ray: side by
-  // side on sibenik at 1920x1080, bounce1 +12 %, shadow0 +5 %, shadow1 +3 % (docs/trace.md).
+  // A binary subtree of at most four triangles becomes one wide leaf, a single full packet under
+  // the subtree's box, when that box's surface area is at most the sum of its binary leaves' (SAH:
+  // a random ray then tests no more packets than before, and the wide node keeps its lanes for
+  // other subtrees). The SAH builder's leaves hold about two triangles, so their packets were half
+  // empty. Without the area condition breakfast_room's shadow rays were 13-15 % slower; with it,
+  // side by side (ours/Embree, median of 5): sibenik bounce1 +7 %, shadow1 +5 %, breakfast_room
+  // shadow0 +7 %, shadow1 +9 %, no batch slower beyond noise (docs/trace.md).
   static constexpr std::uint32_t kMergeTriangles = 4;
-  bool leafish(std::uint32_t n) const { return bvh_.is_leaf(n) || sub_count_[n] <= kMergeTriangles; }
+  bool leafish(std::uint32_t n) const {
+    return bvh_.is_leaf(n) ||
+           (sub_count_[n] <= kMergeTriangles && node_surface_area(bvh_.nodes[n]) <= leaf_area_[n]);
+  }
   RsBvhNode as_leaf(std::uint32_t n) const {
     RsBvhNode b = bvh_.nodes[n];
     b.first = sub_first_[n];
@@ -140,6 +150,7 @@ class Collapser {
   const Bvh& bvh_;
   WideBvh out_;
   std::vector<std::uint32_t> sub_first_, sub_count_;
+  std::vector<double> leaf_area_;  // sum of the surface areas of a subtree's binary leaves
 };
 
 }  // namespace
