@@ -213,12 +213,18 @@ RS_KEY_INLINE rs_u64 rs_morton6(rs_u32 a0, rs_u32 a1, rs_u32 a2, rs_u32 a3, rs_u
 }
 
 /* Far end of a ray's segment inside the scene box: the slab-test exit distance (same reciprocal
- * as traversal), capped by tmax. */
+ * as traversal), capped by tmax. The far plane of each axis is picked by the sign of inv_d, which
+ * equals max((lo − o)·inv, (hi − o)·inv) since lo <= hi and the rounded product is monotone. The y
+ * axis is written −((o − hi)·inv), the same value (up to the sign of a zero, which quantization
+ * cannot see), and the minimum is taken as a chain: with three identical per-axis expressions
+ * PoCL's SLP pass packs two of them into a 2-lane vector, which stops its work-group vectoriser
+ * (TwoPoint then ran one ray at a time, 3x slower). tests/encode_test.cpp compares with the
+ * min/max form. */
 RS_KEY_INLINE float rs_scene_exit(const RsEncodeFrame* f, RsTraversalRay r) {
-  float tx0 = (f->box_min[0] - r.o.x) * r.inv_d.x, tx1 = (f->box_max[0] - r.o.x) * r.inv_d.x;
-  float ty0 = (f->box_min[1] - r.o.y) * r.inv_d.y, ty1 = (f->box_max[1] - r.o.y) * r.inv_d.y;
-  float tz0 = (f->box_min[2] - r.o.z) * r.inv_d.z, tz1 = (f->box_max[2] - r.o.z) * r.inv_d.z;
-  return rs_min(rs_min(rs_max(tx0, tx1), rs_max(ty0, ty1)), rs_min(rs_max(tz0, tz1), r.tmax));
+  float fx = ((r.inv_d.x < 0.0f ? f->box_min[0] : f->box_max[0]) - r.o.x) * r.inv_d.x;
+  float fy = -((r.o.y - (r.inv_d.y < 0.0f ? f->box_min[1] : f->box_max[1])) * r.inv_d.y);
+  float fz = ((r.inv_d.z < 0.0f ? f->box_min[2] : f->box_max[2]) - r.o.z) * r.inv_d.z;
+  return rs_min(rs_min(rs_min(fx, fy), fz), r.tmax);
 }
 
 /* ---------------------------------------------------------------------------------------------

@@ -153,6 +153,37 @@ TEST(EncodeMath, Atan2BitsEqualTheFabsFormulation) {
   }
 }
 
+// rs_scene_exit picks each axis's far plane by the sign of inv_d and writes one axis negated (to
+// keep PoCL's SLP pass from packing the axes, cl/keys.h). It must give the value of the plain slab
+// form, max of the two plane distances per axis and min over the axes (a zero's sign aside), for
+// rays from inside, outside and on the box, with zero direction components and short segments.
+TEST(EncodeMath, SceneExitEqualsTheMinMaxForm) {
+  RsEncodeFrame f{};
+  const float lo[3] = {-1.5f, 0.25f, -3.0f}, hi[3] = {2.0f, 0.25f, 1.0f};  // y is flat
+  for (int a = 0; a < 3; ++a) {
+    f.box_min[a] = lo[a], f.box_max[a] = hi[a];
+    f.inv_extent[a] = hi[a] > lo[a] ? 1.0f / (hi[a] - lo[a]) : 0.0f;
+  }
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(-4.0f, 4.0f);
+  for (int k = 0; k < 200000; ++k) {
+    RsRay ray{};
+    for (int a = 0; a < 3; ++a) {
+      ray.o[a] = k % 13 == 0 ? (k % 2 ? lo[a] : hi[a]) : u(rng);
+      ray.d[a] = k % 7 == a ? (k % 2 ? 0.0f : -0.0f) : u(rng);
+    }
+    ray.tmin = 0.0f;
+    ray.tmax = k % 5 == 0 ? 0.5f : RS_T_FAR;
+    const RsTraversalRay r = rs_prepare_ray(ray);
+    float far = r.tmax;
+    for (int a = 0; a < 3; ++a) {
+      const float o = a == 0 ? r.o.x : a == 1 ? r.o.y : r.o.z, inv = a == 0 ? r.inv_d.x : a == 1 ? r.inv_d.y : r.inv_d.z;
+      far = rs_min(far, rs_max((f.box_min[a] - o) * inv, (f.box_max[a] - o) * inv));
+    }
+    ASSERT_EQ(rs_scene_exit(&f, r), far) << "ray " << k;  // == treats -0 and +0 as equal
+  }
+}
+
 TEST(Encode, NamesRoundTrip) {
   EXPECT_EQ(all_encoders().size(), 11u);
   for (Encoder e : all_encoders()) {
