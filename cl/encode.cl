@@ -8,7 +8,7 @@
  *
  * Every kernel exists twice: *_k32 writes uint keys (key bits ≤ 32), *_k64 ulong keys.
  * Cut nodes (HCC, RegularGrid cells, MLHCC top nodes) come as eight-box SoA groups (RsCutGroup,
- * keys.h) in __constant memory: every work-item reads the same boxes, which GPUs broadcast from the
+ * keys.h; box sets after a summary group of their union boxes, RsCutSet) in __constant memory: every work-item reads the same boxes, which GPUs broadcast from the
  * constant cache, and PoCL needs no per-group copy or barrier (Xiang et al. Alg. 1, line 1, keeps
  * them in shared memory; the constant cache plays that part here). MLHCC's low-level rows (one per
  * ray, chosen by its first top-level hit) stay in global memory.
@@ -28,6 +28,20 @@
     values[i] = i;                                                                                       \
   }
 
+/* HCC, RegularGrid, HCC_DIR: one kernel testing every cut group, one testing the summary group
+ * first (keys.h, rs_box_set_code_culled); the host picks one per box set (RsCutSet::cull). */
+#define RS_DEFINE_BOX_SET_KERNEL(NAME, CODE, SUFFIX, KEY_T)                                               \
+  __kernel void encode_##NAME##_##SUFFIX(__constant const RsCutGroup* set, uint box_count, uint field,    \
+                                         uint dir_bits, __global const RsRay* rays,                      \
+                                         __global const uint* order, uint count, uint bits,              \
+                                         __global KEY_T* keys, __global uint* values) {                  \
+    uint i = get_global_id(0);                                                                           \
+    if (i >= count) return;                                                                              \
+    rs_u64 code = CODE(rays[order[i]], set, box_count, field, dir_bits);                                 \
+    keys[i] = (KEY_T)rs_key_from_code(code, bits);                                                       \
+    values[i] = i;                                                                                       \
+  }
+
 #define RS_DEFINE_ENCODE_KERNELS(SUFFIX, KEY_T)                                                             \
   __kernel void encode_nosort_##SUFFIX(uint count, __global KEY_T* keys, __global uint* values) {        \
     uint i = get_global_id(0);                                                                           \
@@ -42,16 +56,8 @@
   RS_DEFINE_SPATIAL_KERNEL(aila, SUFFIX, KEY_T)                                                          \
   RS_DEFINE_SPATIAL_KERNEL(twopoint, SUFFIX, KEY_T)                                                      \
                                                                                                          \
-  __kernel void encode_box_set_##SUFFIX(__constant const RsCutGroup* groups, uint box_count, uint field, \
-                                        uint dir_bits, __global const RsRay* rays,                       \
-                                        __global const uint* order, uint count, uint bits,               \
-                                        __global KEY_T* keys, __global uint* values) {                   \
-    uint i = get_global_id(0);                                                                           \
-    if (i >= count) return;                                                                              \
-    rs_u64 code = rs_box_set_code(rays[order[i]], groups, box_count, field, dir_bits);                   \
-    keys[i] = (KEY_T)rs_key_from_code(code, bits);                                                       \
-    values[i] = i;                                                                                       \
-  }                                                                                                      \
+  RS_DEFINE_BOX_SET_KERNEL(box_set, rs_box_set_code, SUFFIX, KEY_T)                                      \
+  RS_DEFINE_BOX_SET_KERNEL(box_set_culled, rs_box_set_code_culled, SUFFIX, KEY_T)                        \
                                                                                                          \
   __kernel void encode_two_level_##SUFFIX(__constant const RsCutGroup* top, uint top_count,              \
                                           __global const RsCutGroup* low, __global const uint* low_count,\

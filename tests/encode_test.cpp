@@ -728,6 +728,9 @@ TEST(Encode, SameKeysAsTheBitwiseReference) {
 
 // Cut groups: lane l of group g holds box 8g + 7 − l; the eight-box test gives each box's scalar
 // slab test, for box counts that do not fill the last group, and missing lanes never set bits.
+// Also the box-set codes of a cut set (rs_cut_set: groups after a summary of their union boxes),
+// which skip a group whose union box the ray misses; the boxes are random, some flat, some rays
+// axis-parallel or starting on a box corner, some segments short.
 TEST(Encode, CutGroupsMatchTheScalarSlabTest) {
   std::mt19937 rng(99);
   std::uniform_real_distribution<float> u(-1.0f, 1.0f);
@@ -740,6 +743,8 @@ TEST(Encode, CutGroupsMatchTheScalarSlabTest) {
       }
     const auto groups = rs_cut_groups(boxes.data(), boxes.size());
     ASSERT_EQ(groups.size(), (n + 7) / 8);
+    const RsCutSet set = rs_cut_set(boxes.data(), boxes.size(), true);
+    ASSERT_EQ(set.groups.size(), 1 + groups.size());
     for (int k = 0; k < 2000; ++k) {
       RsRay r = ray(u(rng), u(rng), u(rng), u(rng), u(rng), k % 7 == 0 ? 0.0f : u(rng), k % 3 ? RS_T_FAR : 0.5f);
       if (k % 11 == 0) std::memcpy(r.o, boxes[k % n].bmin, sizeof r.o);  // on a box corner
@@ -749,6 +754,9 @@ TEST(Encode, CutGroupsMatchTheScalarSlabTest) {
       for (rs_u32 i = 0; i < n; ++i)
         if (rs_segment_overlaps_box(tr, boxes[i])) expect |= rs_u64(1) << (63u - i);
       ASSERT_EQ(rs_cut_bits_p(&c, groups.data(), n), expect) << "n " << n << " ray " << k;
+      // The box-set codes, with and without the summary test (cl/keys.h): the same bits.
+      ASSERT_EQ(rs_box_set_code(r, set.groups.data(), n, n, 0), expect) << "n " << n << " ray " << k;
+      ASSERT_EQ(rs_box_set_code_culled(r, set.groups.data(), n, n, 0), expect) << "n " << n << " ray " << k;
     }
   }
 }

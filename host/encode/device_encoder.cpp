@@ -28,6 +28,7 @@ DeviceEncoder::DeviceEncoder(Runtime& rt, const Bvh& bvh, const Aabb& scene_box,
     for (auto [k, suffix] : {std::pair{&k32_, "k32"}, std::pair{&k64_, "k64"}}) {
       k->nosort = cl::Kernel(program, (std::string("encode_nosort_") + suffix).c_str());
       k->box_set = cl::Kernel(program, (std::string("encode_box_set_") + suffix).c_str());
+      k->box_set_culled = cl::Kernel(program, (std::string("encode_box_set_culled_") + suffix).c_str());
       k->two_level = cl::Kernel(program, (std::string("encode_two_level_") + suffix).c_str());
       k->prefix_path = cl::Kernel(program, (std::string("encode_prefix_path_") + suffix).c_str());
       for (Encoder e : all_encoders())
@@ -47,9 +48,10 @@ const DeviceEncoder::Uploaded& DeviceEncoder::uploaded(Encoder e, unsigned bits)
   Uploaded u;
   const std::string what = std::string(encoder_name(e)) + " " + std::to_string(bits) + "-bit ";
   if (is_box_set(e)) {
-    const auto& boxes = scene_.box_set(e, bits);
-    u.a = rt_.upload(what + "cut boxes", scene_.box_groups(e, bits));
-    u.n = static_cast<std::uint32_t>(boxes.size());
+    const RsCutSet& set = scene_.cut_set(e, bits);
+    u.a = rt_.upload(what + "cut boxes", set.groups);
+    u.n = set.box_count;
+    u.cull = set.cull;
   } else if (e == Encoder::MLHCC) {
     const auto& t = scene_.two_level(bits);
     u.a = rt_.upload(what + "top-level cut boxes", t.top_groups);
@@ -86,7 +88,7 @@ cl::Event DeviceEncoder::enqueue(Encoder e, unsigned bits, const cl::Buffer& ray
               k->setArg(arg++, count);
             } else if (is_box_set(e)) {
               const cl_uint dir = e == Encoder::HCC_DIR ? scene_.params().direction_bits : 0u;
-              k = &ks.box_set;
+              k = u.cull ? &ks.box_set_culled : &ks.box_set;
               k->setArg(arg++, u.a);
               k->setArg(arg++, u.n);
               k->setArg(arg++, static_cast<cl_uint>(bits - dir));

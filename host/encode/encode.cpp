@@ -103,6 +103,27 @@ std::vector<RsCutGroup> rs_cut_groups(const RsBox* boxes, std::size_t n) {
   return groups;
 }
 
+RsCutSet rs_cut_set(const RsBox* boxes, std::size_t n, bool cull) {
+  if (n > RS_MAX_KEY_BITS) throw Error("rs_cut_set: more boxes than key bits");
+  RsCutSet set;
+  set.box_count = static_cast<rs_u32>(n);
+  set.cull = cull ? 1u : 0u;
+  set.groups.push_back(RsCutGroup{});
+  const auto groups = rs_cut_groups(boxes, n);
+  set.groups.insert(set.groups.end(), groups.begin(), groups.end());
+  RsCutGroup& sum = set.groups[0];
+  for (std::size_t k = 0; k < groups.size(); ++k) {
+    RsBox un = boxes[k * RS_CUT_LANES];
+    for (std::size_t i = k * RS_CUT_LANES; i < std::min(n, (k + 1) * RS_CUT_LANES); ++i)
+      for (int a = 0; a < 3; ++a)
+        un.bmin[a] = std::min(un.bmin[a], boxes[i].bmin[a]), un.bmax[a] = std::max(un.bmax[a], boxes[i].bmax[a]);
+    sum.lo_x.s[k] = un.bmin[0], sum.hi_x.s[k] = un.bmax[0];
+    sum.lo_y.s[k] = un.bmin[1], sum.hi_y.s[k] = un.bmax[1];
+    sum.lo_z.s[k] = un.bmin[2], sum.hi_z.s[k] = un.bmax[2];
+  }
+  return set;
+}
+
 EncodeScene::EncodeScene(const Bvh& bvh, const Aabb& scene_box, const EncoderParams& params)
     : bvh_(&bvh), params_(params), box_(scene_box.empty() ? Aabb{{0, 0, 0}, {0, 0, 0}} : scene_box) {
   for (int a = 0; a < 3; ++a) {
@@ -138,12 +159,15 @@ const std::vector<RsBox>& EncodeScene::box_set(Encoder e, unsigned bits) const {
   return box_sets_.emplace(key, std::move(boxes)).first->second;
 }
 
-const std::vector<RsCutGroup>& EncodeScene::box_groups(Encoder e, unsigned bits) const {
+const RsCutSet& EncodeScene::cut_set(Encoder e, unsigned bits) const {
   const auto key = std::make_pair(static_cast<int>(e), bits);
-  auto it = box_groups_.find(key);
-  if (it != box_groups_.end()) return it->second;
+  auto it = cut_sets_.find(key);
+  if (it != cut_sets_.end()) return it->second;
   const auto& boxes = box_set(e, bits);
-  return box_groups_.emplace(key, rs_cut_groups(boxes.data(), boxes.size())).first->second;
+  // Culling pays where eight consecutive boxes are neighbours (grid cells) and there are enough
+  // groups to skip (cl/keys.h, rs_box_set_code).
+  const bool cull = e == Encoder::RegularGrid && boxes.size() > 4 * RS_CUT_LANES;
+  return cut_sets_.emplace(key, rs_cut_set(boxes.data(), boxes.size(), cull)).first->second;
 }
 
 const EncodeScene::TwoLevel& EncodeScene::two_level(unsigned bits) const {
@@ -180,11 +204,11 @@ std::uint64_t encode_ray(Encoder e, unsigned bits, const EncodeScene& scene, con
     case Encoder::RegularGrid:
     case Encoder::HCC:
     case Encoder::HCC_DIR: {
-      const auto& boxes = scene.box_set(e, bits);
-      const auto& groups = scene.box_groups(e, bits);
+      const RsCutSet& set = scene.cut_set(e, bits);
       const unsigned dir = e == Encoder::HCC_DIR ? scene.params().direction_bits : 0u;
-      return rs_key_from_code(
-          rs_box_set_code(ray, groups.data(), static_cast<rs_u32>(boxes.size()), bits - dir, dir), bits);
+      const rs_u64 code = set.cull ? rs_box_set_code_culled(ray, set.groups.data(), set.box_count, bits - dir, dir)
+                                   : rs_box_set_code(ray, set.groups.data(), set.box_count, bits - dir, dir);
+      return rs_key_from_code(code, bits);
     }
     case Encoder::MLHCC: {
       const auto& t = scene.two_level(bits);
@@ -203,7 +227,7 @@ std::vector<std::uint64_t> encode_on_host(Encoder e, unsigned bits, const Encode
                                           const std::vector<RsRay>& rays) {
   check_key_bits(e, bits, scene.params());
   // Build the cached cut data before the threads read it.
-  if (e == Encoder::RegularGrid || e == Encoder::HCC || e == Encoder::HCC_DIR) scene.box_groups(e, bits);
+  if (e == Encoder::RegularGrid || e == Encoder::HCC || e == Encoder::HCC_DIR) scene.cut_set(e, bits);
   if (e == Encoder::MLHCC) scene.two_level(bits);
   std::vector<std::uint64_t> keys(rays.size());
   auto work = [&](std::size_t begin, std::size_t end) {

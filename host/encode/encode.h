@@ -58,6 +58,16 @@ std::string key_bits_problem(Encoder e, unsigned bits, const EncoderParams& para
 // Throws Error with key_bits_problem's text.
 void check_key_bits(Encoder e, unsigned bits, const EncoderParams& params);
 
+// A box set for rs_box_set_code (cl/keys.h): groups[0] is the summary (lane k = union of group
+// k's boxes), groups[1 + k] holds boxes 8k .. 8k + 7 (rs_cut_groups); cull says whether the key
+// code tests the summary first (worth it only when consecutive boxes are neighbours).
+struct RsCutSet {
+  std::vector<RsCutGroup> groups;
+  rs_u32 box_count = 0;
+  rs_u32 cull = 0;
+};
+RsCutSet rs_cut_set(const RsBox* boxes, std::size_t n, bool cull);
+
 // What the keys of one scene depend on, computed on the host once and cached per key length.
 // Holds a reference to the BVH: keep it alive as long as this.
 class EncodeScene {
@@ -73,8 +83,9 @@ class EncodeScene {
   const std::vector<std::uint32_t>& hcc_cut(unsigned size) const;
   // The boxes of a box-set encoder (HCC, RegularGrid, HCC_DIR) for keys of `bits` bits, bit order.
   const std::vector<RsBox>& box_set(Encoder e, unsigned bits) const;
-  // The same boxes as eight-box SoA groups (rs_cut_groups), what the key code reads.
-  const std::vector<RsCutGroup>& box_groups(Encoder e, unsigned bits) const;
+  // The same boxes as the key code reads them (rs_cut_set): groups of eight after a summary of
+  // their union boxes, culled for RegularGrid at more than 32 bits.
+  const RsCutSet& cut_set(Encoder e, unsigned bits) const;
   // MLHCC for keys of `bits` bits: top boxes (≤ half), low boxes [top.size() × half] (row i: the
   // low cut of top i, zero-padded), low counts per top node.
   struct TwoLevel {
@@ -95,7 +106,7 @@ class EncodeScene {
   std::vector<double> had_;
   mutable std::map<unsigned, std::vector<std::uint32_t>> hcc_cuts_;
   mutable std::map<std::pair<int, unsigned>, std::vector<RsBox>> box_sets_;
-  mutable std::map<std::pair<int, unsigned>, std::vector<RsCutGroup>> box_groups_;
+  mutable std::map<std::pair<int, unsigned>, RsCutSet> cut_sets_;
   mutable std::map<unsigned, TwoLevel> two_levels_;
 };
 
@@ -103,6 +114,7 @@ RsBox to_rs_box(const Aabb& b);
 // Boxes [0, n) transposed into ceil(n / 8) RsCutGroups (cl/keys.h: lane l of group g = box
 // 8g + 7 − l; missing boxes are zero boxes, masked off by the key code).
 std::vector<RsCutGroup> rs_cut_groups(const RsBox* boxes, std::size_t n);
+
 
 // The key of one ray (host twin of the kernels; same source for the key arithmetic).
 std::uint64_t encode_ray(Encoder e, unsigned bits, const EncodeScene& scene, const RsRay& ray);
@@ -145,6 +157,7 @@ class DeviceEncoder {
   struct Uploaded {
     cl::Buffer a, b, c;
     std::uint32_t n = 0;
+    std::uint32_t cull = 0;  // box sets: test the summary group first (RsCutSet)
   };
   const Uploaded& uploaded(Encoder e, unsigned bits);
 
@@ -152,7 +165,7 @@ class DeviceEncoder {
   EncodeScene scene_;
   cl::Buffer frame_, nodes_, triangles_;
   struct Kernels {
-    cl::Kernel nosort, box_set, two_level, prefix_path;
+    cl::Kernel nosort, box_set, box_set_culled, two_level, prefix_path;
     std::map<Encoder, cl::Kernel> spatial;  // one kernel per spatial encoder: encode_<name>_k32/k64
   } k32_, k64_;
   std::map<std::pair<int, unsigned>, Uploaded> uploads_;
