@@ -30,7 +30,7 @@
 
 /* HCC, RegularGrid, HCC_DIR: one kernel testing every cut group, one testing the summary group
  * first (keys.h, rs_box_set_code_culled); the host picks one per box set (RsCutSet::cull). */
-#define RS_DEFINE_BOX_SET_KERNEL(NAME, CODE, SUFFIX, KEY_T)                                               \
+#define RS_DEFINE_BOX_SET_KERNEL(NAME, CODE, STORE, SUFFIX, KEY_T)                                        \
   __kernel void encode_##NAME##_##SUFFIX(__constant const RsCutGroup* set, uint box_count, uint field,    \
                                          uint dir_bits, __global const RsRay* rays,                      \
                                          __global const uint* order, uint count, uint bits,              \
@@ -38,6 +38,22 @@
     uint i = get_global_id(0);                                                                           \
     if (i >= count) return;                                                                              \
     rs_u64 code = CODE(rays[order[i]], set, box_count, field, dir_bits);                                 \
+    keys[i] STORE (KEY_T)rs_key_from_code(code, bits);                                                   \
+    values[i] = i;                                                                                       \
+  }
+
+/* HCC_DIR in two passes: encode_direction_* writes the direction bits (below a box field of `field`
+ * bits), then encode_box_set_or_* ORs in the box bits (called with dir_bits = 0). The direction
+ * field (atan2, acos) is what HCC_DIR spends its time on; in a kernel of its own PoCL runs it 8 rays
+ * at a time, which it cannot in the box-set kernel (its float8 cut tests are vector-typed). The
+ * key is the same: key_from_code(a | b) = key_from_code(a) | key_from_code(b). */
+#define RS_DEFINE_DIRECTION_KERNEL(SUFFIX, KEY_T)                                                          \
+  __kernel void encode_direction_##SUFFIX(__global const RsRay* rays, __global const uint* order,        \
+                                          uint count, uint field, uint dir_bits, uint bits,              \
+                                          __global KEY_T* keys, __global uint* values) {                 \
+    uint i = get_global_id(0);                                                                           \
+    if (i >= count) return;                                                                              \
+    rs_u64 code = rs_direction_bits(rays[order[i]], dir_bits) << (64u - field - dir_bits);               \
     keys[i] = (KEY_T)rs_key_from_code(code, bits);                                                       \
     values[i] = i;                                                                                       \
   }
@@ -56,8 +72,10 @@
   RS_DEFINE_SPATIAL_KERNEL(aila, SUFFIX, KEY_T)                                                          \
   RS_DEFINE_SPATIAL_KERNEL(twopoint, SUFFIX, KEY_T)                                                      \
                                                                                                          \
-  RS_DEFINE_BOX_SET_KERNEL(box_set, rs_box_set_code, SUFFIX, KEY_T)                                      \
-  RS_DEFINE_BOX_SET_KERNEL(box_set_culled, rs_box_set_code_culled, SUFFIX, KEY_T)                        \
+  RS_DEFINE_BOX_SET_KERNEL(box_set, rs_box_set_code, =, SUFFIX, KEY_T)                                   \
+  RS_DEFINE_BOX_SET_KERNEL(box_set_culled, rs_box_set_code_culled, =, SUFFIX, KEY_T)                     \
+  RS_DEFINE_BOX_SET_KERNEL(box_set_or, rs_box_set_code, |=, SUFFIX, KEY_T)                               \
+  RS_DEFINE_DIRECTION_KERNEL(SUFFIX, KEY_T)                                                              \
                                                                                                          \
   __kernel void encode_two_level_##SUFFIX(__constant const RsCutGroup* top, uint top_count,              \
                                           __global const RsCutGroup* low, __global const uint* low_count,\

@@ -130,10 +130,16 @@ class DeviceEncoder {
  public:
   DeviceEncoder(Runtime& rt, const Bvh& bvh, const Aabb& scene_box, const EncoderParams& params = {});
 
+  // The kernels of one encode: HCC_DIR runs two (direction bits, then box bits), the others one.
+  struct Events {
+    cl::Event first, last;
+    void wait() const;
+    double ms() const;  // first kernel's start to last kernel's end (profiling)
+  };
   // keys[i], values[i] = i for the ray rays[order[i]], i < count. keys holds uint32 (bits ≤ 32) or
-  // uint64 (bits > 32). Enqueues and returns the kernel's event without waiting.
-  cl::Event enqueue(Encoder e, unsigned bits, const cl::Buffer& rays, const cl::Buffer& order, std::uint32_t count,
-                    const cl::Buffer& keys, const cl::Buffer& values);
+  // uint64 (bits > 32). Enqueues and returns the kernels' events without waiting.
+  Events enqueue(Encoder e, unsigned bits, const cl::Buffer& rays, const cl::Buffer& order, std::uint32_t count,
+                 const cl::Buffer& keys, const cl::Buffer& values);
   // Uploads what (e, bits) needs now, so a timed enqueue does no host work.
   void prepare(Encoder e, unsigned bits);
   // Runs every kernel once on a few rays (PoCL compiles kernels at their first launch). Returns ms.
@@ -165,7 +171,7 @@ class DeviceEncoder {
   EncodeScene scene_;
   cl::Buffer frame_, nodes_, triangles_;
   struct Kernels {
-    cl::Kernel nosort, box_set, box_set_culled, two_level, prefix_path;
+    cl::Kernel nosort, box_set, box_set_culled, box_set_or, direction, two_level, prefix_path;
     std::map<Encoder, cl::Kernel> spatial;  // one kernel per spatial encoder: encode_<name>_k32/k64
   } k32_, k64_;
   std::map<std::pair<int, unsigned>, Uploaded> uploads_;
