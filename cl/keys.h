@@ -397,7 +397,7 @@ RS_DEFINE_CUT_BITS(p, )
  * such a ray misses every box of the group, because the slab test is monotone under box
  * containment ((p − o)·inv is monotone in p after rounding, and min/max/compare keep the order),
  * so skipping changes no bit. It pays only where eight consecutive boxes are neighbours: regular
- * grid cells, 64 of them (sibenik's primary shadow rays meet 2.6 of 8 groups; encode 1.5x faster).
+ * grid cells, 64 of them (sibenik's primary shadow rays meet 2.6 of 8 groups; encode 1.2-1.5x faster).
  * HCC's bit order (by HAD) scatters a group over the scene (7.6 of 8 groups met; even grouped
  * depth first, 4.1 of 8, the data-dependent loop was slower than testing all eight). */
 #define RS_CUT_SET_SUMMARY 1u
@@ -416,7 +416,7 @@ RS_KEY_INLINE rs_u64 rs_box_set_code(RsRay ray, RS_CUT_SPACE const RsCutGroup* s
 
 /* The same bits, testing the summary first and only the groups whose union box the ray meets.
  * (A kernel of its own: a run-time switch between the two loops in one kernel made PoCL's code
- * for the plain loop 1.3-1.8x slower.) */
+ * for the plain loop 1.2-1.8x slower here.) */
 RS_KEY_INLINE rs_u64 rs_box_set_code_culled(RsRay ray, RS_CUT_SPACE const RsCutGroup* set, rs_u32 n, rs_u32 field,
                                             rs_u32 dir_bits) {
   RsTraversalRay r = rs_prepare_ray(ray);
