@@ -15,6 +15,21 @@
  */
 #include "keys.h"
 
+/* Key stores. A 64-bit key goes out as two 32-bit words on a little-endian device: PoCL's
+ * work-group vectoriser sizes its vectors by the widest type stored, so a ulong store runs the
+ * whole kernel 4 rays at a time (AVX2), two uint stores 8 at a time. */
+#define RS_STORE_KEY_k32(keys, i, key) ((keys)[i] = (uint)(key))
+#ifdef __ENDIAN_LITTLE__
+#define RS_STORE_KEY_k64(keys, i, key)                            \
+  do {                                                            \
+    const ulong k_ = (key);                                       \
+    ((__global uint*)(keys))[2u * (i)] = (uint)k_;                \
+    ((__global uint*)(keys))[2u * (i) + 1u] = (uint)(k_ >> 32);   \
+  } while (0)
+#else
+#define RS_STORE_KEY_k64(keys, i, key) ((keys)[i] = (ulong)(key))
+#endif
+
 /* One kernel per spatial encoder (encode_origin_k32, ...): a straight-line body PoCL can vectorise
  * across work-items (a single kernel switching on the encoder did not vectorise). */
 #define RS_DEFINE_SPATIAL_KERNEL(NAME, SUFFIX, KEY_T)                                                    \
@@ -24,7 +39,7 @@
     uint i = get_global_id(0);                                                                           \
     if (i >= count) return;                                                                              \
     RsEncodeFrame f = *frame;                                                                            \
-    keys[i] = (KEY_T)rs_key_from_code(rs_##NAME##_code(&f, rays[order[i]]), bits);                       \
+    RS_STORE_KEY_##SUFFIX(keys, i, rs_key_from_code(rs_##NAME##_code(&f, rays[order[i]]), bits));        \
     values[i] = i;                                                                                       \
   }
 
@@ -54,7 +69,7 @@
     uint i = get_global_id(0);                                                                           \
     if (i >= count) return;                                                                              \
     rs_u64 code = rs_direction_bits(rays[order[i]], dir_bits) << (64u - field - dir_bits);               \
-    keys[i] = (KEY_T)rs_key_from_code(code, bits);                                                       \
+    RS_STORE_KEY_##SUFFIX(keys, i, rs_key_from_code(code, bits));                                        \
     values[i] = i;                                                                                       \
   }
 
