@@ -726,6 +726,29 @@ TEST(Encode, SameKeysAsTheBitwiseReference) {
   expect_all_encoders_bit_exact(dev, rays, "edge rays");
 }
 
+// HCC_DIR runs on the device in two passes (direction bits, then the box bits ORed in) when it has
+// direction bits, in one pass when d = 0; either way the keys equal the host twin's and the bitwise
+// reference, for d from 0 to 12 and every key length that leaves room for a box field.
+TEST(Encode, HccDirPassesMatchTheHostForEveryDirectionWidth) {
+  Scene scene = load_scene("detail-room");
+  Scene::Flat tris = scene.flatten();
+  Bvh bvh = build_bvh(tris);
+  const Aabb box = bvh.bounds();
+  for (unsigned d : {0u, 1u, 5u, 12u}) {
+    EncoderParams p;
+    p.direction_bits = d;
+    DeviceEncoder dev(testing::runtime(), bvh, box, p);
+    const std::vector<RsRay> rays = edge_rays(dev.scene(), box, 4000);
+    for (unsigned bits : {8u, 16u, 33u, 64u}) {
+      if (!key_bits_problem(Encoder::HCC_DIR, bits, p).empty()) continue;
+      expect_device_equals_host(dev, Encoder::HCC_DIR, bits, rays, "d = " + std::to_string(d));
+      const auto keys = encode_on_host(Encoder::HCC_DIR, bits, dev.scene(), rays);
+      for (std::size_t i = 0; i < rays.size(); ++i)
+        ASSERT_EQ(keys[i], ref::key(Encoder::HCC_DIR, bits, dev.scene(), rays[i])) << "d " << d << " bits " << bits;
+    }
+  }
+}
+
 // Cut groups: lane l of group g holds box 8g + 7 − l; the eight-box test gives each box's scalar
 // slab test, for box counts that do not fill the last group, and missing lanes never set bits.
 // Also the box-set codes of a cut set (rs_cut_set: groups after a summary of their union boxes),

@@ -90,7 +90,9 @@ DeviceEncoder::Events DeviceEncoder::enqueue(Encoder e, unsigned bits, const cl:
   cl::Kernel* k = nullptr;
   cl::Event ev;
   cl::Event first;  // HCC_DIR: the direction pass, before the box pass
-  if (e == Encoder::HCC_DIR && count > 0) {
+  // HCC_DIR with direction bits: the direction pass first, then the box bits ORed in.
+  const bool two_pass = e == Encoder::HCC_DIR && count > 0 && scene_.params().direction_bits > 0;
+  if (two_pass) {
     const cl_uint dir = scene_.params().direction_bits;
     cl_call("encoding the direction bits of " + std::to_string(count) + " rays (HCC_DIR, " + std::to_string(bits) +
                 " bits)",
@@ -123,7 +125,6 @@ DeviceEncoder::Events DeviceEncoder::enqueue(Encoder e, unsigned bits, const cl:
               k->setArg(arg++, count);
             } else if (is_box_set(e)) {
               // HCC_DIR: the direction bits are in keys already; OR in the box field.
-              const bool two_pass = e == Encoder::HCC_DIR && count > 0;
               const cl_uint dir = e == Encoder::HCC_DIR ? scene_.params().direction_bits : 0u;
               k = two_pass ? &ks.box_set_or : u.cull ? &ks.box_set_culled : &ks.box_set;
               k->setArg(arg++, u.a);
