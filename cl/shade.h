@@ -100,19 +100,6 @@ RS_INLINE float rs_random(RsShadeParams p, rs_u32 path, rs_u32 bounce, rs_u32 di
   return rs_uniform(rs_hash4(p.seed, rs_path_pixel(p, path), rs_path_sample(p, path), RS_DIM(bounce, dim)));
 }
 
-RS_INLINE RsRay rs_make_ray(RsVec3 o, RsVec3 d, float tmax) {
-  RsRay r;
-  r.o[0] = o.x;
-  r.o[1] = o.y;
-  r.o[2] = o.z;
-  r.tmin = 0.0f;
-  r.d[0] = d.x;
-  r.d[1] = d.y;
-  r.d[2] = d.z;
-  r.tmax = tmax;
-  return r;
-}
-
 /* Stage 1, generate: the primary ray of `path`, jittered within its pixel. */
 RS_INLINE RsRay rs_primary_ray(RsCamera cam, RsShadeParams p, rs_u32 path) {
   rs_u32 pixel = rs_path_pixel(p, path);

@@ -175,6 +175,9 @@ RS_INLINE void rs4_store(rs_f4 a, float* p) {
 RS_INLINE rs_f4 rs4_load(const float* p) { return rs_f4{{p[0], p[1], p[2], p[3]}}; }
 #endif
 
+/* |x| per lane, as max(x, 0 − x): the same bits on both sides (±0 gives +0). */
+RS_INLINE rs_f4 rs4_abs(rs_f4 x) { return rs4_max(x, 0.0f - x); }
+
 /* Eight-lane vectors in the same style (the encoders' cut-box tests, cl/keys.h): OpenCL's
  * float8/int8 on the device, a 32-byte struct with per-lane IEEE operations on the host. min/max are
  * selects, as rs4_min/rs4_max. */
@@ -343,22 +346,26 @@ RS_INLINE void rs_sincos_2pi(float u, float* s, float* c) {
  * Ray generation pieces shared by the host and the (later) generate kernels.
  * ------------------------------------------------------------------------------------------- */
 
+/* The ray o + t·d for t in [0, tmax]. */
+RS_INLINE RsRay rs_make_ray(RsVec3 o, RsVec3 d, float tmax) {
+  RsRay r;
+  r.o[0] = o.x;
+  r.o[1] = o.y;
+  r.o[2] = o.z;
+  r.tmin = 0.0f;
+  r.d[0] = d.x;
+  r.d[1] = d.y;
+  r.d[2] = d.z;
+  r.tmax = tmax;
+  return r;
+}
+
 /* Primary ray through pixel (x, y), jittered by (jx, jy) in [0,1)². */
 RS_INLINE RsRay rs_camera_ray(RsCamera cam, rs_u32 x, rs_u32 y, float jx, float jy) {
   float sx = (2.0f * (((float)x + jx) / (float)cam.width) - 1.0f) * cam.tan_half_fov_y * cam.aspect;
   float sy = (1.0f - 2.0f * (((float)y + jy) / (float)cam.height)) * cam.tan_half_fov_y;
   RsVec3 d = rs_add(rs_load3(cam.forward), rs_add(rs_scale(rs_load3(cam.right), sx), rs_scale(rs_load3(cam.up), sy)));
-  d = rs_normalize(d);
-  RsRay r;
-  r.o[0] = cam.pos[0];
-  r.o[1] = cam.pos[1];
-  r.o[2] = cam.pos[2];
-  r.tmin = 0.0f;
-  r.d[0] = d.x;
-  r.d[1] = d.y;
-  r.d[2] = d.z;
-  r.tmax = RS_T_FAR;
-  return r;
+  return rs_make_ray(rs_load3(cam.pos), rs_normalize(d), RS_T_FAR);
 }
 
 /* Orthonormal basis around unit n (Duff et al. 2017, "Building an Orthonormal Basis, Revisited"). */

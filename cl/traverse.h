@@ -210,12 +210,16 @@ RS_INLINE float rs_intersect_box_robust(const RsRobustRay* r, RS_GLOBAL const Rs
 #define RS_GAMMA2 1.1920930e-7f
 #define RS_GAMMA3 1.7881395e-7f
 #define RS_GAMMA5 2.9802326e-7f
-RS_INLINE float rs_robust_t_bound(float max_xt, float max_yt, float max_zt, float max_e, float abs_det) {
-  const float delta_z = RS_GAMMA3 * max_zt;
-  const float delta_x = RS_GAMMA5 * (max_xt + max_zt), delta_y = RS_GAMMA5 * (max_yt + max_zt);
-  const float delta_e = 2.0f * (RS_GAMMA2 * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
-  return 3.0f * (RS_GAMMA3 * max_e * max_zt + delta_e * max_zt + delta_z * max_e) / abs_det;
-}
+#define RS_DEFINE_T_BOUND(NAME, T)                                                                  \
+  RS_INLINE T NAME(T max_xt, T max_yt, T max_zt, T max_e, T abs_det) {                              \
+    const T delta_z = RS_GAMMA3 * max_zt;                                                           \
+    const T delta_x = RS_GAMMA5 * (max_xt + max_zt), delta_y = RS_GAMMA5 * (max_yt + max_zt);       \
+    const T delta_e = 2.0f * (RS_GAMMA2 * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);   \
+    return 3.0f * (RS_GAMMA3 * max_e * max_zt + delta_e * max_zt + delta_z * max_e) / abs_det;      \
+  }
+RS_DEFINE_T_BOUND(rs_robust_t_bound, float)  /* one triangle */
+RS_DEFINE_T_BOUND(rs4_robust_t_bound, rs_f4) /* four, lane by lane (the packet test) */
+#undef RS_DEFINE_T_BOUND
 
 /* Watertight ray/triangle test (Woop, Benthin & Wald 2013), two-sided. The vertices are moved to
  * ray space (translate by the origin, permute, shear so the ray runs along +z); the 2-D edge
@@ -510,18 +514,11 @@ RS_INLINE int rs_packet_intersect_robust(const RsRobustRay* r, RS_GLOBAL const R
   bits &= rs4_bits((t > r->tmin) & (t < tmax));
   if (!bits) return 0;
   {
-    /* rs_robust_t_bound, lane by lane (|x| as max(x, 0 − x)). */
-#define RS4_ABS(x) rs4_max((x), 0.0f - (x))
-    const rs_f4 max_xt = rs4_max(rs4_max(RS4_ABS(ax), RS4_ABS(bx)), RS4_ABS(cx));
-    const rs_f4 max_yt = rs4_max(rs4_max(RS4_ABS(ay), RS4_ABS(by)), RS4_ABS(cy));
-    const rs_f4 max_zt = rs4_max(rs4_max(RS4_ABS(azt), RS4_ABS(bzt)), RS4_ABS(czt));
-    const rs_f4 max_e = rs4_max(rs4_max(RS4_ABS(u), RS4_ABS(v)), RS4_ABS(w));
-    const rs_f4 delta_z = RS_GAMMA3 * max_zt;
-    const rs_f4 delta_x = RS_GAMMA5 * (max_xt + max_zt), delta_y = RS_GAMMA5 * (max_yt + max_zt);
-    const rs_f4 delta_e = 2.0f * (RS_GAMMA2 * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
-    const rs_f4 bound = 3.0f * (RS_GAMMA3 * max_e * max_zt + delta_e * max_zt + delta_z * max_e) / RS4_ABS(safe_det);
-#undef RS4_ABS
-    bits &= rs4_bits(t > bound);
+    const rs_f4 max_xt = rs4_max(rs4_max(rs4_abs(ax), rs4_abs(bx)), rs4_abs(cx));
+    const rs_f4 max_yt = rs4_max(rs4_max(rs4_abs(ay), rs4_abs(by)), rs4_abs(cy));
+    const rs_f4 max_zt = rs4_max(rs4_max(rs4_abs(azt), rs4_abs(bzt)), rs4_abs(czt));
+    const rs_f4 max_e = rs4_max(rs4_max(rs4_abs(u), rs4_abs(v)), rs4_abs(w));
+    bits &= rs4_bits(t > rs4_robust_t_bound(max_xt, max_yt, max_zt, max_e, rs4_abs(safe_det)));
   }
   *t_out = t;
   *u_out = v / safe_det;

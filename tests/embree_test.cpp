@@ -37,12 +37,7 @@ using raysort::testing::run_cli;
 
 namespace {
 
-RsRay ray(float ox, float oy, float oz, float dx, float dy, float dz, float tmax = RS_T_FAR, float tmin = 0.0f) {
-  RsRay r{};
-  r.o[0] = ox, r.o[1] = oy, r.o[2] = oz, r.tmin = tmin;
-  r.d[0] = dx, r.d[1] = dy, r.d[2] = dz, r.tmax = tmax;
-  return r;
-}
+using testing::ray;
 
 // Every batch of the scene's pipeline, for both variants: same triangle for >= 99.9 % of rays.
 void expect_agreement(const Scene& scene, const RayGenOptions& gen) {
@@ -81,14 +76,7 @@ void expect_agreement(const Scene& scene, const RayGenOptions& gen) {
 }  // namespace
 
 TEST(Embree, HandCheckedRaysMatchOurs) {
-  // A unit quad at z = 0 and a smaller one behind it at z = -1.
-  Scene s;
-  s.name = "two-quads";
-  Mesh m;
-  m.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0.25f, 0.25f, -1}, {0.75f, 0.25f, -1}, {0.75f, 0.75f, -1}, {0.25f, 0.75f, -1}};
-  m.triangles = {{0, 1, 2}, {0, 2, 3}, {4, 5, 6}, {4, 6, 7}};
-  s.meshes.push_back(m);
-  Scene::Flat tris = s.flatten();
+  Scene::Flat tris = testing::two_quads().flatten();
   Bvh bvh = build_bvh(tris);
   EmbreeScene embree(tris, 2);
   EXPECT_EQ(embree.threads(), 2u);

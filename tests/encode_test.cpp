@@ -23,12 +23,7 @@ namespace {
 
 const unsigned kBits[] = {16, 32, 64};
 
-RsRay ray(float ox, float oy, float oz, float dx, float dy, float dz, float tmax = RS_T_FAR) {
-  RsRay r{};
-  r.o[0] = ox, r.o[1] = oy, r.o[2] = oz, r.tmin = 0.0f;
-  r.d[0] = dx, r.d[1] = dy, r.d[2] = dz, r.tmax = tmax;
-  return r;
-}
+using testing::ray;
 
 Aabb unit_box() { return Aabb{{0, 0, 0}, {1, 1, 1}}; }
 

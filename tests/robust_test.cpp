@@ -104,13 +104,7 @@ IndexedMesh lattice_cube(std::uint32_t n) {
   return m;
 }
 
-RsRay make_ray(Vec3 o, Vec3 d, float tmax = RS_T_FAR) {
-  RsRay r{};
-  for (int a = 0; a < 3; ++a) r.o[a] = o[a], r.d[a] = d[a];
-  r.tmin = 0.0f;
-  r.tmax = tmax;
-  return r;
-}
+RsRay make_ray(Vec3 o, Vec3 d, float tmax = RS_T_FAR) { return testing::ray(o[0], o[1], o[2], d[0], d[1], d[2], tmax); }
 
 RsVec3 v3(const Vec3& a) { return rs_vec3(a[0], a[1], a[2]); }
 

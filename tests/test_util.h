@@ -16,6 +16,7 @@
 
 #include "cl/runtime.h"
 #include "scene/load.h"
+#include "shared.h"
 
 namespace raysort::testing {
 
@@ -32,6 +33,25 @@ inline bool under_ci() {
 
 // The real-scene root, or "" (after GTEST_SKIP or a failure) when it is absent.
 inline std::string real_scene_root() { return resolve_scene_root({}); }
+
+// The ray o + t·d for t in [tmin, tmax] (tests build rays by hand from numbers).
+inline RsRay ray(float ox, float oy, float oz, float dx, float dy, float dz, float tmax = RS_T_FAR, float tmin = 0.0f) {
+  RsRay r{};
+  r.o[0] = ox, r.o[1] = oy, r.o[2] = oz, r.tmin = tmin;
+  r.d[0] = dx, r.d[1] = dy, r.d[2] = dz, r.tmax = tmax;
+  return r;
+}
+
+// A unit quad in the z = 0 plane, [0,1]² (two triangles), plus a smaller one behind it at z = -1.
+inline Scene two_quads() {
+  Scene s;
+  s.name = "two-quads";
+  Mesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0.25f, 0.25f, -1}, {0.75f, 0.25f, -1}, {0.75f, 0.75f, -1}, {0.25f, 0.75f, -1}};
+  m.triangles = {{0, 1, 2}, {0, 2, 3}, {4, 5, 6}, {4, 6, 7}};
+  s.meshes.push_back(m);
+  return s;
+}
 
 // What the raysort binary printed and its exit code (128 + signal when killed by one).
 struct CliResult {

@@ -14,23 +14,8 @@ namespace raysort {
 
 namespace {
 
-// A unit quad in the z = 0 plane, [0,1]² (two triangles), plus a smaller one behind it at z = -1.
-Scene two_quads() {
-  Scene s;
-  s.name = "two-quads";
-  Mesh m;
-  m.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0.25f, 0.25f, -1}, {0.75f, 0.25f, -1}, {0.75f, 0.75f, -1}, {0.25f, 0.75f, -1}};
-  m.triangles = {{0, 1, 2}, {0, 2, 3}, {4, 5, 6}, {4, 6, 7}};
-  s.meshes.push_back(m);
-  return s;
-}
-
-RsRay ray(float ox, float oy, float oz, float dx, float dy, float dz, float tmax = RS_T_FAR) {
-  RsRay r{};
-  r.o[0] = ox, r.o[1] = oy, r.o[2] = oz, r.tmin = 0.0f;
-  r.d[0] = dx, r.d[1] = dy, r.d[2] = dz, r.tmax = tmax;
-  return r;
-}
+using testing::ray;
+using testing::two_quads;
 
 void expect_device_equals_reference(const Scene& scene, const RayGenOptions& gen, std::size_t min_batches) {
   Scene::Flat tris = scene.flatten();
