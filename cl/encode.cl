@@ -8,7 +8,7 @@
  *
  * Every kernel exists twice: *_k32 writes uint keys (key bits ≤ 32), *_k64 ulong keys.
  * Cut nodes (HCC, RegularGrid cells, MLHCC top nodes) come as eight-box SoA groups (RsCutGroup,
- * keys.h; box sets after a summary group of their union boxes, RsCutSet) in __constant memory: every work-item reads the same boxes, which GPUs broadcast from the
+ * keys.h) in __constant memory: every work-item reads the same boxes, which GPUs broadcast from the
  * constant cache, and PoCL needs no per-group copy or barrier (Xiang et al. Alg. 1, line 1, keeps
  * them in shared memory; the constant cache plays that part here). MLHCC's low-level rows (one per
  * ray, chosen by its first top-level hit) stay in global memory.
@@ -30,6 +30,12 @@
 #define RS_STORE_KEY_k64(keys, i, key) ((keys)[i] = (ulong)(key))
 #endif
 
+/* The code bits a key of this width can hold: a key of at most 32 bits comes from bits 63..32 of the
+ * code. Masking the rest lets the compiler drop the low half of the cut-bit accumulation
+ * (keys.h, rs_cut_bits) in the 32-bit kernels. */
+#define RS_CODE_MASK_k32 0xFFFFFFFF00000000UL
+#define RS_CODE_MASK_k64 0xFFFFFFFFFFFFFFFFUL
+
 /* One kernel per spatial encoder (encode_origin_k32, ...): a straight-line body PoCL can vectorise
  * across work-items (a single kernel switching on the encoder did not vectorise). */
 #define RS_DEFINE_SPATIAL_KERNEL(NAME, SUFFIX, KEY_T)                                                    \
@@ -43,8 +49,7 @@
     values[i] = i;                                                                                       \
   }
 
-/* HCC, RegularGrid, HCC_DIR: one kernel testing every cut group, one testing the summary group
- * first (keys.h, rs_box_set_code_culled); the host picks one per box set (RsCutSet::cull). */
+/* HCC, RegularGrid, HCC_DIR (keys.h, rs_box_set_code); the _or form for HCC_DIR's second pass. */
 #define RS_DEFINE_BOX_SET_KERNEL(NAME, CODE, STORE, SUFFIX, KEY_T)                                        \
   __kernel void encode_##NAME##_##SUFFIX(__constant const RsCutGroup* set, uint box_count, uint field,    \
                                          uint dir_bits, __global const RsRay* rays,                      \
@@ -52,7 +57,7 @@
                                          __global KEY_T* keys, __global uint* values) {                  \
     uint i = get_global_id(0);                                                                           \
     if (i >= count) return;                                                                              \
-    rs_u64 code = CODE(rays[order[i]], set, box_count, field, dir_bits);                                 \
+    rs_u64 code = CODE(rays[order[i]], set, box_count, field, dir_bits) & RS_CODE_MASK_##SUFFIX;          \
     keys[i] STORE (KEY_T)rs_key_from_code(code, bits);                                                   \
     values[i] = i;                                                                                       \
   }
@@ -88,7 +93,6 @@
   RS_DEFINE_SPATIAL_KERNEL(twopoint, SUFFIX, KEY_T)                                                      \
                                                                                                          \
   RS_DEFINE_BOX_SET_KERNEL(box_set, rs_box_set_code, =, SUFFIX, KEY_T)                                   \
-  RS_DEFINE_BOX_SET_KERNEL(box_set_culled, rs_box_set_code_culled, =, SUFFIX, KEY_T)                     \
   RS_DEFINE_BOX_SET_KERNEL(box_set_or, rs_box_set_code, |=, SUFFIX, KEY_T)                               \
   RS_DEFINE_DIRECTION_KERNEL(SUFFIX, KEY_T)                                                              \
                                                                                                          \
@@ -99,7 +103,8 @@
                                           __global KEY_T* keys, __global uint* values) {                 \
     uint i = get_global_id(0);                                                                           \
     if (i >= count) return;                                                                              \
-    rs_u64 code = rs_two_level_cut_code(rays[order[i]], top, top_count, low, low_count, half_bits);      \
+    rs_u64 code = rs_two_level_cut_code(rays[order[i]], top, top_count, low, low_count, half_bits) &     \
+                  RS_CODE_MASK_##SUFFIX;                                                                 \
     keys[i] = (KEY_T)rs_key_from_code(code, bits);                                                       \
     values[i] = i;                                                                                       \
   }                                                                                                      \

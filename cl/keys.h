@@ -314,7 +314,7 @@ RS_KEY_INLINE rs_u64 rs_spatial_code(int encoder, const RsEncodeFrame* f, RsRay 
 /* Does the segment [tmin, tmax] of r overlap box b? The same slab arithmetic, in the same order,
  * as rs_intersect_box in traverse.h (which takes a __global node; this takes a box by value so it
  * works on local-memory cut nodes): a cut-node bit is 1 exactly when traversal would enter it.
- * (The key kernels test eight boxes at once, rs_cut_group_bits; this one-box form is kept for
+ * (The key kernels test sixteen boxes at once, rs_cut_mask; this one-box form is kept for
  * reference and tests.) */
 RS_KEY_INLINE int rs_segment_overlaps_box(RsTraversalRay r, RsBox b) {
   float tx0 = (b.bmin[0] - r.o.x) * r.inv_d.x, tx1 = (b.bmax[0] - r.o.x) * r.inv_d.x;
@@ -325,59 +325,109 @@ RS_KEY_INLINE int rs_segment_overlaps_box(RsTraversalRay r, RsBox b) {
   return tnear <= tfar;
 }
 
-/* Eight cut boxes, one axis bound per vector (SoA), 192 bytes, so one pass of the slab test serves
- * eight boxes. Lanes are in reverse bit order: lane l of group g holds box 8g + 7 − l, so that
- * rs8_bits puts box i at bit 63 − i of the code once shifted by 56 − 8g. Lanes past the last box
- * are zero boxes whose bits are masked off. Built on the host (host/encode/encode.cpp,
- * rs_cut_groups). */
-#define RS_CUT_LANES 8u
+/* Sixteen cut boxes, one axis bound per vector (SoA), so one pass of the slab test serves sixteen
+ * boxes, and the code bit of each box: lane l ORs bit_hi into bits 63..32 of the code and bit_lo
+ * into bits 31..0 where its box is hit (one of them is 0); an empty lane has no bit. The hit masks
+ * are ANDed with these and ORed lane-wise, and the lanes are folded once per key, instead of
+ * turning each group's mask into a bit field. 512 bytes. Built on the host (host/encode/encode.cpp,
+ * rs_cut_groups). The bounds must come in this order: rs_cut_mask indexes them as
+ * (&lo_x)[2·axis + side]. */
+#define RS_CUT_LANES 16u
 typedef struct {
-  rs_f8 lo_x, hi_x, lo_y, hi_y, lo_z, hi_z;
+  rs_f16 lo_x, hi_x, lo_y, hi_y, lo_z, hi_z;
+  rs_i16 bit_hi, bit_lo;
 } RsCutGroup;
 #define RS_MAX_CUT_GROUPS (RS_MAX_KEY_BITS / RS_CUT_LANES)
 
-/* A ray broadcast to eight lanes. */
+/* The number of groups holding n boxes. */
+RS_KEY_INLINE rs_u32 rs_cut_group_count(rs_u32 n) { return (n + RS_CUT_LANES - 1u) / RS_CUT_LANES; }
+
+/* A ray broadcast to sixteen lanes, and per axis the side of the box its slab enters first
+ * (near_x = 1: the hi plane, where 1/d < 0). */
 typedef struct {
-  rs_f8 ox, oy, oz, ix, iy, iz, tmin, tmax;
+  rs_f16 ox, oy, oz, ix, iy, iz, tmin, tmax;
+  rs_u32 near_x, near_y, near_z;
 } RsCutRay;
 
 RS_KEY_INLINE RsCutRay rs_cut_ray(RsTraversalRay r) {
   RsCutRay c;
-  c.ox = rs8_splat(r.o.x), c.oy = rs8_splat(r.o.y), c.oz = rs8_splat(r.o.z);
-  c.ix = rs8_splat(r.inv_d.x), c.iy = rs8_splat(r.inv_d.y), c.iz = rs8_splat(r.inv_d.z);
-  c.tmin = rs8_splat(r.tmin), c.tmax = rs8_splat(r.tmax);
+  c.ox = rs16_splat(r.o.x), c.oy = rs16_splat(r.o.y), c.oz = rs16_splat(r.o.z);
+  c.ix = rs16_splat(r.inv_d.x), c.iy = rs16_splat(r.inv_d.y), c.iz = rs16_splat(r.inv_d.z);
+  c.tmin = rs16_splat(r.tmin), c.tmax = rs16_splat(r.tmax);
+  c.near_x = r.inv_d.x < 0.0f, c.near_y = r.inv_d.y < 0.0f, c.near_z = r.inv_d.z < 0.0f;
   return c;
 }
 
-/* rs_segment_overlaps_box on the eight boxes of g, same arithmetic per lane; bit l = lane l.
- * min/max are selects instead of fmin/fmax: both pick the smaller (larger) of two non-NaN values
- * and may differ only in the sign of a zero result, which no later comparison sees; no lane is
- * NaN, since rays are finite and inv_d comes from rs_safe_rcp (finite, non-zero). */
-RS_KEY_INLINE int rs_cut_group_bits(const RsCutRay* r, RsCutGroup g) {
-  rs_f8 tx0 = (g.lo_x - r->ox) * r->ix, tx1 = (g.hi_x - r->ox) * r->ix;
-  rs_f8 ty0 = (g.lo_y - r->oy) * r->iy, ty1 = (g.hi_y - r->oy) * r->iy;
-  rs_f8 tz0 = (g.lo_z - r->oz) * r->iz, tz1 = (g.hi_z - r->oz) * r->iz;
-  rs_f8 tnear = rs8_max(rs8_max(rs8_min(tx0, tx1), rs8_min(ty0, ty1)), rs8_max(rs8_min(tz0, tz1), r->tmin));
-  rs_f8 tfar = rs8_min(rs8_min(rs8_max(tx0, tx1), rs8_max(ty0, ty1)), rs8_min(rs8_max(tz0, tz1), r->tmax));
-  return rs8_bits(tnear <= tfar);
-}
-
-/* The top n bits of a 64-bit word (n ≤ 64). */
-RS_KEY_INLINE rs_u64 rs_top_bits_mask(rs_u32 n) { return n >= 64u ? ~RS_U64(0) : ~((~RS_U64(0)) >> n); }
-
-/* Bit 63 − i = the segment overlaps box i of the groups g, i < n (n ≤ 64). One definition per
- * address space (OpenCL C 1.2 has no generic pointers): _p private/host, _l local, _c constant,
- * _g global. */
-#define RS_DEFINE_CUT_BITS(SUFFIX, SPACE)                                                        \
-  RS_KEY_INLINE rs_u64 rs_cut_bits_##SUFFIX(const RsCutRay* r, SPACE const RsCutGroup* g, rs_u32 n) { \
-    rs_u64 code = 0;                                                                             \
-    const rs_u32 groups = (n + RS_CUT_LANES - 1u) / RS_CUT_LANES;                                \
-    for (rs_u32 k = 0; k < groups; ++k)                                                          \
-      code |= RS_U64((rs_u32)rs_cut_group_bits(r, g[k])) << (64u - RS_CUT_LANES - RS_CUT_LANES * k); \
-    return code & rs_top_bits_mask(n);                                                           \
+/* rs_segment_overlaps_box on the sixteen boxes of g: -1 in each lane whose box the segment overlaps.
+ * The same values as there, with the near and far plane of each axis picked by the sign of 1/d
+ * instead of a min and a max per box (the trace kernels' rs_wide_boxes does the same): for
+ * lo <= hi, (lo − o)·inv and (hi − o)·inv keep their order after rounding, so the min is the near
+ * plane's t. inv is never 0 or NaN (rs_safe_rcp) and rays are finite; a box must have lo <= hi
+ * (rs_cut_groups checks). min/max are selects, see rs16_min. */
+#define RS_DEFINE_CUT_MASK(NAME, SPACE, MASK_T, VEC_T, HALF, MIN, MAX)                                     \
+  RS_KEY_INLINE MASK_T NAME(const RsCutRay* r, SPACE const RsCutGroup* g) {                                   \
+    SPACE const rs_f16* b = &g->lo_x;                                                                         \
+    const VEC_T tnx = (b[r->near_x] HALF - r->ox HALF) * r->ix HALF;                                          \
+    const VEC_T tfx = (b[1u - r->near_x] HALF - r->ox HALF) * r->ix HALF;                                     \
+    const VEC_T tny = (b[2u + r->near_y] HALF - r->oy HALF) * r->iy HALF;                                     \
+    const VEC_T tfy = (b[3u - r->near_y] HALF - r->oy HALF) * r->iy HALF;                                     \
+    const VEC_T tnz = (b[4u + r->near_z] HALF - r->oz HALF) * r->iz HALF;                                     \
+    const VEC_T tfz = (b[5u - r->near_z] HALF - r->oz HALF) * r->iz HALF;                                     \
+    const VEC_T tnear = MAX(MAX(tnx, tny), MAX(tnz, r->tmin HALF));                                           \
+    const VEC_T tfar = MIN(MIN(tfx, tfy), MIN(tfz, r->tmax HALF));                                            \
+    return tnear <= tfar;                                                                                     \
   }
+
+/* The code bits of the n boxes of g that the segment overlaps (n <= 64): the hit masks, ANDed with
+ * the lanes' bits, are ORed lane-wise and folded across lanes once at the end. A last group with
+ * at most eight boxes is tested on its lower eight lanes only, on the device (rs_cut_mask_half_*):
+ * with AVX-512, PoCL runs a sixteen-lane operation as one zmm instruction, which Zen 4 executes in
+ * two halves, so a half-empty group would cost a full one (MLHCC at 16 bits has two such groups per
+ * key). The host tests every group whole; the upper lanes of such a group have no bits, so the
+ * code is the same.
+ * One definition per address space (OpenCL C 1.2 has no generic pointers): _p private/host,
+ * _c constant, _g global. */
 #ifdef __OPENCL_VERSION__
-RS_DEFINE_CUT_BITS(l, __local)
+RS_INLINE float8 rs8_min(float8 a, float8 b) { return select(b, a, a < b); }
+RS_INLINE float8 rs8_max(float8 a, float8 b) { return select(b, a, a > b); }
+RS_INLINE int rs8_or_lanes(int8 m) {
+  int4 h = m.lo | m.hi;
+  int2 q = h.lo | h.hi;
+  return q.s0 | q.s1;
+}
+#define RS_DEFINE_CUT_BITS(SUFFIX, SPACE)                                                            \
+  RS_DEFINE_CUT_MASK(rs_cut_mask_##SUFFIX, SPACE, int16, float16, , rs16_min, rs16_max)              \
+  RS_DEFINE_CUT_MASK(rs_cut_mask_half_##SUFFIX, SPACE, int8, float8, .lo, rs8_min, rs8_max)          \
+  RS_KEY_INLINE rs_u64 rs_cut_bits_##SUFFIX(const RsCutRay* r, SPACE const RsCutGroup* g, rs_u32 n) { \
+    int16 hi = (int16)(0), lo = (int16)(0);                                                          \
+    const rs_u32 full = n / RS_CUT_LANES, rest = n % RS_CUT_LANES;                                   \
+    for (rs_u32 k = 0; k < full + (rest > RS_CUT_LANES / 2u); ++k) {                                 \
+      const int16 m = rs_cut_mask_##SUFFIX(r, &g[k]);                                                \
+      hi = hi | (m & g[k].bit_hi);                                                                   \
+      lo = lo | (m & g[k].bit_lo);                                                                   \
+    }                                                                                                \
+    int8 hi8 = hi.lo | hi.hi, lo8 = lo.lo | lo.hi;                                                   \
+    if (rest > 0u && rest <= RS_CUT_LANES / 2u) {                                                    \
+      const int8 m = rs_cut_mask_half_##SUFFIX(r, &g[full]);                                         \
+      hi8 = hi8 | (m & g[full].bit_hi.lo);                                                           \
+      lo8 = lo8 | (m & g[full].bit_lo.lo);                                                           \
+    }                                                                                                \
+    return (RS_U64((rs_u32)rs8_or_lanes(hi8)) << 32) | (rs_u32)rs8_or_lanes(lo8);                    \
+  }
+#else
+#define RS_DEFINE_CUT_BITS(SUFFIX, SPACE)                                                            \
+  RS_DEFINE_CUT_MASK(rs_cut_mask_##SUFFIX, SPACE, rs_i16, rs_f16, , rs16_min, rs16_max)              \
+  RS_KEY_INLINE rs_u64 rs_cut_bits_##SUFFIX(const RsCutRay* r, SPACE const RsCutGroup* g, rs_u32 n) { \
+    rs_i16 hi = rs16_zero(), lo = rs16_zero();                                                       \
+    for (rs_u32 k = 0; k < rs_cut_group_count(n); ++k) {                                             \
+      const rs_i16 m = rs_cut_mask_##SUFFIX(r, &g[k]);                                               \
+      hi = hi | (m & g[k].bit_hi);                                                                   \
+      lo = lo | (m & g[k].bit_lo);                                                                   \
+    }                                                                                                \
+    return (RS_U64((rs_u32)rs16_or_lanes(hi)) << 32) | (rs_u32)rs16_or_lanes(lo);                    \
+  }
+#endif
+#ifdef __OPENCL_VERSION__
 RS_DEFINE_CUT_BITS(c, __constant)
 RS_DEFINE_CUT_BITS(g, __global)
 #define RS_CUT_BITS_TOP rs_cut_bits_c
@@ -390,54 +440,27 @@ RS_DEFINE_CUT_BITS(p, )
 /* The space the box-set kernels read the cut groups from (HCC, grid, HCC_DIR, MLHCC top level). */
 #define RS_CUT_SPACE RS_CONSTANT
 
-/* A box set as the box-set kernels read it (built on the host by rs_cut_set, host/encode/encode.cpp):
- *   set[0]      the summary group: lane k holds the union of group k's boxes (k < 8);
- *   set[1 + k]  group k: boxes 8k .. 8k + 7, in bit order (rs_cut_groups).
- * rs_box_set_code_culled first tests the summary and skips every group whose union box it misses:
- * such a ray misses every box of the group, because the slab test is monotone under box
- * containment ((p − o)·inv is monotone in p after rounding, and min/max/compare keep the order),
- * so skipping changes no bit. It pays only where eight consecutive boxes are neighbours: regular
- * grid cells, 64 of them (sibenik's primary shadow rays meet 2.6 of 8 groups; encode 1.2-1.5x faster).
- * HCC's bit order (by HAD) scatters a group over the scene (7.6 of 8 groups met; even grouped
- * depth first, 4.1 of 8, the data-dependent loop was slower than testing all eight). */
-#define RS_CUT_SET_SUMMARY 1u
-
-/* HCC / RegularGrid / HCC_DIR: bit 63 − i = overlap with box i of the set, i < n
- * (n ≤ 64 − dir_bits); then dir_bits direction bits right below the box field of `field` bits
- * (HCC_DIR). Every group is tested. */
+/* HCC / RegularGrid / HCC_DIR: bit 63 − i = overlap with box i of the set (n boxes in
+ * ceil(n / 16) groups, built on the host by rs_cut_groups; n ≤ 64 − dir_bits); then dir_bits
+ * direction bits right below the box field of `field` bits (HCC_DIR). Every group is tested:
+ * testing a group's union box first and skipping the groups it misses (a summary group, tried with
+ * eight-box groups, in bit order and in Morton order) gave the same bits but was 1.2–1.9x slower
+ * on PoCL for HCC and no faster for grid cells: sibenik's shadow rays are long and meet most of the
+ * union boxes, and the data-dependent loop costs more than the groups it skips. */
 RS_KEY_INLINE rs_u64 rs_box_set_code(RsRay ray, RS_CUT_SPACE const RsCutGroup* set, rs_u32 n, rs_u32 field,
                                      rs_u32 dir_bits) {
   RsTraversalRay r = rs_prepare_ray(ray);
   RsCutRay c = rs_cut_ray(r);
-  rs_u64 code = RS_CUT_BITS_TOP(&c, set + RS_CUT_SET_SUMMARY, n);
-  if (dir_bits > 0u) code |= rs_direction_bits(ray, dir_bits) << (64u - field - dir_bits);
-  return code;
-}
-
-/* The same bits, testing the summary first and only the groups whose union box the ray meets.
- * (A kernel of its own: a run-time switch between the two loops in one kernel made PoCL's code
- * for the plain loop 1.2-1.8x slower here.) */
-RS_KEY_INLINE rs_u64 rs_box_set_code_culled(RsRay ray, RS_CUT_SPACE const RsCutGroup* set, rs_u32 n, rs_u32 field,
-                                            rs_u32 dir_bits) {
-  RsTraversalRay r = rs_prepare_ray(ray);
-  RsCutRay c = rs_cut_ray(r);
-  const rs_u32 groups = (n + RS_CUT_LANES - 1u) / RS_CUT_LANES;
-  rs_u32 live = (rs_u32)rs_cut_group_bits(&c, set[0]) & ((1u << groups) - 1u);
-  rs_u64 code = 0;
-  while (live) {
-    const rs_u32 k = (rs_u32)rs_lowest_bit((int)live);
-    code |= RS_U64((rs_u32)rs_cut_group_bits(&c, set[RS_CUT_SET_SUMMARY + k])) << (64u - RS_CUT_LANES - RS_CUT_LANES * k);
-    live &= live - 1u;
-  }
-  code &= rs_top_bits_mask(n);
+  rs_u64 code = RS_CUT_BITS_TOP(&c, set, n);
   if (dir_bits > 0u) code |= rs_direction_bits(ray, dir_bits) << (64u - field - dir_bits);
   return code;
 }
 
 /* MLHCC (Xiang et al. section 4.3): the top `half_bits` bits are the HCC of the top-level cut; the
  * representative top node is the first one hit (top nodes are in descending HAD order); the next
- * `half_bits` bits are the HCC of its low-level cut: row rep of `low` (groups_per_row groups each),
- * boxes j < low_count[rep]. No top node hit: the low bits are 0. */
+ * `half_bits` bits are the HCC of its low-level cut: row rep of `low` (ceil(half_bits / 16)
+ * groups, box j in group j / 16, j < low_count[rep], its code bit already 63 − half_bits − j). No
+ * top node hit: the low bits are 0. */
 RS_KEY_INLINE rs_u64 rs_two_level_cut_code(RsRay ray, RS_CUT_SPACE const RsCutGroup* top, rs_u32 n_top,
                                            RS_GLOBAL const RsCutGroup* low, RS_GLOBAL const rs_u32* low_count,
                                            rs_u32 half_bits) {
@@ -446,8 +469,7 @@ RS_KEY_INLINE rs_u64 rs_two_level_cut_code(RsRay ray, RS_CUT_SPACE const RsCutGr
   rs_u64 code = RS_CUT_BITS_TOP(&c, top, n_top);
   if (code != 0u) {
     const rs_u32 rep = rs_clz64(code);
-    const rs_u32 groups_per_row = (half_bits + RS_CUT_LANES - 1u) / RS_CUT_LANES;
-    code |= rs_cut_bits_g(&c, low + rep * groups_per_row, low_count[rep]) >> half_bits;
+    code |= rs_cut_bits_g(&c, low + rep * rs_cut_group_count(half_bits), low_count[rep]);
   }
   return code;
 }

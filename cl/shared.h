@@ -178,53 +178,54 @@ RS_INLINE rs_f4 rs4_load(const float* p) { return rs_f4{{p[0], p[1], p[2], p[3]}
 /* |x| per lane, as max(x, 0 − x): the same bits on both sides (±0 gives +0). */
 RS_INLINE rs_f4 rs4_abs(rs_f4 x) { return rs4_max(x, 0.0f - x); }
 
-/* Eight-lane vectors in the same style (the encoders' cut-box tests, cl/keys.h): OpenCL's
- * float8/int8 on the device, a 32-byte struct with per-lane IEEE operations on the host. min/max are
- * selects, as rs4_min/rs4_max. */
+/* Sixteen-lane vectors in the same style (the encoders' cut-box tests, cl/keys.h): OpenCL's
+ * float16/int16 on the device, a 64-byte struct with per-lane IEEE operations on the host. min/max
+ * are selects, as rs4_min/rs4_max. Sixteen lanes because a CPU with AVX-512 runs them as one
+ * instruction (PoCL turns float16 into zmm operations), which halves the instructions of a key
+ * against eight-lane groups; elsewhere they are two eight-lane or sixteen scalar operations. */
 #ifdef __OPENCL_VERSION__
-typedef float8 rs_f8;
-typedef int8 rs_i8;
-RS_INLINE rs_f8 rs8_splat(float x) { return (float8)(x); }
-RS_INLINE rs_f8 rs8_min(rs_f8 a, rs_f8 b) { return select(b, a, a < b); }
-RS_INLINE rs_f8 rs8_max(rs_f8 a, rs_f8 b) { return select(b, a, a > b); }
-/* Bit i set when lane i is true. */
-RS_INLINE int rs8_bits(rs_i8 m) {
-  int8 b = m & (int8)(1, 2, 4, 8, 16, 32, 64, 128);
-  int4 h = b.lo | b.hi;
-  int2 q = h.lo | h.hi;
-  return q.s0 | q.s1;
-}
+typedef float16 rs_f16;
+typedef int16 rs_i16;
+RS_INLINE rs_f16 rs16_splat(float x) { return (float16)(x); }
+RS_INLINE rs_f16 rs16_min(rs_f16 a, rs_f16 b) { return select(b, a, a < b); }
+RS_INLINE rs_f16 rs16_max(rs_f16 a, rs_f16 b) { return select(b, a, a > b); }
 #else
-typedef struct alignas(32) rs_f8 {
-  float s[8];
-} rs_f8;
-typedef struct alignas(32) rs_i8 {
-  rs_i32 s[8];
-} rs_i8;
-RS_LANES_BINARY(rs_f8, rs_f8, 8, +)
-RS_LANES_BINARY(rs_f8, rs_f8, 8, -)
-RS_LANES_BINARY(rs_f8, rs_f8, 8, *)
-RS_LANES_BINARY(rs_i8, rs_i8, 8, &)
-RS_LANES_BINARY(rs_i8, rs_i8, 8, |)
-RS_LANES_COMPARE(rs_f8, rs_i8, 8, <)
-RS_LANES_COMPARE(rs_f8, rs_i8, 8, >)
-RS_LANES_COMPARE(rs_f8, rs_i8, 8, <=)
+typedef struct alignas(64) rs_f16 {
+  float s[16];
+} rs_f16;
+typedef struct alignas(64) rs_i16 {
+  rs_i32 s[16];
+} rs_i16;
+RS_LANES_BINARY(rs_f16, rs_f16, 16, +)
+RS_LANES_BINARY(rs_f16, rs_f16, 16, -)
+RS_LANES_BINARY(rs_f16, rs_f16, 16, *)
+RS_LANES_BINARY(rs_i16, rs_i16, 16, &)
+RS_LANES_BINARY(rs_i16, rs_i16, 16, |)
+RS_LANES_COMPARE(rs_f16, rs_i16, 16, <)
+RS_LANES_COMPARE(rs_f16, rs_i16, 16, >)
+RS_LANES_COMPARE(rs_f16, rs_i16, 16, <=)
 #undef RS_LANES_BINARY
 #undef RS_LANES_COMPARE
-RS_INLINE rs_f8 rs8_splat(float x) { return rs_f8{{x, x, x, x, x, x, x, x}}; }
-RS_INLINE rs_f8 rs8_min(rs_f8 a, rs_f8 b) {
-  rs_f8 r;
-  for (int i = 0; i < 8; ++i) r.s[i] = a.s[i] < b.s[i] ? a.s[i] : b.s[i];
+RS_INLINE rs_f16 rs16_splat(float x) {
+  rs_f16 r;
+  for (int i = 0; i < 16; ++i) r.s[i] = x;
   return r;
 }
-RS_INLINE rs_f8 rs8_max(rs_f8 a, rs_f8 b) {
-  rs_f8 r;
-  for (int i = 0; i < 8; ++i) r.s[i] = a.s[i] > b.s[i] ? a.s[i] : b.s[i];
+RS_INLINE rs_f16 rs16_min(rs_f16 a, rs_f16 b) {
+  rs_f16 r;
+  for (int i = 0; i < 16; ++i) r.s[i] = a.s[i] < b.s[i] ? a.s[i] : b.s[i];
   return r;
 }
-RS_INLINE int rs8_bits(rs_i8 m) {
+RS_INLINE rs_f16 rs16_max(rs_f16 a, rs_f16 b) {
+  rs_f16 r;
+  for (int i = 0; i < 16; ++i) r.s[i] = a.s[i] > b.s[i] ? a.s[i] : b.s[i];
+  return r;
+}
+RS_INLINE rs_i16 rs16_zero() { return rs_i16{}; }
+/* The OR of the sixteen lanes (the device folds eight-lane halves, cl/keys.h rs_cut_bits). */
+RS_INLINE int rs16_or_lanes(rs_i16 m) {
   int b = 0;
-  for (int i = 0; i < 8; ++i) b |= m.s[i] & (1 << i);
+  for (int i = 0; i < 16; ++i) b |= m.s[i];
   return b;
 }
 #endif

@@ -716,9 +716,12 @@ TEST(Encode, SameKeysAsTheBitwiseReference) {
         if (keys[i] != ref::key(e, bits, s, rays[i]) && bad++ == 0) first = i;
       EXPECT_EQ(bad, 0u) << encoder_name(e) << "/" << bits << " first mismatch at ray " << first << ": "
                          << std::hex << keys[first] << " vs reference " << ref::key(e, bits, s, rays[first]);
+      // The device at every width too: cut groups whose last group is full, more than half full or
+      // at most half full (the device tests that one eight lanes wide, keys.h rs_cut_bits).
+      expect_device_equals_host(dev, e, bits, rays, "edge rays");
     }
   }
-  expect_all_encoders_bit_exact(dev, rays, "edge rays");
+  expect_all_encoders_bit_exact(dev, rays, "edge rays");  // PPC and NoSort too
 }
 
 // HCC_DIR runs on the device in two passes (direction bits, then the box bits ORed in) when it has
@@ -744,11 +747,11 @@ TEST(Encode, HccDirPassesMatchTheHostForEveryDirectionWidth) {
   }
 }
 
-// Cut groups: lane l of group g holds box 8g + 7 − l; the eight-box test gives each box's scalar
-// slab test, for box counts that do not fill the last group, and missing lanes never set bits.
-// Also the box-set codes of a cut set (rs_cut_set: groups after a summary of their union boxes),
-// which skip a group whose union box the ray misses; the boxes are random, some flat, some rays
-// axis-parallel or starting on a box corner, some segments short.
+// Cut groups: the sixteen-box test (near and far planes picked by the sign of 1/d) gives each box's
+// scalar min/max slab test at the box's code bit, for box counts that do not fill the last group,
+// from the top of the code and below a first bit; missing lanes never set bits.
+// Also the box-set code (rs_box_set_code) on the same groups. The boxes are random, some flat;
+// some rays are axis-parallel or start on a box corner, some segments are short.
 TEST(Encode, CutGroupsMatchTheScalarSlabTest) {
   std::mt19937 rng(99);
   std::uniform_real_distribution<float> u(-1.0f, 1.0f);
@@ -760,9 +763,9 @@ TEST(Encode, CutGroupsMatchTheScalarSlabTest) {
         b.bmin[a] = std::min(x, y), b.bmax[a] = a == 2 && u(rng) < 0 ? b.bmin[a] : std::max(x, y);  // some flat
       }
     const auto groups = rs_cut_groups(boxes.data(), boxes.size());
-    ASSERT_EQ(groups.size(), (n + 7) / 8);
-    const RsCutSet set = rs_cut_set(boxes.data(), boxes.size(), true);
-    ASSERT_EQ(set.groups.size(), 1 + groups.size());
+    ASSERT_EQ(groups.size(), (n + 15) / 16);
+    const rs_u32 first = 64 - n;  // the boxes' bits at the bottom of the code
+    const auto low_groups = rs_cut_groups(boxes.data(), boxes.size(), first);
     for (int k = 0; k < 2000; ++k) {
       RsRay r = ray(u(rng), u(rng), u(rng), u(rng), u(rng), k % 7 == 0 ? 0.0f : u(rng), k % 3 ? RS_T_FAR : 0.5f);
       if (k % 11 == 0) std::memcpy(r.o, boxes[k % n].bmin, sizeof r.o);  // on a box corner
@@ -772,11 +775,15 @@ TEST(Encode, CutGroupsMatchTheScalarSlabTest) {
       for (rs_u32 i = 0; i < n; ++i)
         if (rs_segment_overlaps_box(tr, boxes[i])) expect |= rs_u64(1) << (63u - i);
       ASSERT_EQ(rs_cut_bits_p(&c, groups.data(), n), expect) << "n " << n << " ray " << k;
-      // The box-set codes, with and without the summary test (cl/keys.h): the same bits.
-      ASSERT_EQ(rs_box_set_code(r, set.groups.data(), n, n, 0), expect) << "n " << n << " ray " << k;
-      ASSERT_EQ(rs_box_set_code_culled(r, set.groups.data(), n, n, 0), expect) << "n " << n << " ray " << k;
+      ASSERT_EQ(rs_cut_bits_p(&c, low_groups.data(), n), expect >> first)
+          << "n " << n << " ray " << k;
+      ASSERT_EQ(rs_box_set_code(r, groups.data(), n, n, 0), expect) << "n " << n << " ray " << k;
     }
   }
+  // The sign-picked test needs lo <= hi: an empty or NaN box is refused, not silently mis-tested.
+  RsBox empty{{0, 0, 1}, {1, 1, 0}}, nan{{0, 0, 0}, {1, std::nanf(""), 1}};
+  EXPECT_THROW(rs_cut_groups(&empty, 1), Error);
+  EXPECT_THROW(rs_cut_groups(&nan, 1), Error);
 }
 
 }  // namespace raysort

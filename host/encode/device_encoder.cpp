@@ -28,7 +28,6 @@ DeviceEncoder::DeviceEncoder(Runtime& rt, const Bvh& bvh, const Aabb& scene_box,
     for (auto [k, suffix] : {std::pair{&k32_, "k32"}, std::pair{&k64_, "k64"}}) {
       k->nosort = cl::Kernel(program, (std::string("encode_nosort_") + suffix).c_str());
       k->box_set = cl::Kernel(program, (std::string("encode_box_set_") + suffix).c_str());
-      k->box_set_culled = cl::Kernel(program, (std::string("encode_box_set_culled_") + suffix).c_str());
       k->box_set_or = cl::Kernel(program, (std::string("encode_box_set_or_") + suffix).c_str());
       k->direction = cl::Kernel(program, (std::string("encode_direction_") + suffix).c_str());
       k->two_level = cl::Kernel(program, (std::string("encode_two_level_") + suffix).c_str());
@@ -50,10 +49,8 @@ const DeviceEncoder::Uploaded& DeviceEncoder::uploaded(Encoder e, unsigned bits)
   Uploaded u;
   const std::string what = std::string(encoder_name(e)) + " " + std::to_string(bits) + "-bit ";
   if (is_box_set(e)) {
-    const RsCutSet& set = scene_.cut_set(e, bits);
-    u.a = rt_.upload(what + "cut boxes", set.groups);
-    u.n = set.box_count;
-    u.cull = set.cull;
+    u.a = rt_.upload(what + "cut boxes", scene_.cut_groups(e, bits));
+    u.n = static_cast<std::uint32_t>(scene_.box_set(e, bits).size());
   } else if (e == Encoder::MLHCC) {
     const auto& t = scene_.two_level(bits);
     u.a = rt_.upload(what + "top-level cut boxes", t.top_groups);
@@ -124,7 +121,7 @@ DeviceEncoder::Events DeviceEncoder::enqueue(Encoder e, unsigned bits, const cl:
             } else if (is_box_set(e)) {
               // HCC_DIR: the direction bits are in keys already; OR in the box field.
               const cl_uint dir = e == Encoder::HCC_DIR ? scene_.params().direction_bits : 0u;
-              k = two_pass ? &ks.box_set_or : u.cull ? &ks.box_set_culled : &ks.box_set;
+              k = two_pass ? &ks.box_set_or : &ks.box_set;
               k->setArg(arg++, u.a);
               k->setArg(arg++, u.n);
               k->setArg(arg++, static_cast<cl_uint>(bits - dir));
@@ -209,10 +206,10 @@ double DeviceEncoder::warm_up() {
     for (Encoder e : {Encoder::NoSort, Encoder::Origin, Encoder::Reis, Encoder::Costa, Encoder::Aila, Encoder::TwoPoint,
                       Encoder::HCC, Encoder::MLHCC, Encoder::PPC})
       run(e, bits, rays);
-  // The kernels only these use (culled grid cells at 64 bits; HCC_DIR's two passes). Best effort:
+  // The kernels only HCC_DIR uses (its two passes). Best effort:
   // their cut data is per encoder and key length, and if it cannot be allocated here, the cell that
   // needs it fails with that message and the other cells still run (tests/cli_test.cpp).
-  for (auto [e, bits] : {std::pair{Encoder::RegularGrid, 64u}, std::pair{Encoder::HCC_DIR, 32u}, std::pair{Encoder::HCC_DIR, 64u}}) {
+  for (auto [e, bits] : {std::pair{Encoder::HCC_DIR, 32u}, std::pair{Encoder::HCC_DIR, 64u}}) {
     try {
       run(e, bits, rays);
     } catch (const Error&) {

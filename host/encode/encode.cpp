@@ -11,7 +11,7 @@
 
 namespace raysort {
 
-static_assert(sizeof(RsBox) == 24 && sizeof(RsEncodeFrame) == 48 && sizeof(RsCutGroup) == 192,
+static_assert(sizeof(RsBox) == 24 && sizeof(RsEncodeFrame) == 48 && sizeof(RsCutGroup) == 512,
               "device struct layouts (cl/keys.h)");
 
 std::string_view encoder_name(Encoder e) {
@@ -90,38 +90,25 @@ RsBox to_rs_box(const Aabb& b) {
   return r;
 }
 
-std::vector<RsCutGroup> rs_cut_groups(const RsBox* boxes, std::size_t n) {
+std::vector<RsCutGroup> rs_cut_groups(const RsBox* boxes, std::size_t n, unsigned first_bit) {
+  if (first_bit + n > RS_MAX_KEY_BITS) throw Error("rs_cut_groups: more boxes than key bits");
   const std::size_t lanes = RS_CUT_LANES;
   std::vector<RsCutGroup> groups((n + lanes - 1) / lanes, RsCutGroup{});
   for (std::size_t i = 0; i < n; ++i) {
+    const RsBox& b = boxes[i];
+    for (int a = 0; a < 3; ++a)
+      if (!(b.bmin[a] <= b.bmax[a]))  // also NaN: the sign-picked slab test needs lo <= hi
+        throw Error("rs_cut_groups: box " + std::to_string(i) + " is empty or not a number on axis " +
+                    std::to_string(a));
     RsCutGroup& g = groups[i / lanes];
-    const std::size_t l = lanes - 1 - i % lanes;
-    g.lo_x.s[l] = boxes[i].bmin[0], g.hi_x.s[l] = boxes[i].bmax[0];
-    g.lo_y.s[l] = boxes[i].bmin[1], g.hi_y.s[l] = boxes[i].bmax[1];
-    g.lo_z.s[l] = boxes[i].bmin[2], g.hi_z.s[l] = boxes[i].bmax[2];
+    const std::size_t l = i % lanes;
+    g.lo_x.s[l] = b.bmin[0], g.hi_x.s[l] = b.bmax[0];
+    g.lo_y.s[l] = b.bmin[1], g.hi_y.s[l] = b.bmax[1];
+    g.lo_z.s[l] = b.bmin[2], g.hi_z.s[l] = b.bmax[2];
+    const unsigned bit = 63u - first_bit - static_cast<unsigned>(i);
+    (bit >= 32 ? g.bit_hi : g.bit_lo).s[l] = static_cast<rs_i32>(1u << (bit % 32));
   }
   return groups;
-}
-
-RsCutSet rs_cut_set(const RsBox* boxes, std::size_t n, bool cull) {
-  if (n > RS_MAX_KEY_BITS) throw Error("rs_cut_set: more boxes than key bits");
-  RsCutSet set;
-  set.box_count = static_cast<rs_u32>(n);
-  set.cull = cull ? 1u : 0u;
-  set.groups.push_back(RsCutGroup{});
-  const auto groups = rs_cut_groups(boxes, n);
-  set.groups.insert(set.groups.end(), groups.begin(), groups.end());
-  RsCutGroup& sum = set.groups[0];
-  for (std::size_t k = 0; k < groups.size(); ++k) {
-    RsBox un = boxes[k * RS_CUT_LANES];
-    for (std::size_t i = k * RS_CUT_LANES; i < std::min(n, (k + 1) * RS_CUT_LANES); ++i)
-      for (int a = 0; a < 3; ++a)
-        un.bmin[a] = std::min(un.bmin[a], boxes[i].bmin[a]), un.bmax[a] = std::max(un.bmax[a], boxes[i].bmax[a]);
-    sum.lo_x.s[k] = un.bmin[0], sum.hi_x.s[k] = un.bmax[0];
-    sum.lo_y.s[k] = un.bmin[1], sum.hi_y.s[k] = un.bmax[1];
-    sum.lo_z.s[k] = un.bmin[2], sum.hi_z.s[k] = un.bmax[2];
-  }
-  return set;
 }
 
 EncodeScene::EncodeScene(const Bvh& bvh, const Aabb& scene_box, const EncoderParams& params)
@@ -159,15 +146,12 @@ const std::vector<RsBox>& EncodeScene::box_set(Encoder e, unsigned bits) const {
   return box_sets_.emplace(key, std::move(boxes)).first->second;
 }
 
-const RsCutSet& EncodeScene::cut_set(Encoder e, unsigned bits) const {
+const std::vector<RsCutGroup>& EncodeScene::cut_groups(Encoder e, unsigned bits) const {
   const auto key = std::make_pair(static_cast<int>(e), bits);
-  auto it = cut_sets_.find(key);
-  if (it != cut_sets_.end()) return it->second;
+  auto it = cut_groups_.find(key);
+  if (it != cut_groups_.end()) return it->second;
   const auto& boxes = box_set(e, bits);
-  // Culling pays where eight consecutive boxes are neighbours (grid cells) and there are enough
-  // groups to skip (cl/keys.h, rs_box_set_code).
-  const bool cull = e == Encoder::RegularGrid && boxes.size() > 4 * RS_CUT_LANES;
-  return cut_sets_.emplace(key, rs_cut_set(boxes.data(), boxes.size(), cull)).first->second;
+  return cut_groups_.emplace(key, rs_cut_groups(boxes.data(), boxes.size())).first->second;
 }
 
 const EncodeScene::TwoLevel& EncodeScene::two_level(unsigned bits) const {
@@ -186,7 +170,9 @@ const EncodeScene::TwoLevel& EncodeScene::two_level(unsigned bits) const {
   }
   t.top_groups = rs_cut_groups(t.top.data(), t.top.size());
   for (std::size_t i = 0; i < t.top.size(); ++i) {
-    const auto row = rs_cut_groups(t.low.data() + i * t.half, t.half);
+    // Row i: its low_count[i] boxes, then zero boxes (no code bit) up to half; bits below the top half.
+    auto row = rs_cut_groups(t.low.data() + i * t.half, t.low_count[i], t.half);
+    row.resize(rs_cut_group_count(t.half), RsCutGroup{});
     t.low_groups.insert(t.low_groups.end(), row.begin(), row.end());
   }
   return two_levels_.emplace(bits, std::move(t)).first->second;
@@ -204,10 +190,10 @@ std::uint64_t encode_ray(Encoder e, unsigned bits, const EncodeScene& scene, con
     case Encoder::RegularGrid:
     case Encoder::HCC:
     case Encoder::HCC_DIR: {
-      const RsCutSet& set = scene.cut_set(e, bits);
+      const auto& groups = scene.cut_groups(e, bits);
       const unsigned dir = e == Encoder::HCC_DIR ? scene.params().direction_bits : 0u;
-      const rs_u64 code = set.cull ? rs_box_set_code_culled(ray, set.groups.data(), set.box_count, bits - dir, dir)
-                                   : rs_box_set_code(ray, set.groups.data(), set.box_count, bits - dir, dir);
+      const auto n = static_cast<rs_u32>(scene.box_set(e, bits).size());
+      const rs_u64 code = rs_box_set_code(ray, groups.data(), n, bits - dir, dir);
       return rs_key_from_code(code, bits);
     }
     case Encoder::MLHCC: {
@@ -227,7 +213,7 @@ std::vector<std::uint64_t> encode_on_host(Encoder e, unsigned bits, const Encode
                                           const std::vector<RsRay>& rays) {
   check_key_bits(e, bits, scene.params());
   // Build the cached cut data before the threads read it.
-  if (e == Encoder::RegularGrid || e == Encoder::HCC || e == Encoder::HCC_DIR) scene.cut_set(e, bits);
+  if (e == Encoder::RegularGrid || e == Encoder::HCC || e == Encoder::HCC_DIR) scene.cut_groups(e, bits);
   if (e == Encoder::MLHCC) scene.two_level(bits);
   std::vector<std::uint64_t> keys(rays.size());
   auto work = [&](std::size_t begin, std::size_t end) {

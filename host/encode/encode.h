@@ -58,15 +58,6 @@ std::string key_bits_problem(Encoder e, unsigned bits, const EncoderParams& para
 // Throws Error with key_bits_problem's text.
 void check_key_bits(Encoder e, unsigned bits, const EncoderParams& params);
 
-// A box set for rs_box_set_code (cl/keys.h): groups[0] is the summary (lane k = union of group
-// k's boxes), groups[1 + k] holds boxes 8k .. 8k + 7 (rs_cut_groups); cull says whether the key
-// code tests the summary first (worth it only when consecutive boxes are neighbours).
-struct RsCutSet {
-  std::vector<RsCutGroup> groups;
-  rs_u32 box_count = 0;
-  rs_u32 cull = 0;
-};
-RsCutSet rs_cut_set(const RsBox* boxes, std::size_t n, bool cull);
 
 // What the keys of one scene depend on, computed on the host once and cached per key length.
 // Holds a reference to the BVH: keep it alive as long as this.
@@ -83,9 +74,8 @@ class EncodeScene {
   const std::vector<std::uint32_t>& hcc_cut(unsigned size) const;
   // The boxes of a box-set encoder (HCC, RegularGrid, HCC_DIR) for keys of `bits` bits, bit order.
   const std::vector<RsBox>& box_set(Encoder e, unsigned bits) const;
-  // The same boxes as the key code reads them (rs_cut_set): groups of eight after a summary of
-  // their union boxes, culled for RegularGrid at more than 32 bits.
-  const RsCutSet& cut_set(Encoder e, unsigned bits) const;
+  // The same boxes as rs_box_set_code reads them: sixteen-box groups (rs_cut_groups), cached.
+  const std::vector<RsCutGroup>& cut_groups(Encoder e, unsigned bits) const;
   // MLHCC for keys of `bits` bits: top boxes (≤ half), low boxes [top.size() × half] (row i: the
   // low cut of top i, zero-padded), low counts per top node.
   struct TwoLevel {
@@ -106,14 +96,15 @@ class EncodeScene {
   std::vector<double> had_;
   mutable std::map<unsigned, std::vector<std::uint32_t>> hcc_cuts_;
   mutable std::map<std::pair<int, unsigned>, std::vector<RsBox>> box_sets_;
-  mutable std::map<std::pair<int, unsigned>, RsCutSet> cut_sets_;
+  mutable std::map<std::pair<int, unsigned>, std::vector<RsCutGroup>> cut_groups_;
   mutable std::map<unsigned, TwoLevel> two_levels_;
 };
 
 RsBox to_rs_box(const Aabb& b);
-// Boxes [0, n) transposed into ceil(n / 8) RsCutGroups (cl/keys.h: lane l of group g = box
-// 8g + 7 − l; missing boxes are zero boxes, masked off by the key code).
-std::vector<RsCutGroup> rs_cut_groups(const RsBox* boxes, std::size_t n);
+// Boxes [0, n) transposed into ceil(n / 16) RsCutGroups (cl/keys.h): box i in lane i % 16 of
+// group i / 16, with code bit 63 − first_bit − i; missing lanes are zero boxes without a bit.
+// Throws Error for a box with lo > hi or NaN bounds.
+std::vector<RsCutGroup> rs_cut_groups(const RsBox* boxes, std::size_t n, unsigned first_bit = 0);
 
 
 // The key of one ray (host twin of the kernels; same source for the key arithmetic).
@@ -163,7 +154,6 @@ class DeviceEncoder {
   struct Uploaded {
     cl::Buffer a, b, c;
     std::uint32_t n = 0;
-    std::uint32_t cull = 0;  // box sets: test the summary group first (RsCutSet)
   };
   const Uploaded& uploaded(Encoder e, unsigned bits);
 
@@ -171,7 +161,7 @@ class DeviceEncoder {
   EncodeScene scene_;
   cl::Buffer frame_, nodes_, triangles_;
   struct Kernels {
-    cl::Kernel nosort, box_set, box_set_culled, box_set_or, direction, two_level, prefix_path;
+    cl::Kernel nosort, box_set, box_set_or, direction, two_level, prefix_path;
     std::map<Encoder, cl::Kernel> spatial;  // one kernel per spatial encoder: encode_<name>_k32/k64
   } k32_, k64_;
   std::map<std::pair<int, unsigned>, Uploaded> uploads_;
