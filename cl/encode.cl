@@ -101,12 +101,16 @@
                                           uint half_bits, __global const RsRay* rays,                    \
                                           __global const uint* order, uint count, uint bits,             \
                                           __global KEY_T* keys, __global uint* values) {                 \
-    uint i = get_global_id(0);                                                                           \
+    const uint i = 2u * get_global_id(0); /* rays i and i + 1 (keys.h, rs_two_level_cut_code2) */        \
     if (i >= count) return;                                                                              \
-    rs_u64 code = rs_two_level_cut_code(rays[order[i]], top, top_count, low, low_count, half_bits) &     \
-                  RS_CODE_MASK_##SUFFIX;                                                                 \
-    keys[i] = (KEY_T)rs_key_from_code(code, bits);                                                       \
+    const uint j = i + 1u < count ? i + 1u : i;                                                          \
+    rs_u64 code_i, code_j;                                                                               \
+    rs_two_level_cut_code2(rays[order[i]], rays[order[j]], top, top_count, low, low_count, half_bits,    \
+                           &code_i, &code_j);                                                            \
+    keys[i] = (KEY_T)rs_key_from_code(code_i & RS_CODE_MASK_##SUFFIX, bits);                             \
     values[i] = i;                                                                                       \
+    keys[j] = (KEY_T)rs_key_from_code(code_j & RS_CODE_MASK_##SUFFIX, bits);                             \
+    values[j] = j;                                                                                       \
   }                                                                                                      \
                                                                                                          \
   __kernel void encode_prefix_path_##SUFFIX(__global const RsBvhNode* nodes,                             \

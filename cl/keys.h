@@ -474,6 +474,31 @@ RS_KEY_INLINE rs_u64 rs_two_level_cut_code(RsRay ray, RS_CUT_SPACE const RsCutGr
   return code;
 }
 
+/* Rays per work-item of the MLHCC kernel (rs_two_level_cut_code2 below; the host sizes the launch). */
+#define RS_TWO_LEVEL_RAYS 2u
+#ifdef __OPENCL_VERSION__
+/* rs_two_level_cut_code for two rays, a and b (the device kernel's form; the host twin is the
+ * one-ray function above, and the tests compare the two). A key's low-level test needs its own
+ * top-level result first (which row), so one ray's work is a chain of dependent steps longer than
+ * the processor can look ahead over; placed one after the other, two rays' chains overlap. The row
+ * test runs with no branch on whether a top node was hit; its bits are dropped if not. (Four rays,
+ * through private arrays, measured slower than one.) */
+RS_KEY_INLINE void rs_two_level_cut_code2(RsRay ray_a, RsRay ray_b, RS_CUT_SPACE const RsCutGroup* top, rs_u32 n_top,
+                                          RS_GLOBAL const RsCutGroup* low, RS_GLOBAL const rs_u32* low_count,
+                                          rs_u32 half_bits, rs_u64* code_a, rs_u64* code_b) {
+  const RsCutRay a = rs_cut_ray(rs_prepare_ray(ray_a));
+  const RsCutRay b = rs_cut_ray(rs_prepare_ray(ray_b));
+  const rs_u64 top_a = RS_CUT_BITS_TOP(&a, top, n_top);
+  const rs_u64 top_b = RS_CUT_BITS_TOP(&b, top, n_top);
+  const rs_u32 rep_a = top_a != 0u ? rs_clz64(top_a) : 0u, rep_b = top_b != 0u ? rs_clz64(top_b) : 0u;
+  const rs_u32 row = rs_cut_group_count(half_bits);
+  const rs_u64 low_a = rs_cut_bits_g(&a, low + rep_a * row, low_count[rep_a]);
+  const rs_u64 low_b = rs_cut_bits_g(&b, low + rep_b * row, low_count[rep_b]);
+  *code_a = top_a | (top_a != 0u ? low_a : 0u);
+  *code_b = top_b | (top_b != 0u ? low_b : 0u);
+}
+#endif
+
 /* PPC (Xiang et al. section 4.1): the first `bits` box-test results of a closest-hit traversal
  * that visits children in fixed order, left first: the root's test, then at each inner node the
  * left and the right child's tests (rs_intersect_box, the trace kernels' test, against the

@@ -420,6 +420,19 @@ TEST(Encode, ThroughAnOrderBuffer) {
     for (std::size_t i = 0; i < rays.size(); ++i) bad += run.keys[i] != host[reversed[i]] || run.values[i] != i;
     EXPECT_EQ(bad, 0u) << encoder_name(e);
   }
+  // Odd and tiny counts: MLHCC's work-items take two rays each (cl/keys.h, RS_TWO_LEVEL_RAYS).
+  for (std::size_t n : {1u, 2u, 3u, 5u, 577u}) {
+    std::vector<RsRay> some(rays.begin(), rays.begin() + static_cast<std::ptrdiff_t>(n));
+    for (unsigned bits : {16u, 64u}) {
+      const auto host = encode_on_host(Encoder::MLHCC, bits, dev.scene(), some);
+      const auto run = dev.run(Encoder::MLHCC, bits, some);
+      ASSERT_EQ(run.keys.size(), n);
+      for (std::size_t i = 0; i < n; ++i) {
+        EXPECT_EQ(run.keys[i], host[i]) << n << " rays, bits " << bits << ", ray " << i;
+        EXPECT_EQ(run.values[i], i) << n << " rays, bits " << bits;
+      }
+    }
+  }
 }
 
 TEST(Encode, SingleLeafBvh) {

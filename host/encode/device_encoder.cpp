@@ -153,8 +153,11 @@ DeviceEncoder::Events DeviceEncoder::enqueue(Encoder e, unsigned bits, const cl:
               k->setArg(arg++, static_cast<cl_uint>(bits));
             k->setArg(arg++, keys);
             k->setArg(arg++, values);
+            // MLHCC's work-items take RS_TWO_LEVEL_RAYS rays each (cl/keys.h, rs_two_level_cut_codes).
+            const std::size_t items =
+                e == Encoder::MLHCC ? (std::size_t(count) + RS_TWO_LEVEL_RAYS - 1) / RS_TWO_LEVEL_RAYS : count;
             if (count > 0)
-              rt_.queue().enqueueNDRangeKernel(*k, cl::NullRange, cl::NDRange(Runtime::padded(count, local_)),
+              rt_.queue().enqueueNDRangeKernel(*k, cl::NullRange, cl::NDRange(Runtime::padded(items, local_)),
                                                cl::NDRange(local_), nullptr, &ev);
             else
               rt_.queue().enqueueMarkerWithWaitList(nullptr, &ev);
