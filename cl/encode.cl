@@ -65,7 +65,7 @@
 /* HCC_DIR in two passes: encode_direction_* writes the direction bits (below a box field of `field`
  * bits), then encode_box_set_or_* ORs in the box bits (called with dir_bits = 0). The direction
  * field (atan2, acos) is what HCC_DIR spends its time on; in a kernel of its own PoCL runs it 8 rays
- * at a time, which it cannot in the box-set kernel (its float8 cut tests are vector-typed). The
+ * at a time, which it cannot in the box-set kernel (its float16 cut tests are vector-typed). The
  * key is the same: key_from_code(a | b) = key_from_code(a) | key_from_code(b). */
 #define RS_DEFINE_DIRECTION_KERNEL(SUFFIX, KEY_T)                                                          \
   __kernel void encode_direction_##SUFFIX(__global const RsRay* rays, __global const uint* order,        \
@@ -101,7 +101,7 @@
                                           uint half_bits, __global const RsRay* rays,                    \
                                           __global const uint* order, uint count, uint bits,             \
                                           __global KEY_T* keys, __global uint* values) {                 \
-    const uint i = 2u * get_global_id(0); /* rays i and i + 1 (keys.h, rs_two_level_cut_code2) */        \
+    const uint i = RS_TWO_LEVEL_RAYS * get_global_id(0); /* rays i, i + 1 (rs_two_level_cut_code2) */    \
     if (i >= count) return;                                                                              \
     const uint j = i + 1u < count ? i + 1u : i;                                                          \
     rs_u64 code_i, code_j;                                                                               \

@@ -312,8 +312,8 @@ RS_KEY_INLINE rs_u64 rs_spatial_code(int encoder, const RsEncodeFrame* f, RsRay 
  * ------------------------------------------------------------------------------------------- */
 
 /* Does the segment [tmin, tmax] of r overlap box b? The same slab arithmetic, in the same order,
- * as rs_intersect_box in traverse.h (which takes a __global node; this takes a box by value so it
- * works on local-memory cut nodes): a cut-node bit is 1 exactly when traversal would enter it.
+ * as rs_intersect_box in traverse.h (which takes a __global node; this takes a box by value):
+ * a cut-node bit is 1 exactly when traversal would enter it.
  * (The key kernels test sixteen boxes at once, rs_cut_mask; this one-box form is kept for
  * reference and tests.) */
 RS_KEY_INLINE int rs_segment_overlaps_box(RsTraversalRay r, RsBox b) {
@@ -337,7 +337,6 @@ typedef struct {
   rs_f16 lo_x, hi_x, lo_y, hi_y, lo_z, hi_z;
   rs_i16 bit_hi, bit_lo;
 } RsCutGroup;
-#define RS_MAX_CUT_GROUPS (RS_MAX_KEY_BITS / RS_CUT_LANES)
 
 /* The number of groups holding n boxes. */
 RS_KEY_INLINE rs_u32 rs_cut_group_count(rs_u32 n) { return (n + RS_CUT_LANES - 1u) / RS_CUT_LANES; }
@@ -388,13 +387,6 @@ RS_KEY_INLINE RsCutRay rs_cut_ray(RsTraversalRay r) {
  * One definition per address space (OpenCL C 1.2 has no generic pointers): _p private/host,
  * _c constant, _g global. */
 #ifdef __OPENCL_VERSION__
-RS_INLINE float8 rs8_min(float8 a, float8 b) { return select(b, a, a < b); }
-RS_INLINE float8 rs8_max(float8 a, float8 b) { return select(b, a, a > b); }
-RS_INLINE int rs8_or_lanes(int8 m) {
-  int4 h = m.lo | m.hi;
-  int2 q = h.lo | h.hi;
-  return q.s0 | q.s1;
-}
 #define RS_DEFINE_CUT_BITS(SUFFIX, SPACE)                                                            \
   RS_DEFINE_CUT_MASK(rs_cut_mask_##SUFFIX, SPACE, int16, float16, , rs16_min, rs16_max)              \
   RS_DEFINE_CUT_MASK(rs_cut_mask_half_##SUFFIX, SPACE, int8, float8, .lo, rs8_min, rs8_max)          \

@@ -189,6 +189,15 @@ typedef int16 rs_i16;
 RS_INLINE rs_f16 rs16_splat(float x) { return (float16)(x); }
 RS_INLINE rs_f16 rs16_min(rs_f16 a, rs_f16 b) { return select(b, a, a < b); }
 RS_INLINE rs_f16 rs16_max(rs_f16 a, rs_f16 b) { return select(b, a, a > b); }
+/* Eight-lane forms for a half-full group (device only, cl/keys.h rs_cut_bits). */
+RS_INLINE float8 rs8_min(float8 a, float8 b) { return select(b, a, a < b); }
+RS_INLINE float8 rs8_max(float8 a, float8 b) { return select(b, a, a > b); }
+/* The OR of the eight lanes. */
+RS_INLINE int rs8_or_lanes(int8 m) {
+  int4 h = m.lo | m.hi;
+  int2 q = h.lo | h.hi;
+  return q.s0 | q.s1;
+}
 #else
 typedef struct alignas(64) rs_f16 {
   float s[16];

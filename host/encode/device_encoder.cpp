@@ -49,8 +49,9 @@ const DeviceEncoder::Uploaded& DeviceEncoder::uploaded(Encoder e, unsigned bits)
   Uploaded u;
   const std::string what = std::string(encoder_name(e)) + " " + std::to_string(bits) + "-bit ";
   if (is_box_set(e)) {
-    u.a = rt_.upload(what + "cut boxes", scene_.cut_groups(e, bits));
-    u.n = static_cast<std::uint32_t>(scene_.box_set(e, bits).size());
+    const auto& set = scene_.cut_set(e, bits);
+    u.a = rt_.upload(what + "cut boxes", set.groups);
+    u.n = set.box_count;
   } else if (e == Encoder::MLHCC) {
     const auto& t = scene_.two_level(bits);
     u.a = rt_.upload(what + "top-level cut boxes", t.top_groups);
@@ -153,7 +154,7 @@ DeviceEncoder::Events DeviceEncoder::enqueue(Encoder e, unsigned bits, const cl:
               k->setArg(arg++, static_cast<cl_uint>(bits));
             k->setArg(arg++, keys);
             k->setArg(arg++, values);
-            // MLHCC's work-items take RS_TWO_LEVEL_RAYS rays each (cl/keys.h, rs_two_level_cut_codes).
+            // MLHCC's work-items take RS_TWO_LEVEL_RAYS rays each (cl/keys.h, rs_two_level_cut_code2).
             const std::size_t items =
                 e == Encoder::MLHCC ? (std::size_t(count) + RS_TWO_LEVEL_RAYS - 1) / RS_TWO_LEVEL_RAYS : count;
             if (count > 0)
@@ -209,9 +210,9 @@ double DeviceEncoder::warm_up() {
     for (Encoder e : {Encoder::NoSort, Encoder::Origin, Encoder::Reis, Encoder::Costa, Encoder::Aila, Encoder::TwoPoint,
                       Encoder::HCC, Encoder::MLHCC, Encoder::PPC})
       run(e, bits, rays);
-  // The kernels only HCC_DIR uses (its two passes). Best effort:
-  // their cut data is per encoder and key length, and if it cannot be allocated here, the cell that
-  // needs it fails with that message and the other cells still run (tests/cli_test.cpp).
+  // The kernels only HCC_DIR uses (its two passes). Best effort: their cut data is per encoder and
+  // key length, and if it cannot be allocated here, the cell that needs it fails with that message
+  // and the other cells still run (tests/cli_test.cpp).
   for (auto [e, bits] : {std::pair{Encoder::HCC_DIR, 32u}, std::pair{Encoder::HCC_DIR, 64u}}) {
     try {
       run(e, bits, rays);

@@ -93,7 +93,7 @@ RsBox to_rs_box(const Aabb& b) {
 std::vector<RsCutGroup> rs_cut_groups(const RsBox* boxes, std::size_t n, unsigned first_bit) {
   if (first_bit + n > RS_MAX_KEY_BITS) throw Error("rs_cut_groups: more boxes than key bits");
   const std::size_t lanes = RS_CUT_LANES;
-  std::vector<RsCutGroup> groups((n + lanes - 1) / lanes, RsCutGroup{});
+  std::vector<RsCutGroup> groups(rs_cut_group_count(static_cast<rs_u32>(n)), RsCutGroup{});
   for (std::size_t i = 0; i < n; ++i) {
     const RsBox& b = boxes[i];
     for (int a = 0; a < 3; ++a)
@@ -146,12 +146,13 @@ const std::vector<RsBox>& EncodeScene::box_set(Encoder e, unsigned bits) const {
   return box_sets_.emplace(key, std::move(boxes)).first->second;
 }
 
-const std::vector<RsCutGroup>& EncodeScene::cut_groups(Encoder e, unsigned bits) const {
+const EncodeScene::CutSet& EncodeScene::cut_set(Encoder e, unsigned bits) const {
   const auto key = std::make_pair(static_cast<int>(e), bits);
-  auto it = cut_groups_.find(key);
-  if (it != cut_groups_.end()) return it->second;
+  auto it = cut_sets_.find(key);
+  if (it != cut_sets_.end()) return it->second;
   const auto& boxes = box_set(e, bits);
-  return cut_groups_.emplace(key, rs_cut_groups(boxes.data(), boxes.size())).first->second;
+  CutSet set{rs_cut_groups(boxes.data(), boxes.size()), static_cast<rs_u32>(boxes.size())};
+  return cut_sets_.emplace(key, std::move(set)).first->second;
 }
 
 const EncodeScene::TwoLevel& EncodeScene::two_level(unsigned bits) const {
@@ -190,10 +191,9 @@ std::uint64_t encode_ray(Encoder e, unsigned bits, const EncodeScene& scene, con
     case Encoder::RegularGrid:
     case Encoder::HCC:
     case Encoder::HCC_DIR: {
-      const auto& groups = scene.cut_groups(e, bits);
+      const auto& set = scene.cut_set(e, bits);
       const unsigned dir = e == Encoder::HCC_DIR ? scene.params().direction_bits : 0u;
-      const auto n = static_cast<rs_u32>(scene.box_set(e, bits).size());
-      const rs_u64 code = rs_box_set_code(ray, groups.data(), n, bits - dir, dir);
+      const rs_u64 code = rs_box_set_code(ray, set.groups.data(), set.box_count, bits - dir, dir);
       return rs_key_from_code(code, bits);
     }
     case Encoder::MLHCC: {
@@ -213,7 +213,7 @@ std::vector<std::uint64_t> encode_on_host(Encoder e, unsigned bits, const Encode
                                           const std::vector<RsRay>& rays) {
   check_key_bits(e, bits, scene.params());
   // Build the cached cut data before the threads read it.
-  if (e == Encoder::RegularGrid || e == Encoder::HCC || e == Encoder::HCC_DIR) scene.cut_groups(e, bits);
+  if (e == Encoder::RegularGrid || e == Encoder::HCC || e == Encoder::HCC_DIR) scene.cut_set(e, bits);
   if (e == Encoder::MLHCC) scene.two_level(bits);
   std::vector<std::uint64_t> keys(rays.size());
   auto work = [&](std::size_t begin, std::size_t end) {

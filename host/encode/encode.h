@@ -58,7 +58,6 @@ std::string key_bits_problem(Encoder e, unsigned bits, const EncoderParams& para
 // Throws Error with key_bits_problem's text.
 void check_key_bits(Encoder e, unsigned bits, const EncoderParams& params);
 
-
 // What the keys of one scene depend on, computed on the host once and cached per key length.
 // Holds a reference to the BVH: keep it alive as long as this.
 class EncodeScene {
@@ -74,8 +73,13 @@ class EncodeScene {
   const std::vector<std::uint32_t>& hcc_cut(unsigned size) const;
   // The boxes of a box-set encoder (HCC, RegularGrid, HCC_DIR) for keys of `bits` bits, bit order.
   const std::vector<RsBox>& box_set(Encoder e, unsigned bits) const;
-  // The same boxes as rs_box_set_code reads them: sixteen-box groups (rs_cut_groups), cached.
-  const std::vector<RsCutGroup>& cut_groups(Encoder e, unsigned bits) const;
+  // The same boxes as rs_box_set_code reads them: sixteen-box groups (rs_cut_groups) and their
+  // number of boxes, cached.
+  struct CutSet {
+    std::vector<RsCutGroup> groups;
+    rs_u32 box_count = 0;
+  };
+  const CutSet& cut_set(Encoder e, unsigned bits) const;
   // MLHCC for keys of `bits` bits: top boxes (≤ half), low boxes [top.size() × half] (row i: the
   // low cut of top i, zero-padded), low counts per top node.
   struct TwoLevel {
@@ -83,7 +87,7 @@ class EncodeScene {
     TwoLevelCut cut;
     std::vector<RsBox> top, low;
     std::vector<rs_u32> low_count;
-    // top and each row of low as eight-box groups (rs_cut_groups): ceil(half / 8) groups per row.
+    // top and each row of low as sixteen-box groups (rs_cut_groups): ceil(half / 16) groups per row.
     std::vector<RsCutGroup> top_groups, low_groups;
   };
   const TwoLevel& two_level(unsigned bits) const;
@@ -96,7 +100,7 @@ class EncodeScene {
   std::vector<double> had_;
   mutable std::map<unsigned, std::vector<std::uint32_t>> hcc_cuts_;
   mutable std::map<std::pair<int, unsigned>, std::vector<RsBox>> box_sets_;
-  mutable std::map<std::pair<int, unsigned>, std::vector<RsCutGroup>> cut_groups_;
+  mutable std::map<std::pair<int, unsigned>, CutSet> cut_sets_;
   mutable std::map<unsigned, TwoLevel> two_levels_;
 };
 
