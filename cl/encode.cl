@@ -62,11 +62,13 @@
     values[i] = i;                                                                                       \
   }
 
-/* HCC_DIR in two passes: encode_direction_* writes the direction bits (below a box field of `field`
- * bits), then encode_box_set_or_* ORs in the box bits (called with dir_bits = 0). The direction
- * field (atan2, acos) is what HCC_DIR spends its time on; in a kernel of its own PoCL runs it 8 rays
- * at a time, which it cannot in the box-set kernel (its float16 cut tests are vector-typed). The
- * key is the same: key_from_code(a | b) = key_from_code(a) | key_from_code(b). */
+/* HCC_DIR with d > 1 direction bits, in two passes: encode_direction_* writes the direction bits
+ * (below a box field of `field` bits), then encode_box_set_or_* ORs in the box bits (called with
+ * dir_bits = 0). The direction field (atan2, acos) is what such an HCC_DIR spends its time on; in a
+ * kernel of its own PoCL runs it 8 rays at a time, which it cannot in the box-set kernel (its
+ * float16 cut tests are vector-typed). The key is the same: key_from_code(a | b) =
+ * key_from_code(a) | key_from_code(b). With d = 1 (the default) the box-set kernel reads the bit
+ * from the signs of dx and dy (keys.h, rs_direction_top_bit), one pass. */
 #define RS_DEFINE_DIRECTION_KERNEL(SUFFIX, KEY_T)                                                          \
   __kernel void encode_direction_##SUFFIX(__global const RsRay* rays, __global const uint* order,        \
                                           uint count, uint field, uint dir_bits, uint bits,              \

@@ -296,6 +296,37 @@ RS_KEY_INLINE rs_u64 rs_direction_bits(RsRay r, rs_u32 d) {
   return rs_key_from_code(rs_morton2(s[0], s[1]) << (64u - 2u * RS_DIRECTION_LEVELS), d);
 }
 
+/* rs_direction_bits(r, 1), HCC_DIR's default single direction bit, read from the signs of dx and dy
+ * where they decide it, so that HCC_DIR needs no atan2 per ray and runs in one pass with its box
+ * test (encode.cl). The bit is φ's top bit: φ = atan2(y, x)/2π + ½ ≥ ½ on the unit direction (x, y).
+ * - dy ≥ 0 (±0 included): the unit y is ≥ 0, ±0 or NaN, for which rs_atan2 returns an angle ≥ 0 or
+ *   NaN, so φ ≥ ½ or NaN, which quantises to the top cell: 1, at any scale.
+ * - dy < 0, the largest |component| in [2^-40, 2^40] and |dy| ≥ 2^-80: normalising neither overflows
+ *   nor underflows, so the unit y is < 0 and the unit x has dx's sign (or is ±0).
+ *   dx ≤ 0: the angle is ≤ −π/2, φ ≤ ¼: 0.
+ *   dx ≥ 2^-80 and |dy| ≥ 2^-19·dx: the unit ratio |y|/x is ≥ 2^-19·(1 − 2^-21), rs_atan_unit
+ *   gives more than 0.9 times it, so φ < ½ − 2.7e-7, which stays below ½ after rounding (the float
+ *   below ½ is ½ − 3e-8): 0.
+ * - otherwise (dy < 0 within 2^-19 of the +x axis, where φ can round up to ½; extreme scales; NaN):
+ *   the definition itself.
+ * Encode.DirectionTopBitIsTheDefinitions checks rays on and around every boundary. */
+RS_KEY_INLINE rs_u64 rs_direction_top_bit(RsRay r) {
+  const float x = r.d[0], y = r.d[1], z = r.d[2];
+  if (y >= 0.0f) return 1u;
+  const float ax = rs_abs(x), ay = -y, az = rs_abs(z);
+  const float m = ax > ay ? (ax > az ? ax : az) : (ay > az ? ay : az);
+  if (m >= 0x1p-40f && m <= 0x1p40f && ay >= 0x1p-80f) {
+    if (x <= 0.0f) return 0u;
+    if (x >= 0x1p-80f && ay >= x * 0x1p-19f) return 0u;
+  }
+  return rs_direction_bits(r, 1u);
+}
+
+/* HCC_DIR's d direction bits: rs_direction_bits, by the signs of dx and dy for d = 1. */
+RS_KEY_INLINE rs_u64 rs_direction_field(RsRay r, rs_u32 d) {
+  return d == 1u ? rs_direction_top_bit(r) : rs_direction_bits(r, d);
+}
+
 RS_KEY_INLINE rs_u64 rs_spatial_code(int encoder, const RsEncodeFrame* f, RsRay r) {
   switch (encoder) {
     case RS_ENC_ORIGIN: return rs_origin_code(f, r);
@@ -444,7 +475,7 @@ RS_KEY_INLINE rs_u64 rs_box_set_code(RsRay ray, RS_CUT_SPACE const RsCutGroup* s
   RsTraversalRay r = rs_prepare_ray(ray);
   RsCutRay c = rs_cut_ray(r);
   rs_u64 code = RS_CUT_BITS_TOP(&c, set, n);
-  if (dir_bits > 0u) code |= rs_direction_bits(ray, dir_bits) << (64u - field - dir_bits);
+  if (dir_bits > 0u) code |= rs_direction_field(ray, dir_bits) << (64u - field - dir_bits);
   return code;
 }
 

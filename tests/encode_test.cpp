@@ -8,6 +8,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <random>
 #include <set>
 
@@ -738,7 +739,8 @@ TEST(Encode, SameKeysAsTheBitwiseReference) {
 }
 
 // HCC_DIR runs on the device in two passes (direction bits, then the box bits ORed in) when it has
-// direction bits, in one pass when d = 0; either way the keys equal the host twin's and the bitwise
+// more than one direction bit, in one pass when d ≤ 1 (d = 1: the bit from the signs of dx and dy,
+// rs_direction_top_bit); either way the keys equal the host twin's and the bitwise
 // reference, for d from 0 to 12 and every key length that leaves room for a box field.
 TEST(Encode, HccDirPassesMatchTheHostForEveryDirectionWidth) {
   Scene scene = load_scene("detail-room");
@@ -758,6 +760,65 @@ TEST(Encode, HccDirPassesMatchTheHostForEveryDirectionWidth) {
         ASSERT_EQ(keys[i], ref::key(Encoder::HCC_DIR, bits, dev.scene(), rays[i])) << "d " << d << " bits " << bits;
     }
   }
+}
+
+// HCC_DIR's single direction bit read from the signs of dx and dy (rs_direction_top_bit) is the
+// definition's, rs_direction_bits(r, 1), φ ≥ ½: on both sides of the +x axis where φ = atan2/2π + ½
+// rounds up to ½ (|dy|/dx from 2^-34 to 2^-10, densely, across 2^-19, the shortcut's bound), at
+// magnitudes from denormal to 2^60 (past the shortcut's 2^±40 and 2^-80 guards), with ±0, inf and
+// NaN components; and the kernel gives the host's HCC_DIR keys on the same rays.
+TEST(Encode, DirectionTopBitIsTheDefinitions) {
+  std::vector<RsRay> rays;
+  std::vector<float> scales = {0x1p-140f, 0x1p-126f, 0x1p-90f, 0x1p-81f, 0x1p-80f, 0x1p-79f, 0x1p-41f, 0x1p-40f,
+                               0x1p-39f,  1e-20f,    0.001f,   0.7f,     1.0f,     3.0f,     0x1p39f,  0x1p40f,
+                               0x1p41f,   0x1p60f};
+  const float inf = std::numeric_limits<float>::infinity(), nan = std::numeric_limits<float>::quiet_NaN();
+  std::size_t ones = 0, zeros = 0, near_axis_ones = 0, near_axis_zeros = 0;
+  for (float sx : scales)
+    for (float z : {0.0f, -0.0f, 1.0f, -0x1p-100f, 0x1p50f}) {
+      // Around the +x axis: dy = −ratio·dx, ratio from 2^-34 to 2^-10 (and the same above the axis).
+      for (int k = 0; k <= 2400; ++k) {
+        const float ratio = std::ldexp(1.0f, -34) * std::pow(2.0f, k / 100.0f);
+        rays.push_back(ray(0, 0, 0, sx, -ratio * sx, z));
+        rays.push_back(ray(0, 0, 0, sx, ratio * sx, z));
+      }
+      // The shortcut's bound itself, a few ulps either side.
+      float b = 0x1p-19f * sx;
+      for (int k = 0; k < 4; ++k) b = std::nextafter(b, 0.0f);
+      for (int k = 0; k < 8; ++k, b = std::nextafter(b, inf)) rays.push_back(ray(0, 0, 0, sx, -b, z));
+      // Every sign of x, ±0, tiny and huge dy, inf and NaN.
+      for (float x : {sx, -sx, 0.0f, -0.0f, 0x1p-149f, -0x1p-149f, inf, -inf, nan})
+        for (float y : {sx, -sx, 0.0f, -0.0f, -0x1p-149f, -0x1p-130f, -0x1p-80f, -0x1p60f, -inf, nan})
+          rays.push_back(ray(0, 0, 0, x, y, z));
+    }
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  for (int i = 0; i < 20000; ++i) rays.push_back(ray(0, 0, 0, u(rng), u(rng), u(rng)));
+  std::size_t bad = 0;
+  for (const RsRay& r : rays) {
+    const rs_u64 fast = rs_direction_top_bit(r), def = rs_direction_bits(r, 1u);
+    if (fast != def && bad++ < 5)
+      ADD_FAILURE() << "d = (" << r.d[0] << ", " << r.d[1] << ", " << r.d[2] << "): " << fast << " vs definition "
+                    << def;
+    (def ? ones : zeros)++;
+    const bool near_axis = r.d[0] > 0 && r.d[1] < 0 && -r.d[1] < 0x1p-19f * r.d[0];
+    if (near_axis) (def ? near_axis_ones : near_axis_zeros)++;
+  }
+  EXPECT_EQ(bad, 0u);
+  // The rays straddle the boundary: both results occur, also just below the +x axis.
+  EXPECT_GT(ones, 1000u);
+  EXPECT_GT(zeros, 1000u);
+  EXPECT_GT(near_axis_ones, 100u);
+  EXPECT_GT(near_axis_zeros, 100u);
+
+  Scene scene = load_scene("detail-room");
+  Scene::Flat tris = scene.flatten();
+  Bvh bvh = build_bvh(tris);
+  DeviceEncoder dev(testing::runtime(), bvh, bvh.bounds());
+  std::vector<RsRay> finite;
+  for (const RsRay& r : rays)
+    if (std::isfinite(r.d[0]) && std::isfinite(r.d[1]) && std::isfinite(r.d[2])) finite.push_back(r);
+  for (unsigned bits : {16u, 64u}) expect_device_equals_host(dev, Encoder::HCC_DIR, bits, finite, "near-axis rays");
 }
 
 // Cut groups: the sixteen-box test (near and far planes picked by the sign of 1/d) gives each box's

@@ -86,8 +86,10 @@ DeviceEncoder::Events DeviceEncoder::enqueue(Encoder e, unsigned bits, const cl:
   cl::Kernel* k = nullptr;
   cl::Event ev;
   cl::Event first;  // HCC_DIR: the direction pass, before the box pass
-  // HCC_DIR with direction bits: the direction pass first, then the box bits ORed in.
-  const bool two_pass = e == Encoder::HCC_DIR && count > 0 && scene_.params().direction_bits > 0;
+  // HCC_DIR with more than one direction bit: the direction pass first (atan2, acos), then the box
+  // bits ORed in. One direction bit comes from the signs of dx and dy (keys.h, rs_direction_top_bit)
+  // in the box-set kernel itself.
+  const bool two_pass = e == Encoder::HCC_DIR && count > 0 && scene_.params().direction_bits > 1;
   if (two_pass) {
     const cl_uint dir = scene_.params().direction_bits;
     cl_call("encoding the direction bits of " + std::to_string(count) + " rays (HCC_DIR, " + std::to_string(bits) +

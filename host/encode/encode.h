@@ -125,7 +125,8 @@ class DeviceEncoder {
  public:
   DeviceEncoder(Runtime& rt, const Bvh& bvh, const Aabb& scene_box, const EncoderParams& params = {});
 
-  // The kernels of one encode: HCC_DIR runs two (direction bits, then box bits), the others one.
+  // The kernels of one encode: HCC_DIR with d > 1 direction bits runs two (direction bits, then box
+  // bits), the others one.
   struct Events {
     cl::Event first, last;
     void wait() const;
