@@ -113,7 +113,19 @@ RS_INLINE rs_f4 rs4_min(rs_f4 a, rs_f4 b) { return select(b, a, a < b); }
 RS_INLINE rs_f4 rs4_max(rs_f4 a, rs_f4 b) { return select(b, a, a > b); }
 RS_INLINE rs_f4 rs4_select(rs_f4 if_false, rs_f4 if_true, rs_i4 m) { return select(if_false, if_true, m); }
 /* Bit i set when lane i is true. */
-RS_INLINE int rs4_bits(rs_i4 m) { return (m.s0 & 1) | (m.s1 & 2) | (m.s2 & 4) | (m.s3 & 8); }
+/* The lanes of a -1/0 mask as bits, lane i -> bit i. The traversal branches on these bits at every
+ * node, so on x86 devices (PoCL) it is one movmskps; the portable form (AND with 1, 2, 4, 8, then OR
+ * the lanes) put a shuffle-and-OR chain on that path, and the trace took 4-13 % longer (sibenik,
+ * docs/trace.md). GPUs and other CPUs use the portable form; ClRuntime.MaskBitsFormsAgree compares
+ * the two on the device for every mask. */
+RS_INLINE int rs4_bits_portable(rs_i4 m) { return (m.s0 & 1) | (m.s1 & 2) | (m.s2 & 4) | (m.s3 & 8); }
+#if defined(__x86_64__) && defined(__SSE__) && !defined(RS_PORTABLE_MASK_BITS)
+#define RS_MASK_BITS_MOVMSK 1
+RS_INLINE int rs4_bits(rs_i4 m) { return __builtin_ia32_movmskps(as_float4(m)); }
+#else
+#define RS_MASK_BITS_MOVMSK 0
+RS_INLINE int rs4_bits(rs_i4 m) { return rs4_bits_portable(m); }
+#endif
 RS_INLINE void rs4_store(rs_f4 a, float* p) { vstore4(a, 0, p); }
 /* Index of the lowest set bit of x != 0 (OpenCL 1.2 has clz but no ctz). */
 RS_INLINE int rs_lowest_bit(int x) { return 31 - clz(x & -x); }

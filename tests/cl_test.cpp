@@ -70,6 +70,40 @@ TEST(ClRuntime, OversizedAllocationNamesBufferAndLimit) {
   }
 }
 
+// rs4_bits (cl/shared.h) is one movmskps on x86 devices and an AND/OR form elsewhere: on the device,
+// both give lane i -> bit i for each of the sixteen -1/0 masks, and the x86 form is the one PoCL
+// builds here (a test that could only ever see the portable form would check nothing new).
+TEST(ClRuntime, MaskBitsFormsAgree) {
+  Runtime& rt = testing::runtime();
+  const std::string src = kernel_source("cl/shared.h") + R"(
+__kernel void mask_bits(__global int* out) {
+  const int i = get_global_id(0);
+  const int4 m = (int4)((i & 1) ? -1 : 0, (i & 2) ? -1 : 0, (i & 4) ? -1 : 0, (i & 8) ? -1 : 0);
+  out[3 * i] = rs4_bits(m);
+  out[3 * i + 1] = rs4_bits_portable(m);
+  out[3 * i + 2] = RS_MASK_BITS_MOVMSK;
+}
+)";
+  cl::Program program = rt.build_source(src, "mask_bits.cl");
+  cl::Buffer out = rt.buffer("mask bits", 16 * 3 * sizeof(int));
+  cl_call("mask_bits", [&] {
+    cl::Kernel k(program, "mask_bits");
+    k.setArg(0, out);
+    rt.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(16), cl::NDRange(16));
+  });
+  std::vector<int> v;
+  rt.download("mask bits", out, v, 16 * 3);
+  for (int i = 0; i < 16; ++i) {
+    EXPECT_EQ(v[3 * i], i) << "rs4_bits";
+    EXPECT_EQ(v[3 * i + 1], i) << "rs4_bits_portable";
+  }
+#if defined(__x86_64__)
+  if (rt.info().is_pocl() && rt.info().type == "CPU") {
+    EXPECT_EQ(v[2], 1) << "PoCL on x86 should build the movmskps form";
+  }
+#endif
+}
+
 TEST(ClRuntime, EmbeddedKernelsResolveIncludes) {
   std::string src = kernel_source("cl/trace.cl");
   EXPECT_NE(src.find("RAYSORT_SHARED_H"), std::string::npos);
