@@ -358,11 +358,12 @@ RS_KEY_INLINE int rs_segment_overlaps_box(RsTraversalRay r, RsBox b) {
 
 /* Sixteen cut boxes, one axis bound per vector (SoA), so one pass of the slab test serves sixteen
  * boxes, and the code bit of each box: lane l ORs bit_hi into bits 63..32 of the code and bit_lo
- * into bits 31..0 where its box is hit (one of them is 0); an empty lane has no bit. The hit masks
- * are ANDed with these and ORed lane-wise, and the lanes are folded once per key, instead of
- * turning each group's mask into a bit field. 512 bytes. Built on the host (host/encode/encode.cpp,
- * rs_cut_groups). The bounds must come in this order: rs_cut_mask indexes them as
- * (&lo_x)[2·axis + side]. */
+ * into bits 31..0 where its box is hit (one of them is 0); an empty lane has no bit. Box j of a
+ * group sits in lane 15 − j, so that lane l's code bit is bit l of a 16-bit field: devices that turn
+ * a mask into bits in one instruction (RS_MASK16_BITS, cl/shared.h) shift the group's hit mask into
+ * place; the others AND the masks with the bit words, OR them lane-wise and fold the lanes once
+ * per key. 512 bytes. Built on the host (host/encode/encode.cpp, rs_cut_groups). The bounds must
+ * come in this order: rs_cut_mask indexes them as (&lo_x)[2·axis + side]. */
 #define RS_CUT_LANES 16u
 typedef struct {
   rs_f16 lo_x, hi_x, lo_y, hi_y, lo_z, hi_z;
@@ -408,20 +409,46 @@ RS_KEY_INLINE RsCutRay rs_cut_ray(RsTraversalRay r) {
     return tnear <= tfar;                                                                                     \
   }
 
-/* The code bits of the n boxes of g that the segment overlaps (n <= 64): the hit masks, ANDed with
- * the lanes' bits, are ORed lane-wise and folded across lanes once at the end. A last group with
- * at most eight boxes is tested on its lower eight lanes only, on the device (rs_cut_mask_half_*):
- * with AVX-512, PoCL runs a sixteen-lane operation as one zmm instruction, which Zen 4 executes in
- * two halves, so a half-empty group would cost a full one (MLHCC at 16 bits has two such groups per
- * key). The host tests every group whole; the upper lanes of such a group have no bits, so the
+/* The code bits of the n boxes of g that the segment overlaps (n <= 64; box i in group i / 16,
+ * code bit 63 − first_bit − i; rs_cut_groups). A last group with at most eight boxes (in lanes
+ * 8..15) is tested on its upper eight lanes only, on the device (rs_cut_mask_half_*): with
+ * AVX-512, PoCL runs a sixteen-lane operation as one zmm instruction, which Zen 4 executes in two
+ * halves, so a half-empty group would cost a full one (MLHCC at 16 bits has two such groups per
+ * key). The host tests every group whole; the lower lanes of such a group have no bits, so the
  * code is the same.
+ * With RS_MASK16_BITS a group's hit mask, restricted to its boxes' lanes, is shifted into place:
+ * lane l of group k is code bit 48 + l − first_bit − 16k. Otherwise the hit masks, ANDed with the
+ * lanes' bit words, are ORed lane-wise and folded across lanes once at the end (the bit words
+ * already hold first_bit).
  * One definition per address space (OpenCL C 1.2 has no generic pointers): _p private/host,
  * _c constant, _g global. */
 #ifdef __OPENCL_VERSION__
+#if RS_MASK16_BITS
 #define RS_DEFINE_CUT_BITS(SUFFIX, SPACE)                                                            \
   RS_DEFINE_CUT_MASK(rs_cut_mask_##SUFFIX, SPACE, int16, float16, , rs16_min, rs16_max)              \
-  RS_DEFINE_CUT_MASK(rs_cut_mask_half_##SUFFIX, SPACE, int8, float8, .lo, rs8_min, rs8_max)          \
-  RS_KEY_INLINE rs_u64 rs_cut_bits_##SUFFIX(const RsCutRay* r, SPACE const RsCutGroup* g, rs_u32 n) { \
+  RS_DEFINE_CUT_MASK(rs_cut_mask_half_##SUFFIX, SPACE, int8, float8, .hi, rs8_min, rs8_max)          \
+  RS_KEY_INLINE rs_u64 rs_cut_bits_##SUFFIX(const RsCutRay* r, SPACE const RsCutGroup* g, rs_u32 n,  \
+                                            rs_u32 first_bit) {                                      \
+    rs_u64 code = 0;                                                                                 \
+    const rs_u32 full = n / RS_CUT_LANES, rest = n % RS_CUT_LANES;                                   \
+    for (rs_u32 k = 0; k < full + (rest > RS_CUT_LANES / 2u); ++k) {                                 \
+      const rs_u32 boxes = min(RS_CUT_LANES, n - RS_CUT_LANES * k); /* lanes 15 .. 16 − boxes */     \
+      const rs_u32 m = rs16_mask_bits(rs_cut_mask_##SUFFIX(r, &g[k])) & (0xFFFF0000u >> boxes);      \
+      code |= (RS_U64(m) << 48) >> (first_bit + RS_CUT_LANES * k);                                   \
+    }                                                                                                \
+    if (rest > 0u && rest <= RS_CUT_LANES / 2u) {                                                    \
+      const rs_u32 m = rs8_mask_bits(rs_cut_mask_half_##SUFFIX(r, &g[full])) & (0xFF00u >> rest);    \
+      code |= (RS_U64(m) << 56) >> (first_bit + RS_CUT_LANES * full);                                \
+    }                                                                                                \
+    return code;                                                                                     \
+  }
+#else
+#define RS_DEFINE_CUT_BITS(SUFFIX, SPACE)                                                            \
+  RS_DEFINE_CUT_MASK(rs_cut_mask_##SUFFIX, SPACE, int16, float16, , rs16_min, rs16_max)              \
+  RS_DEFINE_CUT_MASK(rs_cut_mask_half_##SUFFIX, SPACE, int8, float8, .hi, rs8_min, rs8_max)          \
+  RS_KEY_INLINE rs_u64 rs_cut_bits_##SUFFIX(const RsCutRay* r, SPACE const RsCutGroup* g, rs_u32 n,  \
+                                            rs_u32 first_bit) {                                      \
+    (void)first_bit;                                                                                 \
     int16 hi = (int16)(0), lo = (int16)(0);                                                          \
     const rs_u32 full = n / RS_CUT_LANES, rest = n % RS_CUT_LANES;                                   \
     for (rs_u32 k = 0; k < full + (rest > RS_CUT_LANES / 2u); ++k) {                                 \
@@ -432,15 +459,18 @@ RS_KEY_INLINE RsCutRay rs_cut_ray(RsTraversalRay r) {
     int8 hi8 = hi.lo | hi.hi, lo8 = lo.lo | lo.hi;                                                   \
     if (rest > 0u && rest <= RS_CUT_LANES / 2u) {                                                    \
       const int8 m = rs_cut_mask_half_##SUFFIX(r, &g[full]);                                         \
-      hi8 = hi8 | (m & g[full].bit_hi.lo);                                                           \
-      lo8 = lo8 | (m & g[full].bit_lo.lo);                                                           \
+      hi8 = hi8 | (m & g[full].bit_hi.hi);                                                           \
+      lo8 = lo8 | (m & g[full].bit_lo.hi);                                                           \
     }                                                                                                \
     return (RS_U64((rs_u32)rs8_or_lanes(hi8)) << 32) | (rs_u32)rs8_or_lanes(lo8);                    \
   }
+#endif
 #else
 #define RS_DEFINE_CUT_BITS(SUFFIX, SPACE)                                                            \
   RS_DEFINE_CUT_MASK(rs_cut_mask_##SUFFIX, SPACE, rs_i16, rs_f16, , rs16_min, rs16_max)              \
-  RS_KEY_INLINE rs_u64 rs_cut_bits_##SUFFIX(const RsCutRay* r, SPACE const RsCutGroup* g, rs_u32 n) { \
+  RS_KEY_INLINE rs_u64 rs_cut_bits_##SUFFIX(const RsCutRay* r, SPACE const RsCutGroup* g, rs_u32 n,  \
+                                            rs_u32 first_bit) {                                      \
+    (void)first_bit;                                                                                 \
     rs_i16 hi = rs16_zero(), lo = rs16_zero();                                                       \
     for (rs_u32 k = 0; k < rs_cut_group_count(n); ++k) {                                             \
       const rs_i16 m = rs_cut_mask_##SUFFIX(r, &g[k]);                                               \
@@ -474,7 +504,7 @@ RS_KEY_INLINE rs_u64 rs_box_set_code(RsRay ray, RS_CUT_SPACE const RsCutGroup* s
                                      rs_u32 dir_bits) {
   RsTraversalRay r = rs_prepare_ray(ray);
   RsCutRay c = rs_cut_ray(r);
-  rs_u64 code = RS_CUT_BITS_TOP(&c, set, n);
+  rs_u64 code = RS_CUT_BITS_TOP(&c, set, n, 0u);
   if (dir_bits > 0u) code |= rs_direction_field(ray, dir_bits) << (64u - field - dir_bits);
   return code;
 }
@@ -489,10 +519,10 @@ RS_KEY_INLINE rs_u64 rs_two_level_cut_code(RsRay ray, RS_CUT_SPACE const RsCutGr
                                            rs_u32 half_bits) {
   RsTraversalRay r = rs_prepare_ray(ray);
   RsCutRay c = rs_cut_ray(r);
-  rs_u64 code = RS_CUT_BITS_TOP(&c, top, n_top);
+  rs_u64 code = RS_CUT_BITS_TOP(&c, top, n_top, 0u);
   if (code != 0u) {
     const rs_u32 rep = rs_clz64(code);
-    code |= rs_cut_bits_g(&c, low + rep * rs_cut_group_count(half_bits), low_count[rep]);
+    code |= rs_cut_bits_g(&c, low + rep * rs_cut_group_count(half_bits), low_count[rep], half_bits);
   }
   return code;
 }
@@ -511,12 +541,12 @@ RS_KEY_INLINE void rs_two_level_cut_code2(RsRay ray_a, RsRay ray_b, RS_CUT_SPACE
                                           rs_u32 half_bits, rs_u64* code_a, rs_u64* code_b) {
   const RsCutRay a = rs_cut_ray(rs_prepare_ray(ray_a));
   const RsCutRay b = rs_cut_ray(rs_prepare_ray(ray_b));
-  const rs_u64 top_a = RS_CUT_BITS_TOP(&a, top, n_top);
-  const rs_u64 top_b = RS_CUT_BITS_TOP(&b, top, n_top);
+  const rs_u64 top_a = RS_CUT_BITS_TOP(&a, top, n_top, 0u);
+  const rs_u64 top_b = RS_CUT_BITS_TOP(&b, top, n_top, 0u);
   const rs_u32 rep_a = top_a != 0u ? rs_clz64(top_a) : 0u, rep_b = top_b != 0u ? rs_clz64(top_b) : 0u;
   const rs_u32 row = rs_cut_group_count(half_bits);
-  const rs_u64 low_a = rs_cut_bits_g(&a, low + rep_a * row, low_count[rep_a]);
-  const rs_u64 low_b = rs_cut_bits_g(&b, low + rep_b * row, low_count[rep_b]);
+  const rs_u64 low_a = rs_cut_bits_g(&a, low + rep_a * row, low_count[rep_a], half_bits);
+  const rs_u64 low_b = rs_cut_bits_g(&b, low + rep_b * row, low_count[rep_b], half_bits);
   *code_a = top_a | (top_a != 0u ? low_a : 0u);
   *code_b = top_b | (top_b != 0u ? low_b : 0u);
 }

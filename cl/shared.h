@@ -210,6 +210,19 @@ RS_INLINE int rs8_or_lanes(int8 m) {
   int2 q = h.lo | h.hi;
   return q.s0 | q.s1;
 }
+/* The lanes of a sixteen- or eight-lane -1/0 mask as bits, lane i -> bit i, on devices with an
+ * instruction for it: AVX-512 (PoCL on such CPUs), where the compare's mask register is the
+ * answer (kmovd). The cut-box tests then place each group's hits in the code with two shifts,
+ * instead of ORing per-lane bit words and folding the lanes (cl/keys.h, rs_cut_bits). Elsewhere
+ * RS_MASK16_BITS is 0 and keys.h uses the portable form. ClRuntime.MaskBitsFormsAgree checks
+ * these on the device. */
+#if defined(__AVX512F__) && defined(__AVX512DQ__) && !defined(RS_PORTABLE_MASK_BITS)
+#define RS_MASK16_BITS 1
+RS_INLINE uint rs16_mask_bits(int16 m) { return (uint)__builtin_ia32_cvtd2mask512(m); }
+RS_INLINE uint rs8_mask_bits(int8 m) { return (uint)__builtin_ia32_movmskps256(as_float8(m)); }
+#else
+#define RS_MASK16_BITS 0
+#endif
 #else
 typedef struct alignas(64) rs_f16 {
   float s[16];

@@ -762,6 +762,79 @@ TEST(Encode, HccDirPassesMatchTheHostForEveryDirectionWidth) {
   }
 }
 
+// rs_cut_bits on the device, in both of its forms: the hit mask shifted into place (RS_MASK16_BITS,
+// what PoCL builds on an AVX-512 CPU) and the portable bit words (GPUs, other CPUs; forced here with
+// -DRS_PORTABLE_MASK_BITS), against the host's, for group counts with a full, a more-than-half and
+// an at-most-half last group, placed from the top of the code and from a first bit below it.
+TEST(Encode, DeviceCutBitsInBothFormsEqualTheHost) {
+  Runtime& rt = testing::runtime();
+  const std::string src = kernel_source("cl/keys.h") + R"(
+__kernel void cut_bits(__global const RsCutGroup* g, uint n, uint first_bit, __global const RsRay* rays,
+                       __global ulong* out, __global int* mask_form) {
+  const uint i = get_global_id(0);
+  const RsCutRay c = rs_cut_ray(rs_prepare_ray(rays[i]));
+  out[i] = rs_cut_bits_g(&c, g, n, first_bit);
+  if (i == 0) *mask_form = RS_MASK16_BITS;
+}
+)";
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  std::vector<RsRay> rays;
+  for (int k = 0; k < 1024; ++k)
+    rays.push_back(ray(u(rng), u(rng), u(rng), u(rng), u(rng), k % 7 == 0 ? 0.0f : u(rng), k % 3 ? RS_T_FAR : 0.5f));
+  cl::Buffer ray_buf = rt.upload("rays", rays);
+  int forms_seen[2] = {0, 0};
+  for (const char* options : {"", "-DRS_PORTABLE_MASK_BITS"}) {
+    cl::Program program = rt.build_source(src, "cut_bits.cl", options);
+    for (rs_u32 n : {1u, 7u, 8u, 9u, 16u, 17u, 24u, 25u, 40u, 63u, 64u}) {
+      std::vector<RsBox> boxes(n);
+      for (RsBox& b : boxes)
+        for (int a = 0; a < 3; ++a) {
+          const float x = u(rng), y = u(rng);
+          b.bmin[a] = std::min(x, y), b.bmax[a] = std::max(x, y);
+        }
+      for (rs_u32 first : {0u, (64u - n) / 2u, 64u - n}) {
+        const auto groups = rs_cut_groups(boxes.data(), boxes.size(), first);
+        cl::Buffer group_buf = rt.upload("cut groups", groups);
+        cl::Buffer out = rt.buffer("codes", rays.size() * sizeof(rs_u64));
+        cl::Buffer form = rt.buffer("mask form", sizeof(int));
+        cl_call("cut_bits", [&] {
+          cl::Kernel k(program, "cut_bits");
+          k.setArg(0, group_buf);
+          k.setArg(1, n);
+          k.setArg(2, first);
+          k.setArg(3, ray_buf);
+          k.setArg(4, out);
+          k.setArg(5, form);
+          rt.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(rays.size()), cl::NDRange(64));
+        });
+        std::vector<rs_u64> codes;
+        std::vector<int> f;
+        rt.download("codes", out, codes, rays.size());
+        rt.download("mask form", form, f, 1);
+        forms_seen[f[0] != 0] = 1;
+        std::size_t bad = 0;
+        for (std::size_t i = 0; i < rays.size(); ++i) {
+          const RsCutRay c = rs_cut_ray(rs_prepare_ray(rays[i]));
+          const rs_u64 host = rs_cut_bits_p(&c, groups.data(), n, first);
+          if (codes[i] != host && bad++ == 0)
+            ADD_FAILURE() << "options '" << options << "' n " << n << " first bit " << first << " ray " << i
+                          << ": device " << std::hex << codes[i] << " host " << host;
+        }
+        EXPECT_EQ(bad, 0u) << "options '" << options << "' n " << n << " first bit " << first;
+      }
+    }
+  }
+  EXPECT_EQ(forms_seen[0], 1) << "the portable form was not built";
+#if defined(__x86_64__) && defined(__GNUC__)
+  // PoCL compiles for the host CPU: with AVX-512 (F and DQ) it must take the mask-bits form.
+  if (rt.info().is_pocl() && rt.info().type == "CPU" && __builtin_cpu_supports("avx512f") &&
+      __builtin_cpu_supports("avx512dq")) {
+    EXPECT_EQ(forms_seen[1], 1) << "PoCL on this AVX-512 CPU should build the mask-bits form";
+  }
+#endif
+}
+
 // HCC_DIR's single direction bit read from the signs of dx and dy (rs_direction_top_bit) is the
 // definition's, rs_direction_bits(r, 1), φ ≥ ½: on both sides of the +x axis where φ = atan2/2π + ½
 // rounds up to ½ (|dy|/dx from 2^-34 to 2^-10, densely, across 2^-19, the shortcut's bound), at
@@ -848,8 +921,8 @@ TEST(Encode, CutGroupsMatchTheScalarSlabTest) {
       rs_u64 expect = 0;
       for (rs_u32 i = 0; i < n; ++i)
         if (rs_segment_overlaps_box(tr, boxes[i])) expect |= rs_u64(1) << (63u - i);
-      ASSERT_EQ(rs_cut_bits_p(&c, groups.data(), n), expect) << "n " << n << " ray " << k;
-      ASSERT_EQ(rs_cut_bits_p(&c, low_groups.data(), n), expect >> first)
+      ASSERT_EQ(rs_cut_bits_p(&c, groups.data(), n, 0), expect) << "n " << n << " ray " << k;
+      ASSERT_EQ(rs_cut_bits_p(&c, low_groups.data(), n, first), expect >> first)
           << "n " << n << " ray " << k;
       ASSERT_EQ(rs_box_set_code(r, groups.data(), n, n, 0), expect) << "n " << n << " ray " << k;
     }

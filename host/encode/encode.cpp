@@ -101,7 +101,7 @@ std::vector<RsCutGroup> rs_cut_groups(const RsBox* boxes, std::size_t n, unsigne
         throw Error("rs_cut_groups: box " + std::to_string(i) + " is empty or not a number on axis " +
                     std::to_string(a));
     RsCutGroup& g = groups[i / lanes];
-    const std::size_t l = i % lanes;
+    const std::size_t l = lanes - 1 - i % lanes;  // box j of a group in lane 15 − j (keys.h, RsCutGroup)
     g.lo_x.s[l] = b.bmin[0], g.hi_x.s[l] = b.bmax[0];
     g.lo_y.s[l] = b.bmin[1], g.hi_y.s[l] = b.bmax[1];
     g.lo_z.s[l] = b.bmin[2], g.hi_z.s[l] = b.bmax[2];

@@ -105,7 +105,7 @@ class EncodeScene {
 };
 
 RsBox to_rs_box(const Aabb& b);
-// Boxes [0, n) transposed into ceil(n / 16) RsCutGroups (cl/keys.h): box i in lane i % 16 of
+// Boxes [0, n) transposed into ceil(n / 16) RsCutGroups (cl/keys.h): box i in lane 15 − i % 16 of
 // group i / 16, with code bit 63 − first_bit − i; missing lanes are zero boxes without a bit.
 // Throws Error for a box with lo > hi or NaN bounds.
 std::vector<RsCutGroup> rs_cut_groups(const RsBox* boxes, std::size_t n, unsigned first_bit = 0);
