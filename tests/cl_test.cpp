@@ -1,6 +1,8 @@
 // The OpenCL runtime: device choice, error names, build failures that surface the log.
 #include <gtest/gtest.h>
 
+#include <cstdlib>
+
 #include "test_util.h"
 
 namespace raysort {
@@ -102,6 +104,20 @@ __kernel void mask_bits(__global int* out) {
     EXPECT_EQ(v[2], 1) << "PoCL on x86 should build the movmskps form";
   }
 #endif
+}
+
+// RAYSORT_CL_OPTIONS reaches every kernel build (the way to the portable mask-bit forms on an x86
+// compiler without the target builtins): a source that needs its macro builds only with it.
+TEST(ClRuntime, ClOptionsFromTheEnvironmentReachTheBuild) {
+  Runtime& rt = testing::runtime();
+  const std::string src =
+      "#ifndef RS_TEST_OPTION_SEEN\n#error RS_TEST_OPTION_SEEN is not defined\n#endif\n"
+      "__kernel void seen(__global int* p) { p[0] = RS_TEST_OPTION_SEEN; }\n";
+  EXPECT_THROW(rt.build_source(src, "seen.cl"), Error);
+  ::setenv("RAYSORT_CL_OPTIONS", "-DRS_TEST_OPTION_SEEN=7", 1);
+  EXPECT_NE(rt.build_options("").find("-DRS_TEST_OPTION_SEEN=7"), std::string::npos);
+  EXPECT_NO_THROW(rt.build_source(src, "seen.cl"));
+  ::unsetenv("RAYSORT_CL_OPTIONS");
 }
 
 TEST(ClRuntime, EmbeddedKernelsResolveIncludes) {

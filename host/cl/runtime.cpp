@@ -283,6 +283,9 @@ std::string Runtime::build_options(const std::string& extra) const {
   // Correctly rounded divide and sqrt: the kernels must give the host twin's bits (DESIGN.md 4).
   if (info_.correctly_rounded_divide_sqrt) opts += " -cl-fp32-correctly-rounded-divide-sqrt";
   if (!extra.empty()) opts += " " + extra;
+  // Options for every kernel build, e.g. -DRS_PORTABLE_MASK_BITS on an x86 OpenCL compiler that
+  // lacks the target builtins cl/shared.h uses there (docs/trace.md).
+  if (const char* env = std::getenv("RAYSORT_CL_OPTIONS"); env && *env) opts += std::string(" ") + env;
   return opts;
 }
 
@@ -319,7 +322,9 @@ cl::Program Runtime::build_source(const std::string& source, const std::string& 
     } catch (const cl::Error&) {
       log = "(no build log available)";
     }
-    throw ClError(fmt::format("OpenCL build of {} failed with {} on device '{}' ({})\n  options: {}\n  build log:\n{}",
+    throw ClError(fmt::format("OpenCL build of {} failed with {} on device '{}' ({})\n  options: {}\n  build log:\n{}\n"
+                              "  (RAYSORT_CL_OPTIONS adds build options; -DRS_PORTABLE_MASK_BITS avoids the x86 "
+                              "target builtins of cl/shared.h)",
                               names, cl_error_name(err), info_.name, info_.platform_name, opts, trim(log)),
                   err);
   }
