@@ -112,7 +112,6 @@ RS_INLINE rs_f4 rs4_splat(float x) { return (float4)(x); }
 RS_INLINE rs_f4 rs4_min(rs_f4 a, rs_f4 b) { return select(b, a, a < b); }
 RS_INLINE rs_f4 rs4_max(rs_f4 a, rs_f4 b) { return select(b, a, a > b); }
 RS_INLINE rs_f4 rs4_select(rs_f4 if_false, rs_f4 if_true, rs_i4 m) { return select(if_false, if_true, m); }
-/* Bit i set when lane i is true. */
 /* The lanes of a -1/0 mask as bits, lane i -> bit i. The traversal branches on these bits at every
  * node, so on x86 devices (PoCL) it is one movmskps; the portable form (AND with 1, 2, 4, 8, then OR
  * the lanes) put a shuffle-and-OR chain on that path, and the trace took 4-13 % longer (sibenik,
@@ -215,7 +214,7 @@ RS_INLINE int rs8_or_lanes(int8 m) {
  * answer (kmovd). The cut-box tests then place each group's hits in the code with two shifts,
  * instead of ORing per-lane bit words and folding the lanes (cl/keys.h, rs_cut_bits). Elsewhere
  * RS_MASK16_BITS is 0 and keys.h uses the portable form. ClRuntime.MaskBitsFormsAgree checks
- * these on the device. */
+ * these on the device where they exist. */
 #if defined(__AVX512F__) && defined(__AVX512DQ__) && !defined(RS_PORTABLE_MASK_BITS)
 #define RS_MASK16_BITS 1
 RS_INLINE uint rs16_mask_bits(int16 m) { return (uint)__builtin_ia32_cvtd2mask512(m); }

@@ -1,7 +1,9 @@
 // The OpenCL runtime: device choice, error names, build failures that surface the log.
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <cstdlib>
+#include <vector>
 
 #include "test_util.h"
 
@@ -74,7 +76,8 @@ TEST(ClRuntime, OversizedAllocationNamesBufferAndLimit) {
 
 // rs4_bits (cl/shared.h) is one movmskps on x86 devices and an AND/OR form elsewhere: on the device,
 // both give lane i -> bit i for each of the sixteen -1/0 masks, and the x86 form is the one PoCL
-// builds here (a test that could only ever see the portable form would check nothing new).
+// builds here (a test that could only ever see the portable form would check nothing new). The
+// sixteen- and eight-lane forms (rs16_mask_bits, rs8_mask_bits, AVX-512 devices) on bit patterns.
 TEST(ClRuntime, MaskBitsFormsAgree) {
   Runtime& rt = testing::runtime();
   const std::string src = kernel_source("cl/shared.h") + R"(
@@ -84,6 +87,20 @@ __kernel void mask_bits(__global int* out) {
   out[3 * i] = rs4_bits(m);
   out[3 * i + 1] = rs4_bits_portable(m);
   out[3 * i + 2] = RS_MASK_BITS_MOVMSK;
+}
+/* Sixteen- and eight-lane masks from bit patterns p (lane l set when bit l of p is): where the device
+ * has rs16_mask_bits / rs8_mask_bits, they must give p back; elsewhere p is written as is. */
+__kernel void mask_bits16(__global const uint* patterns, __global uint* out) {
+  const int i = get_global_id(0);
+  const uint p = patterns[i];
+  const int16 lanes = (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+  const int16 m = ((int16)(p) >> lanes & 1) != 0;
+#if RS_MASK16_BITS
+  out[2 * i] = rs16_mask_bits(m);
+  out[2 * i + 1] = rs8_mask_bits(m.lo) | (rs8_mask_bits(m.hi) << 8);
+#else
+  out[2 * i] = out[2 * i + 1] = p;
+#endif
 }
 )";
   cl::Program program = rt.build_source(src, "mask_bits.cl");
@@ -104,6 +121,23 @@ __kernel void mask_bits(__global int* out) {
     EXPECT_EQ(v[2], 1) << "PoCL on x86 should build the movmskps form";
   }
 #endif
+
+  std::vector<std::uint32_t> patterns = {0u, 0xFFFFu, 0x8000u, 0x0001u, 0x00FFu, 0xFF00u, 0x5555u, 0xAAAAu};
+  for (std::uint32_t p = 1; p < 0x10000u; p = p * 7u + 3u) patterns.push_back(p & 0xFFFFu);
+  cl::Buffer pattern_buf = rt.upload("patterns", patterns);
+  cl::Buffer out16 = rt.buffer("mask bits 16", patterns.size() * 2 * sizeof(std::uint32_t));
+  cl_call("mask_bits16", [&] {
+    cl::Kernel k(program, "mask_bits16");
+    k.setArg(0, pattern_buf);
+    k.setArg(1, out16);
+    rt.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(patterns.size()), cl::NullRange);
+  });
+  std::vector<std::uint32_t> w;
+  rt.download("mask bits 16", out16, w, patterns.size() * 2);
+  for (std::size_t i = 0; i < patterns.size(); ++i) {
+    EXPECT_EQ(w[2 * i], patterns[i]) << "rs16_mask_bits of pattern " << std::hex << patterns[i];
+    EXPECT_EQ(w[2 * i + 1], patterns[i]) << "rs8_mask_bits of pattern " << std::hex << patterns[i];
+  }
 }
 
 // RAYSORT_CL_OPTIONS reaches every kernel build (the way to the portable mask-bit forms on an x86
