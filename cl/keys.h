@@ -357,17 +357,14 @@ RS_KEY_INLINE int rs_segment_overlaps_box(RsTraversalRay r, RsBox b) {
 }
 
 /* Sixteen cut boxes, one axis bound per vector (SoA), so one pass of the slab test serves sixteen
- * boxes, and the code bit of each box: lane l ORs bit_hi into bits 63..32 of the code and bit_lo
- * into bits 31..0 where its box is hit (one of them is 0); an empty lane has no bit. Box j of a
- * group sits in lane 15 − j, so that lane l's code bit is bit l of a 16-bit field: devices that turn
- * a mask into bits in one instruction (RS_MASK16_BITS, cl/shared.h) shift the group's hit mask into
- * place; the others AND the masks with the bit words, OR them lane-wise and fold the lanes once
- * per key. 512 bytes. Built on the host (host/encode/encode.cpp, rs_cut_groups). The bounds must
- * come in this order: rs_cut_mask indexes them as (&lo_x)[2·axis + side]. */
+ * boxes. Box j of a group sits in lane 15 − j, so that the group's hit mask, as bits (lane l ->
+ * bit l, rs16_mask_bits), is the group's field of the code: shifted into place, lane l of group k is
+ * code bit 48 + l − first_bit − 16k. An empty lane is a zero box, masked off by the box count.
+ * 384 bytes. Built on the host (host/encode/encode.cpp, rs_cut_groups). The bounds must come in
+ * this order: rs_cut_mask indexes them as (&lo_x)[2·axis + side]. */
 #define RS_CUT_LANES 16u
 typedef struct {
   rs_f16 lo_x, hi_x, lo_y, hi_y, lo_z, hi_z;
-  rs_i16 bit_hi, bit_lo;
 } RsCutGroup;
 
 /* The number of groups holding n boxes. */
@@ -410,76 +407,45 @@ RS_KEY_INLINE RsCutRay rs_cut_ray(RsTraversalRay r) {
   }
 
 /* The code bits of the n boxes of g that the segment overlaps (n <= 64; box i in group i / 16,
- * code bit 63 − first_bit − i; rs_cut_groups). A last group with at most eight boxes (in lanes
- * 8..15) is tested on its upper eight lanes only, on the device (rs_cut_mask_half_*): with
- * AVX-512, PoCL runs a sixteen-lane operation as one zmm instruction, which Zen 4 executes in two
- * halves, so a half-empty group would cost a full one (MLHCC at 16 bits has two such groups per
- * key). The host tests every group whole; the lower lanes of such a group have no bits, so the
- * code is the same.
- * With RS_MASK16_BITS a group's hit mask, restricted to its boxes' lanes, is shifted into place:
- * lane l of group k is code bit 48 + l − first_bit − 16k. Otherwise the hit masks, ANDed with the
- * lanes' bit words, are ORed lane-wise and folded across lanes once at the end (the bit words
- * already hold first_bit).
+ * code bit 63 − first_bit − i): each group's hit mask as bits (rs16_mask_bits: one kmovd on
+ * AVX-512 devices, cl/shared.h), restricted to its boxes' lanes and shifted into place.
+ * On the device, a last group with at most eight boxes (in lanes 8..15) is tested on its upper
+ * eight lanes only (rs_cut_mask_half_*): with AVX-512, PoCL runs a sixteen-lane operation as one
+ * zmm instruction, which Zen 4 executes in two halves, so a half-empty group would cost a full one
+ * (MLHCC at 16 bits has two such groups per key). The host tests every group whole; the code is
+ * the same.
  * One definition per address space (OpenCL C 1.2 has no generic pointers): _p private/host,
  * _c constant, _g global. */
 #ifdef __OPENCL_VERSION__
-#if RS_MASK16_BITS
+#define RS_CUT_WHOLE_ABOVE (RS_CUT_LANES / 2u) /* a last group with more boxes is tested whole */
+#define RS_DEFINE_CUT_MASK_HALF(SUFFIX, SPACE)                                                       \
+  RS_DEFINE_CUT_MASK(rs_cut_mask_half_##SUFFIX, SPACE, int8, float8, .hi, rs8_min, rs8_max)
+#define RS_CUT_BITS_HALF(SUFFIX)                                                                     \
+  if (rest > 0u && rest <= RS_CUT_WHOLE_ABOVE) {                                                     \
+    const rs_u32 m = rs8_mask_bits(rs_cut_mask_half_##SUFFIX(r, &g[full])) & (0xFF00u >> rest);      \
+    code |= (RS_U64(m) << 56) >> (first_bit + RS_CUT_LANES * full);                                  \
+  }
+#else
+#define RS_CUT_WHOLE_ABOVE 0u
+#define RS_DEFINE_CUT_MASK_HALF(SUFFIX, SPACE)
+#define RS_CUT_BITS_HALF(SUFFIX)
+#endif
 #define RS_DEFINE_CUT_BITS(SUFFIX, SPACE)                                                            \
-  RS_DEFINE_CUT_MASK(rs_cut_mask_##SUFFIX, SPACE, int16, float16, , rs16_min, rs16_max)              \
-  RS_DEFINE_CUT_MASK(rs_cut_mask_half_##SUFFIX, SPACE, int8, float8, .hi, rs8_min, rs8_max)          \
+  RS_DEFINE_CUT_MASK(rs_cut_mask_##SUFFIX, SPACE, rs_i16, rs_f16, , rs16_min, rs16_max)              \
+  RS_DEFINE_CUT_MASK_HALF(SUFFIX, SPACE)                                                             \
   RS_KEY_INLINE rs_u64 rs_cut_bits_##SUFFIX(const RsCutRay* r, SPACE const RsCutGroup* g, rs_u32 n,  \
                                             rs_u32 first_bit) {                                      \
     rs_u64 code = 0;                                                                                 \
     const rs_u32 full = n / RS_CUT_LANES, rest = n % RS_CUT_LANES;                                   \
-    for (rs_u32 k = 0; k < full + (rest > RS_CUT_LANES / 2u); ++k) {                                 \
-      const rs_u32 boxes = min(RS_CUT_LANES, n - RS_CUT_LANES * k); /* lanes 15 .. 16 − boxes */     \
+    for (rs_u32 k = 0; k < full + (rest > RS_CUT_WHOLE_ABOVE); ++k) {                                \
+      const rs_u32 left = n - RS_CUT_LANES * k; /* boxes from this group on, in lanes 15, 14, ... */   \
+      const rs_u32 boxes = left < RS_CUT_LANES ? left : RS_CUT_LANES;                                \
       const rs_u32 m = rs16_mask_bits(rs_cut_mask_##SUFFIX(r, &g[k])) & (0xFFFF0000u >> boxes);      \
       code |= (RS_U64(m) << 48) >> (first_bit + RS_CUT_LANES * k);                                   \
     }                                                                                                \
-    if (rest > 0u && rest <= RS_CUT_LANES / 2u) {                                                    \
-      const rs_u32 m = rs8_mask_bits(rs_cut_mask_half_##SUFFIX(r, &g[full])) & (0xFF00u >> rest);    \
-      code |= (RS_U64(m) << 56) >> (first_bit + RS_CUT_LANES * full);                                \
-    }                                                                                                \
+    RS_CUT_BITS_HALF(SUFFIX)                                                                         \
     return code;                                                                                     \
   }
-#else
-#define RS_DEFINE_CUT_BITS(SUFFIX, SPACE)                                                            \
-  RS_DEFINE_CUT_MASK(rs_cut_mask_##SUFFIX, SPACE, int16, float16, , rs16_min, rs16_max)              \
-  RS_DEFINE_CUT_MASK(rs_cut_mask_half_##SUFFIX, SPACE, int8, float8, .hi, rs8_min, rs8_max)          \
-  RS_KEY_INLINE rs_u64 rs_cut_bits_##SUFFIX(const RsCutRay* r, SPACE const RsCutGroup* g, rs_u32 n,  \
-                                            rs_u32 first_bit) {                                      \
-    (void)first_bit;                                                                                 \
-    int16 hi = (int16)(0), lo = (int16)(0);                                                          \
-    const rs_u32 full = n / RS_CUT_LANES, rest = n % RS_CUT_LANES;                                   \
-    for (rs_u32 k = 0; k < full + (rest > RS_CUT_LANES / 2u); ++k) {                                 \
-      const int16 m = rs_cut_mask_##SUFFIX(r, &g[k]);                                                \
-      hi = hi | (m & g[k].bit_hi);                                                                   \
-      lo = lo | (m & g[k].bit_lo);                                                                   \
-    }                                                                                                \
-    int8 hi8 = hi.lo | hi.hi, lo8 = lo.lo | lo.hi;                                                   \
-    if (rest > 0u && rest <= RS_CUT_LANES / 2u) {                                                    \
-      const int8 m = rs_cut_mask_half_##SUFFIX(r, &g[full]);                                         \
-      hi8 = hi8 | (m & g[full].bit_hi.hi);                                                           \
-      lo8 = lo8 | (m & g[full].bit_lo.hi);                                                           \
-    }                                                                                                \
-    return (RS_U64((rs_u32)rs8_or_lanes(hi8)) << 32) | (rs_u32)rs8_or_lanes(lo8);                    \
-  }
-#endif
-#else
-#define RS_DEFINE_CUT_BITS(SUFFIX, SPACE)                                                            \
-  RS_DEFINE_CUT_MASK(rs_cut_mask_##SUFFIX, SPACE, rs_i16, rs_f16, , rs16_min, rs16_max)              \
-  RS_KEY_INLINE rs_u64 rs_cut_bits_##SUFFIX(const RsCutRay* r, SPACE const RsCutGroup* g, rs_u32 n,  \
-                                            rs_u32 first_bit) {                                      \
-    (void)first_bit;                                                                                 \
-    rs_i16 hi = rs16_zero(), lo = rs16_zero();                                                       \
-    for (rs_u32 k = 0; k < rs_cut_group_count(n); ++k) {                                             \
-      const rs_i16 m = rs_cut_mask_##SUFFIX(r, &g[k]);                                               \
-      hi = hi | (m & g[k].bit_hi);                                                                   \
-      lo = lo | (m & g[k].bit_lo);                                                                   \
-    }                                                                                                \
-    return (RS_U64((rs_u32)rs16_or_lanes(hi)) << 32) | (rs_u32)rs16_or_lanes(lo);                    \
-  }
-#endif
 #ifdef __OPENCL_VERSION__
 RS_DEFINE_CUT_BITS(c, __constant)
 RS_DEFINE_CUT_BITS(g, __global)

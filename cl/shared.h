@@ -209,18 +209,19 @@ RS_INLINE int rs8_or_lanes(int8 m) {
   int2 q = h.lo | h.hi;
   return q.s0 | q.s1;
 }
-/* The lanes of a sixteen- or eight-lane -1/0 mask as bits, lane i -> bit i, on devices with an
- * instruction for it: AVX-512 (PoCL on such CPUs), where the compare's mask register is the
- * answer (kmovd). The cut-box tests then place each group's hits in the code with two shifts,
- * instead of ORing per-lane bit words and folding the lanes (cl/keys.h, rs_cut_bits). Elsewhere
- * RS_MASK16_BITS is 0 and keys.h uses the portable form. ClRuntime.MaskBitsFormsAgree checks
- * these on the device where they exist. */
+/* The lanes of a sixteen- or eight-lane -1/0 mask as bits, lane i -> bit i (the cut-box tests,
+ * cl/keys.h rs_cut_bits). On AVX-512 devices (PoCL on such CPUs) the compare's mask register is
+ * the answer (kmovd, RS_MASK16_BITS = 1); elsewhere the lanes are ANDed with their bits and ORed,
+ * a fold of the lanes per group (on PoCL 1.2-1.6x slower box-set keys).
+ * ClRuntime.MaskBitsFormsAgree checks them on the device. */
 #if defined(__AVX512F__) && defined(__AVX512DQ__) && !defined(RS_PORTABLE_MASK_BITS)
 #define RS_MASK16_BITS 1
 RS_INLINE uint rs16_mask_bits(int16 m) { return (uint)__builtin_ia32_cvtd2mask512(m); }
 RS_INLINE uint rs8_mask_bits(int8 m) { return (uint)__builtin_ia32_movmskps256(as_float8(m)); }
 #else
 #define RS_MASK16_BITS 0
+RS_INLINE uint rs8_mask_bits(int8 m) { return (uint)rs8_or_lanes(m & (int8)(1, 2, 4, 8, 16, 32, 64, 128)); }
+RS_INLINE uint rs16_mask_bits(int16 m) { return rs8_mask_bits(m.lo) | (rs8_mask_bits(m.hi) << 8); }
 #endif
 #else
 typedef struct alignas(64) rs_f16 {
@@ -254,11 +255,10 @@ RS_INLINE rs_f16 rs16_max(rs_f16 a, rs_f16 b) {
   for (int i = 0; i < 16; ++i) r.s[i] = a.s[i] > b.s[i] ? a.s[i] : b.s[i];
   return r;
 }
-RS_INLINE rs_i16 rs16_zero() { return rs_i16{}; }
-/* The OR of the sixteen lanes (the device folds eight-lane halves, cl/keys.h rs_cut_bits). */
-RS_INLINE int rs16_or_lanes(rs_i16 m) {
-  int b = 0;
-  for (int i = 0; i < 16; ++i) b |= m.s[i];
+/* Lane i -> bit i (the device's rs16_mask_bits). */
+RS_INLINE rs_u32 rs16_mask_bits(rs_i16 m) {
+  rs_u32 b = 0;
+  for (int i = 0; i < 16; ++i) b |= static_cast<rs_u32>(m.s[i] != 0) << i;
   return b;
 }
 #endif

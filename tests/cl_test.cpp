@@ -77,7 +77,7 @@ TEST(ClRuntime, OversizedAllocationNamesBufferAndLimit) {
 // rs4_bits (cl/shared.h) is one movmskps on x86 devices and an AND/OR form elsewhere: on the device,
 // both give lane i -> bit i for each of the sixteen -1/0 masks, and the x86 form is the one PoCL
 // builds here (a test that could only ever see the portable form would check nothing new). The
-// sixteen- and eight-lane forms (rs16_mask_bits, rs8_mask_bits, AVX-512 devices) on bit patterns.
+// sixteen- and eight-lane forms (rs16_mask_bits, rs8_mask_bits: one instruction on AVX-512 devices) on bit patterns.
 TEST(ClRuntime, MaskBitsFormsAgree) {
   Runtime& rt = testing::runtime();
   const std::string src = kernel_source("cl/shared.h") + R"(
@@ -88,19 +88,15 @@ __kernel void mask_bits(__global int* out) {
   out[3 * i + 1] = rs4_bits_portable(m);
   out[3 * i + 2] = RS_MASK_BITS_MOVMSK;
 }
-/* Sixteen- and eight-lane masks from bit patterns p (lane l set when bit l of p is): where the device
- * has rs16_mask_bits / rs8_mask_bits, they must give p back; elsewhere p is written as is. */
+/* Sixteen- and eight-lane masks from bit patterns p (lane l set when bit l of p is):
+ * rs16_mask_bits and rs8_mask_bits must give p back. */
 __kernel void mask_bits16(__global const uint* patterns, __global uint* out) {
   const int i = get_global_id(0);
   const uint p = patterns[i];
   const int16 lanes = (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
   const int16 m = ((int16)(p) >> lanes & 1) != 0;
-#if RS_MASK16_BITS
   out[2 * i] = rs16_mask_bits(m);
   out[2 * i + 1] = rs8_mask_bits(m.lo) | (rs8_mask_bits(m.hi) << 8);
-#else
-  out[2 * i] = out[2 * i + 1] = p;
-#endif
 }
 )";
   cl::Program program = rt.build_source(src, "mask_bits.cl");

@@ -763,7 +763,7 @@ TEST(Encode, HccDirPassesMatchTheHostForEveryDirectionWidth) {
 }
 
 // rs_cut_bits on the device, in both of its forms: the hit mask shifted into place (RS_MASK16_BITS,
-// what PoCL builds on an AVX-512 CPU) and the portable bit words (GPUs, other CPUs; forced here with
+// what PoCL builds on an AVX-512 CPU) and the portable AND-and-fold of the lanes (GPUs, other CPUs; forced here with
 // -DRS_PORTABLE_MASK_BITS), against the host's, for group counts with a full, a more-than-half and
 // an at-most-half last group, placed from the top of the code and from a first bit below it.
 TEST(Encode, DeviceCutBitsInBothFormsEqualTheHost) {
@@ -794,7 +794,7 @@ __kernel void cut_bits(__global const RsCutGroup* g, uint n, uint first_bit, __g
           b.bmin[a] = std::min(x, y), b.bmax[a] = std::max(x, y);
         }
       for (rs_u32 first : {0u, (64u - n) / 2u, 64u - n}) {
-        const auto groups = rs_cut_groups(boxes.data(), boxes.size(), first);
+        const auto groups = rs_cut_groups(boxes.data(), boxes.size());
         cl::Buffer group_buf = rt.upload("cut groups", groups);
         cl::Buffer out = rt.buffer("codes", rays.size() * sizeof(rs_u64));
         cl::Buffer form = rt.buffer("mask form", sizeof(int));
@@ -912,7 +912,7 @@ TEST(Encode, CutGroupsMatchTheScalarSlabTest) {
     const auto groups = rs_cut_groups(boxes.data(), boxes.size());
     ASSERT_EQ(groups.size(), (n + 15) / 16);
     const rs_u32 first = 64 - n;  // the boxes' bits at the bottom of the code
-    const auto low_groups = rs_cut_groups(boxes.data(), boxes.size(), first);
+    const auto& low_groups = groups;
     for (int k = 0; k < 2000; ++k) {
       RsRay r = ray(u(rng), u(rng), u(rng), u(rng), u(rng), k % 7 == 0 ? 0.0f : u(rng), k % 3 ? RS_T_FAR : 0.5f);
       if (k % 11 == 0) std::memcpy(r.o, boxes[k % n].bmin, sizeof r.o);  // on a box corner

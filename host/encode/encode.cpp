@@ -11,7 +11,7 @@
 
 namespace raysort {
 
-static_assert(sizeof(RsBox) == 24 && sizeof(RsEncodeFrame) == 48 && sizeof(RsCutGroup) == 512,
+static_assert(sizeof(RsBox) == 24 && sizeof(RsEncodeFrame) == 48 && sizeof(RsCutGroup) == 384,
               "device struct layouts (cl/keys.h)");
 
 std::string_view encoder_name(Encoder e) {
@@ -90,8 +90,8 @@ RsBox to_rs_box(const Aabb& b) {
   return r;
 }
 
-std::vector<RsCutGroup> rs_cut_groups(const RsBox* boxes, std::size_t n, unsigned first_bit) {
-  if (first_bit + n > RS_MAX_KEY_BITS) throw Error("rs_cut_groups: more boxes than key bits");
+std::vector<RsCutGroup> rs_cut_groups(const RsBox* boxes, std::size_t n) {
+  if (n > RS_MAX_KEY_BITS) throw Error("rs_cut_groups: more boxes than key bits");
   const std::size_t lanes = RS_CUT_LANES;
   std::vector<RsCutGroup> groups(rs_cut_group_count(static_cast<rs_u32>(n)), RsCutGroup{});
   for (std::size_t i = 0; i < n; ++i) {
@@ -105,8 +105,6 @@ std::vector<RsCutGroup> rs_cut_groups(const RsBox* boxes, std::size_t n, unsigne
     g.lo_x.s[l] = b.bmin[0], g.hi_x.s[l] = b.bmax[0];
     g.lo_y.s[l] = b.bmin[1], g.hi_y.s[l] = b.bmax[1];
     g.lo_z.s[l] = b.bmin[2], g.hi_z.s[l] = b.bmax[2];
-    const unsigned bit = 63u - first_bit - static_cast<unsigned>(i);
-    (bit >= 32 ? g.bit_hi : g.bit_lo).s[l] = static_cast<rs_i32>(1u << (bit % 32));
   }
   return groups;
 }
@@ -171,8 +169,9 @@ const EncodeScene::TwoLevel& EncodeScene::two_level(unsigned bits) const {
   }
   t.top_groups = rs_cut_groups(t.top.data(), t.top.size());
   for (std::size_t i = 0; i < t.top.size(); ++i) {
-    // Row i: its low_count[i] boxes, then zero boxes (no code bit) up to half; bits below the top half.
-    auto row = rs_cut_groups(t.low.data() + i * t.half, t.low_count[i], t.half);
+    // Row i: its low_count[i] boxes, then zero groups up to half (rs_cut_bits reads low_count[i]
+    // boxes and places them below the top half).
+    auto row = rs_cut_groups(t.low.data() + i * t.half, t.low_count[i]);
     row.resize(rs_cut_group_count(t.half), RsCutGroup{});
     t.low_groups.insert(t.low_groups.end(), row.begin(), row.end());
   }

@@ -105,10 +105,10 @@ class EncodeScene {
 };
 
 RsBox to_rs_box(const Aabb& b);
-// Boxes [0, n) transposed into ceil(n / 16) RsCutGroups (cl/keys.h): box i in lane 15 − i % 16 of
-// group i / 16, with code bit 63 − first_bit − i; missing lanes are zero boxes without a bit.
-// Throws Error for a box with lo > hi or NaN bounds.
-std::vector<RsCutGroup> rs_cut_groups(const RsBox* boxes, std::size_t n, unsigned first_bit = 0);
+// Boxes [0, n ≤ 64) transposed into ceil(n / 16) RsCutGroups (cl/keys.h): box i in lane 15 − i % 16
+// of group i / 16 (rs_cut_bits places it at code bit 63 − first_bit − i); missing lanes are zero
+// boxes. Throws Error for a box with lo > hi or NaN bounds.
+std::vector<RsCutGroup> rs_cut_groups(const RsBox* boxes, std::size_t n);
 
 
 // The key of one ray (host twin of the kernels; same source for the key arithmetic).
