@@ -7,7 +7,7 @@
  * keys.h, shared with the host twin (host/encode/), so both give the same bits.
  *
  * Every kernel exists twice: *_k32 writes uint keys (key bits ≤ 32), *_k64 ulong keys.
- * Cut nodes (HCC, RegularGrid cells, MLHCC top nodes) come as eight-box SoA groups (RsCutGroup,
+ * Cut nodes (HCC, RegularGrid cells, MLHCC top nodes) come as sixteen-box SoA groups (RsCutGroup,
  * keys.h) in __constant memory: every work-item reads the same boxes, which GPUs broadcast from the
  * constant cache, and PoCL needs no per-group copy or barrier (Xiang et al. Alg. 1, line 1, keeps
  * them in shared memory; the constant cache plays that part here). MLHCC's low-level rows (one per
