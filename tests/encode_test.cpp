@@ -436,6 +436,51 @@ TEST(Encode, ThroughAnOrderBuffer) {
   }
 }
 
+// The spatial kernels have no count guard: the host launches whole work-groups and then the rest
+// one work-item per group from `first` on (DeviceEncoder::enqueue). Counts below, at and around
+// multiples of the local size, through a reversed order, must give every ray its key.
+TEST(Encode, SpatialKernelsCoverEveryCount) {
+  Scene scene = load_scene("cornell");
+  Scene::Flat tris = scene.flatten();
+  Bvh bvh = build_bvh(tris);
+  RayGenOptions gen;
+  gen.width = 24;
+  gen.height = 16;
+  const auto batches = generate_batches(scene, tris, bvh, gen);
+  const auto& all = batches.at(0).batch.rays;
+  DeviceEncoder dev(testing::runtime(), bvh, bvh.bounds());
+  const std::size_t local = dev.local_size();
+  ASSERT_GT(all.size(), 3 * local);
+  for (std::size_t n : {std::size_t{1}, local - 1, local, local + 1, 2 * local, 3 * local - 5}) {
+    std::vector<RsRay> rays(all.begin(), all.begin() + static_cast<std::ptrdiff_t>(n));
+    std::vector<std::uint32_t> reversed(n);
+    for (std::size_t i = 0; i < n; ++i) reversed[i] = static_cast<std::uint32_t>(n - 1 - i);
+    for (Encoder e : {Encoder::Origin, Encoder::Reis, Encoder::Costa, Encoder::Aila, Encoder::TwoPoint})
+      for (unsigned bits : {32u, 64u}) {
+        const auto host = encode_on_host(e, bits, dev.scene(), rays);
+        const auto run = dev.run(e, bits, rays, &reversed);
+        ASSERT_EQ(run.keys.size(), n);
+        std::size_t bad = 0;
+        for (std::size_t i = 0; i < n; ++i) bad += run.keys[i] != host[reversed[i]] || run.values[i] != i;
+        EXPECT_EQ(bad, 0u) << encoder_name(e) << "/" << bits << ", " << n << " rays";
+      }
+  }
+}
+
+// A batch past the encode kernels' 32-bit float offsets is refused with a message, before any launch.
+TEST(Encode, TooLargeABatchIsRefused) {
+  Bvh bvh = four_leaf_bvh();
+  DeviceEncoder dev(testing::runtime(), bvh, bvh.bounds());
+  Runtime& rt = testing::runtime();
+  cl::Buffer small = rt.buffer("small", 64);
+  try {
+    dev.enqueue(Encoder::Reis, 32, small, small, DeviceEncoder::kMaxRays, small, small);
+    FAIL() << "no error";
+  } catch (const Error& err) {
+    EXPECT_NE(std::string(err.what()).find("too large to encode"), std::string::npos) << err.what();
+  }
+}
+
 TEST(Encode, SingleLeafBvh) {
   Scene s;
   Mesh m;

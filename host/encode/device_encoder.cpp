@@ -10,6 +10,8 @@ namespace raysort {
 
 namespace {
 
+constexpr cl_uint kSpatialFirstArg = 3;  // encode_<spatial>_k*(frame, rays, order, first, ...)
+
 bool is_spatial(Encoder e) {
   return e == Encoder::Origin || e == Encoder::Reis || e == Encoder::Costa || e == Encoder::Aila ||
          e == Encoder::TwoPoint;
@@ -20,7 +22,6 @@ bool is_box_set(Encoder e) { return e == Encoder::RegularGrid || e == Encoder::H
 
 DeviceEncoder::DeviceEncoder(Runtime& rt, const Bvh& bvh, const Aabb& scene_box, const EncoderParams& params)
     : rt_(rt), scene_(bvh, scene_box, params) {
-  frame_ = rt.upload("encode frame", std::vector<RsEncodeFrame>{scene_.frame()});
   nodes_ = rt.upload("bvh nodes (ppc)", bvh.nodes);
   triangles_ = rt.upload("triangles (ppc)", bvh.triangles);
   cl::Program program = rt.build({"cl/encode.cl"});
@@ -81,6 +82,10 @@ double DeviceEncoder::Events::ms() const {
 DeviceEncoder::Events DeviceEncoder::enqueue(Encoder e, unsigned bits, const cl::Buffer& rays, const cl::Buffer& order,
                                              std::uint32_t count, const cl::Buffer& keys, const cl::Buffer& values) {
   check_key_bits(e, bits, scene_.params());
+  // The spatial kernels read ray fields at signed 32-bit float offsets (cl/encode.cl, rs_load_ray).
+  if (count >= kMaxRays)
+    throw Error("a batch of " + std::to_string(count) + " rays is too large to encode (at most " +
+                std::to_string(kMaxRays - 1) + "); trace it in smaller batches (a lower --resolution or --spp)");
   Kernels& ks = bits > 32 ? k64_ : k32_;
   const Uploaded& u = uploaded(e, bits);
   cl::Kernel* k = nullptr;
@@ -117,10 +122,10 @@ DeviceEncoder::Events DeviceEncoder::enqueue(Encoder e, unsigned bits, const cl:
               k = &ks.nosort;
             } else if (is_spatial(e)) {
               k = &ks.spatial.at(e);
-              k->setArg(arg++, frame_);
+              k->setArg(arg++, sizeof(RsEncodeFrame), &scene_.frame());
               k->setArg(arg++, rays);
               k->setArg(arg++, order);
-              k->setArg(arg++, count);
+              k->setArg(arg++, 0u);  // first: set per launch below
             } else if (is_box_set(e)) {
               // HCC_DIR: the direction bits are in keys already; OR in the box field.
               const cl_uint dir = e == Encoder::HCC_DIR ? scene_.params().direction_bits : 0u;
@@ -159,7 +164,20 @@ DeviceEncoder::Events DeviceEncoder::enqueue(Encoder e, unsigned bits, const cl:
             // MLHCC's work-items take RS_TWO_LEVEL_RAYS rays each (cl/keys.h, rs_two_level_cut_code2).
             const std::size_t items =
                 e == Encoder::MLHCC ? (std::size_t(count) + RS_TWO_LEVEL_RAYS - 1) / RS_TWO_LEVEL_RAYS : count;
-            if (count > 0)
+            if (count > 0 && is_spatial(e)) {
+              // The spatial kernels have no count guard (cl/encode.cl): whole work-groups over
+              // [0, full), then the rest from `first` = full, one work-item per group.
+              const std::size_t full = count / local_ * local_, rest = count - full;
+              cl::Event whole;
+              if (full > 0)
+                rt_.queue().enqueueNDRangeKernel(*k, cl::NullRange, cl::NDRange(full), cl::NDRange(local_), nullptr,
+                                                 rest > 0 ? &whole : &ev);
+              if (rest > 0) {
+                k->setArg(kSpatialFirstArg, static_cast<cl_uint>(full));
+                rt_.queue().enqueueNDRangeKernel(*k, cl::NullRange, cl::NDRange(rest), cl::NDRange(1), nullptr, &ev);
+              }
+              if (full > 0 && rest > 0) first = whole;
+            } else if (count > 0)
               rt_.queue().enqueueNDRangeKernel(*k, cl::NullRange, cl::NDRange(Runtime::padded(items, local_)),
                                                cl::NDRange(local_), nullptr, &ev);
             else
@@ -207,7 +225,9 @@ double DeviceEncoder::warm_up() {
   RsRay ray{};
   ray.d[2] = 1.0f;
   ray.tmax = RS_T_FAR;
-  std::vector<RsRay> rays(4, ray);
+  // One whole work-group and one ray more: the spatial kernels launch both shapes (enqueue), and
+  // PoCL compiles a kernel per local size.
+  std::vector<RsRay> rays(local_ + 1, ray);
   for (unsigned bits : {32u, 64u})
     for (Encoder e : {Encoder::NoSort, Encoder::Origin, Encoder::Reis, Encoder::Costa, Encoder::Aila, Encoder::TwoPoint,
                       Encoder::HCC, Encoder::MLHCC, Encoder::PPC})

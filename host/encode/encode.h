@@ -132,8 +132,9 @@ class DeviceEncoder {
     void wait() const;
     double ms() const;  // first kernel's start to last kernel's end (profiling)
   };
-  // keys[i], values[i] = i for the ray rays[order[i]], i < count. keys holds uint32 (bits ≤ 32) or
-  // uint64 (bits > 32). Enqueues and returns the kernels' events without waiting.
+  // keys[i], values[i] = i for the ray rays[order[i]], i < count < kMaxRays. keys holds uint32
+  // (bits ≤ 32) or uint64 (bits > 32). Enqueues and returns the kernels' events without waiting.
+  static constexpr std::uint32_t kMaxRays = 1u << 28;
   Events enqueue(Encoder e, unsigned bits, const cl::Buffer& rays, const cl::Buffer& order, std::uint32_t count,
                  const cl::Buffer& keys, const cl::Buffer& values);
   // Uploads what (e, bits) needs now, so a timed enqueue does no host work.
@@ -164,7 +165,7 @@ class DeviceEncoder {
 
   Runtime& rt_;
   EncodeScene scene_;
-  cl::Buffer frame_, nodes_, triangles_;
+  cl::Buffer nodes_, triangles_;
   struct Kernels {
     cl::Kernel nosort, box_set, box_set_or, direction, two_level, prefix_path;
     std::map<Encoder, cl::Kernel> spatial;  // one kernel per spatial encoder: encode_<name>_k32/k64
