@@ -15,6 +15,8 @@
 #pragma OPENCL FP_CONTRACT OFF
 #define RS_GLOBAL __global
 #define RS_INLINE inline
+/* Fully unrolls the short fixed loop that follows (per-axis loops in the traversal). */
+#define RS_UNROLL _Pragma("unroll")
 typedef uint rs_u32;
 typedef int rs_i32;
 typedef ulong rs_u64;
@@ -31,6 +33,7 @@ RS_INLINE float rs_int_as_float(rs_i32 i) { return as_float(i); }
 #include <cstdint>
 #define RS_GLOBAL
 #define RS_INLINE inline
+#define RS_UNROLL _Pragma("GCC unroll 4")
 typedef std::uint32_t rs_u32;
 typedef std::int32_t rs_i32;
 typedef std::uint64_t rs_u64;
