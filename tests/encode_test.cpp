@@ -403,14 +403,9 @@ TEST(Encode, CornellEveryBatchBitExact) { check_scene("cornell", 64, 36); }
 TEST(Encode, DetailRoomEveryBatchBitExact) { check_scene("detail-room", 64, 36); }
 
 TEST(Encode, ThroughAnOrderBuffer) {
-  Scene scene = load_scene("cornell");
-  Scene::Flat tris = scene.flatten();
-  Bvh bvh = build_bvh(tris);
-  RayGenOptions gen;
-  gen.width = 32;
-  gen.height = 18;
-  auto batches = generate_batches(scene, tris, bvh, gen);
-  const auto& rays = batches.at(0).batch.rays;
+  const auto cornell = testing::scene_batches("cornell", 32, 18);
+  const Bvh& bvh = cornell.bvh;
+  const auto& rays = cornell.batches.at(0).batch.rays;
   std::vector<std::uint32_t> reversed(rays.size());
   for (std::size_t i = 0; i < rays.size(); ++i) reversed[i] = static_cast<std::uint32_t>(rays.size() - 1 - i);
   DeviceEncoder dev(testing::runtime(), bvh, bvh.bounds());
@@ -440,14 +435,9 @@ TEST(Encode, ThroughAnOrderBuffer) {
 // one work-item per group from `first` on (DeviceEncoder::enqueue). Counts below, at and around
 // multiples of the local size, through a reversed order, must give every ray its key.
 TEST(Encode, SpatialKernelsCoverEveryCount) {
-  Scene scene = load_scene("cornell");
-  Scene::Flat tris = scene.flatten();
-  Bvh bvh = build_bvh(tris);
-  RayGenOptions gen;
-  gen.width = 24;
-  gen.height = 16;
-  const auto batches = generate_batches(scene, tris, bvh, gen);
-  const auto& all = batches.at(0).batch.rays;
+  const auto cornell = testing::scene_batches("cornell", 24, 16);
+  const Bvh& bvh = cornell.bvh;
+  const auto& all = cornell.batches.at(0).batch.rays;
   DeviceEncoder dev(testing::runtime(), bvh, bvh.bounds());
   const std::size_t local = dev.local_size();
   ASSERT_GT(all.size(), 3 * local);

@@ -14,7 +14,9 @@
 #include <string>
 #include <vector>
 
+#include "bvh/bvh.h"
 #include "cl/runtime.h"
+#include "render/batches.h"
 #include "scene/load.h"
 #include "shared.h"
 
@@ -40,6 +42,25 @@ inline RsRay ray(float ox, float oy, float oz, float dx, float dy, float dz, flo
   r.o[0] = ox, r.o[1] = oy, r.o[2] = oz, r.tmin = tmin;
   r.d[0] = dx, r.d[1] = dy, r.d[2] = dz, r.tmax = tmax;
   return r;
+}
+
+// A scene by name, its BVH and its ray batches at width × height (the setup of many tests).
+struct SceneBatches {
+  Scene scene;
+  Scene::Flat tris;
+  Bvh bvh;
+  std::vector<ReferencedBatch> batches;
+};
+inline SceneBatches scene_batches(const std::string& name, std::uint32_t width, std::uint32_t height) {
+  SceneBatches s;
+  s.scene = load_scene(name);
+  s.tris = s.scene.flatten();
+  s.bvh = build_bvh(s.tris);
+  RayGenOptions gen;
+  gen.width = width;
+  gen.height = height;
+  s.batches = generate_batches(s.scene, s.tris, s.bvh, gen);
+  return s;
 }
 
 // A unit quad in the z = 0 plane, [0,1]² (two triangles), plus a smaller one behind it at z = -1.
