@@ -18,6 +18,23 @@ bool is_spatial(Encoder e) {
 }
 bool is_box_set(Encoder e) { return e == Encoder::RegularGrid || e == Encoder::HCC || e == Encoder::HCC_DIR; }
 
+// A kernel without a count guard (the spatial encoders, cl/encode.cl) over [0, count): whole
+// work-groups over [0, full), then the rest, one work-item per group, with argument first_arg set
+// to full. Events: the first launch and the last.
+DeviceEncoder::Events enqueue_whole_groups(cl::CommandQueue& queue, cl::Kernel& k, std::size_t count,
+                                           std::size_t local, cl_uint first_arg) {
+  const std::size_t full = count / local * local, rest = count - full;
+  DeviceEncoder::Events ev;
+  if (full > 0) queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(full), cl::NDRange(local), nullptr, &ev.first);
+  if (rest > 0) {
+    k.setArg(first_arg, static_cast<cl_uint>(full));
+    queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(rest), cl::NDRange(1), nullptr, &ev.last);
+  }
+  if (!ev.first()) ev.first = ev.last;
+  if (!ev.last()) ev.last = ev.first;
+  return ev;
+}
+
 }  // namespace
 
 DeviceEncoder::DeviceEncoder(Runtime& rt, const Bvh& bvh, const Aabb& scene_box, const EncoderParams& params)
@@ -90,7 +107,7 @@ DeviceEncoder::Events DeviceEncoder::enqueue(Encoder e, unsigned bits, const cl:
   const Uploaded& u = uploaded(e, bits);
   cl::Kernel* k = nullptr;
   cl::Event ev;
-  cl::Event first;  // HCC_DIR: the direction pass, before the box pass
+  cl::Event first;  // the first of two kernels: HCC_DIR's direction pass, or a spatial kernel's whole groups
   // HCC_DIR with more than one direction bit: the direction pass first (atan2, acos), then the box
   // bits ORed in. One direction bit comes from the signs of dx and dy (keys.h, rs_direction_top_bit)
   // in the box-set kernel itself.
@@ -165,18 +182,9 @@ DeviceEncoder::Events DeviceEncoder::enqueue(Encoder e, unsigned bits, const cl:
             const std::size_t items =
                 e == Encoder::MLHCC ? (std::size_t(count) + RS_TWO_LEVEL_RAYS - 1) / RS_TWO_LEVEL_RAYS : count;
             if (count > 0 && is_spatial(e)) {
-              // The spatial kernels have no count guard (cl/encode.cl): whole work-groups over
-              // [0, full), then the rest from `first` = full, one work-item per group.
-              const std::size_t full = count / local_ * local_, rest = count - full;
-              cl::Event whole;
-              if (full > 0)
-                rt_.queue().enqueueNDRangeKernel(*k, cl::NullRange, cl::NDRange(full), cl::NDRange(local_), nullptr,
-                                                 rest > 0 ? &whole : &ev);
-              if (rest > 0) {
-                k->setArg(kSpatialFirstArg, static_cast<cl_uint>(full));
-                rt_.queue().enqueueNDRangeKernel(*k, cl::NullRange, cl::NDRange(rest), cl::NDRange(1), nullptr, &ev);
-              }
-              if (full > 0 && rest > 0) first = whole;
+              const Events launched = enqueue_whole_groups(rt_.queue(), *k, count, local_, kSpatialFirstArg);
+              first = launched.first;
+              ev = launched.last;
             } else if (count > 0)
               rt_.queue().enqueueNDRangeKernel(*k, cl::NullRange, cl::NDRange(Runtime::padded(items, local_)),
                                                cl::NDRange(local_), nullptr, &ev);
