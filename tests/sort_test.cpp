@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstring>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -15,6 +16,7 @@
 #include <vector>
 
 #include "cl/runtime.h"
+#include "sort/permute.h"
 #include "sort/radix_sort.h"
 
 namespace raysort {
@@ -262,6 +264,36 @@ TEST(Sort, RejectsBadInput) {
   EXPECT_THROW(sorter.sort(k64, v, {32, 0}), Error);  // 64-bit keys for a 32-bit config
   std::vector<std::uint32_t> short_v(9);
   EXPECT_THROW(sorter.sort(k, short_v, {32, 0}), Error);
+}
+
+// The permute access mode's kernel (cl/permute.cl) equals its host twin, bit for bit, for counts
+// around the work-group size, and writes nothing past count.
+TEST(Permute, DeviceEqualsHost) {
+  Runtime& rt = *device().rt;
+  RayPermuter permuter(rt);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> f(-100.0f, 100.0f);
+  for (std::uint32_t n : {0u, 1u, 63u, 64u, 65u, 1000u}) {
+    std::vector<RsRay> rays(n);
+    for (auto& r : rays) r = {{f(rng), f(rng), f(rng)}, f(rng), {f(rng), f(rng), f(rng)}, f(rng)};
+    std::vector<std::uint32_t> order(n);
+    std::iota(order.begin(), order.end(), 0u);
+    std::shuffle(order.begin(), order.end(), rng);
+    cl::Buffer in = rt.upload("rays", rays);
+    cl::Buffer ord = rt.upload("order", order);
+    const std::size_t capacity = n + 1;
+    std::vector<RsRay> sentinel(capacity);
+    sentinel.back().tmax = 12345.0f;
+    cl::Buffer out = rt.upload("permuted", sentinel, CL_MEM_READ_WRITE);
+    cl::Event ev = permuter.enqueue(in, ord, n, out);
+    ev.wait();
+    std::vector<RsRay> got;
+    rt.download("permuted", out, got, capacity);
+    const std::vector<RsRay> want = permute_on_host(rays, order);
+    EXPECT_EQ(std::memcmp(got.data(), want.data(), n * sizeof(RsRay)), 0) << n;
+    EXPECT_EQ(got.back().tmax, 12345.0f) << "wrote past count, n = " << n;
+  }
+  EXPECT_THROW(permute_on_host(std::vector<RsRay>(2), {0, 2}), Error);
 }
 
 }  // namespace
