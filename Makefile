@@ -33,7 +33,7 @@ test: deps
 
 bench: deps
 	$(MAKE) build
-	$(BUILD)/raysort trace --scene $(BENCH_SCENES) --resolution $(BENCH_RESOLUTION)
+	$(BUILD)/raysort trace --scene $(BENCH_SCENES) --resolution $(BENCH_RESOLUTION) --max-time 0.3
 	@# The default folder is scratch (gitignored) and starts fresh each time: one left by an older
 	@# build may hold another matrix configuration, which `run` refuses to resume into. A folder
 	@# given as BENCH_OUT=... is never deleted (run resumes into it, or says why it cannot).

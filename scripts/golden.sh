@@ -10,7 +10,7 @@ mode="${1:?usage: golden.sh check|update RAYSORT_BIN}"
 bin="${2:?usage: golden.sh check|update RAYSORT_BIN}"
 root="$(cd "$(dirname "$0")/.." && pwd)"
 golden="$root/tests/golden/quick-tiny"
-args=(run --preset quick --resolution 48x27 --reps 1 --warmup 0)
+args=(run --preset quick --resolution 48x27 --reps 1 --warmup 0 --max-time 0)
 
 if [ "$mode" = update ]; then
   rm -rf "$golden"

@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <thread>
@@ -34,7 +35,7 @@ std::string temp_dir(const std::string& name) {
 CellRecord cell(const std::string& encoder, unsigned bits, double mrays, double anc) {
   CellRecord c;
   c.scene = "s", c.batch = "bounce1", c.encoder = encoder, c.bits = bits, c.rays = 100;
-  c.trace_mrays = mrays, c.speedup = mrays / 10.0, c.anc = anc;
+  c.trace_mrays = mrays, c.speedup = {mrays / 10.0, NAN, NAN, 0}, c.anc = anc;
   c.keys_hash = "00000000000000aa", c.order_hash = "00000000000000bb";
   c.hits_match_nosort = c.order_is_permutation = true;
   return c;
@@ -145,9 +146,68 @@ TEST(Compare, TablesAndRules) {
   EXPECT_EQ(compare_result_sets(a, b, {}, {FailRule::parse("keys_hash!=")}).violations.size(), 0u);
   EXPECT_EQ(compare_result_sets(a, b, {}, {FailRule::parse("missing")}).violations.size(), 1u);
   EXPECT_EQ(compare_result_sets(a, b, {}, {FailRule::parse("trace_mrays>+4%")}).violations.size(), 1u);
+  // Without intervals (as here, or in a version 1 set) a relative rule compares the points and says so.
+  EXPECT_NE(compare_result_sets(a, b, {}, {FailRule::parse("trace_mrays<-10%")}).violations[0].find("point rule"),
+            std::string::npos);
   EXPECT_THROW(FailRule::parse("speed<-5%"), Error);   // unknown metric
   EXPECT_THROW(FailRule::parse("anc<-"), Error);       // relative rule without a percentage
   EXPECT_THROW(FailRule::parse("keys_hash<-5%"), Error);
+}
+
+// A relative rule on a figure with intervals fires only when the two intervals are apart: a point
+// change inside the noise is reported as such, not as a regression.
+TEST(Compare, RelativeRulesFireOnlyOnSignificantChanges) {
+  std::string da = temp_dir("cia"), db = temp_dir("cib");
+  auto with_speedup = [](const std::string& encoder, double v, double lo, double hi) {
+    CellRecord c = cell(encoder, 32, 10.0, 2.0);
+    c.speedup = {v, lo, hi, 12};
+    return c;
+  };
+  {
+    auto a = ResultSet::open_for_run(da, meta_for("quick"));
+    a.add(with_speedup("hcc", 1.20, 1.17, 1.23));
+    a.add(with_speedup("origin", 1.10, 1.08, 1.12));
+    a.add(with_speedup("ppc", 1.30, 1.28, 1.32));
+    auto b = ResultSet::open_for_run(db, meta_for("quick"));
+    b.add(with_speedup("hcc", 1.10, 1.05, 1.18));     // 8 % lower, intervals overlap: noise
+    b.add(with_speedup("origin", 1.00, 0.98, 1.02));  // 9 % lower, intervals apart: a regression
+    b.add(with_speedup("ppc", 1.29, 1.27, 1.31));     // within the threshold
+  }
+  auto a = ResultSet::load(da), b = ResultSet::load(db);
+  const CompareResult r = compare_result_sets(a, b, {"speedup"}, {FailRule::parse("speedup<-5%")});
+  ASSERT_EQ(r.violations.size(), 1u);
+  EXPECT_NE(r.violations[0].find("s/bounce1/origin/32"), std::string::npos) << r.violations[0];
+  ASSERT_EQ(r.within_noise.size(), 1u);
+  EXPECT_NE(r.within_noise[0].find("s/bounce1/hcc/32"), std::string::npos) << r.within_noise[0];
+  EXPECT_NE(r.report.find("1.2 [1.17, 1.23]"), std::string::npos) << r.report;
+  EXPECT_NE(r.report.find("**apart**"), std::string::npos);
+  // The same rule as a rise, and deterministic rules stay exact.
+  EXPECT_TRUE(compare_result_sets(a, b, {}, {FailRule::parse("speedup>+5%")}).violations.empty());
+  EXPECT_TRUE(compare_result_sets(a, b, {}, {FailRule::parse("anc!=")}).violations.empty());
+}
+
+// Result sets of format version 1 (point figures) stay readable, so older sets can be compared.
+TEST(ResultSet, ReadsFormatVersionOne) {
+  std::string dir = temp_dir("v1");
+  fs::create_directories(dir + "/cells");
+  write_file_atomically(dir + "/meta.json", R"({"format_version": 1, "matrix": {"preset": "quick"}})");
+  write_file_atomically(dir + "/cells/s__bounce1__hcc__32.json", R"({
+    "format_version": 1, "id": "s/bounce1/hcc/32", "scene": "s", "batch": "bounce1", "encoder": "hcc", "bits": 32,
+    "top_bits": 0, "variant": "robust", "access": "gather", "rays": 100, "status": "ok", "error": "",
+    "trace_mrays": 12.5, "speedup": 1.25, "net_speedup": 1.1, "overhead_pct": 12.0, "anc": 1.5,
+    "simt_lane_efficiency": 0.5, "simt_distinct_per_visit": 0.3, "simt_lane_efficiency_ratio": 1.2,
+    "simt_distinct_per_visit_ratio": 0.8, "hits_match_nosort": true, "order_is_permutation": true,
+    "keys_hash": "00000000000000aa", "order_hash": "00000000000000bb",
+    "encode_ms": {"median": 1, "min": 1, "max": 1}, "sort_ms": {"median": 2, "min": 2, "max": 2},
+    "trace_ms": {"median": 8, "min": 7, "max": 9}})");
+  auto rs = ResultSet::load(dir);
+  const CellRecord* c = rs.find("s/bounce1/hcc/32");
+  ASSERT_NE(c, nullptr);
+  EXPECT_DOUBLE_EQ(c->speedup.value, 1.25);
+  EXPECT_FALSE(c->speedup.has_interval());
+  EXPECT_DOUBLE_EQ(c->trace.median_ms, 8.0);
+  // A run does not resume into it: it would mix two formats in one set.
+  EXPECT_THROW(ResultSet::open_for_run(dir, meta_for("quick")), Error);
 }
 
 TEST(Matrix, RefusesImpossibleCombinationsBeforeWork) {
@@ -163,6 +223,15 @@ TEST(Matrix, RefusesImpossibleCombinationsBeforeWork) {
   m = matrix_preset("quick");
   m.encoders = {"mlhcc"};
   m.bits = {33};
+  EXPECT_THROW(validate_matrix(m), Error);
+  m = matrix_preset("quick");
+  m.access = "gather,scatter";
+  EXPECT_THROW(validate_matrix(m), Error);
+  m = matrix_preset("quick");
+  m.max_noise = 0;
+  EXPECT_THROW(validate_matrix(m), Error);
+  m = matrix_preset("quick");
+  m.max_time_s = -1;
   EXPECT_THROW(validate_matrix(m), Error);
   EXPECT_THROW(matrix_preset("nope"), Error);
   EXPECT_NO_THROW(validate_matrix(matrix_preset("quick")));
@@ -180,29 +249,40 @@ TEST(Matrix, EndToEndAndResume) {
   spec.resolution = "48x27";
   spec.reps = 1;
   spec.warmup = 0;
+  spec.max_time_s = 0;
   RunOptions opts;
   opts.out = temp_dir("quick");
   RunSummary s = run_matrix(spec, opts);
   EXPECT_FALSE(s.interrupted);
   EXPECT_EQ(s.cells_failed, 0u);
-  // 2 scenes x 3 batches x (NoSort + 10 encoders x (bits + top-k)); cornell runs 3 key lengths.
-  EXPECT_EQ(s.cells_run, 3u * (1 + 10 * 4) + 3u * (1 + 10 * 2));
+  // 2 scenes x 3 batches x (NoSort + 10 encoders x (bits + top-k) x 2 access modes); cornell runs 3
+  // key lengths.
+  EXPECT_EQ(s.cells_run, 3u * (1 + 10 * 4 * 2) + 3u * (1 + 10 * 2 * 2));
   auto rs = ResultSet::load(opts.out);
   for (auto& c : rs.cells()) {
     EXPECT_TRUE(c.ok()) << c.id() << ": " << c.error;
     EXPECT_TRUE(c.hits_match_nosort) << c.id();
     EXPECT_TRUE(c.order_is_permutation) << c.id();
+    EXPECT_EQ(c.rounds, 1u) << c.id();  // --reps 1 and no time to sample more
+    EXPECT_EQ(c.samples.at("nosort").size(), 1u) << c.id();
     if (c.encoder != kBaselineEncoder) {
       EXPECT_GE(c.anc, 1.0) << c.id();
       EXPECT_LE(c.anc, 32.0) << c.id();
       EXPECT_GT(c.trace_mrays, 0.0) << c.id();
+      EXPECT_EQ(c.samples.count("permute"), c.access == "permute" ? 1u : 0u) << c.id();
+      // One round has no interval: the figures say so rather than invent one.
+      EXPECT_FALSE(c.speedup.has_interval() && !c.same_order_as_nosort) << c.id();
     }
   }
   std::string tables = read_file(opts.out + "/tables.md");
   EXPECT_NE(tables.find("## Trace speed, bounce1 rays"), std::string::npos);
+  EXPECT_NE(tables.find("access permute"), std::string::npos);
+  EXPECT_NE(tables.find("## Gather against permute"), std::string::npos);
   EXPECT_NE(tables.find("## Key length, cornell"), std::string::npos);
   EXPECT_NE(tables.find("## Top-k sorting"), std::string::npos);
-  EXPECT_TRUE(fs::exists(opts.out + "/overhead-vs-gain-bounce1.png"));
+  EXPECT_NE(tables.find("## Noise floor"), std::string::npos);
+  EXPECT_TRUE(fs::exists(opts.out + "/overhead-vs-gain-bounce1-32b.png"));
+  EXPECT_TRUE(fs::exists(opts.out + "/overhead-vs-gain-bounce1-32b-permute.png"));
   // meta.json fingerprints every cell's keys and order.
   auto meta = nlohmann::json::parse(read_file(opts.out + "/meta.json"));
   ASSERT_TRUE(meta.contains("fingerprints"));
@@ -210,15 +290,62 @@ TEST(Matrix, EndToEndAndResume) {
   EXPECT_EQ(meta["fingerprints"]["cornell/bounce1/hcc/32"]["keys"], rs.find("cornell/bounce1/hcc/32")->keys_hash);
   RunSummary again = run_matrix(spec, opts);
   EXPECT_EQ(again.cells_run, 0u);
-  EXPECT_EQ(again.cells_skipped, s.cells_run - 2 * 3);  // NoSort cells are re-measured, not skipped
+  // Every cell carries its own NoSort traces, so NoSort cells are skipped like the others.
+  EXPECT_EQ(again.cells_skipped, s.cells_run);
   EXPECT_EQ(ResultSet::load(opts.out).cells().size(), rs.cells().size());
+}
+
+// The case that made the old runner report 1.9x: on primary rays every origin is the camera, so
+// Origin's keys are all equal, the stable sort keeps the generation order, and the sorted trace is
+// the NoSort trace. Such a cell is flagged and reports exactly 1, and what its rounds measured
+// (NoSort against the same order, paired) stays near 1 too: the protocol treats both arms alike.
+// A cell whose order does differ is not flagged. Every cell has an A/A interval.
+TEST(Matrix, IdenticalOrderIsNeverReportedAsASpeedup) {
+  MatrixSpec spec;
+  spec.scenes = {"detail-room"};
+  spec.batches = {"primary", "bounce1"};
+  spec.encoders = {"origin", "hcc"};
+  spec.bits = {32};
+  spec.resolution = "96x54";
+  spec.access = "gather,permute";
+  spec.reps = 12;
+  spec.max_time_s = 0.5;
+  RunOptions opts;
+  opts.out = temp_dir("same-order");
+  ASSERT_EQ(run_matrix(spec, opts).cells_failed, 0u);
+  auto rs = ResultSet::load(opts.out);
+  for (const std::string access : {"", "/permute"}) {
+    const CellRecord* same = rs.find("detail-room/primary/origin/32" + access);
+    ASSERT_NE(same, nullptr);
+    EXPECT_TRUE(same->same_order_as_nosort);
+    EXPECT_EQ(same->speedup.value, 1.0);
+    EXPECT_EQ(same->speedup.lo, 1.0);
+    EXPECT_EQ(same->speedup.hi, 1.0);
+    // Before the paired protocol this ratio was 1.4-1.9 at this size.
+    const Estimate measured = ratio_interval(same->samples.at("nosort"), same->samples.at("trace"));
+    EXPECT_GT(measured.value, 0.85) << access;
+    EXPECT_LT(measured.value, 1.18) << access;
+    const CellRecord* different = rs.find("detail-room/bounce1/origin/32" + access);
+    ASSERT_NE(different, nullptr);
+    EXPECT_FALSE(different->same_order_as_nosort);
+  }
+  for (const auto& c : rs.cells()) {
+    EXPECT_GE(c.rounds, 12u) << c.id();
+    EXPECT_TRUE(c.aa.has_interval()) << c.id();
+    EXPECT_TRUE(c.speedup.has_interval()) << c.id();
+    EXPECT_TRUE(c.stopped_by == "noise" || c.stopped_by == "time") << c.id() << " " << c.stopped_by;
+  }
+  const std::string tables = read_file(opts.out + "/tables.md");
+  EXPECT_NE(tables.find("(= NoSort)"), std::string::npos);
+  EXPECT_NE(tables.find("A/A calibration"), std::string::npos);
+  EXPECT_TRUE(nlohmann::json::parse(read_file(opts.out + "/meta.json")).contains("noise"));
 }
 
 // SIGKILL at several points, rerun after each: the final set equals an uninterrupted run's, each
 // cell once, and no file is corrupt.
 TEST(Matrix, KilledRunResumesToTheSameCells) {
-  std::vector<std::string> args = {"run", "--scenes", "cornell", "--batches", "bounce1,shadow0",
-                                   "--bits", "16,32", "--resolution", "40x30", "--reps", "1", "--warmup", "0"};
+  std::vector<std::string> args = {"run", "--scenes", "cornell", "--batches", "bounce1,shadow0", "--bits", "16,32",
+                                   "--resolution", "40x30", "--reps", "1", "--warmup", "0", "--max-time", "0"};
   std::string clean = temp_dir("clean"), killed = temp_dir("killed");
   auto with_out = [&](const std::string& out) {
     auto a = args;

@@ -191,7 +191,8 @@ TEST(ShardedRun, MergeOfShardsEqualsTheFullRunAndRefusesWhatIsNotOneRun) {
   fs::create_directories(root);
   const std::vector<std::string> matrix{"run",     "--scenes",     "cornell,detail-room", "--encoders",
                                         "hcc,origin,mlhcc", "--bits",  "16,32",         "--batches",
-                                        "primary,shadow0", "--resolution", "48x27", "--reps", "1", "--warmup", "0"};
+                                        "primary,shadow0", "--resolution", "48x27", "--reps", "1", "--warmup", "0",
+                                        "--max-time", "0"};
   auto run = [&](std::vector<std::string> extra) {
     std::vector<std::string> args = matrix;
     args.insert(args.end(), extra.begin(), extra.end());

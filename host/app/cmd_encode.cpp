@@ -4,9 +4,12 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
+#include <numeric>
 
 #include "app/commands.h"
 #include "app/options.h"
+#include "bench/protocol.h"
 #include "bvh/bvh.h"
 #include "encode/encode.h"
 #include "render/batches.h"
@@ -23,8 +26,7 @@ struct EncodeBenchArgs {
   std::string batch = "bounce1";
   std::vector<std::string> encoders;  // empty: all
   std::vector<unsigned> bits{16, 32, 64};
-  unsigned reps = 5;
-  unsigned warmup = 1;
+  ProtocolOptions protocol;
   bool verify = true;
   CommonOptions common;
 };
@@ -52,35 +54,76 @@ int run_encodebench(const EncodeBenchArgs& args) {
   if (encoders.empty()) encoders = all_encoders();
 
   const RayBatch& batch = rb->batch;
+  const auto n = static_cast<std::uint32_t>(batch.size());
   fmt::print("device   {} ({})\n", rt.info().name, rt.info().platform_name);
   fmt::print("scene    {}: {} triangles; batch {}: {} rays\n", scene.name, tris.size(), batch.name, batch.size());
+  fmt::print("timing   each encode paired with a trace of the same batch in the same rounds (docs/measurement.md): "
+             "ms = median [95 % interval], % trace = median of per-round encode / trace\n\n");
   DeviceEncoder enc(rt, bvh, bvh.bounds());
   Tracer tracer(rt, bvh);
   enc.warm_up();
-  Tracer::Run trace = tracer.run(batch.rays, nullptr, batch.any_hit(), args.warmup, args.reps);
-  fmt::print("trace    {:.2f} ms ({:.2f} MRays/s)\n\n", trace.median_ms, batch.size() / (trace.median_ms * 1e3));
-  fmt::print("{:<9} {:>4} {:>10} {:>10} {:>10} {:>10} {:>8}\n", "encoder", "bits", "ms", "MRays/s", "% trace", "distinct",
-             "host==");
+  std::vector<std::uint32_t> identity(n);
+  std::iota(identity.begin(), identity.end(), 0u);
+  cl::Buffer rays = rt.upload("rays of " + batch.name, batch.rays);
+  cl::Buffer order = rt.upload("identity order", identity);
+  cl::Buffer hits = rt.buffer("hits", std::max<std::size_t>(1, n) * sizeof(RsHit));
+  cl::Buffer keys = rt.buffer("keys", std::max<std::size_t>(1, n) * sizeof(std::uint64_t));
+  cl::Buffer values = rt.buffer("values", std::max<std::size_t>(1, n) * sizeof(std::uint32_t));
+  auto ms_text = [](const Timing& t) {
+    return std::isfinite(t.lo_ms) ? fmt::format("{:.3f} [{:.3f}, {:.3f}]", t.median_ms, t.lo_ms, t.hi_ms)
+                                  : fmt::format("{:.3f}", t.median_ms);
+  };
+  fmt::print("{:<9} {:>4} {:>28} {:>9} {:>24} {:>10} {:>8} {:>7}\n", "encoder", "bits", "encode ms", "MRays/s",
+             "% trace", "distinct", "host==", "rounds");
   int failures = 0;
   for (Encoder e : encoders)
     for (unsigned bits : args.bits) {
       if (!key_bits_problem(e, bits, enc.scene().params()).empty()) continue;
-      auto run = enc.run(e, bits, batch.rays, nullptr, args.warmup, args.reps);
+      enc.prepare(e, bits);
+      Measurement m;
+      m.arms = {{{"encode"}, [&] {
+                   const DeviceEncoder::Events ev = enc.enqueue(e, bits, rays, order, n, keys, values);
+                   ev.wait();
+                   return std::vector<double>{ev.ms()};
+                 }},
+                {{"trace"}, [&] {
+                   cl::Event ev = tracer.enqueue(rays, order, n, batch.any_hit(), hits);
+                   cl_call("waiting for the trace", [&] { ev.wait(); });
+                   return std::vector<double>{event_ms(ev)};
+                 }}};
+      m.targets = {[](const Series& s) { return ratio_interval(s.at("encode"), s.at("trace")); }};
+      const Outcome o = measure(m, args.protocol.settings(protocol_seed(fmt::format(
+                                       "{}/{}/{}/{}", scene.name, batch.name, encoder_name(e), bits))));
+      const Timing encode = Timing::of(o.series.at("encode"));
+      const Estimate share = ratio_interval(o.series.at("encode"), o.series.at("trace"));
+      // The keys of the last round (every round computes the same keys).
+      std::vector<std::uint64_t> device_keys;
+      if (bits > 32) {
+        rt.download("keys", keys, device_keys, n);
+      } else {
+        std::vector<std::uint32_t> k32;
+        rt.download("keys", keys, k32, n);
+        device_keys.assign(k32.begin(), k32.end());
+      }
       std::string check = "-";
       if (args.verify) {
         auto host = encode_on_host(e, bits, enc.scene(), batch.rays);
-        const bool same = host == run.keys;
+        const bool same = host == device_keys;
         check = same ? "yes" : "NO";
         failures += !same;
       }
-      std::vector<std::uint64_t> sorted = run.keys;
+      std::vector<std::uint64_t> sorted = device_keys;
       std::sort(sorted.begin(), sorted.end());
       const auto distinct = static_cast<std::size_t>(std::unique(sorted.begin(), sorted.end()) - sorted.begin());
-      fmt::print("{:<9} {:>4} {:>10.3f} {:>10.1f} {:>9.1f}% {:>10} {:>8}\n", encoder_name(e), bits, run.median_ms,
-                 run.median_ms > 0 ? batch.size() / (run.median_ms * 1e3) : 0.0, 100.0 * run.median_ms / trace.median_ms,
-                 distinct, check);
+      const std::string share_text =
+          share.has_interval() ? fmt::format("{:.1f}% [{:.1f}, {:.1f}]", 100 * share.value, 100 * share.lo, 100 * share.hi)
+                               : fmt::format("{:.1f}%", 100 * share.value);
+      fmt::print("{:<9} {:>4} {:>28} {:>9.1f} {:>24} {:>10} {:>8} {:>6}{}\n", encoder_name(e), bits, ms_text(encode),
+                 encode.median_ms > 0 ? batch.size() / (encode.median_ms * 1e3) : 0.0, share_text, distinct, check,
+                 o.rounds, o.stop == StopReason::Noise ? " " : "*");
       std::fflush(stdout);
     }
+  fmt::print("rounds * = stopped by --max-time before the % trace interval was within --max-noise\n");
   if (failures) {
     fmt::print(stderr, "raysort: {} encoder runs differ from the host twin\n", failures);
     return 1;
@@ -97,8 +140,7 @@ void register_encode_command(CLI::App& app) {
   cmd->add_option("--batch", args->batch, "batch name: primary, shadow<k>, bounce<k>")->capture_default_str();
   cmd->add_option("--encoders", args->encoders, "comma-separated encoders (default: all)")->delimiter(',');
   cmd->add_option("--bits", args->bits, "comma-separated key lengths")->delimiter(',')->capture_default_str();
-  cmd->add_option("--reps", args->reps, "timed repetitions (median reported)")->check(CLI::Range(1u, 1000u));
-  cmd->add_option("--warmup", args->warmup, "untimed runs before timing");
+  add_protocol_options(*cmd, args->protocol);
   cmd->add_flag("!--no-verify", args->verify, "skip the comparison with the host twin");
   add_common_options(*cmd, args->common);
   cmd->callback([args] { set_command_exit_code(run_encodebench(*args)); });

@@ -2,6 +2,7 @@
 #include <fmt/format.h>
 
 #include "app/commands.h"
+#include "bench/result_set.h"
 #include "bench/runner.h"
 #include "bench/shard.h"
 #include "encode/encode.h"
@@ -15,8 +16,9 @@ struct RunArgs {
   std::vector<std::string> scenes, batches, encoders;
   std::vector<unsigned> bits, top_bits;
   std::string resolution;
-  std::string variant;
+  std::string variant, access;
   unsigned spp = 0, reps = 0, warmup = 0, seed = 0;
+  double max_noise_pct = 0, max_time_s = 0;
   bool warmup_set = false;
   float lambda = -1, twopoint = -1;
   int direction_bits = -1;
@@ -38,8 +40,20 @@ void register_run_command(CLI::App& app) {
   cmd->add_option("--top-bits", a->top_bits, "also sort by only the highest k bits (top-k cells)")->delimiter(',');
   cmd->add_option("--resolution", a->resolution, "WxH");
   auto* spp_opt = cmd->add_option("--spp", a->spp, "samples per pixel");
-  auto* reps_opt = cmd->add_option("--reps", a->reps, "timed repetitions per cell");
-  cmd->add_option("--warmup", a->warmup, "untimed runs before timing")->each([a](const std::string&) { a->warmup_set = true; });
+  auto* reps_opt = cmd->add_option("--reps", a->reps,
+                                   "the fewest timed rounds per cell (default 6, the fewest with a 95 % interval); "
+                                   "more follow until --max-noise or --max-time is reached (docs/measurement.md)");
+  cmd->add_option("--warmup", a->warmup, "untimed rounds before timing")->each([a](const std::string&) { a->warmup_set = true; });
+  auto* noise_opt = cmd->add_option("--max-noise", a->max_noise_pct,
+                                    "stop sampling a cell once its speedup's 95 % interval is within +-this many "
+                                    "percent (default 2)");
+  auto* time_opt = cmd->add_option("--max-time", a->max_time_s,
+                                   "stop sampling a cell after this many seconds of rounds (past --reps) even if "
+                                   "--max-noise is not reached; the cell records that it stopped on time "
+                                   "(default 5; quick preset 0.3)");
+  cmd->add_option("--access", a->access,
+                  "ray access modes, comma-separated: gather (trace through the sorted order), permute (move the "
+                  "rays into sorted order first, timed as a stage), or all");
   auto* seed_opt = cmd->add_option("--seed", a->seed, "seed of the ray generator");
   cmd->add_option("--variant", a->variant,
                   "trace variants, comma-separated: robust (watertight, default), fast (Moller-Trumbore)");
@@ -48,7 +62,7 @@ void register_run_command(CLI::App& app) {
   cmd->add_option("--direction-bits", a->direction_bits, "HCC_DIR direction bits");
   cmd->add_option("--timeout", a->timeout_s,
                   "per-cell wall-clock limit in seconds (0: none); a cell over it is recorded as \"timeout\" "
-                  "(checked between repetitions: a kernel in flight runs to completion)");
+                  "(checked between the arms of a round: a kernel in flight runs to completion)");
   cmd->add_option("--out", a->opts.out, "result folder (default results/<device>/<preset>-<hash>)");
   cmd->add_option("--device", a->opts.device, "device index, cpu, gpu or part of its name (env RAYSORT_DEVICE)");
   cmd->add_option("--scene-root", a->opts.scene_root, "folder of the real scenes (env RAYSORT_SCENE_ROOT)");
@@ -58,7 +72,7 @@ void register_run_command(CLI::App& app) {
   cmd->add_option("--shard-plan", a->shard_plan,
                   "print which cells each of N shards would run, with their estimated costs, and exit")
       ->excludes(shard_opt);
-  cmd->callback([a, cmd, spp_opt, reps_opt, seed_opt] {
+  cmd->callback([a, cmd, spp_opt, reps_opt, seed_opt, noise_opt, time_opt] {
     MatrixSpec spec;
     if (!a->preset.empty()) {
       spec = matrix_preset(a->preset);
@@ -79,6 +93,9 @@ void register_run_command(CLI::App& app) {
     if (!a->top_bits.empty()) spec.top_bits = a->top_bits;
     if (!a->resolution.empty()) spec.resolution = a->resolution;
     if (!a->variant.empty()) spec.variant = a->variant;
+    if (!a->access.empty()) spec.access = a->access == "all" ? "gather,permute" : a->access;
+    if (noise_opt->count()) spec.max_noise = a->max_noise_pct / 100.0;
+    if (time_opt->count()) spec.max_time_s = a->max_time_s;
     // Given values are taken as given (--reps 0 is refused by validate_matrix, not ignored).
     if (spp_opt->count()) spec.spp = a->spp;
     if (reps_opt->count()) spec.reps = a->reps;
@@ -104,6 +121,13 @@ void register_run_command(CLI::App& app) {
     RunSummary s = run_matrix(spec, a->opts);
     fmt::print("{} cells run, {} already done (skipped), {} failed; results in {}\n", s.cells_run, s.cells_skipped,
                s.cells_failed, s.out_dir);
+    const NoiseSummary noise = summarize_noise(ResultSet::load(s.out_dir).cells());
+    if (noise.aa_intervals > 0)
+      fmt::print("noise: A/A calibration {} of {} intervals contain 1.00 ({:.1f} %); speedup interval half-width "
+                 "median {:.1f} %, 90th percentile {:.1f} %; cells stopped by time {}, by noise {}\n",
+                 noise.aa_containing_one, noise.aa_intervals, 100.0 * noise.aa_coverage(),
+                 100.0 * noise.median_half_width, 100.0 * noise.p90_half_width, noise.stopped_by_time,
+                 noise.stopped_by_noise);
     fmt::print("tables: {}/tables.md\n", s.out_dir);
     if (s.interrupted) {
       fmt::print(stderr, "interrupted: finished cells are saved; rerun the same command to resume\n");

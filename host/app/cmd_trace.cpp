@@ -8,11 +8,13 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <numeric>
 #include <optional>
 
 #include "app/commands.h"
 #include "app/options.h"
+#include "bench/protocol.h"
 #include "bvh/bvh.h"
 #include "cl/runtime.h"
 #ifdef RAYSORT_HAVE_EMBREE
@@ -30,54 +32,95 @@ namespace {
 struct TraceArgs {
   std::vector<std::string> scenes;
   CommonOptions common;
-  unsigned reps = 3;
-  unsigned warmup = 1;
+  ProtocolOptions protocol;
   std::string variant = "robust";
   std::string layout = "wide";
   std::string reference;  // "" or "embree"
 };
 
+// One batch traced by each variant (and Embree), all arms of the same rounds of the measurement
+// protocol (bench/protocol.h): their times and ratios are paired.
+struct BatchRun {
+  std::vector<std::vector<RsHit>> hits;  // per variant, ray order
+  std::vector<Timing> ms;                // per variant
+  std::vector<std::size_t> mismatches;   // per variant, against the host reference of that variant
+  std::size_t hit_count = 0;             // hits of the first variant's reference
+  Timing embree_ms;
+  std::vector<RsHit> embree_hits;
+  Outcome outcome;
+};
+
+std::string stage_of(const Tracer& t) { return std::string("ours:") + trace_variant_name(t.variant()); }
+
+BatchRun trace_batch(Runtime& rt, std::vector<Tracer>& tracers, const void* embree_scene, const Bvh& bvh,
+                     const ReferencedBatch& rb, const ProtocolSettings& settings) {
+  const RayBatch& b = rb.batch;
+  const auto n = static_cast<std::uint32_t>(b.size());
+  std::vector<std::uint32_t> identity(n);
+  std::iota(identity.begin(), identity.end(), 0u);
+  cl::Buffer rays = rt.upload("rays of " + b.name, b.rays);
+  cl::Buffer order = rt.upload("identity order", identity);
+  std::vector<cl::Buffer> hit_bufs;
+  Measurement m;
+  for (Tracer& t : tracers) {
+    hit_bufs.push_back(rt.buffer("hits", std::max<std::size_t>(1, n) * sizeof(RsHit)));
+    m.arms.push_back({{stage_of(t)}, [&, buf = hit_bufs.back()] {
+                        cl::Event ev = t.enqueue(rays, order, n, b.any_hit(), buf);
+                        cl_call("waiting for a trace of " + std::to_string(n) + " rays", [&] { ev.wait(); });
+                        return std::vector<double>{event_ms(ev)};
+                      }});
+    m.targets.push_back([name = stage_of(t)](const Series& s) { return median_interval(s.at(name)); });
+  }
+  BatchRun r;
 #ifdef RAYSORT_HAVE_EMBREE
-// Embree's run of one batch, timed as ours is (warmup, then the median over reps).
-struct EmbreeRun {
-  EmbreeScene::Run run;
-  double mrays = 0.0;
-  std::vector<HitAgreement> agreement;  // one per variant run, in the same order
-};
-
-EmbreeRun trace_embree(const EmbreeScene& embree, const ReferencedBatch& rb, const std::vector<Tracer::Run*>& ours,
-                       const TraceArgs& args) {
-  const RayBatch& b = rb.batch;
-  EmbreeRun e;
-  e.run = embree.run(b.rays, b.any_hit(), args.warmup, args.reps);
-  e.mrays = e.run.median_ms > 0 ? static_cast<double>(b.size()) / (e.run.median_ms * 1e3) : 0.0;
-  for (const Tracer::Run* r : ours) e.agreement.push_back(compare_with_embree(r->hits, e.run.hits, b.any_hit()));
-  return e;
-}
+  if (embree_scene) {
+    const auto& embree = *static_cast<const EmbreeScene*>(embree_scene);
+    m.arms.push_back({{"embree"}, [&] {
+                        const auto t0 = std::chrono::steady_clock::now();
+                        r.embree_hits = embree.trace(b.rays, b.any_hit());
+                        return std::vector<double>{
+                            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count()};
+                      }});
+    for (Tracer& t : tracers)
+      m.targets.push_back([name = stage_of(t)](const Series& s) { return ratio_interval(s.at("embree"), s.at(name)); });
+  }
+#else
+  (void)embree_scene;
 #endif
-
-struct VariantRun {
-  Tracer::Run run;
-  std::size_t mismatches = 0;  // device vs the host reference of the same variant
-  std::size_t hit_count = 0;
-  double mrays = 0.0;
-};
-
-VariantRun trace_variant(Tracer& tracer, const Bvh& bvh, const ReferencedBatch& rb, const TraceArgs& args) {
-  const RayBatch& b = rb.batch;
-  VariantRun v;
-  v.run = tracer.run(b.rays, nullptr, b.any_hit(), args.warmup, args.reps);
-  // generate_batches' reference hits come from the fast variant on the wide layout; other
-  // variants and layouts trace their own.
-  const bool fast = tracer.variant() == TraceVariant::Fast && tracer.layout() == TraceLayout::Wide;
-  std::vector<RsHit> own;
-  if (!fast) own = trace_reference(bvh, b.rays, nullptr, b.any_hit(), nullptr, tracer.variant(), tracer.layout());
-  const std::vector<RsHit>& ref = fast ? rb.reference_hits : own;
-  v.mismatches = count_hit_mismatches(v.run.hits, ref);
-  v.hit_count = std::count_if(ref.begin(), ref.end(), [](const RsHit& x) { return x.tri != RS_NO_HIT; });
-  v.mrays = v.run.median_ms > 0 ? static_cast<double>(b.size()) / (v.run.median_ms * 1e3) : 0.0;
-  return v;
+  if (tracers.size() == 2)
+    m.targets.push_back([a = stage_of(tracers[0]), b2 = stage_of(tracers[1])](const Series& s) {
+      return ratio_interval(s.at(a), s.at(b2));
+    });
+  r.outcome = measure(m, settings);
+  if (r.outcome.series.count("embree")) r.embree_ms = Timing::of(r.outcome.series.at("embree"));
+  for (std::size_t i = 0; i < tracers.size(); ++i) {
+    const Tracer& t = tracers[i];
+    std::vector<RsHit> hits;
+    rt.download("hits", hit_bufs[i], hits, n);
+    // generate_batches' reference hits come from the fast variant on the wide layout; other
+    // variants and layouts trace their own.
+    const bool fast = t.variant() == TraceVariant::Fast && t.layout() == TraceLayout::Wide;
+    std::vector<RsHit> own;
+    if (!fast) own = trace_reference(bvh, b.rays, nullptr, b.any_hit(), nullptr, t.variant(), t.layout());
+    const std::vector<RsHit>& ref = fast ? rb.reference_hits : own;
+    r.mismatches.push_back(count_hit_mismatches(hits, ref));
+    if (i == 0) r.hit_count = std::count_if(ref.begin(), ref.end(), [](const RsHit& x) { return x.tri != RS_NO_HIT; });
+    r.ms.push_back(Timing::of(r.outcome.series.at(stage_of(t))));
+    r.hits.push_back(std::move(hits));
+  }
+  return r;
 }
+
+// "12.34 [12.10, 12.60]": a median with its 95 % interval (just the median without one).
+std::string ms_text(const Timing& t) {
+  if (!std::isfinite(t.lo_ms)) return fmt::format("{:.2f}", t.median_ms);
+  return fmt::format("{:.2f} [{:.2f}, {:.2f}]", t.median_ms, t.lo_ms, t.hi_ms);
+}
+std::string ratio_text(const Estimate& e) {
+  if (!e.has_interval()) return e.has_value() ? fmt::format("{:.3f}", e.value) : "-";
+  return fmt::format("{:.3f} [{:.3f}, {:.3f}]", e.value, e.lo, e.hi);
+}
+double mrays(std::size_t rays, const Timing& t) { return t.median_ms > 0 ? static_cast<double>(rays) / (t.median_ms * 1e3) : 0.0; }
 
 // Rays whose hit triangle (or hit/miss) differs between two runs.
 std::size_t count_triangle_differences(const std::vector<RsHit>& a, const std::vector<RsHit>& b) {
@@ -124,81 +167,82 @@ int run_trace(const TraceArgs& args) {
     const TraceLayout layout = parse_trace_layout(args.layout);
     for (TraceVariant v : variants) tracers.emplace_back(rt, bvh, v, layout);
     fmt::print("kernels  built in {:.0f} ms (reported apart from trace times)\n", rt.build_ms() - build_before);
+    const void* embree_scene = nullptr;
 #ifdef RAYSORT_HAVE_EMBREE
     std::optional<EmbreeScene> embree;
     if (with_embree) {
       embree.emplace(tris);
+      embree_scene = &*embree;
       fmt::print("embree   Embree {}, {} threads, rtcIntersect1 / rtcOccluded1, build quality high: BVH built in {:.0f} ms "
                  "(ours {:.0f} ms = {:.2f}x Embree's)\n",
                  EmbreeScene::version(), embree->threads(), embree->build_ms(), bvh.build_ms,
                  embree->build_ms() > 0 ? bvh.build_ms / embree->build_ms() : 0.0);
     }
-    const char* emb_head = with_embree ? "   emb ms  emb MR/s" : "";
-#else
-    const char* emb_head = "";
 #endif
+    fmt::print("timing   every arm of a batch in the same rounds (docs/measurement.md): ms = median [95 % interval]; "
+               "ratios are medians of per-round ratios\n");
     if (both) {
-      fmt::print("variant  fast and robust, back to back on each batch ({} BVH)\n", trace_layout_name(layout));
-      fmt::print("{:<10} {:>10} {:>9} {:>9} {:>9} {:>9} {:>8} {:>10} {:>8} {:>11}{}{}\n", "batch", "rays", "fast ms",
-                 "fast MR/s", "rob ms", "rob MR/s", "rob/fast", "hits", "tri diff", "mismatches", emb_head,
-                 with_embree ? " fast/emb  rob/emb  same %  +ties %" : "");
+      fmt::print("variant  fast and robust, in the same rounds on each batch ({} BVH)\n", trace_layout_name(layout));
+      fmt::print("{:<9} {:>9} {:>24} {:>9} {:>24} {:>9} {:>24} {:>9} {:>8} {:>10} {:>7}{}\n", "batch", "rays", "fast ms",
+                 "fast MR/s", "robust ms", "rob MR/s", "robust/fast time", "hits", "tri diff", "mismatches", "rounds",
+                 with_embree ? "   emb ms  fast/emb speed  rob/emb speed  same %  +ties %" : "");
     } else {
       fmt::print("variant  {} ({} BVH)\n", trace_variant_name(variants[0]), trace_layout_name(layout));
-      fmt::print("{:<10} {:>10} {:>10} {:>10} {:>10} {:>11}{}{}\n", "batch", "rays", "ms", "MRays/s", "hits", "mismatches",
-                 emb_head, with_embree ? " ours/emb  same %  +ties %" : "");
+      fmt::print("{:<9} {:>9} {:>24} {:>9} {:>9} {:>10} {:>7}{}\n", "batch", "rays", "ms", "MRays/s", "hits",
+                 "mismatches", "rounds", with_embree ? "   emb ms  ours/emb speed  same %  +ties %" : "");
     }
 
     // The pipeline of DESIGN.md section 1, as far as the scene's effects ask.
     for (const ReferencedBatch& rb : generate_batches(scene, tris, bvh, gen)) {
       const RayBatch& b = rb.batch;
-      std::vector<VariantRun> runs;
-      for (Tracer& tracer : tracers) runs.push_back(trace_variant(tracer, bvh, rb, args));
+      const BatchRun run = trace_batch(rt, tracers, embree_scene, bvh, rb,
+                                       args.protocol.settings(protocol_seed(scene.name + "/" + b.name)));
       std::size_t mismatches = 0;
-      for (const VariantRun& r : runs) mismatches += r.mismatches;
-      // Embree's columns: its median ms and MRays/s, ours/Embree per variant, the lowest agreement.
+      for (std::size_t m : run.mismatches) mismatches += m;
+      // Embree's columns: its median ms, ours/Embree speed per variant (paired), the lowest agreement.
       std::string emb_cols;
       std::vector<std::string> emb_notes;
 #ifdef RAYSORT_HAVE_EMBREE
       if (embree) {
-        std::vector<Tracer::Run*> ours;
-        for (VariantRun& r : runs) ours.push_back(&r.run);
-        EmbreeRun e = trace_embree(*embree, rb, ours, args);
-        emb_cols = fmt::format(" {:>8.2f} {:>9.2f}", e.run.median_ms, e.mrays);
+        emb_cols = fmt::format(" {:>8.2f}", run.embree_ms.median_ms);
         double worst = 1.0, worst_ties = 1.0;
         bool below = false;
-        for (std::size_t i = 0; i < runs.size(); ++i) {
-          emb_cols += fmt::format(" {:>8.3f}", e.mrays > 0 ? runs[i].mrays / e.mrays : 0.0);
-          const HitAgreement& a = e.agreement[i];
+        for (std::size_t i = 0; i < tracers.size(); ++i) {
+          emb_cols += fmt::format(" {:>14}", ratio_text(ratio_interval(run.outcome.series.at("embree"),
+                                                                       run.outcome.series.at(stage_of(tracers[i])))));
+          const HitAgreement a = compare_with_embree(run.hits[i], run.embree_hits, b.any_hit());
           worst = std::min(worst, a.fraction());
           worst_ties = std::min(worst_ties, a.fraction_with_ties());
           below = below || a.fraction_with_ties() < kEmbreeMinAgreement;
           if (a.differences())
-            emb_notes.push_back(fmt::format("{:<10} {}{} of {} rays differ from Embree: {}", "",
+            emb_notes.push_back(fmt::format("{:<9} {}{} of {} rays differ from Embree: {}", "",
                                             both ? fmt::format("{}: ", trace_variant_name(tracers[i].variant())) : "",
                                             a.differences(), a.rays, a.describe()));
         }
         emb_cols += fmt::format(" {:>7.3f} {:>7.3f}", 100.0 * worst, 100.0 * worst_ties);
         if (below) {
           ++disagreeing_batches;
-          emb_notes.push_back(fmt::format("{:<10} below the required {:.1f} % agreement with Embree (same triangle or a tie)",
+          emb_notes.push_back(fmt::format("{:<9} below the required {:.1f} % agreement with Embree (same triangle or a tie)",
                                           "", 100.0 * kEmbreeMinAgreement));
         }
       }
 #endif
+      const std::string rounds = fmt::format("{}{}", run.outcome.rounds, run.outcome.stop == StopReason::Noise ? "" : "*");
       if (both) {
-        const VariantRun &f = runs[0], &r = runs[1];
-        fmt::print("{:<10} {:>10} {:>9.2f} {:>9.2f} {:>9.2f} {:>9.2f} {:>8.3f} {:>10} {:>8} {:>11}{}\n", b.name, b.size(),
-                   f.run.median_ms, f.mrays, r.run.median_ms, r.mrays, f.mrays > 0 ? r.mrays / f.mrays : 0.0,
-                   r.hit_count, count_triangle_differences(f.run.hits, r.run.hits), mismatches, emb_cols);
+        fmt::print("{:<9} {:>9} {:>24} {:>9.2f} {:>24} {:>9.2f} {:>24} {:>9} {:>8} {:>10} {:>7}{}\n", b.name, b.size(),
+                   ms_text(run.ms[0]), mrays(b.size(), run.ms[0]), ms_text(run.ms[1]), mrays(b.size(), run.ms[1]),
+                   ratio_text(ratio_interval(run.outcome.series.at(stage_of(tracers[1])),
+                                             run.outcome.series.at(stage_of(tracers[0])))),
+                   run.hit_count, count_triangle_differences(run.hits[0], run.hits[1]), mismatches, rounds, emb_cols);
       } else {
-        const VariantRun& r = runs[0];
-        fmt::print("{:<10} {:>10} {:>10.2f} {:>10.2f} {:>10} {:>11}{}\n", b.name, b.size(), r.run.median_ms, r.mrays,
-                   r.hit_count, mismatches, emb_cols);
+        fmt::print("{:<9} {:>9} {:>24} {:>9.2f} {:>9} {:>10} {:>7}{}\n", b.name, b.size(), ms_text(run.ms[0]),
+                   mrays(b.size(), run.ms[0]), run.hit_count, mismatches, rounds, emb_cols);
       }
       for (const auto& note : emb_notes) fmt::print("{}\n", note);
       std::fflush(stdout);
       total_mismatches += mismatches;
     }
+    fmt::print("rounds   * = stopped by --max-time before every interval was within --max-noise\n");
   }
   int code = 0;
   if (total_mismatches > 0) {
@@ -222,8 +266,7 @@ void register_trace_command(CLI::App& app) {
       ->required()
       ->delimiter(',');
   add_common_options(*cmd, args->common);
-  cmd->add_option("--reps", args->reps, "timed repetitions per batch (median reported)")->check(CLI::Range(1u, 1000u));
-  cmd->add_option("--warmup", args->warmup, "untimed runs before timing");
+  add_protocol_options(*cmd, args->protocol);
   cmd->add_option("--variant", args->variant,
                   "traversal arithmetic: robust (watertight), fast (Moller-Trumbore), or both side by side")
       ->check(CLI::IsMember({"robust", "fast", "both"}))

@@ -33,4 +33,30 @@ void add_common_options(CLI::App& cmd, CommonOptions& o) {
   cmd.add_option("--seed", o.seed, "seed of the counter-based ray generator");
 }
 
+ProtocolSettings ProtocolOptions::settings(std::uint64_t seed) const {
+  ProtocolSettings p;
+  p.warmup = warmup;
+  p.min_rounds = reps;
+  p.max_noise = max_noise_pct / 100.0;
+  p.max_time_s = max_time_s;
+  p.seed = seed;
+  return p;
+}
+
+void add_protocol_options(CLI::App& cmd, ProtocolOptions& o) {
+  cmd.add_option("--reps", o.reps,
+                 "the fewest timed rounds (6 is the fewest with a 95 % interval); more follow until --max-noise or "
+                 "--max-time (docs/measurement.md)")
+      ->check(CLI::Range(1u, 100000u))
+      ->capture_default_str();
+  cmd.add_option("--warmup", o.warmup, "untimed rounds before timing")->capture_default_str();
+  cmd.add_option("--max-noise", o.max_noise_pct,
+                 "stop once every figure's 95 % interval is within +-this many percent")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd.add_option("--max-time", o.max_time_s, "stop after this many seconds of rounds per batch even if --max-noise is not met")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+}
+
 }  // namespace raysort

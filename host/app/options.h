@@ -4,6 +4,7 @@
 
 #include <string>
 
+#include "bench/protocol.h"
 #include "render/rays.h"
 #include "scene/load.h"
 
@@ -20,5 +21,17 @@ struct CommonOptions {
 };
 
 void add_common_options(CLI::App& cmd, CommonOptions& o);
+
+// The measurement protocol's knobs (bench/protocol.h) for the commands that time one batch at a
+// time (trace, encodebench); `run` has its own, stored in the matrix.
+struct ProtocolOptions {
+  unsigned reps = 6;          // --reps: the fewest timed rounds
+  unsigned warmup = 1;        // --warmup: untimed rounds first
+  double max_noise_pct = 2;   // --max-noise: target half-width of the intervals, percent
+  double max_time_s = 3;      // --max-time: sampling budget per batch, seconds
+  ProtocolSettings settings(std::uint64_t seed) const;
+};
+
+void add_protocol_options(CLI::App& cmd, ProtocolOptions& o);
 
 }  // namespace raysort

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <limits>
 #include <functional>
 #include <map>
 #include <regex>
@@ -14,25 +15,43 @@ namespace raysort {
 namespace {
 
 using Getter = std::function<std::string(const CellRecord&)>;
-using Number = std::function<double(const CellRecord&)>;
+using Number = std::function<Estimate(const CellRecord&)>;
+
+// rays / time: the interval of a rate is the rate at the time interval's ends.
+Estimate mrays(const CellRecord& c) {
+  const Estimate t = c.trace.estimate();
+  const double r = static_cast<double>(c.rays) * 1e-3;
+  Estimate e{c.trace_mrays, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN(), t.n};
+  if (t.has_interval() && t.lo > 0) e.lo = r / t.hi, e.hi = r / t.lo;
+  return e;
+}
+Estimate exact(double v) { return {v, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN(), 0}; }
 
 const std::map<std::string, Number>& numeric_metrics() {
   static const std::map<std::string, Number> m = {
-      {"trace_mrays", [](const CellRecord& c) { return c.trace_mrays; }},
+      {"trace_mrays", mrays},
       {"speedup", [](const CellRecord& c) { return c.speedup; }},
       {"net_speedup", [](const CellRecord& c) { return c.net_speedup; }},
       {"overhead_pct", [](const CellRecord& c) { return c.overhead_pct; }},
-      {"encode_ms", [](const CellRecord& c) { return c.encode.median_ms; }},
-      {"sort_ms", [](const CellRecord& c) { return c.sort.median_ms; }},
-      {"trace_ms", [](const CellRecord& c) { return c.trace.median_ms; }},
-      {"anc", [](const CellRecord& c) { return c.anc; }},
-      {"simt_lane_efficiency", [](const CellRecord& c) { return c.simt_lane_efficiency; }},
-      {"simt_distinct_per_visit", [](const CellRecord& c) { return c.simt_distinct_per_visit; }},
-      {"simt_lane_efficiency_ratio", [](const CellRecord& c) { return c.simt_lane_efficiency_ratio; }},
-      {"simt_distinct_per_visit_ratio", [](const CellRecord& c) { return c.simt_distinct_per_visit_ratio; }},
-      {"rays", [](const CellRecord& c) { return static_cast<double>(c.rays); }},
+      {"aa", [](const CellRecord& c) { return c.aa; }},
+      {"encode_ms", [](const CellRecord& c) { return c.encode.estimate(); }},
+      {"sort_ms", [](const CellRecord& c) { return c.sort.estimate(); }},
+      {"permute_ms", [](const CellRecord& c) { return c.permute.estimate(); }},
+      {"trace_ms", [](const CellRecord& c) { return c.trace.estimate(); }},
+      {"anc", [](const CellRecord& c) { return exact(c.anc); }},
+      {"simt_lane_efficiency", [](const CellRecord& c) { return exact(c.simt_lane_efficiency); }},
+      {"simt_distinct_per_visit", [](const CellRecord& c) { return exact(c.simt_distinct_per_visit); }},
+      {"simt_lane_efficiency_ratio", [](const CellRecord& c) { return exact(c.simt_lane_efficiency_ratio); }},
+      {"simt_distinct_per_visit_ratio", [](const CellRecord& c) { return exact(c.simt_distinct_per_visit_ratio); }},
+      {"rays", [](const CellRecord& c) { return exact(static_cast<double>(c.rays)); }},
   };
   return m;
+}
+
+std::string shown(const Estimate& e) {
+  if (!e.has_value()) return "–";
+  if (!e.has_interval()) return fmt::format("{:.4g}", e.value);
+  return fmt::format("{:.4g} [{:.4g}, {:.4g}]", e.value, e.lo, e.hi);
 }
 
 const std::map<std::string, Getter>& text_metrics() {
@@ -108,17 +127,23 @@ CompareResult compare_result_sets(const ResultSet& a, const ResultSet& b, const 
       for (auto& n : comparable_metrics()) names += (names.empty() ? "" : ", ") + n;
       throw Error(fmt::format("unknown metric '{}'; metrics are: {}", metric, names));
     }
-    md += fmt::format("## {}\n\n| cell | A | B | B/A |\n|---|---:|---:|---:|\n", metric);
+    md += fmt::format("## {}\n\n| cell | A | B | B/A | intervals |\n|---|---:|---:|---:|---|\n", metric);
     for (auto& [id, x] : ma) {
       auto it = mb.find(id);
       if (it == mb.end()) continue;
       const CellRecord* y = it->second;
       if (numeric) {
-        double va = numeric_metrics().at(metric)(*x), vb = numeric_metrics().at(metric)(*y);
-        md += fmt::format("| {} | {:.4g} | {:.4g} | {} |\n", id, va, vb, va != 0 ? fmt::format("{:.3f}", vb / va) : "–");
+        const Estimate ea = numeric_metrics().at(metric)(*x), eb = numeric_metrics().at(metric)(*y);
+        const double va = ea.value, vb = eb.value;
+        const std::string overlap = !ea.has_interval() || !eb.has_interval() ? "–"
+                                    : ea.overlaps(eb)                        ? "overlap"
+                                                                             : "**apart**";
+        md += fmt::format("| {} | {} | {} | {} | {} |\n", id, shown(ea), shown(eb),
+                          va != 0 && std::isfinite(va) && std::isfinite(vb) ? fmt::format("{:.3f}", vb / va) : "–",
+                          overlap);
       } else {
         std::string va = text_metrics().at(metric)(*x), vb = text_metrics().at(metric)(*y);
-        md += fmt::format("| {} | {} | {} | {} |\n", id, va, vb, va == vb ? "same" : "**differs**");
+        md += fmt::format("| {} | {} | {} | {} | |\n", id, va, vb, va == vb ? "same" : "**differs**");
       }
     }
     md += "\n";
@@ -146,16 +171,34 @@ CompareResult compare_result_sets(const ResultSet& a, const ResultSet& b, const 
       if (it == mb.end()) continue;
       const CellRecord* y = it->second;
       if (numeric_metrics().count(rule.metric)) {
-        double va = numeric_metrics().at(rule.metric)(*x), vb = numeric_metrics().at(rule.metric)(*y);
+        const Estimate ea = numeric_metrics().at(rule.metric)(*x), eb = numeric_metrics().at(rule.metric)(*y);
+        const double va = ea.value, vb = eb.value;
         bool bad = false;
+        bool relative = false;
         switch (rule.kind) {
           case FailRule::AnyChange: bad = va != vb; break;
           case FailRule::AbsoluteChange: bad = std::abs(vb - va) > rule.threshold; break;
-          case FailRule::RelativeDrop: bad = va > 0 && (vb - va) / va < -rule.threshold; break;
-          case FailRule::RelativeRise: bad = va > 0 && (vb - va) / va > rule.threshold; break;
+          case FailRule::RelativeDrop:
+            relative = true;
+            bad = va > 0 && (vb - va) / va < -rule.threshold;
+            break;
+          case FailRule::RelativeRise:
+            relative = true;
+            bad = va > 0 && (vb - va) / va > rule.threshold;
+            break;
           case FailRule::Missing: break;
         }
-        if (bad) out.violations.push_back(fmt::format("{}: {} {} -> {} (rule {})", id, rule.metric, va, vb, rule.text));
+        if (bad && relative && ea.has_interval() && eb.has_interval() && ea.overlaps(eb)) {
+          out.within_noise.push_back(fmt::format("{}: {} {} -> {} (rule {}; the intervals overlap)", id, rule.metric,
+                                                 shown(ea), shown(eb), rule.text));
+          continue;
+        }
+        if (bad)
+          out.violations.push_back(fmt::format("{}: {} {} -> {} (rule {}{})", id, rule.metric, shown(ea), shown(eb),
+                                               rule.text,
+                                               relative && (!ea.has_interval() || !eb.has_interval())
+                                                   ? "; point rule: no interval in both sets"
+                                                   : relative ? "; the intervals do not overlap" : ""));
       } else {
         std::string va = text_metrics().at(rule.metric)(*x), vb = text_metrics().at(rule.metric)(*y);
         if (va != vb) out.violations.push_back(fmt::format("{}: {} {} -> {} (rule {})", id, rule.metric, va, vb, rule.text));
@@ -165,6 +208,10 @@ CompareResult compare_result_sets(const ResultSet& a, const ResultSet& b, const 
   if (!out.violations.empty()) {
     md += fmt::format("\n## Regressions: {}\n\n", out.violations.size());
     for (auto& v : out.violations) md += "- " + v + "\n";
+  }
+  if (!out.within_noise.empty()) {
+    md += fmt::format("\n## Past a threshold but within the noise (not fired): {}\n\n", out.within_noise.size());
+    for (auto& v : out.within_noise) md += "- " + v + "\n";
   }
   return out;
 }

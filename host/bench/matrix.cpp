@@ -34,24 +34,44 @@ nlohmann::json MatrixSpec::to_json() const {
           {"spp", spp},
           {"reps", reps},
           {"warmup", warmup},
+          {"max_noise", max_noise},
+          {"max_time_s", max_time_s},
           {"seed", seed},
           {"variant", variant},
+          {"access", access},
           {"twopoint_length_fraction", params.twopoint_length_fraction},
           {"had_lambda", params.had_lambda},
           {"direction_bits", params.direction_bits}};
 }
 
-std::vector<std::string> MatrixSpec::variant_list() const {
+namespace {
+// "a,b,,a" -> {"a", "b"}: the items of a comma-separated list, first occurrence kept.
+std::vector<std::string> split_list(const std::string& text) {
   std::vector<std::string> out;
   std::size_t start = 0;
-  while (start <= variant.size()) {
-    std::size_t comma = variant.find(',', start);
-    std::string item = variant.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+  while (start <= text.size()) {
+    std::size_t comma = text.find(',', start);
+    std::string item = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
     if (!item.empty() && std::find(out.begin(), out.end(), item) == out.end()) out.push_back(item);
     if (comma == std::string::npos) break;
     start = comma + 1;
   }
   return out;
+}
+}  // namespace
+
+std::vector<std::string> MatrixSpec::variant_list() const { return split_list(variant); }
+std::vector<std::string> MatrixSpec::access_list() const { return split_list(access); }
+
+ProtocolSettings MatrixSpec::protocol(const std::string& cell_id) const {
+  ProtocolSettings p;
+  p.warmup = warmup;
+  p.min_rounds = reps;
+  p.max_noise = max_noise;
+  p.max_time_s = max_time_s;
+  p.hard_limit_s = cell_timeout_s;
+  p.seed = protocol_seed(fmt::format("{}/{}", seed, cell_id));
+  return p;
 }
 
 std::vector<unsigned> MatrixSpec::bits_for(const std::string& scene) const {
@@ -76,8 +96,8 @@ MatrixSpec matrix_preset(const std::string& name) {
     m.key_length_scenes = {"detail-room"};
     m.key_length_bits = {16, 64};
     m.resolution = "320x180";
-    m.reps = 3;
-    m.warmup = 1;
+    m.access = "gather,permute";
+    m.max_time_s = 0.3;
     return m;
   }
   if (name == "paper") {
@@ -91,8 +111,7 @@ MatrixSpec matrix_preset(const std::string& name) {
     m.key_length_scenes = {"sibenik"};
     m.key_length_bits = {16, 64};
     m.resolution = "1920x1080";
-    m.reps = 3;
-    m.warmup = 1;
+    m.access = "gather,permute";
     return m;
   }
   throw Error(fmt::format("unknown preset '{}'; presets are: quick, paper", name));
@@ -106,6 +125,14 @@ void validate_matrix(const MatrixSpec& spec) {
   if (spec.bits.empty()) throw Error("no key bits selected (--bits N[,N...])");
   if (spec.spp == 0) throw Error("--spp must be at least 1");
   if (spec.reps == 0) throw Error("--reps must be at least 1");
+  if (!(spec.max_noise > 0) || !std::isfinite(spec.max_noise))
+    throw Error(fmt::format("--max-noise {}: must be a percentage above 0, e.g. 2", spec.max_noise * 100));
+  if (!(spec.max_time_s >= 0) || !std::isfinite(spec.max_time_s))
+    throw Error(fmt::format("--max-time {}: must be a number of seconds, 0 or more", spec.max_time_s));
+  if (spec.access_list().empty()) throw Error("--access: name at least one access mode (gather, permute)");
+  for (const auto& a : spec.access_list())
+    if (a != "gather" && a != "permute")
+      throw Error(fmt::format("--access '{}': the access modes are gather and permute", a));
   if (spec.variant_list().empty()) throw Error("--variant: name at least one trace variant (robust, fast)");
   for (const auto& v : spec.variant_list())
     if (v != "robust" && v != "fast")

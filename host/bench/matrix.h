@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/protocol.h"
 #include "encode/encode.h"
 
 namespace raysort {
@@ -23,13 +24,27 @@ struct MatrixSpec {
   std::vector<unsigned> top_bits;     // extra top-k sorted cells at the largest key length (0: none)
   std::string resolution = "1920x1080";
   unsigned spp = 1;
-  unsigned reps = 5;
-  unsigned warmup = 1;
   unsigned seed = 1;
   std::string variant = "robust";     // trace variants, comma-separated: robust (watertight), fast
   std::vector<std::string> variant_list() const;  // "robust,fast" -> {"robust", "fast"}
+  // Ray access modes, comma-separated (docs/measurement.md): gather (the trace reads rays through
+  // the sorted order) and permute (a kernel moves the rays into sorted order first, timed as its
+  // own stage). NoSort runs once per batch and variant: its order is the identity either way.
+  std::string access = "gather";
+  std::vector<std::string> access_list() const;
   EncoderParams params;
-  double cell_timeout_s = 0;          // 0: none
+
+  // The measurement protocol of every cell (bench/protocol.h): warm-up rounds, the fewest timed
+  // rounds (--reps), and the stopping rule: stop once the speedup interval's relative half-width
+  // is at most max_noise (--max-noise, in percent on the command line) or after max_time_s of
+  // sampling (--max-time).
+  unsigned warmup = 1;
+  unsigned reps = 6;
+  double max_noise = 0.02;
+  double max_time_s = 5.0;
+  double cell_timeout_s = 0;          // hard limit per cell (--timeout); 0: none
+  // The protocol settings of one cell; the arm order is seeded from the run's seed and the cell id.
+  ProtocolSettings protocol(const std::string& cell_id) const;
 
   nlohmann::json to_json() const;     // "matrix" in meta.json: what must match to resume
   // The key lengths a scene runs.
@@ -42,7 +57,8 @@ MatrixSpec matrix_preset(const std::string& name);
 std::vector<std::string> preset_names();
 
 // Checks the matrix before any work starts: encoder names, key bits valid per encoder, batch
-// names well formed, resolution non-zero. Throws Error naming the offending value and the valid ones.
+// names well formed, resolution non-zero, trace variants and access modes known, protocol
+// settings in range. Throws Error naming the offending value and the valid ones.
 void validate_matrix(const MatrixSpec& spec);
 
 // "1920x1080" -> width, height (throws Error).

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <map>
 #include <set>
+#include <tuple>
 
 namespace raysort {
 
@@ -30,7 +31,30 @@ class Chart {
   void line(double xa, double ya, double xb, double yb, const float* c, int width = 2) {
     for (int d = 0; d < width; ++d) IBA::render_line(buf_, px(xa), py(ya) + d, px(xb), py(yb) + d, {c, 3});
   }
-  void marker(double x, double y, const float* c) { IBA::render_box(buf_, px(x) - 4, py(y) - 4, px(x) + 4, py(y) + 4, {c, 3}, true); }
+  // A marker of one of kShapes shapes at data (x, y); shapes tell scenes apart where colours tell
+  // encoders apart.
+  void marker(double x, double y, const float* c, int shape = 0) { marker_px(px(x), py(y), c, shape); }
+  void marker_px(int x, int y, const float* c, int shape) {
+    auto seg = [&](int xa, int ya, int xb, int yb) {
+      for (int d = 0; d < 2; ++d) IBA::render_line(buf_, xa + d, ya, xb + d, yb, {c, 3});
+    };
+    const int r = 5;
+    switch (shape % kShapes) {
+      case 0: IBA::render_box(buf_, x - r + 1, y - r + 1, x + r - 1, y + r - 1, {c, 3}, true); break;  // square
+      case 1: seg(x, y - r, x - r, y + r), seg(x - r, y + r, x + r, y + r), seg(x + r, y + r, x, y - r); break;  // triangle
+      case 2: seg(x, y - r, x + r, y), seg(x + r, y, x, y + r), seg(x, y + r, x - r, y), seg(x - r, y, x, y - r); break;  // diamond
+      case 3: seg(x - r, y - r, x + r, y + r), seg(x - r, y + r, x + r, y - r); break;  // x
+      case 4: seg(x - r, y, x + r, y), seg(x, y - r, x, y + r); break;                  // +
+      case 5: IBA::render_box(buf_, x - r, y - r, x + r, y + r, {c, 3}, false); break;  // hollow square
+    }
+  }
+  // A vertical error bar from y0 to y1 at x, with caps.
+  void error_bar(double x, double y0, double y1, const float* c) {
+    IBA::render_line(buf_, px(x), py(y0), px(x), py(y1), {c, 3});
+    IBA::render_line(buf_, px(x) - 3, py(y0), px(x) + 3, py(y0), {c, 3});
+    IBA::render_line(buf_, px(x) - 3, py(y1), px(x) + 3, py(y1), {c, 3});
+  }
+  static constexpr int kShapes = 6;
   void text(int x, int y, const std::string& s, int size = 14, const float* c = kBlack,
             OIIO::ImageBufAlgo::TextAlignX ax = OIIO::ImageBufAlgo::TextAlignX::Left) {
     if (font_.empty()) return;
@@ -82,36 +106,56 @@ std::string file_safe(std::string s) {
   return s;
 }
 
+// The speedup a plot shows for a cell: only ok encoder cells whose order differs from NoSort's.
+bool plotted(const CellRecord& c) {
+  return c.ok() && c.encoder != kBaselineEncoder && !c.same_order_as_nosort && c.speedup.has_value();
+}
+double low_of(const Estimate& e) { return e.has_interval() ? e.lo : e.value; }
+double high_of(const Estimate& e) { return e.has_interval() ? e.hi : e.value; }
+
+// "-fast", "-permute": the parts of a cell's identity a plot file name carries beyond scene,
+// batch and bits (as CellRecord::id does: nothing for the defaults).
+std::string facet_suffix(const std::string& variant, const std::string& access) {
+  return (variant != "robust" ? "-" + variant : std::string()) + (access != "gather" ? "-" + access : std::string());
+}
+
 }  // namespace
 
 std::vector<std::string> write_plots(const std::vector<CellRecord>& cells, const std::string& dir) {
   std::vector<std::string> written;
-  std::vector<std::string> encoders;
-  std::set<std::pair<std::string, std::string>> scene_batches;
-  std::set<std::string> batches;
+  std::vector<std::string> encoders, scenes;
+  std::set<std::tuple<std::string, std::string, std::string, std::string>> scene_batch_facets;  // scene, batch, variant, access
+  std::set<std::tuple<std::string, unsigned, std::string, std::string>> batch_facets;          // batch, bits, variant, access
   for (auto& c : cells) {
-    if (c.encoder != kBaselineEncoder && std::find(encoders.begin(), encoders.end(), c.encoder) == encoders.end())
-      encoders.push_back(c.encoder);
-    scene_batches.insert({c.scene, c.batch});
-    batches.insert(c.batch);
+    if (!plotted(c)) continue;
+    if (std::find(encoders.begin(), encoders.end(), c.encoder) == encoders.end()) encoders.push_back(c.encoder);
+    if (std::find(scenes.begin(), scenes.end(), c.scene) == scenes.end()) scenes.push_back(c.scene);
+    scene_batch_facets.insert({c.scene, c.batch, c.variant, c.access});
+    if (c.top_bits == 0) batch_facets.insert({c.batch, c.bits, c.variant, c.access});
   }
+  auto shape_of = [&](const std::string& scene) {
+    return static_cast<int>(std::find(scenes.begin(), scenes.end(), scene) - scenes.begin());
+  };
 
-  // Speedup against key bits, per scene and batch with more than one key length.
-  for (auto& [scene, batch] : scene_batches) {
-    std::map<std::string, std::map<unsigned, double>> series;
+  // Speedup against key bits with 95 % intervals, per scene, batch, variant and access mode with
+  // more than one key length.
+  for (auto& [scene, batch, variant, access] : scene_batch_facets) {
+    std::map<std::string, std::map<unsigned, const CellRecord*>> series;
     std::set<unsigned> bits;
     double ymax = 1.0, ymin = 1.0;
     for (auto& c : cells)
-      if (c.scene == scene && c.batch == batch && c.ok() && c.encoder != kBaselineEncoder && c.top_bits == 0) {
-        series[c.encoder][c.bits] = c.speedup;
+      if (plotted(c) && c.scene == scene && c.batch == batch && c.variant == variant && c.access == access &&
+          c.top_bits == 0) {
+        series[c.encoder][c.bits] = &c;
         bits.insert(c.bits);
-        ymax = std::max(ymax, c.speedup);
-        ymin = std::min(ymin, c.speedup);
+        ymax = std::max(ymax, high_of(c.speedup));
+        ymin = std::min(ymin, low_of(c.speedup));
       }
     if (bits.size() < 2) continue;
     Chart ch(900, 560, *bits.begin() - 4.0, *bits.rbegin() + 4.0, std::floor(ymin * 10) / 10, std::ceil(ymax * 10) / 10 + 0.05);
-    ch.axes(fmt::format("{} {}: trace speedup vs NoSort against key bits", scene, batch), "key bits", "speedup",
-            std::vector<double>(bits.begin(), bits.end()));
+    ch.axes(fmt::format("{} {}{}: trace speedup vs NoSort (95 % interval) against key bits", scene, batch,
+                        facet_suffix(variant, access)),
+            "key bits", "speedup", std::vector<double>(bits.begin(), bits.end()));
     std::size_t i = 0;
     for (auto& e : encoders) {
       auto it = series.find(e);
@@ -120,58 +164,82 @@ std::vector<std::string> write_plots(const std::vector<CellRecord>& cells, const
         continue;
       }
       const float* col = color(i);
+      // Encoders side by side within a key length, so that their error bars do not hide each other.
+      const double dx = (static_cast<double>(i) - 0.5 * static_cast<double>(encoders.size() - 1)) * 0.5;
       double px = 0, py = 0;
       bool first = true;
-      for (auto& [b, s] : it->second) {
-        if (!first) ch.line(px, py, b, s, col);
-        ch.marker(b, s, col);
-        px = b, py = s, first = false;
+      for (auto& [b, c] : it->second) {
+        const double x = b + dx, y = c->speedup.value;
+        if (!first) ch.line(px, py, x, y, col);
+        if (c->speedup.has_interval()) ch.error_bar(x, c->speedup.lo, c->speedup.hi, col);
+        ch.marker(x, y, col, static_cast<int>(i));
+        px = x, py = y, first = false;
       }
-      ch.text(900 - 160, 70 + 20 * static_cast<int>(i), e, 14, col);
+      ch.marker_px(900 - 165, 65 + 20 * static_cast<int>(i), col, static_cast<int>(i));
+      ch.text(900 - 152, 70 + 20 * static_cast<int>(i), e, 14, col);
       ++i;
     }
-    std::string name = fmt::format("speed-vs-bits-{}-{}.png", file_safe(scene), file_safe(batch));
+    std::string name =
+        fmt::format("speed-vs-bits-{}-{}{}.png", file_safe(scene), file_safe(batch), facet_suffix(variant, access));
     if (ch.write((std::filesystem::path(dir) / name).string())) written.push_back(name);
   }
 
-  // Overhead against gain, per batch, at every key length run.
-  for (auto& batch : batches) {
+  // Overhead against gain, per batch, key length, variant and access mode: colour = encoder,
+  // shape = scene, error bar = the speedup's 95 % interval.
+  for (auto& [batch, bits, variant, access] : batch_facets) {
+    auto in_facet = [&](const CellRecord& c) {
+      return plotted(c) && c.batch == batch && c.bits == bits && c.top_bits == 0 && c.variant == variant &&
+             c.access == access;
+    };
+    // Overhead relative to the NoSort trace time: (encode + sort [+ permute]) / (trace · speedup).
+    auto overhead_x = [](const CellRecord& c) { return c.speedup.value > 0 ? c.overhead_pct.value / c.speedup.value : 0; };
     double xmax = 10, ymax = 1.0, ymin = 1.0;
     for (auto& c : cells)
-      if (c.batch == batch && c.ok() && c.encoder != kBaselineEncoder) {
-        // Overhead relative to the NoSort trace time: (encode + sort) / (trace · speedup).
-        double rel = c.speedup > 0 ? c.overhead_pct / c.speedup : 0;
-        xmax = std::max(xmax, rel);
-        ymax = std::max(ymax, c.speedup);
-        ymin = std::min(ymin, c.speedup);
+      if (in_facet(c)) {
+        xmax = std::max(xmax, overhead_x(c));
+        ymax = std::max(ymax, high_of(c.speedup));
+        ymin = std::min(ymin, low_of(c.speedup));
       }
     xmax = std::ceil(xmax / 10) * 10;
     Chart ch(900, 560, 0, xmax, std::floor(ymin * 10) / 10, std::ceil(ymax * 10) / 10 + 0.05);
     std::vector<double> xt;
     for (int k = 0; k <= 5; ++k) xt.push_back(xmax * k / 5);
-    ch.axes(fmt::format("{}: what ordering costs (x) against what it buys (y)", batch),
-            "encode + sort, % of NoSort trace time", "trace speedup", xt);
+    ch.axes(fmt::format("{}, {}-bit keys{}: what ordering costs (x) against what it buys (y)", batch, bits,
+                        facet_suffix(variant, access)),
+            access == "permute" ? "encode + sort + permute, % of NoSort trace time" : "encode + sort, % of NoSort trace time",
+            "trace speedup", xt);
     // Break-even: net speedup = 1 where overhead/T0 = 1 - 1/s, i.e. s = 1 / (1 - x/100).
     const float grey[3] = {0.6f, 0.6f, 0.6f};
     double lx = 0, ly = 1;
     for (int k = 1; k <= 100; ++k) {
       double x = xmax * k / 100;
       if (x >= 99) break;
-      double s = 1.0 / (1.0 - x / 100.0);
-      if (s > std::ceil(ymax * 10) / 10 + 0.05) break;
-      ch.line(lx, ly, x, s, grey, 1);
-      lx = x, ly = s;
+      double sp = 1.0 / (1.0 - x / 100.0);
+      if (sp > std::ceil(ymax * 10) / 10 + 0.05) break;
+      ch.line(lx, ly, x, sp, grey, 1);
+      lx = x, ly = sp;
     }
-    ch.text(900 - 160, 70 + 20 * static_cast<int>(encoders.size()) + 10, "net speedup = 1", 13, grey);
+    int legend_y = 70;
     std::size_t i = 0;
     for (auto& e : encoders) {
       const float* col = color(i);
       for (auto& c : cells)
-        if (c.batch == batch && c.ok() && c.encoder == e) ch.marker(c.speedup > 0 ? c.overhead_pct / c.speedup : 0, c.speedup, col);
-      ch.text(900 - 160, 70 + 20 * static_cast<int>(i), e, 14, col);
+        if (in_facet(c) && c.encoder == e) {
+          if (c.speedup.has_interval()) ch.error_bar(overhead_x(c), c.speedup.lo, c.speedup.hi, col);
+          ch.marker(overhead_x(c), c.speedup.value, col, shape_of(c.scene));
+        }
+      ch.text(900 - 160, legend_y, e, 14, col);
+      legend_y += 20;
       ++i;
     }
-    std::string name = fmt::format("overhead-vs-gain-{}.png", file_safe(batch));
+    legend_y += 10;
+    for (auto& sc : scenes) {
+      ch.marker_px(900 - 155, legend_y - 5, Chart::kBlack, shape_of(sc));
+      ch.text(900 - 143, legend_y, sc, 13);
+      legend_y += 18;
+    }
+    ch.text(900 - 160, legend_y + 10, "net speedup = 1", 13, grey);
+    std::string name = fmt::format("overhead-vs-gain-{}-{}b{}.png", file_safe(batch), bits, facet_suffix(variant, access));
     if (ch.write((std::filesystem::path(dir) / name).string())) written.push_back(name);
   }
   return written;

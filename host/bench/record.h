@@ -1,22 +1,27 @@
 #pragma once
-// One record per benchmark cell (scene × batch × encoder × bits): the single record type behind
-// every table, plot, CSV/JSON row and comparison (no figure is computed a second way).
+// One record per benchmark cell (scene × batch × encoder × bits × variant × access): the single
+// record type behind every table, plot, CSV/JSON row and comparison (no figure is computed a
+// second way).
 #include <nlohmann/json.hpp>
 
 #include <cstdint>
 #include <string>
 #include <vector>
 
-#include "util/timing.h"
+#include "bench/protocol.h"
 
 namespace raysort {
 
-// Bump when the meaning or layout of a field changes; readers refuse other versions clearly.
-constexpr int kResultFormatVersion = 1;
+// Bump when the meaning or layout of a field changes; readers refuse versions they do not know.
+//   1: point speedups, timings as median/min/max.
+//   2: paired measurement (bench/protocol.h): speedups with 95 % intervals, the A/A check, the
+//      stopping rule's outcome and the raw per-round samples. Version 1 records are still read
+//      (their figures have no intervals).
+constexpr int kResultFormatVersion = 2;
+constexpr int kOldestReadableFormatVersion = 1;
 
 // The encoder name of the baseline cells (rays traced in generation order): encoder_name(NoSort).
 inline constexpr const char* kBaselineEncoder = "nosort";
-
 
 struct CellRecord {
   // Identity of the cell.
@@ -24,22 +29,39 @@ struct CellRecord {
   unsigned bits = 0;       // key bits (0 for NoSort)
   unsigned top_bits = 0;   // sort by the highest top_bits only (0: all bits)
   std::string variant = "robust";  // trace variant ("robust" default, "fast")
-  std::string access = "gather";   // rays read through the order (gather) or permuted
+  std::string access = "gather";   // rays read through the order (gather) or permuted first
   std::uint64_t rays = 0;
 
   // Outcome.
   std::string status = "ok";  // "ok", "failed", "timeout"
   std::string error;          // why, when not ok
 
-  // Timings (OpenCL profiling events; median and range over repetitions after warm-up).
-  Timing encode, sort, trace;
+  // Timings (OpenCL profiling events, one sample per round of the protocol): median, its 95 %
+  // interval and the range. trace is this cell's trace (of the permuted rays in a permute cell);
+  // nosort_trace the NoSort trace measured in the same rounds.
+  Timing encode, sort, permute, trace, nosort_trace;
 
-  // Derived figures (the paper's Tables 2-7 columns).
-  double trace_mrays = 0.0;      // rays / trace median
-  double speedup = 0.0;          // NoSort trace median / this trace median (same batch)
-  double net_speedup = 0.0;      // NoSort trace / (encode + sort + trace)
-  double overhead_pct = 0.0;     // (encode + sort) / trace · 100
-  double anc = 0.0;              // distinct keys per 32 consecutive sorted rays
+  // Derived figures (the paper's Tables 2-7 columns), each a paired estimate over the rounds.
+  double trace_mrays = 0.0;  // rays / trace median
+  Estimate speedup;          // NoSort trace / trace, per round. Exactly 1 when same_order_as_nosort
+  Estimate net_speedup;      // NoSort trace / (encode + sort + permute + trace), per round
+  Estimate overhead_pct;     // (encode + sort + permute) / trace · 100, per round
+  // The A/A check: a second NoSort trace of the same rounds / the NoSort trace. Its interval
+  // should contain 1 in about 95 % of cells; the result set reports how often it does.
+  Estimate aa;
+  // The sorted order equals the generation order (e.g. Origin on primary rays, whose origins are
+  // all the camera): the same rays in the same order were traced, so no speedup is reported.
+  bool same_order_as_nosort = false;
+
+  // The stopping rule (bench/protocol.h): timed rounds, what ended them ("noise", "time",
+  // "rounds") and the speedup interval's relative half-width then.
+  unsigned rounds = 0;
+  std::string stopped_by;
+  double noise = 0.0;
+  // Raw samples, one per round: "nosort", "aa", "encode", "sort", "permute", "trace" (ms).
+  Series samples;
+
+  double anc = 0.0;  // distinct keys per 32 consecutive sorted rays; NoSort: 0 (no keys)
   double simt_lane_efficiency = 0.0;
   double simt_distinct_per_visit = 0.0;
   double simt_lane_efficiency_ratio = 0.0;      // vs NoSort on the same batch
@@ -56,7 +78,7 @@ struct CellRecord {
   std::string keys_hash;   // FNV-1a 64 of the key array (generation order), hex
   std::string order_hash;  // FNV-1a 64 of the sorted order, hex
 
-  std::string id() const;  // "scene/batch/encoder/bits[/topK]"
+  std::string id() const;  // "scene/batch/encoder/bits[/topK][/variant][/access]"
   bool ok() const { return status == "ok"; }
 };
 

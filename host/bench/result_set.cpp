@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <filesystem>
 
 #include "bench/plots.h"
@@ -20,12 +21,18 @@ std::string cell_file_name(const std::string& id) {
   return s + ".json";
 }
 
-void check_version(const nlohmann::json& meta, const std::string& path) {
+// Reading accepts every version this raysort knows (older sets stay comparable); a run resumes
+// only into a set of the current version (for_run).
+void check_version(const nlohmann::json& meta, const std::string& path, bool for_run) {
   int v = meta.value("format_version", 0);
-  if (v != kResultFormatVersion)
-    throw Error(fmt::format("{}: result format version {} but this raysort reads version {}; "
-                            "rerun with this version into a new --out folder, or use the raysort that wrote it",
+  if (for_run && v != kResultFormatVersion)
+    throw Error(fmt::format("{}: result format version {} but this raysort writes version {}; "
+                            "run into a new --out folder, or resume with the raysort that wrote it",
                             path, v, kResultFormatVersion));
+  if (v < kOldestReadableFormatVersion || v > kResultFormatVersion)
+    throw Error(fmt::format("{}: result format version {} but this raysort reads versions {} to {}; "
+                            "rerun with this version into a new --out folder, or use the raysort that wrote it",
+                            path, v, kOldestReadableFormatVersion, kResultFormatVersion));
 }
 
 void read_cells(const std::string& dir, std::map<std::string, CellRecord>& cells) {
@@ -91,7 +98,7 @@ ResultSet ResultSet::open_for_run(const std::string& dir, const nlohmann::json& 
     } catch (const nlohmann::json::exception& e) {
       throw Error(fmt::format("{}: not valid JSON ({}); choose another --out folder", meta_path.string(), e.what()));
     }
-    check_version(old, meta_path.string());
+    check_version(old, meta_path.string(), true);
     if (old.value("matrix", nlohmann::json()) != meta.value("matrix", nlohmann::json()))
       throw Error(fmt::format("{} holds results of a different matrix configuration; choose another --out folder "
                               "(or delete it to start over)",
@@ -116,7 +123,7 @@ ResultSet ResultSet::load(const std::string& dir) {
   } catch (const nlohmann::json::exception& e) {
     throw Error(fmt::format("{}: not valid JSON ({})", meta_path.string(), e.what()));
   }
-  check_version(rs.meta_, meta_path.string());
+  check_version(rs.meta_, meta_path.string(), false);
   read_cells(dir, rs.cells_);
   return rs;
 }
@@ -168,11 +175,79 @@ void ResultSet::write_views() const {
   nlohmann::json fingerprints = nlohmann::json::object();
   for (auto& c : all) fingerprints[c.id()] = {{"keys", c.keys_hash}, {"order", c.order_hash}};
   meta["fingerprints"] = fingerprints;
+  meta["noise"] = summarize_noise(all).to_json();
   write_file_atomically((fs::path(dir_) / "meta.json").string(), meta.dump(2) + "\n");
   write_file_atomically((fs::path(dir_) / "cells.csv").string(), csv);
   write_file_atomically((fs::path(dir_) / "tables.md").string(), render_tables(all, meta_));
 }
 
 void ResultSet::write_plots() const { raysort::write_plots(cells(), dir_); }
+
+NoiseSummary summarize_noise(const std::vector<CellRecord>& cells) {
+  NoiseSummary n;
+  std::map<std::string, const CellRecord*> by_id;
+  for (const auto& c : cells) by_id[c.id()] = &c;
+  std::vector<double> widths;
+  std::vector<unsigned> rounds;
+  for (const auto& c : cells) {
+    if (!c.ok() || c.rounds == 0) continue;
+    // A permute cell measured in the rounds of its gather sibling repeats that cell's A/A interval.
+    bool shared_rounds = false;
+    if (c.access == "permute") {
+      CellRecord sibling = c;
+      sibling.access = "gather";
+      auto it = by_id.find(sibling.id());
+      shared_rounds = it != by_id.end() && it->second->ok() && it->second->samples.count("nosort") &&
+                      c.samples.count("nosort") && it->second->samples.at("nosort") == c.samples.at("nosort");
+    }
+    if (!shared_rounds) {
+      rounds.push_back(c.rounds);
+      n.stopped_by_noise += c.stopped_by == "noise";
+      n.stopped_by_time += c.stopped_by == "time";
+      n.stopped_by_rounds += c.stopped_by == "rounds";
+      if (c.aa.has_interval()) {
+        ++n.aa_intervals;
+        n.aa_containing_one += c.aa.contains(1.0);
+      }
+    }
+    if (c.encoder == kBaselineEncoder) continue;
+    if (c.same_order_as_nosort) {
+      ++n.same_order_cells;
+      continue;
+    }
+    if (c.speedup.has_interval()) {
+      ++n.cells_with_interval;
+      widths.push_back(c.speedup.relative_half_width());
+      n.speedups_containing_one += c.speedup.contains(1.0);
+    }
+  }
+  auto quantile = [](std::vector<double> v, double q) {
+    if (v.empty()) return 0.0;
+    std::sort(v.begin(), v.end());
+    return v[std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size() - 1) + 0.5))];
+  };
+  n.median_half_width = quantile(widths, 0.5);
+  n.p90_half_width = quantile(widths, 0.9);
+  n.max_half_width = widths.empty() ? 0.0 : *std::max_element(widths.begin(), widths.end());
+  if (!rounds.empty()) {
+    std::sort(rounds.begin(), rounds.end());
+    n.median_rounds = rounds[rounds.size() / 2];
+    n.min_rounds = rounds.front();
+    n.max_rounds = rounds.back();
+  }
+  return n;
+}
+
+nlohmann::json NoiseSummary::to_json() const {
+  return {{"aa_intervals", aa_intervals},
+          {"aa_containing_one", aa_containing_one},
+          {"aa_coverage", aa_coverage()},
+          {"cells_with_interval", cells_with_interval},
+          {"speedup_half_width", {{"median", median_half_width}, {"p90", p90_half_width}, {"max", max_half_width}}},
+          {"rounds", {{"median", median_rounds}, {"min", min_rounds}, {"max", max_rounds}}},
+          {"stopped_by", {{"noise", stopped_by_noise}, {"time", stopped_by_time}, {"rounds", stopped_by_rounds}}},
+          {"same_order_cells", same_order_cells},
+          {"speedups_containing_one", speedups_containing_one}};
+}
 
 }  // namespace raysort

@@ -47,4 +47,22 @@ class ResultSet {
 // The paper's tables from a set of cells, as markdown (see tables.cpp).
 std::string render_tables(const std::vector<CellRecord>& cells, const nlohmann::json& meta);
 
+// The noise floor of a set of cells (docs/measurement.md, "Noise floor"): how many A/A intervals
+// contain 1 (about 95 % when the intervals are honest), how wide the speedup intervals are and
+// what stopped the cells. Cells that shared their rounds (the gather and permute cells of one
+// encoder) share one A/A interval and count once. tables.md and meta.json ("noise") show it.
+struct NoiseSummary {
+  std::size_t aa_intervals = 0, aa_containing_one = 0;
+  std::size_t cells_with_interval = 0;  // ok encoder cells with a speedup interval
+  double median_half_width = 0, p90_half_width = 0, max_half_width = 0;  // relative, of those
+  unsigned median_rounds = 0, min_rounds = 0, max_rounds = 0;
+  std::size_t stopped_by_noise = 0, stopped_by_time = 0, stopped_by_rounds = 0;
+  std::size_t same_order_cells = 0, speedups_containing_one = 0;
+  double aa_coverage() const {
+    return aa_intervals ? static_cast<double>(aa_containing_one) / static_cast<double>(aa_intervals) : 0.0;
+  }
+  nlohmann::json to_json() const;
+};
+NoiseSummary summarize_noise(const std::vector<CellRecord>& cells);
+
 }  // namespace raysort

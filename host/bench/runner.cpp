@@ -1,3 +1,6 @@
+// The matrix runner: a short loop over plan → scene → batch → cell → record. What happens to one
+// cell (its rounds, checks and figures) lives in bench/cell_measure.cpp, and how a time is taken
+// in bench/protocol.h.
 #include "bench/runner.h"
 
 #include <fmt/format.h>
@@ -7,24 +10,19 @@
 #include <chrono>
 #include <csignal>
 #include <cstdlib>
-#include <cstring>
 #include <ctime>
 #include <filesystem>
 #include <fstream>
-#include <numeric>
 #include <map>
 #include <memory>
-#include <optional>
 #include <set>
 
-#include "bench/metrics.h"
+#include "bench/cell_measure.h"
 #include "bench/result_set.h"
 #include "bvh/bvh.h"
 #include "cl/runtime.h"
 #include "render/batches.h"
 #include "scene/load.h"
-#include "sort/radix_sort.h"
-#include "trace/tracer.h"
 #include "util/error.h"
 
 namespace raysort {
@@ -33,6 +31,17 @@ namespace {
 
 std::atomic<bool> g_interrupted{false};
 extern "C" void on_sigint(int) { g_interrupted = true; }
+
+// SIGINT/SIGTERM end the run after the cell in flight (its rounds finish), restored on exit.
+struct InterruptGuard {
+  using Handler = void (*)(int);
+  Handler previous_int = std::signal(SIGINT, on_sigint);
+  Handler previous_term = std::signal(SIGTERM, on_sigint);
+  ~InterruptGuard() {
+    std::signal(SIGINT, previous_int);
+    std::signal(SIGTERM, previous_term);
+  }
+};
 
 std::string host_cpu() {
   std::ifstream in("/proc/cpuinfo");
@@ -61,6 +70,36 @@ std::string utc_now() {
   return buf;
 }
 
+nlohmann::json run_meta(const MatrixSpec& spec, const RunOptions& opts, const DeviceInfo& dev) {
+  return {
+      {"format_version", kResultFormatVersion},
+      {"raysort_version", RAYSORT_VERSION},
+      {"matrix", spec.to_json()},
+      {"protocol",
+       {{"doc", "docs/measurement.md"},
+        {"arms", "per round, after encode + sort: nosort, aa (nosort again), and the cell's trace(s), in a seeded random order"},
+        {"estimate", "median over rounds of the per-round ratio (paired)"},
+        {"interval", fmt::format("exact order-statistic (sign-test) interval of the median, {:.0f} %", kConfidence * 100)},
+        {"stop", "min rounds (reps), then relative half-width <= max_noise, or max_time_s of sampling"}}},
+      {"device",
+       {{"name", dev.name},
+        {"type", dev.type},
+        {"platform", dev.platform_name},
+        {"platform_version", dev.platform_version},
+        {"opencl", dev.version},
+        {"opencl_c", dev.opencl_c_version},
+        {"driver", dev.driver_version},
+        {"pocl_version", dev.is_pocl() ? dev.platform_version : ""},
+        {"compute_units", dev.compute_units},
+        {"slug", dev.slug()}}},
+      {"host_cpu", host_cpu()},
+      {"git_commit", git_commit()},
+      {"command", opts.command},
+      {"date", utc_now()},
+      {"seeds", {{"rays", spec.seed}}},
+  };
+}
+
 struct Progress {
   std::size_t total = 0, done = 0;
   std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
@@ -76,46 +115,103 @@ struct Progress {
   }
 };
 
-struct BatchBuffers {
-  cl::Buffer rays, identity, hits, keys32, keys64, values;
-};
+// "1.16 [1.12, 1.20]", or "1.16" without an interval.
+std::string with_interval(const Estimate& e) {
+  if (!e.has_value()) return "–";
+  if (!e.has_interval()) return fmt::format("{:.2f}", e.value);
+  return fmt::format("{:.2f} [{:.2f}, {:.2f}]", e.value, e.lo, e.hi);
+}
 
-// Thrown inside a cell when it has run longer than MatrixSpec::cell_timeout_s.
-struct CellTimedOut {};
+std::string progress_text(const CellRecord& c) {
+  if (!c.ok()) return fmt::format("{}: {}: {}", c.id(), c.status == "timeout" ? "TIMEOUT" : "FAILED", c.error);
+  const std::string rounds = fmt::format("{} rounds, stopped by {}", c.rounds, c.stopped_by);
+  if (c.encoder == kBaselineEncoder)
+    return fmt::format("{}: NoSort {:.2f} MRays/s, A/A {}  ({})", c.id(), c.trace_mrays, with_interval(c.aa), rounds);
+  const std::string speed =
+      c.same_order_as_nosort
+          ? fmt::format("same order as NoSort, no speedup (measured {})",
+                        with_interval(ratio_interval(c.samples.at("nosort"), c.samples.at("trace"))))
+          : fmt::format("speedup {}", with_interval(c.speedup));
+  return fmt::format("{}: {:.2f} MRays/s, {}, net {}, encode {:.2f} + sort {:.2f}{} ms, ANC {:.2f}  ({})", c.id(),
+                     c.trace_mrays, speed, with_interval(c.net_speedup), c.encode.median_ms, c.sort.median_ms,
+                     c.access == "permute" ? fmt::format(" + permute {:.2f}", c.permute.median_ms) : "", c.anc, rounds);
+}
 
-// The per-cell wall-clock limit (--timeout). Checked between repetitions: an OpenCL kernel cannot
-// be interrupted portably, so a kernel in flight runs to completion, and the cell's remaining
-// repetitions are skipped.
-struct CellClock {
-  double limit_s;
-  std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
-  double elapsed_s() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); }
-  bool over() const { return limit_s > 0 && elapsed_s() > limit_s; }
-  std::string message() const {
-    return fmt::format("timed out: {:.3f} s, over --timeout {} s (remaining repetitions skipped)", elapsed_s(), limit_s);
+CellRecord cell_of(const PlannedCell& p) {
+  CellRecord c;
+  c.scene = p.scene, c.batch = p.batch, c.encoder = p.encoder, c.bits = p.bits, c.top_bits = p.top_bits;
+  c.variant = p.variant, c.access = p.access;
+  return c;
+}
+
+// Consecutive runs of cells that agree on key(cell): the plan is ordered scene, batch, variant,
+// then NoSort and each encoder × key length × top-k with its access modes side by side.
+template <class Key>
+std::vector<std::vector<PlannedCell>> runs_of(const std::vector<PlannedCell>& cells, Key key) {
+  std::vector<std::vector<PlannedCell>> out;
+  for (const auto& c : cells) {
+    if (out.empty() || key(out.back().front()) != key(c)) out.emplace_back();
+    out.back().push_back(c);
+  }
+  return out;
+}
+
+// A scene loaded for measuring: triangles, BVH, the batches its effects imply (generated once:
+// every encoder sees the same rays), its tracers and encoder kernels.
+struct SceneBench {
+  Scene scene;
+  Scene::Flat tris;
+  Bvh bvh;
+  std::vector<ReferencedBatch> batches;
+  std::map<std::string, std::unique_ptr<Tracer>> tracers;  // by variant name
+  std::unique_ptr<DeviceEncoder> encoder;
+  std::map<std::string, std::vector<RsHit>> robust_references;  // by batch, traced when first asked
+
+  SceneBench(Runtime& rt, const std::string& name, const MatrixSpec& spec, const std::string& scene_root,
+             Progress& progress) {
+    SceneOptions scene_opts;
+    scene_opts.scene_root = scene_root;
+    parse_resolution(spec.resolution, scene_opts.width, scene_opts.height);
+    scene_opts.spp = spec.spp;
+    scene = load_scene(name, scene_opts);
+    tris = scene.flatten();
+    bvh = build_bvh(tris);
+    progress.line(fmt::format("{}: {} triangles, BVH {:.0f} ms; generating batches", name, tris.size(), bvh.build_ms));
+    RayGenOptions gen;
+    gen.width = scene_opts.width, gen.height = scene_opts.height, gen.spp = spec.spp, gen.seed = spec.seed;
+    batches = generate_batches(scene, tris, bvh, gen);
+    for (const auto& v : spec.variant_list()) tracers[v] = std::make_unique<Tracer>(rt, bvh, parse_trace_variant(v));
+    encoder = std::make_unique<DeviceEncoder>(rt, bvh, scene.bounds(), spec.params);
+    encoder->warm_up();
+  }
+  const ReferencedBatch* batch(const std::string& name) const {
+    for (const auto& b : batches)
+      if (b.batch.name == name) return &b;
+    return nullptr;
+  }
+  // The host reference of a variant. The batch's own is the fast one (render/batches.h); the
+  // robust one is traced when a robust cell first needs it.
+  const std::vector<RsHit>& reference(const ReferencedBatch& b, const std::string& variant) {
+    if (variant == "fast") return b.reference_hits;
+    auto it = robust_references.find(b.batch.name);
+    if (it == robust_references.end())
+      it = robust_references
+               .emplace(b.batch.name, trace_reference(bvh, b.batch.rays, nullptr, b.batch.any_hit(), nullptr,
+                                                      TraceVariant::Robust))
+               .first;
+    return it->second;
+  }
+  // Rays this variant misses that the other one hits, per million (-1 unless both variants run).
+  double leaks_per_million(const ReferencedBatch& b, const std::string& variant, bool both_variants) {
+    if (!both_variants || b.batch.size() == 0) return -1.0;
+    const auto& mine = reference(b, variant);
+    const auto& other = reference(b, variant == "fast" ? "robust" : "fast");
+    std::size_t leaks = 0;
+    for (std::size_t i = 0; i < mine.size(); ++i) leaks += mine[i].tri == RS_NO_HIT && other[i].tri != RS_NO_HIT;
+    return static_cast<double>(leaks) * 1e6 / static_cast<double>(b.batch.size());
   }
 };
 
-template <class T>
-std::vector<std::uint64_t> widen(const std::vector<T>& v) {
-  return std::vector<std::uint64_t>(v.begin(), v.end());
-}
-
-}  // namespace
-
-std::string default_result_dir(const MatrixSpec& spec, const std::string& device_slug, const ShardSpec& shard) {
-  const std::string matrix = spec.to_json().dump();
-  std::string hash = fnv1a_hex(matrix.data(), matrix.size()).substr(0, 8);
-  std::string dir = fmt::format("results/{}/{}-{}", device_slug, spec.preset.empty() ? "run" : spec.preset, hash);
-  return shard.active() ? fmt::format("{}-shard{}of{}", dir, shard.index, shard.count) : dir;
-}
-
-std::vector<PlannedCell> plan_matrix_shards(const MatrixSpec& spec, const std::string& scene_root, unsigned count) {
-  return plan_shards(matrix_cells(spec, [&](const std::string& scene) { return load_scene_facts(scene, spec, scene_root); }),
-                     count);
-}
-
-namespace {
 // Scene problems a run can find before any work starts: a scene file or OBJ given by path is
 // parsed (it is small next to a run); an embedded scene's OBJ files must exist under the root.
 void check_scenes_before_work(const MatrixSpec& spec, const RunOptions& opts) {
@@ -139,347 +235,106 @@ void check_scenes_before_work(const MatrixSpec& spec, const RunOptions& opts) {
     }
   }
 }
+
 }  // namespace
+
+std::string default_result_dir(const MatrixSpec& spec, const std::string& device_slug, const ShardSpec& shard) {
+  const std::string matrix = spec.to_json().dump();
+  std::string hash = fnv1a_hex(matrix.data(), matrix.size()).substr(0, 8);
+  std::string dir = fmt::format("results/{}/{}-{}", device_slug, spec.preset.empty() ? "run" : spec.preset, hash);
+  return shard.active() ? fmt::format("{}-shard{}of{}", dir, shard.index, shard.count) : dir;
+}
+
+std::vector<PlannedCell> plan_matrix_shards(const MatrixSpec& spec, const std::string& scene_root, unsigned count) {
+  return plan_shards(matrix_cells(spec, [&](const std::string& scene) { return load_scene_facts(scene, spec, scene_root); }),
+                     count);
+}
 
 RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
   validate_matrix(spec);
   check_scenes_before_work(spec, opts);
-  // A shard plans the whole matrix (every shard computes the same plan) and keeps its own cells;
-  // the baseline of a batch is measured by every shard that has a cell of it (speedups compare
-  // with a NoSort trace on the same machine), and recorded by the shard that owns the NoSort cell.
-  std::vector<PlannedCell> plan;
-  std::set<std::string> mine, mine_scenes, mine_batches;  // cell ids; scenes; "scene/batch/variant"
-  if (opts.shard.active()) {
-    plan = plan_matrix_shards(spec, opts.scene_root, opts.shard.count);
-    for (const auto& c : plan)
-      if (c.shard == opts.shard.index) {
-        mine.insert(c.id);
-        mine_scenes.insert(c.scene);
-        mine_batches.insert(c.scene + "/" + c.batch + "/" + c.variant);
-      }
-  }
-  auto in_shard = [&](const std::string& id) { return !opts.shard.active() || mine.count(id) > 0; };
-  Runtime rt(select_device(opts.device));
-  const DeviceInfo& dev = rt.info();
-  RunSummary summary;
-  summary.out_dir = opts.out.empty() ? default_result_dir(spec, dev.slug(), opts.shard) : opts.out;
 
-  nlohmann::json meta = {
-      {"format_version", kResultFormatVersion},
-      {"raysort_version", RAYSORT_VERSION},
-      {"matrix", spec.to_json()},
-      {"device",
-       {{"name", dev.name},
-        {"type", dev.type},
-        {"platform", dev.platform_name},
-        {"platform_version", dev.platform_version},
-        {"opencl", dev.version},
-        {"opencl_c", dev.opencl_c_version},
-        {"driver", dev.driver_version},
-        {"pocl_version", dev.is_pocl() ? dev.platform_version : ""},
-        {"compute_units", dev.compute_units},
-        {"slug", dev.slug()}}},
-      {"host_cpu", host_cpu()},
-      {"git_commit", git_commit()},
-      {"command", opts.command},
-      {"date", utc_now()},
-      {"seeds", {{"rays", spec.seed}}},
-  };
-  if (opts.shard.active()) meta["shard"] = shard_meta(spec, opts.shard, plan);
+  // Plan: every cell of the matrix in visiting order; a shard keeps its own (bench/shard.h).
+  std::vector<PlannedCell> plan = plan_matrix_shards(spec, opts.scene_root, opts.shard.active() ? opts.shard.count : 1);
+  const std::vector<PlannedCell> full_plan = plan;
+  if (opts.shard.active())
+    std::erase_if(plan, [&](const PlannedCell& c) { return c.shard != opts.shard.index; });
+
+  Runtime rt(select_device(opts.device));
+  RunSummary summary;
+  summary.out_dir = opts.out.empty() ? default_result_dir(spec, rt.info().slug(), opts.shard) : opts.out;
+  nlohmann::json meta = run_meta(spec, opts, rt.info());
+  if (opts.shard.active()) meta["shard"] = shard_meta(spec, opts.shard, full_plan);
   ResultSet results = ResultSet::open_for_run(summary.out_dir, meta);
   fmt::print(stderr, "raysort run: {}{} on {}; results in {}\n", spec.preset.empty() ? "custom matrix" : spec.preset,
-             opts.shard.active() ? fmt::format(", shard {} ({} of {} cells)", opts.shard.str(), mine.size(), plan.size())
+             opts.shard.active() ? fmt::format(", shard {} ({} of {} cells)", opts.shard.str(), plan.size(), full_plan.size())
                                  : "",
-             dev.name, summary.out_dir);
+             rt.info().name, summary.out_dir);
 
-  // Cells per scene (the batch list is only known after generation; count requested ones).
-  std::vector<Encoder> encoders;
-  for (auto& n : spec.encoders)
-    if (auto e = parse_encoder(n); e && *e != Encoder::NoSort) encoders.push_back(*e);
-  const std::vector<std::string> variant_names = spec.variant_list();
-  Progress progress;
-  for (auto& s : spec.scenes)
-    progress.total += (spec.batches.empty() ? 3 : spec.batches.size()) * variant_names.size() *
-                      (1 + encoders.size() * (spec.bits_for(s).size() + spec.top_bits.size()));
-  if (opts.shard.active()) progress.total = mine.size();
-  std::vector<std::string> absent;  // a shard's planned cells whose batch turned out not to exist
-
+  InterruptGuard interrupt_guard;
   const char* kill_env = std::getenv("RAYSORT_TEST_KILL_AFTER_CELLS");
   const std::size_t kill_after = kill_env ? std::strtoul(kill_env, nullptr, 10) : 0;
-  auto previous = std::signal(SIGINT, on_sigint);
-  std::signal(SIGTERM, on_sigint);
+  Progress progress;
+  progress.total = plan.size();
   RadixSort sorter(rt);
   sorter.warm_up();
+  RayPermuter permuter(rt);
+  permuter.warm_up();
+  const bool both_variants = spec.variant_list().size() > 1;
+  std::vector<std::string> absent;  // planned cells whose batch turned out empty
 
-  SceneOptions scene_opts;
-  scene_opts.scene_root = opts.scene_root;
-  parse_resolution(spec.resolution, scene_opts.width, scene_opts.height);
-  scene_opts.spp = spec.spp;
-  RayGenOptions gen;
-  gen.width = scene_opts.width;
-  gen.height = scene_opts.height;
-  gen.spp = spec.spp;
-  gen.seed = spec.seed;
+  auto record = [&](const CellRecord& c) {
+    results.add(c);
+    ++summary.cells_run;
+    summary.cells_failed += !c.ok();
+    ++progress.done;
+    // Test hook (tests/bench_test.cpp): die by SIGKILL right after the N-th new cell, a
+    // deterministic kill point for the resume test.
+    if (kill_after > 0 && summary.cells_run >= kill_after) std::raise(SIGKILL);
+    progress.line(progress_text(c));
+  };
 
-  for (const auto& scene_name : spec.scenes) {
+  for (auto& scene_cells : runs_of(plan, [](const PlannedCell& c) { return c.scene; })) {  // → scene
     if (g_interrupted) break;
-    if (opts.shard.active() && !mine_scenes.count(scene_name)) continue;
-    Scene scene = load_scene(scene_name, scene_opts);
-    Scene::Flat tris = scene.flatten();
-    Bvh bvh = build_bvh(tris);
-    progress.line(fmt::format("{}: {} triangles, BVH {:.0f} ms; generating batches", scene_name, tris.size(), bvh.build_ms));
-    auto batches = generate_batches(scene, tris, bvh, gen);
-    // Both trace variants see the same rays: batches come from the fast host reference (render/
-    // batches.h); each cell checks the device against the host reference of its own variant.
-    std::map<std::string, std::unique_ptr<Tracer>> tracers;
-    for (const auto& v : variant_names) tracers[v] = std::make_unique<Tracer>(rt, bvh, parse_trace_variant(v));
-    DeviceEncoder encoder(rt, bvh, scene.bounds(), spec.params);
-    encoder.warm_up();
-
-    std::vector<std::string> wanted = spec.batches;
-    if (wanted.empty())
-      for (auto& b : batches) wanted.push_back(b.batch.name);
-    for (const auto& batch_name : wanted) {
+    std::erase_if(scene_cells, [&](const PlannedCell& c) {
+      const bool done = results.has(c.id);
+      summary.cells_skipped += done, progress.done += done;
+      return done;
+    });
+    if (scene_cells.empty()) continue;
+    SceneBench scene(rt, scene_cells.front().scene, spec, opts.scene_root, progress);
+    for (const auto& batch_cells : runs_of(scene_cells, [](const PlannedCell& c) { return c.batch + "/" + c.variant; })) {
       if (g_interrupted) break;
-      auto it = std::find_if(batches.begin(), batches.end(), [&](const ReferencedBatch& b) { return b.batch.name == batch_name; });
-      if (it == batches.end()) {
-        fmt::print(stderr, "note: scene {} has no batch {} (its effects do not imply it); skipped\n", scene_name, batch_name);
-        if (opts.shard.active()) {
-          std::size_t lost = 0;
-          for (const auto& c : plan)
-            if (c.shard == opts.shard.index && c.scene == scene_name && c.batch == batch_name) {
-              absent.push_back(c.id);
-              ++lost;
-            }
-          progress.total -= std::min(progress.total - progress.done, lost);
-          continue;
-        }
-        progress.total -= std::min(progress.total - progress.done,
-                                   variant_names.size() * (1 + encoders.size() * (spec.bits_for(scene_name).size() +
-                                                                                  spec.top_bits.size())));
+      const PlannedCell& first = batch_cells.front();
+      const ReferencedBatch* rb = scene.batch(first.batch);
+      if (!rb) {  // every ray of an earlier bounce missed, or a requested batch the effects do not imply
+        fmt::print(stderr, "note: scene {} has no batch {} (its effects do not imply it, or it is empty); skipped\n",
+                   first.scene, first.batch);
+        for (const auto& c : batch_cells) absent.push_back(c.id);
+        progress.total -= batch_cells.size();
         continue;
       }
-      const RayBatch& batch = it->batch;
-      const auto n = static_cast<std::uint32_t>(batch.size());
-      const bool any_hit = batch.any_hit();
-      BatchBuffers buf;
-      std::vector<std::uint32_t> identity(n);
-      std::iota(identity.begin(), identity.end(), 0u);
-      // Fast and robust references (the leak rate: rays one variant misses that the other hits).
-      // The batch's own reference is the fast one (render/batches.h); the robust one is traced once
-      // here when a robust variant runs. variant_names holds only "fast" and "robust" (validated).
-      std::vector<RsHit> robust_reference;
-      std::map<std::string, const std::vector<RsHit>*> references{{"fast", &it->reference_hits}};
-      if (std::find(variant_names.begin(), variant_names.end(), "robust") != variant_names.end()) {
-        robust_reference = trace_reference(bvh, batch.rays, nullptr, any_hit, nullptr, TraceVariant::Robust);
-        references["robust"] = &robust_reference;
-      }
-      auto leaks_per_million = [&](const std::string& v) {
-        if (references.size() < 2 || n == 0) return -1.0;
-        const auto& mine = *references.at(v);
-        const auto& other = *references.at(v == "fast" ? "robust" : "fast");
-        std::size_t leaks = 0;
-        for (std::uint32_t i = 0; i < n; ++i) leaks += mine[i].tri == RS_NO_HIT && other[i].tri != RS_NO_HIT;
-        return static_cast<double>(leaks) * 1e6 / static_cast<double>(n);
-      };
-      for (const std::string& variant_name : variant_names) {
-        if (opts.shard.active() && !mine_batches.count(scene_name + "/" + batch_name + "/" + variant_name)) continue;
-        const TraceVariant variant = parse_trace_variant(variant_name);
-        Tracer& tracer = *tracers.at(variant_name);
-        const std::vector<RsHit>& variant_reference = *references.at(variant_name);
-        // NoSort: the baseline every speedup on this batch is measured against, in this run.
-        std::vector<double> nosort_times;
-        std::vector<RsHit> nosort_hits;
-        CellClock nosort_clock{spec.cell_timeout_s};
-        std::string batch_error;  // a device fault in the batch's setup or baseline fails all its cells
-        try {
-          buf.rays = rt.upload("rays of " + batch.name, batch.rays);
-          buf.identity = rt.upload("identity order", identity);
-          buf.hits = rt.buffer("hits", std::max<std::size_t>(1, n) * sizeof(RsHit));
-          buf.values = rt.buffer("sort values (ray order)", std::max<std::size_t>(1, n) * 4);
-          buf.keys32 = rt.buffer("32-bit keys", std::max<std::size_t>(1, n) * 4);
-          buf.keys64 = rt.buffer("64-bit keys", std::max<std::size_t>(1, n) * 8);
-          for (unsigned i = 0; i < spec.warmup + spec.reps; ++i) {
-            cl::Event ev = tracer.enqueue(buf.rays, buf.identity, n, any_hit, buf.hits);
-            cl_call("waiting for the NoSort trace", [&] { ev.wait(); });
-            if (i >= spec.warmup) nosort_times.push_back(event_ms(ev));
-            if (nosort_clock.over()) break;
-          }
-          rt.download("NoSort hits", buf.hits, nosort_hits, n);
-        } catch (const Error& err) {
-          batch_error = err.what();
+      BatchBench bench({rt, *scene.encoder, sorter, permuter, *scene.tracers.at(first.variant)}, scene.bvh, rb->batch,
+                       scene.reference(*rb, first.variant));
+      for (const auto& group : runs_of(batch_cells, [](const PlannedCell& c) {  // → cell
+             return fmt::format("{}/{}/{}", c.encoder, c.bits, c.top_bits);
+           })) {
+        if (g_interrupted) break;
+        std::vector<CellRecord> cells;
+        for (const auto& p : group) cells.push_back(cell_of(p));
+        if (group.front().encoder == kBaselineEncoder) {
+          CellRecord c = bench.measure_nosort(cells.front(), spec.protocol(cells.front().id()));
+          c.leaks_per_million = scene.leaks_per_million(*rb, first.variant, both_variants);
+          record(c);
+          continue;
         }
-        const Timing nosort_trace = Timing::of(nosort_times);
-        const SimtModel nosort_simt = simt_model(bvh, batch.rays, nullptr, any_hit, variant);
-        {
-          CellRecord c;
-          c.scene = scene_name, c.batch = batch_name, c.encoder = kBaselineEncoder, c.bits = 0, c.rays = n;
-          c.variant = variant_name;
-          c.trace = nosort_trace;
-          c.trace_mrays = nosort_trace.median_ms > 0 ? n / (nosort_trace.median_ms * 1e3) : 0;
-          c.speedup = c.net_speedup = 1.0;
-          c.anc = 0;
-          c.simt_lane_efficiency = nosort_simt.lane_efficiency;
-          c.simt_distinct_per_visit = nosort_simt.distinct_nodes_per_visit;
-          c.simt_lane_efficiency_ratio = c.simt_distinct_per_visit_ratio = 1.0;
-          c.leaks_per_million = leaks_per_million(variant_name);
-          c.hits_match_nosort = batch_error.empty() && count_hit_mismatches(nosort_hits, variant_reference) == 0;
-          c.order_is_permutation = true;
-          c.keys_hash = fnv1a_hex(nullptr, 0);
-          c.order_hash = fnv1a_hex(identity.data(), identity.size() * 4);
-          if (!batch_error.empty()) {
-            c.status = "failed";
-            c.error = batch_error;
-          } else if (!c.hits_match_nosort) {
-            c.status = "failed";
-            c.error = "device NoSort hits differ from the host reference traversal";
-          } else if (nosort_clock.over()) {
-            c.status = "timeout";
-            c.error = nosort_clock.message();
-          }
-          if (in_shard(c.id())) {
-            ++progress.done;
-            if (!results.has(c.id())) {
-              results.add(c);
-              ++summary.cells_run;
-              summary.cells_failed += !c.ok();
-            }
-            progress.line(c.ok() ? fmt::format("{} {} NoSort: {:.2f} MRays/s", scene_name, batch_name, c.trace_mrays)
-                                 : fmt::format("{}: {}: {}", c.id(), c.status == "timeout" ? "TIMEOUT" : "FAILED", c.error));
-          }
-        }
-
-        for (Encoder e : encoders) {
-          std::vector<std::pair<unsigned, unsigned>> variants;  // (bits, top_bits)
-          auto bits_list = spec.bits_for(scene_name);
-          for (unsigned b : bits_list) variants.push_back({b, 0});
-          for (unsigned k : spec.top_bits) variants.push_back({bits_list.back(), k});
-          for (auto [bits, top] : variants) {
-            if (g_interrupted) break;
-            CellRecord c;
-            c.scene = scene_name, c.batch = batch_name, c.encoder = std::string(encoder_name(e)), c.bits = bits;
-            c.top_bits = top, c.rays = n, c.variant = variant_name;
-            if (!in_shard(c.id())) continue;
-            ++progress.done;
-            if (results.has(c.id())) {
-              ++summary.cells_skipped;
-              continue;
-            }
-            CellClock clock{spec.cell_timeout_s};
-            try {
-              if (!batch_error.empty()) throw Error("the batch's setup failed: " + batch_error);
-              encoder.prepare(e, bits);
-              cl::Buffer& keys = bits > 32 ? buf.keys64 : buf.keys32;
-              RadixSortConfig cfg;
-              cfg.key_bits = bits;
-              cfg.top_bits = top;
-              std::vector<double> te, ts, tt;
-              std::vector<std::uint64_t> unsorted;
-              for (unsigned i = 0; i < spec.warmup + spec.reps; ++i) {
-                const DeviceEncoder::Events ev_e = encoder.enqueue(e, bits, buf.rays, buf.identity, n, keys, buf.values);
-                ev_e.wait();
-                if (i == 0) {  // fingerprint of the keys in generation order (outside timing)
-                  if (bits > 32) {
-                    std::vector<std::uint64_t> k;
-                    rt.download("keys", keys, k, n);
-                    unsorted = k;
-                  } else {
-                    std::vector<std::uint32_t> k;
-                    rt.download("keys", keys, k, n);
-                    unsorted = widen(k);
-                  }
-                }
-                SortStats st = sorter.sort(keys, buf.values, n, cfg);
-                cl::Event ev_t = tracer.enqueue(buf.rays, buf.values, n, any_hit, buf.hits);
-                cl_call("waiting for the sorted trace", [&] { ev_t.wait(); });
-                if (i >= spec.warmup) {
-                  te.push_back(ev_e.ms());
-                  ts.push_back(st.ms);
-                  tt.push_back(event_ms(ev_t));
-                }
-                if (clock.over()) throw CellTimedOut{};
-              }
-              std::vector<std::uint32_t> order;
-              std::vector<RsHit> hits;
-              std::vector<std::uint64_t> sorted_keys;
-              rt.download("sorted order", buf.values, order, n);
-              rt.download("sorted hits", buf.hits, hits, n);
-              if (bits > 32) {
-                rt.download("sorted keys", keys, sorted_keys, n);
-              } else {
-                std::vector<std::uint32_t> k;
-                rt.download("sorted keys", keys, k, n);
-                sorted_keys = widen(k);
-              }
-              // Checks: the order is a permutation, and hits scattered back equal NoSort's.
-              std::vector<std::uint8_t> seen(n, 0);
-              bool perm = true;
-              for (auto v : order) {
-                if (v >= n || seen[v]++) {
-                  perm = false;
-                  break;
-                }
-              }
-              std::size_t bad = 0;
-              if (perm)
-                for (std::uint32_t i = 0; i < n; ++i)
-                  bad += std::memcmp(&hits[i], &nosort_hits[order[i]], sizeof(RsHit)) != 0;
-              c.order_is_permutation = perm;
-              c.hits_match_nosort = perm && bad == 0;
-              c.keys_hash = fnv1a_hex(unsorted.data(), unsorted.size() * 8);
-              c.order_hash = fnv1a_hex(order.data(), order.size() * 4);
-              if (!c.hits_match_nosort) {
-                c.status = "failed";
-                c.error = perm ? fmt::format("{} of {} hits differ from NoSort after scattering back", bad, n)
-                               : "the sorted order is not a permutation of the rays";
-              } else {
-                c.encode = Timing::of(te);
-                c.sort = Timing::of(ts);
-                c.trace = Timing::of(tt);
-                double t = c.trace.median_ms;
-                c.trace_mrays = t > 0 ? n / (t * 1e3) : 0;
-                c.speedup = t > 0 ? nosort_trace.median_ms / t : 0;
-                double total = c.encode.median_ms + c.sort.median_ms + t;
-                c.net_speedup = total > 0 ? nosort_trace.median_ms / total : 0;
-                c.overhead_pct = t > 0 ? (c.encode.median_ms + c.sort.median_ms) / t * 100.0 : 0;
-                // ANC of the codes the sort used: a top-k sort orders by the highest k bits only.
-                if (top > 0)
-                  for (auto& k : sorted_keys) k >>= (bits - top);
-                c.anc = average_number_of_codes(sorted_keys);
-                SimtModel m = simt_model(bvh, batch.rays, order.data(), any_hit, variant);
-                c.simt_lane_efficiency = m.lane_efficiency;
-                c.simt_distinct_per_visit = m.distinct_nodes_per_visit;
-                c.simt_lane_efficiency_ratio =
-                    nosort_simt.lane_efficiency > 0 ? m.lane_efficiency / nosort_simt.lane_efficiency : 0;
-                c.simt_distinct_per_visit_ratio = nosort_simt.distinct_nodes_per_visit > 0
-                                                      ? m.distinct_nodes_per_visit / nosort_simt.distinct_nodes_per_visit
-                                                      : 0;
-              }
-            } catch (const Error& err) {
-              // A device fault (allocation, build, launch) fails this cell; the run goes on.
-              c.status = "failed";
-              c.error = err.what();
-            } catch (const CellTimedOut&) {
-              c.status = "timeout";
-              c.error = clock.message();
-            }
-            results.add(c);
-            ++summary.cells_run;
-            summary.cells_failed += !c.ok();
-            // Test hook (tests/bench_test.cpp): die by SIGKILL right after the N-th new cell, a
-            // deterministic kill point for the resume test.
-            if (kill_after > 0 && summary.cells_run >= kill_after) std::raise(SIGKILL);
-            progress.line(c.ok() ? fmt::format("{}: {:.2f} MRays/s ({:.2f}x), encode {:.2f} + sort {:.2f} ms, ANC {:.2f}",
-                                               c.id(), c.trace_mrays, c.speedup, c.encode.median_ms, c.sort.median_ms, c.anc)
-                                 : fmt::format("{}: {}: {}", c.id(), c.status == "timeout" ? "TIMEOUT" : "FAILED", c.error));
-          }
-        }
+        const Encoder e = *parse_encoder(group.front().encoder);
+        for (const CellRecord& c : bench.measure_sorted(cells, e, spec.protocol(cells.front().id()))) record(c);
       }
     }
   }
-  std::signal(SIGINT, previous);
-  std::signal(SIGTERM, SIG_DFL);
-  if (!absent.empty()) {
+
+  if (!absent.empty() && opts.shard.active()) {
     // raysort merge counts these as accounted for (no shard can produce them).
     std::set<std::string> all(absent.begin(), absent.end());
     for (const auto& id : results.meta().value("absent_cells", std::vector<std::string>{})) all.insert(id);

@@ -1,9 +1,9 @@
 #pragma once
-// Runs a scenario matrix into a result set. For every scene: load, BVH, the batches its effects
-// imply (generated once; every encoder sees the same rays); for every selected batch: NoSort (the
-// baseline), then every encoder × key length: encode → radix sort → trace through the sorted
-// order, each timed with profiling events, checked (permutation, hits equal NoSort bit for bit),
-// and measured (ANC, SIMT model). Each cell is written the moment it finishes.
+// Runs a scenario matrix into a result set: plan (every cell, or a shard's) → scene (load, BVH, the
+// batches its effects imply, generated once so every encoder sees the same rays) → batch → cell
+// (bench/cell_measure.h: encode → radix sort → [permute] → trace, paired with NoSort traces in the
+// rounds of bench/protocol.h, checked bit for bit, ANC and SIMT model) → record (each cell written
+// the moment it finishes; a rerun skips finished cells).
 #include <string>
 
 #include "bench/matrix.h"

@@ -94,17 +94,21 @@ std::vector<PlannedCell> matrix_cells(const MatrixSpec& spec,
       const std::uint64_t rays = batch.rfind("shadow", 0) == 0 ? f.rays_per_batch * f.shadow_rays_per_bounce
                                                                : f.rays_per_batch;
       for (const auto& variant : spec.variant_list()) {
-        auto add = [&](const std::string& encoder, unsigned bits, unsigned top) {
+        auto add = [&](const std::string& encoder, unsigned bits, unsigned top, const std::string& access) {
           CellRecord c;
           c.scene = scene, c.batch = batch, c.encoder = encoder, c.bits = bits, c.top_bits = top, c.variant = variant;
+          c.access = access;
           if (!seen.insert(c.id()).second) return;  // a scene named twice runs once
-          out.push_back({c.id(), scene, batch, variant, rays * depth * encoder_weight_pct(encoder), 0});
+          out.push_back({c.id(), scene, batch, variant, rays * depth * encoder_weight_pct(encoder), 0, encoder, access,
+                         bits, top});
         };
-        add(kBaselineEncoder, 0, 0);
+        add(kBaselineEncoder, 0, 0, "gather");  // the identity order: no access mode to choose
         const std::vector<unsigned> bits = spec.bits_for(scene);
         for (const auto& e : encoders) {
-          for (unsigned b : bits) add(e, b, 0);
-          for (unsigned k : spec.top_bits) add(e, bits.back(), k);
+          for (unsigned b : bits)
+            for (const auto& a : spec.access_list()) add(e, b, 0, a);
+          for (unsigned k : spec.top_bits)
+            for (const auto& a : spec.access_list()) add(e, bits.back(), k, a);
         }
       }
     }

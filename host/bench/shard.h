@@ -44,6 +44,8 @@ struct PlannedCell {
   std::string scene, batch, variant;
   std::uint64_t cost = 0;
   unsigned shard = 0;  // 1..N once planned
+  std::string encoder, access;
+  unsigned bits = 0, top_bits = 0;
 };
 
 // Every cell the matrix can produce, in the order `raysort run` visits them. A requested batch the

@@ -1,7 +1,12 @@
-// The paper's tables laid out as in the paper, from cell records only (DESIGN.md section 3):
-//   trace speed with the ratio to NoSort in parentheses, best per column in bold (Tables 2-4);
-//   overhead: encode/sort ms, share of trace time and net speedup (Table 5);
-//   key length: speed and ANC against key bits (Tables 6-7); the SIMT model; failed cells.
+// The paper's tables laid out as in the paper, from cell records only:
+//   the noise floor of the set (A/A calibration, interval widths, what stopped the cells);
+//   trace speed with the speedup and its 95 % interval (Tables 2-4), per access mode;
+//   overhead: encode/sort[/permute] ms, share of trace time and net speedup (Table 5);
+//   gather against permute; key length: speed and ANC against key bits (Tables 6-7); the SIMT
+//   model; robust against fast; failed cells.
+// Marks: **bold** is a column's best speedup only when its interval does not overlap the second
+// best's; *italic* is a speedup whose interval contains 1; "= NoSort" is an order equal to the
+// generation order (no speedup is reported for it).
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -28,20 +33,26 @@ std::vector<std::string> ordered(const std::vector<CellRecord>& cells, const nlo
   return present;
 }
 
-// The variant the main tables show (the first one the matrix lists); a robust-vs-fast section
-// compares the variants when a run has both.
-std::string g_main_variant;
+// The first item of a comma-separated matrix entry ("robust,fast" -> "robust").
+std::string first_of(const nlohmann::json& meta, const char* key, const std::string& fallback) {
+  if (!meta.contains("matrix") || !meta["matrix"].contains(key) || !meta["matrix"][key].is_string()) return fallback;
+  const std::string v = meta["matrix"][key].get<std::string>();
+  return v.substr(0, v.find(','));
+}
 
-const CellRecord* find(const std::vector<CellRecord>& cells, const std::string& scene, const std::string& batch,
-                       const std::string& encoder, unsigned bits, const std::string& variant = g_main_variant) {
+// Which cells a table shows: the main trace variant and access mode unless it says otherwise.
+struct View {
+  std::string variant = "robust", access = "gather";
+};
+
+const CellRecord* find(const std::vector<CellRecord>& cells, const View& view, const std::string& scene,
+                       const std::string& batch, const std::string& encoder, unsigned bits) {
   for (auto& c : cells)
-    if (c.scene == scene && c.batch == batch && c.encoder == encoder && c.top_bits == 0 && c.variant == variant &&
-        (c.encoder == kBaselineEncoder || c.bits == bits))
+    if (c.scene == scene && c.batch == batch && c.encoder == encoder && c.top_bits == 0 && c.variant == view.variant &&
+        (c.encoder == kBaselineEncoder || (c.bits == bits && c.access == view.access)))
       return &c;
   return nullptr;
 }
-
-std::string bold_if(bool b, const std::string& s) { return b ? fmt::format("**{}**", s) : s; }
 
 std::string header(const std::string& first, const std::vector<std::string>& cols) {
   std::string h = fmt::format("| {} |", first), sep = "|---|";
@@ -52,6 +63,59 @@ std::string header(const std::string& first, const std::vector<std::string>& col
   return h + "\n" + sep + "\n";
 }
 
+// Speedups and net speedups get three decimals, so that an interval printed next to 1 says on
+// which side of 1 it lies ("0.984 [0.962, 0.996]", not "0.98 [0.96, 1.00]").
+std::string interval_text(const Estimate& e, int decimals = 3) {
+  if (!e.has_value()) return "–";
+  if (!e.has_interval()) return fmt::format("{:.{}f}", e.value, decimals);
+  return fmt::format("{:.{}f} [{:.{}f}, {:.{}f}]", e.value, decimals, e.lo, decimals, e.hi, decimals);
+}
+
+// A speedup as the tables print it: "= NoSort" for an unchanged order, italic when its interval
+// contains 1, bold when `best`.
+std::string speedup_text(const CellRecord& c, bool best) {
+  if (c.same_order_as_nosort) return "= NoSort";
+  std::string s = interval_text(c.speedup);
+  if (c.speedup.contains(1.0)) s = "*" + s + "*";
+  return best ? "**" + s + "**" : s;
+}
+
+// The cell whose speedup is a column's significant best: the highest speedup among cells with an
+// interval, provided its interval does not overlap the runner-up's. nullptr when none qualifies.
+const CellRecord* significant_best(const std::vector<const CellRecord*>& column) {
+  std::vector<const CellRecord*> ranked;
+  for (const CellRecord* c : column)
+    if (c && c->ok() && c->encoder != kBaselineEncoder && !c->same_order_as_nosort && c->speedup.has_interval())
+      ranked.push_back(c);
+  if (ranked.empty()) return nullptr;
+  std::sort(ranked.begin(), ranked.end(),
+            [](const CellRecord* a, const CellRecord* b) { return a->speedup.value > b->speedup.value; });
+  if (ranked.size() > 1 && ranked[0]->speedup.overlaps(ranked[1]->speedup)) return nullptr;
+  return ranked[0];
+}
+
+std::string noise_section(const std::vector<CellRecord>& cells) {
+  const NoiseSummary n = summarize_noise(cells);
+  std::string md = "## Noise floor\n\n";
+  if (n.aa_intervals == 0) return md + "No cell has an A/A interval (too few rounds, or a version 1 result set).\n\n";
+  md += fmt::format(
+      "- **A/A calibration**: {} of {} A/A intervals contain 1.00 ({:.1f} %; about 95 % means the intervals are "
+      "honest). Each A/A interval compares the NoSort trace with a second NoSort trace of the same rounds.\n",
+      n.aa_containing_one, n.aa_intervals, 100.0 * n.aa_coverage());
+  md += fmt::format("- Speedup intervals: {} cells; relative half-width median {:.1f} %, 90th percentile {:.1f} %, "
+                    "largest {:.1f} %.\n",
+                    n.cells_with_interval, 100.0 * n.median_half_width, 100.0 * n.p90_half_width,
+                    100.0 * n.max_half_width);
+  md += fmt::format("- Rounds per cell: median {}, range {}–{}; stopped by the noise target: {}, by the time budget: "
+                    "{}, by the round limit: {}.\n",
+                    n.median_rounds, n.min_rounds, n.max_rounds, n.stopped_by_noise, n.stopped_by_time,
+                    n.stopped_by_rounds);
+  md += fmt::format("- Cells whose sorted order equals NoSort's (no speedup reported): {}; speedups whose interval "
+                    "contains 1 (no measurable effect): {}.\n\n",
+                    n.same_order_cells, n.speedups_containing_one);
+  return md;
+}
+
 }  // namespace
 
 std::string render_tables(const std::vector<CellRecord>& cells, const nlohmann::json& meta) {
@@ -59,69 +123,121 @@ std::string render_tables(const std::vector<CellRecord>& cells, const nlohmann::
   if (meta.contains("device"))
     md += fmt::format("Device: {} ({}, driver {}). ", meta["device"].value("name", "?"), meta["device"].value("platform", "?"),
                       meta["device"].value("driver", "?"));
-  if (meta.contains("matrix"))
-    md += fmt::format("Resolution {}, {} spp, {} repetitions after {} warm-up; trace variant {}.\n\n",
-                      meta["matrix"].value("resolution", "?"), meta["matrix"].value("spp", 0),
-                      meta["matrix"].value("reps", 0), meta["matrix"].value("warmup", 0),
-                      meta["matrix"].value("variant", "robust"));
-  md += "Times are medians of OpenCL profiling events. Speedup = NoSort trace time / trace time on the same batch; "
-        "net = NoSort trace / (encode + sort + trace). A cell whose sorted trace does not reproduce the NoSort hits "
-        "exactly is listed under failed cells and has no speed.\n\n";
-
-  g_main_variant = cells.empty() ? std::string("robust") : cells.front().variant;
-  if (meta.contains("matrix") && meta["matrix"].contains("variant")) {
-    std::string v = meta["matrix"]["variant"].get<std::string>();
-    g_main_variant = v.substr(0, v.find(','));
+  if (meta.contains("matrix")) {
+    const auto& m = meta["matrix"];
+    md += fmt::format("Resolution {}, {} spp; trace variant {}, access {}. Protocol: {} warm-up round(s), at least {} "
+                      "timed rounds per cell, then until the speedup interval is within ±{:.1f} % or {} s of "
+                      "sampling.\n\n",
+                      m.value("resolution", "?"), m.value("spp", 0), m.value("variant", "robust"),
+                      m.value("access", "gather"), m.value("warmup", 0), m.value("reps", 0),
+                      100.0 * m.value("max_noise", 0.0), m.value("max_time_s", 0.0));
   }
+  md += "Times are medians of OpenCL profiling events over the rounds of the measurement protocol "
+        "(docs/measurement.md): each round runs encode + sort, then, in a random order, the NoSort trace, a second "
+        "NoSort trace (the A/A check) and the cell's own trace(s). Speedup = the median over rounds of NoSort trace / "
+        "trace, with its exact 95 % interval in brackets; net = NoSort trace / (encode + sort + permute + trace), per "
+        "round likewise. **Bold**: a column's best speedup whose interval does not overlap the second best's. "
+        "*Italic*: the interval contains 1. \"= NoSort\": the sorted order is the generation order, so no speedup is "
+        "reported. A cell whose sorted trace does not reproduce the NoSort hits exactly is listed under failed cells "
+        "and has no speed.\n\n";
+  md += noise_section(cells);
+
+  View main_view{first_of(meta, "variant", cells.empty() ? "robust" : cells.front().variant),
+                 first_of(meta, "access", "gather")};
   auto scenes = ordered(cells, meta, "scenes", &CellRecord::scene);
   auto batches = ordered(cells, meta, "batches", &CellRecord::batch);
   auto encoders = ordered(cells, meta, "encoders", &CellRecord::encoder);
+  std::set<std::string> access_set;
   std::set<unsigned> bit_set;
   for (auto& c : cells)
-    if (c.encoder != kBaselineEncoder && c.top_bits == 0) bit_set.insert(c.bits);
+    if (c.encoder != kBaselineEncoder) {
+      if (c.top_bits == 0) bit_set.insert(c.bits);
+      access_set.insert(c.access);
+    }
+  std::vector<std::string> accesses;
+  for (const std::string a : {"gather", "permute"})
+    if (access_set.count(a)) accesses.push_back(a);
+  if (accesses.empty()) accesses.push_back(main_view.access);
   std::vector<unsigned> bits(bit_set.begin(), bit_set.end());
   const unsigned overview_bits = bit_set.count(32) ? 32 : (bits.empty() ? 0 : bits.back());
 
-  // Trace speed per batch (Tables 2-4).
-  for (auto& batch : batches) {
-    md += fmt::format("## Trace speed, {} rays, {}-bit keys: MRays/s (speedup vs NoSort)\n\n", batch, overview_bits);
-    md += header("encoder", scenes);
-    std::map<std::string, double> best;
-    for (auto& s : scenes)
-      for (auto& e : encoders)
-        if (auto* c = find(cells, s, batch, e, overview_bits); c && c->ok()) best[s] = std::max(best[s], c->trace_mrays);
-    for (auto& e : encoders) {
-      md += fmt::format("| {} |", e);
+  // Trace speed per batch and access mode (Tables 2-4).
+  for (auto& access : accesses) {
+    const View view{main_view.variant, access};
+    for (auto& batch : batches) {
+      md += fmt::format("## Trace speed, {} rays, {}-bit keys, access {}: MRays/s (speedup [95 % interval])\n\n", batch,
+                        overview_bits, access);
+      md += header("encoder", scenes);
+      std::map<std::string, const CellRecord*> best;
       for (auto& s : scenes) {
-        auto* c = find(cells, s, batch, e, overview_bits);
-        if (!c) md += " – |";
-        else if (!c->ok()) md += " failed |";
-        else
-          md += fmt::format(" {} |", bold_if(c->trace_mrays == best[s], fmt::format("{:.2f} ({:.2f})", c->trace_mrays, c->speedup)));
+        std::vector<const CellRecord*> column;
+        for (auto& e : encoders) column.push_back(find(cells, view, s, batch, e, overview_bits));
+        best[s] = significant_best(column);
+      }
+      for (auto& e : encoders) {
+        md += fmt::format("| {} |", e);
+        for (auto& s : scenes) {
+          auto* c = find(cells, view, s, batch, e, overview_bits);
+          if (!c) md += " – |";
+          else if (!c->ok()) md += " failed |";
+          else if (c->encoder == kBaselineEncoder)
+            md += fmt::format(" {:.2f} (A/A {}) |", c->trace_mrays, interval_text(c->aa));
+          else
+            md += fmt::format(" {:.2f} ({}) |", c->trace_mrays, speedup_text(*c, c == best[s]));
+        }
+        md += "\n";
       }
       md += "\n";
     }
-    md += "\n";
   }
 
   // Overhead (Table 5).
-  for (auto& batch : batches) {
-    md += fmt::format("## Overhead, {} rays, {}-bit keys: encode + sort ms (% of trace) → net speedup\n\n", batch,
-                      overview_bits);
-    md += header("encoder", scenes);
-    for (auto& e : encoders) {
-      if (e == kBaselineEncoder) continue;
-      md += fmt::format("| {} |", e);
-      for (auto& s : scenes) {
-        auto* c = find(cells, s, batch, e, overview_bits);
-        if (!c) md += " – |";
-        else if (!c->ok()) md += " failed |";
-        else
-          md += fmt::format(" {:.2f} + {:.2f} ({:.0f}%) → {:.2f} |", c->encode.median_ms, c->sort.median_ms, c->overhead_pct,
-                            c->net_speedup);
+  for (auto& access : accesses) {
+    const View view{main_view.variant, access};
+    for (auto& batch : batches) {
+      md += fmt::format("## Overhead, {} rays, {}-bit keys, access {}: encode + sort{} ms (% of trace) → net speedup "
+                        "[95 % interval]\n\n",
+                        batch, overview_bits, access, access == "permute" ? " + permute" : "");
+      md += header("encoder", scenes);
+      for (auto& e : encoders) {
+        if (e == kBaselineEncoder) continue;
+        md += fmt::format("| {} |", e);
+        for (auto& s : scenes) {
+          auto* c = find(cells, view, s, batch, e, overview_bits);
+          if (!c) md += " – |";
+          else if (!c->ok()) md += " failed |";
+          else
+            md += fmt::format(" {:.2f} + {:.2f}{} ({:.0f}%) → {} |", c->encode.median_ms, c->sort.median_ms,
+                              access == "permute" ? fmt::format(" + {:.2f}", c->permute.median_ms) : "",
+                              c->overhead_pct.value, interval_text(c->net_speedup));
+        }
+        md += "\n";
       }
       md += "\n";
     }
+  }
+
+  // Gather against permute, when both ran: the same order read two ways.
+  if (accesses.size() > 1) {
+    md += fmt::format("## Gather against permute, {}-bit keys: trace speedup, permute ms, net speedup\n\n"
+                      "Each cell's speedups are paired with the NoSort traces of its own rounds; the gather and "
+                      "permute cells of one encoder share their rounds.\n\n"
+                      "| scene | batch | encoder | speedup gather | speedup permute | permute ms (% of trace) | net "
+                      "gather | net permute |\n|---|---|---|---:|---:|---:|---:|---:|\n",
+                      overview_bits);
+    const View g{main_view.variant, "gather"}, p{main_view.variant, "permute"};
+    for (auto& s : scenes)
+      for (auto& batch : batches)
+        for (auto& e : encoders) {
+          if (e == kBaselineEncoder) continue;
+          auto* cg = find(cells, g, s, batch, e, overview_bits);
+          auto* cp = find(cells, p, s, batch, e, overview_bits);
+          if (!cg || !cp || !cg->ok() || !cp->ok()) continue;
+          md += fmt::format("| {} | {} | {} | {} | {} | {:.2f} ({:.1f}%) | {} | {} |\n", s, batch, e,
+                            speedup_text(*cg, false), speedup_text(*cp, false), cp->permute.median_ms,
+                            cp->trace.median_ms > 0 ? 100.0 * cp->permute.median_ms / cp->trace.median_ms : 0.0,
+                            interval_text(cg->net_speedup), interval_text(cp->net_speedup));
+        }
     md += "\n";
   }
 
@@ -133,18 +249,19 @@ std::string render_tables(const std::vector<CellRecord>& cells, const nlohmann::
       for (auto& batch : batches) {
         bool any = false;
         for (auto& e : encoders)
-          for (auto b : bits) any |= find(cells, s, batch, e, b) && e != kBaselineEncoder;
+          for (auto b : bits) any |= find(cells, main_view, s, batch, e, b) && e != kBaselineEncoder;
         if (!any) continue;
-        md += fmt::format("## Key length, {} {}: MRays/s (speedup) | ANC\n\n", s, batch);
+        md += fmt::format("## Key length, {} {}, access {}: MRays/s (speedup [95 % interval]) | ANC\n\n", s, batch,
+                          main_view.access);
         md += header("encoder", bit_cols);
         for (auto& e : encoders) {
           if (e == kBaselineEncoder) continue;
           md += fmt::format("| {} |", e);
           for (auto b : bits) {
-            auto* c = find(cells, s, batch, e, b);
+            auto* c = find(cells, main_view, s, batch, e, b);
             if (!c) md += " – |";
             else if (!c->ok()) md += " failed |";
-            else md += fmt::format(" {:.2f} ({:.2f}) \\| {:.2f} |", c->trace_mrays, c->speedup, c->anc);
+            else md += fmt::format(" {:.2f} ({}) \\| {:.2f} |", c->trace_mrays, speedup_text(*c, false), c->anc);
           }
           md += "\n";
         }
@@ -166,7 +283,7 @@ std::string render_tables(const std::vector<CellRecord>& cells, const nlohmann::
       for (auto& s : scenes)
         for (auto& batch : batches)
           for (auto b : bits) {
-            auto* c = find(cells, s, batch, e, b);
+            auto* c = find(cells, main_view, s, batch, e, b);
             md += c && c->ok() ? fmt::format(" {:.2f} |", c->anc) : " – |";
           }
       md += "\n";
@@ -188,7 +305,7 @@ std::string render_tables(const std::vector<CellRecord>& cells, const nlohmann::
       md += fmt::format("| {} |", e);
       for (auto& s : scenes)
         for (auto& batch : batches) {
-          auto* c = find(cells, s, batch, e, overview_bits);
+          auto* c = find(cells, main_view, s, batch, e, overview_bits);
           md += c && c->ok() ? fmt::format(" {:.3f} ({:.2f}) / {:.3f} ({:.2f}) |", c->simt_lane_efficiency,
                                            c->simt_lane_efficiency_ratio, c->simt_distinct_per_visit,
                                            c->simt_distinct_per_visit_ratio)
@@ -203,11 +320,11 @@ std::string render_tables(const std::vector<CellRecord>& cells, const nlohmann::
   bool any_topk = std::any_of(cells.begin(), cells.end(), [](const CellRecord& c) { return c.top_bits > 0; });
   if (any_topk) {
     md += "## Top-k sorting: sort by the highest k key bits only\n\n";
-    md += "| cell | sort ms | trace MRays/s (speedup) | net | ANC |\n|---|---:|---:|---:|---:|\n";
+    md += "| cell | sort ms | trace MRays/s (speedup [95 % interval]) | net | ANC |\n|---|---:|---:|---:|---:|\n";
     for (auto& c : cells)
       if (c.top_bits > 0 && c.ok())
-        md += fmt::format("| {} | {:.2f} | {:.2f} ({:.2f}) | {:.2f} | {:.2f} |\n", c.id(), c.sort.median_ms, c.trace_mrays,
-                          c.speedup, c.net_speedup, c.anc);
+        md += fmt::format("| {} | {:.2f} | {:.2f} ({}) | {} | {:.2f} |\n", c.id(), c.sort.median_ms, c.trace_mrays,
+                          speedup_text(c, false), interval_text(c.net_speedup), c.anc);
     md += "\n";
   }
 
@@ -218,20 +335,22 @@ std::string render_tables(const std::vector<CellRecord>& cells, const nlohmann::
     md += "## Robust vs fast trace: what watertight intersection costs\n\n"
           "NoSort trace MRays/s of each variant on the same rays, their ratio, and leaks per million rays "
           "(rays the variant misses that the other one hits: the fast variant's leaks through shared edges and "
-          "vertices). Best = the best encoder's speedup at the overview key length in that variant.\n\n"
+          "vertices). Best = the encoder with the highest speedup at the overview key length in that variant. The "
+          "two variants' NoSort cells ran at different times, so their ratio carries no interval.\n\n"
           "| scene | batch | fast MRays/s | robust MRays/s | robust/fast | fast leaks/M | robust leaks/M | best fast | best robust |\n"
           "|---|---|---:|---:|---:|---:|---:|---|---|\n";
     for (auto& s : scenes)
       for (auto& batch : batches) {
-        auto* f = find(cells, s, batch, kBaselineEncoder, 0, "fast");
-        auto* r = find(cells, s, batch, kBaselineEncoder, 0, "robust");
+        auto* f = find(cells, {"fast", main_view.access}, s, batch, kBaselineEncoder, 0);
+        auto* r = find(cells, {"robust", main_view.access}, s, batch, kBaselineEncoder, 0);
         if (!f || !r || !f->ok() || !r->ok()) continue;
         auto best = [&](const std::string& v) {
           const CellRecord* b = nullptr;
           for (auto& e : encoders)
-            if (auto* c = find(cells, s, batch, e, overview_bits, v); c && c->ok() && e != kBaselineEncoder)
-              if (!b || c->speedup > b->speedup) b = c;
-          return b ? fmt::format("{} {:.2f}", b->encoder, b->speedup) : std::string("–");
+            if (auto* c = find(cells, {v, main_view.access}, s, batch, e, overview_bits);
+                c && c->ok() && e != kBaselineEncoder && !c->same_order_as_nosort)
+              if (!b || c->speedup.value > b->speedup.value) b = c;
+          return b ? fmt::format("{} {}", b->encoder, speedup_text(*b, false)) : std::string("–");
         };
         md += fmt::format("| {} | {} | {:.2f} | {:.2f} | {:.3f} | {:.1f} | {:.1f} | {} | {} |\n", s, batch, f->trace_mrays,
                           r->trace_mrays, f->trace_mrays > 0 ? r->trace_mrays / f->trace_mrays : 0.0, f->leaks_per_million,

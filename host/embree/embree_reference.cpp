@@ -160,22 +160,6 @@ std::vector<RsHit> EmbreeScene::trace(const std::vector<RsRay>& rays, bool any_h
   return hits;
 }
 
-EmbreeScene::Run EmbreeScene::run(const std::vector<RsRay>& rays, bool any_hit, unsigned warmup, unsigned reps) const {
-  Run out;
-  for (unsigned i = 0; i < warmup; ++i) out.hits = trace(rays, any_hit);
-  std::vector<double> ms;
-  for (unsigned i = 0; i < std::max(1u, reps); ++i) {
-    auto t0 = std::chrono::steady_clock::now();
-    out.hits = trace(rays, any_hit);
-    ms.push_back(ms_since(t0));
-  }
-  std::sort(ms.begin(), ms.end());
-  out.median_ms = ms.size() % 2 ? ms[ms.size() / 2] : 0.5 * (ms[ms.size() / 2 - 1] + ms[ms.size() / 2]);
-  out.min_ms = ms.front();
-  out.max_ms = ms.back();
-  return out;
-}
-
 HitAgreement compare_with_embree(const std::vector<RsHit>& ours, const std::vector<RsHit>& embree, bool any_hit) {
   if (ours.size() != embree.size())
     throw Error(fmt::format("compare_with_embree: {} hits against {}", ours.size(), embree.size()));

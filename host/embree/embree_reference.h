@@ -42,15 +42,8 @@ class EmbreeScene {
   // Traces every ray (closest hit, or any hit when any_hit) on threads() threads, each taking
   // contiguous chunks of the batch. Closest: hits[i] = (tfar, primID, u, v) or tri = RS_NO_HIT.
   // Any hit: tri = kEmbreeOccluded (t = 0) or RS_NO_HIT.
+  // Timed traces go through the measurement protocol (bench/protocol.h), by wall clock.
   std::vector<RsHit> trace(const std::vector<RsRay>& rays, bool any_hit) const;
-
-  struct Run {
-    std::vector<RsHit> hits;
-    double median_ms = 0.0;  // wall clock of trace(), median over reps
-    double min_ms = 0.0, max_ms = 0.0;
-  };
-  // warmup untimed traces, then reps timed ones (as Tracer::run does on the device).
-  Run run(const std::vector<RsRay>& rays, bool any_hit, unsigned warmup = 1, unsigned reps = 1) const;
 
  private:
   RTCDeviceTy* device_ = nullptr;

@@ -4,7 +4,6 @@
 #include <numeric>
 
 #include "encode/encode.h"
-#include "util/timing.h"
 
 namespace raysort {
 
@@ -195,7 +194,7 @@ DeviceEncoder::Events DeviceEncoder::enqueue(Encoder e, unsigned bits, const cl:
 }
 
 DeviceEncoder::Run DeviceEncoder::run(Encoder e, unsigned bits, const std::vector<RsRay>& rays,
-                                      const std::vector<std::uint32_t>* order, unsigned warmup, unsigned reps) {
+                                      const std::vector<std::uint32_t>* order) {
   const auto n = static_cast<std::uint32_t>(order ? order->size() : rays.size());
   std::vector<std::uint32_t> identity;
   if (!order) {
@@ -208,15 +207,9 @@ DeviceEncoder::Run DeviceEncoder::run(Encoder e, unsigned bits, const std::vecto
   cl::Buffer order_buf = rt_.upload("ray order", *order);
   cl::Buffer key_buf = rt_.buffer("keys", std::max<std::size_t>(1, n) * key_bytes(bits));
   cl::Buffer value_buf = rt_.buffer("values", std::max<std::size_t>(1, n) * sizeof(std::uint32_t));
-  std::vector<double> times;
-  for (unsigned i = 0; i < warmup + std::max(1u, reps); ++i) {
-    const Events ev = enqueue(e, bits, ray_buf, order_buf, n, key_buf, value_buf);
-    ev.wait();
-    if (i >= warmup && n > 0) times.push_back(ev.ms());
-  }
+  const Events ev = enqueue(e, bits, ray_buf, order_buf, n, key_buf, value_buf);
+  ev.wait();
   Run r;
-  const Timing t = Timing::of(std::move(times));
-  r.median_ms = t.median_ms, r.min_ms = t.min_ms;
   if (bits > 32) {
     rt_.download("keys", key_buf, r.keys, n);
   } else {

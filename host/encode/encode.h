@@ -147,11 +147,10 @@ class DeviceEncoder {
   struct Run {
     std::vector<std::uint64_t> keys;  // widened to 64 bits
     std::vector<std::uint32_t> values;
-    double median_ms = 0.0, min_ms = 0.0;
   };
-  // Uploads rays (order null = identity), encodes warmup + reps times, returns keys and times.
-  Run run(Encoder e, unsigned bits, const std::vector<RsRay>& rays, const std::vector<std::uint32_t>* order = nullptr,
-          unsigned warmup = 0, unsigned reps = 1);
+  // Uploads rays (order null = identity), encodes them once and returns keys and values. Untimed:
+  // timed encodes go through the measurement protocol (bench/protocol.h) with enqueue().
+  Run run(Encoder e, unsigned bits, const std::vector<RsRay>& rays, const std::vector<std::uint32_t>* order = nullptr);
 
   const EncodeScene& scene() const { return scene_; }
   std::size_t local_size() const { return local_; }

@@ -6,7 +6,6 @@
 #include <thread>
 
 #include "traverse.h"
-#include "util/timing.h"
 #include "util/error.h"
 
 namespace raysort {
@@ -93,8 +92,7 @@ cl::Event Tracer::enqueue_counted(const cl::Buffer& rays, const cl::Buffer& orde
   return launch(counted_, count, doing);
 }
 
-Tracer::Run Tracer::run(const std::vector<RsRay>& rays, const std::vector<std::uint32_t>* order, bool any_hit,
-                        unsigned warmup, unsigned reps) {
+Tracer::Run Tracer::run(const std::vector<RsRay>& rays, const std::vector<std::uint32_t>* order, bool any_hit) {
   const auto n = static_cast<std::uint32_t>(rays.size());
   std::vector<std::uint32_t> identity;
   if (!order) {
@@ -105,15 +103,9 @@ Tracer::Run Tracer::run(const std::vector<RsRay>& rays, const std::vector<std::u
   cl::Buffer ray_buf = rt_.upload("rays", rays);
   cl::Buffer order_buf = rt_.upload("ray order", *order);
   cl::Buffer hit_buf = rt_.buffer("hits", std::max<std::size_t>(1, n) * sizeof(RsHit));
-  std::vector<double> times;
-  for (unsigned i = 0; i < warmup + std::max(1u, reps); ++i) {
-    cl::Event ev = enqueue(ray_buf, order_buf, n, any_hit, hit_buf);
-    cl_call("waiting for a trace of " + std::to_string(n) + " rays", [&] { ev.wait(); });
-    if (i >= warmup && n > 0) times.push_back(event_ms(ev));
-  }
+  cl::Event ev = enqueue(ray_buf, order_buf, n, any_hit, hit_buf);
+  cl_call("waiting for a trace of " + std::to_string(n) + " rays", [&] { ev.wait(); });
   Run r;
-  const Timing t = Timing::of(std::move(times));
-  r.median_ms = t.median_ms, r.min_ms = t.min_ms, r.max_ms = t.max_ms;
   rt_.download("hits", hit_buf, r.hits, n);
   return r;
 }

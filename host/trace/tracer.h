@@ -51,12 +51,10 @@ class Tracer {
 
   struct Run {
     std::vector<RsHit> hits;  // hits[i] of rays[order[i]]
-    double median_ms = 0.0;   // kernel time from profiling events, median over reps
-    double min_ms = 0.0, max_ms = 0.0;
   };
-  // Uploads rays (and order; null = identity), traces warmup + reps times, returns the hits.
-  Run run(const std::vector<RsRay>& rays, const std::vector<std::uint32_t>* order, bool any_hit, unsigned warmup = 1,
-          unsigned reps = 1);
+  // Uploads rays (and order; null = identity), traces them once and returns the hits. Untimed:
+  // timed traces go through the measurement protocol (bench/protocol.h) with enqueue().
+  Run run(const std::vector<RsRay>& rays, const std::vector<std::uint32_t>* order, bool any_hit);
 
  private:
   cl::Event launch(cl::Kernel& k, std::uint32_t count, const std::string& doing);

@@ -1,0 +1,248 @@
+#include "bench/cell_measure.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cstring>
+#include <numeric>
+
+namespace raysort {
+
+namespace {
+
+std::vector<std::uint32_t> identity_order(std::uint32_t n) {
+  std::vector<std::uint32_t> order(n);
+  std::iota(order.begin(), order.end(), 0u);
+  return order;
+}
+
+Estimate scaled(Estimate e, double factor) {
+  e.value *= factor, e.lo *= factor, e.hi *= factor;
+  return e;
+}
+
+// Keys of `bits` bits from a device buffer, widened to 64 bits.
+std::vector<std::uint64_t> download_keys(Runtime& rt, const cl::Buffer& keys, unsigned bits, std::uint32_t n,
+                                         const char* what) {
+  if (bits > 32) {
+    std::vector<std::uint64_t> k;
+    rt.download(what, keys, k, n);
+    return k;
+  }
+  std::vector<std::uint32_t> k;
+  rt.download(what, keys, k, n);
+  return {k.begin(), k.end()};
+}
+
+}  // namespace
+
+BatchBench::BatchBench(const Stages& stages, const Bvh& bvh, const RayBatch& batch, const std::vector<RsHit>& reference)
+    : s_(stages), bvh_(bvh), batch_(batch), n_(static_cast<std::uint32_t>(batch.size())) {
+  try {
+    const std::size_t n = std::max<std::size_t>(1, n_);
+    rays_ = s_.rt.upload("rays of " + batch.name, batch.rays);
+    identity_ = s_.rt.upload("identity order", identity_order(n_));
+    values_ = s_.rt.buffer("sort values (ray order)", n * sizeof(std::uint32_t));
+    keys32_ = s_.rt.buffer("32-bit keys", n * sizeof(std::uint32_t));
+    keys64_ = s_.rt.buffer("64-bit keys", n * sizeof(std::uint64_t));
+    nosort_hits_ = s_.rt.buffer("NoSort hits", n * sizeof(RsHit));
+    gather_hits_ = s_.rt.buffer("hits in sorted order (gather)", n * sizeof(RsHit));
+    permute_hits_ = s_.rt.buffer("hits in sorted order (permute)", n * sizeof(RsHit));
+    cl::Event ev = trace(rays_, identity_, nosort_hits_);
+    cl_call("waiting for the NoSort trace", [&] { ev.wait(); });
+    s_.rt.download("NoSort hits", nosort_hits_, nosort_hits_host_, n_);
+    if (count_hit_mismatches(nosort_hits_host_, reference) != 0)
+      setup_error_ = "device NoSort hits differ from the host reference traversal";
+  } catch (const Error& err) {
+    setup_error_ = err.what();
+  }
+  nosort_simt_ = simt_model(bvh_, batch_.rays, nullptr, batch_.any_hit(), s_.tracer.variant());
+}
+
+cl::Event BatchBench::trace(const cl::Buffer& rays, const cl::Buffer& order, const cl::Buffer& hits) {
+  return s_.tracer.enqueue(rays, order, n_, batch_.any_hit(), hits);
+}
+
+double BatchBench::timed_trace(const cl::Buffer& rays, const cl::Buffer& order, const cl::Buffer& hits,
+                               const char* doing) {
+  cl::Event ev = trace(rays, order, hits);
+  cl_call(doing, [&] { ev.wait(); });
+  return event_ms(ev);
+}
+
+const cl::Buffer& BatchBench::permuted_rays() {
+  // Only cells of the permute access mode need the second copy of the rays.
+  if (!permuted_()) permuted_ = s_.rt.buffer("rays in sorted order (permute)", std::max<std::size_t>(1, n_) * sizeof(RsRay));
+  return permuted_;
+}
+
+CellRecord BatchBench::measure_nosort(CellRecord c, const ProtocolSettings& settings) {
+  c.rays = n_;
+  c.order_is_permutation = true;
+  c.same_order_as_nosort = true;
+  const std::vector<std::uint32_t> identity = identity_order(n_);
+  c.keys_hash = fnv1a_hex(nullptr, 0);
+  c.order_hash = fnv1a_hex(identity.data(), identity.size() * sizeof(std::uint32_t));
+  c.simt_lane_efficiency = nosort_simt_.lane_efficiency;
+  c.simt_distinct_per_visit = nosort_simt_.distinct_nodes_per_visit;
+  c.simt_lane_efficiency_ratio = c.simt_distinct_per_visit_ratio = 1.0;
+  c.hits_match_nosort = setup_error_.empty();
+  if (!setup_error_.empty()) {
+    c.status = "failed";
+    c.error = setup_error_;
+    return c;
+  }
+  try {
+    Measurement m;
+    m.arms = {{{"nosort"}, [&] { return std::vector<double>{timed_trace(rays_, identity_, nosort_hits_, "waiting for the NoSort trace")}; }},
+              {{"aa"}, [&] { return std::vector<double>{timed_trace(rays_, identity_, nosort_hits_, "waiting for the NoSort trace")}; }}};
+    m.targets = {[](const Series& s) { return ratio_interval(s.at("nosort"), s.at("aa")); }};
+    const Outcome o = measure(m, settings);
+    const auto &nosort = o.series.at("nosort"), &aa = o.series.at("aa");
+    c.trace = c.nosort_trace = Timing::of(nosort);
+    c.trace_mrays = c.trace.median_ms > 0 ? n_ / (c.trace.median_ms * 1e3) : 0.0;
+    c.aa = ratio_interval(nosort, aa, settings.confidence);
+    // NoSort against itself: 1 and no overhead by definition.
+    c.speedup = c.net_speedup = Estimate::exact(1.0);
+    c.overhead_pct = Estimate::exact(0.0);
+    c.speedup.n = c.net_speedup.n = c.overhead_pct.n = o.rounds;
+    c.rounds = o.rounds;
+    c.stopped_by = stop_reason_name(o.stop);
+    c.noise = c.aa.relative_half_width();
+    c.samples = {{"nosort", nosort}, {"aa", aa}};
+  } catch (const TimedOut& t) {
+    c.status = "timeout";
+    c.error = t.what();
+  } catch (const Error& err) {
+    c.status = "failed";
+    c.error = err.what();
+  }
+  return c;
+}
+
+std::vector<CellRecord> BatchBench::measure_sorted(std::vector<CellRecord> cells, Encoder encoder,
+                                                   const ProtocolSettings& settings) {
+  const unsigned bits = cells.front().bits, top = cells.front().top_bits;
+  for (auto& c : cells) c.rays = n_;
+  auto fail_all = [&](const std::string& status, const std::string& error) {
+    for (auto& c : cells) c.status = status, c.error = error;
+    return cells;
+  };
+  if (!setup_error_.empty()) return fail_all("failed", "the batch's setup failed: " + setup_error_);
+  try {
+    s_.encoder.prepare(encoder, bits);
+    cl::Buffer& keys = bits > 32 ? keys64_ : keys32_;
+    RadixSortConfig cfg;
+    cfg.key_bits = bits;
+    cfg.top_bits = top;
+    // The keys in generation order, for their fingerprint (untimed).
+    s_.encoder.enqueue(encoder, bits, rays_, identity_, n_, keys, values_).wait();
+    const std::vector<std::uint64_t> unsorted = download_keys(s_.rt, keys, bits, n_, "keys");
+
+    Measurement m;
+    m.prologue = {{"encode", "sort"}, [&] {
+                    const DeviceEncoder::Events ev = s_.encoder.enqueue(encoder, bits, rays_, identity_, n_, keys, values_);
+                    ev.wait();
+                    const SortStats st = s_.sorter.sort(keys, values_, n_, cfg);
+                    return std::vector<double>{ev.ms(), st.ms};
+                  }};
+    m.arms = {{{"nosort"}, [&] { return std::vector<double>{timed_trace(rays_, identity_, nosort_hits_, "waiting for the NoSort trace")}; }},
+              {{"aa"}, [&] { return std::vector<double>{timed_trace(rays_, identity_, nosort_hits_, "waiting for the NoSort trace")}; }}};
+    for (const CellRecord& c : cells) {
+      if (c.access == "gather") {
+        m.arms.push_back({{"trace:gather"}, [&] {
+                            return std::vector<double>{timed_trace(rays_, values_, gather_hits_, "waiting for the sorted trace")};
+                          }});
+      } else {
+        m.arms.push_back({{"permute", "trace:permute"}, [&] {
+                            cl::Event p = s_.permuter.enqueue(rays_, values_, n_, permuted_rays());
+                            cl_call("waiting for the permute kernel", [&] { p.wait(); });
+                            const double permute_ms = event_ms(p);
+                            return std::vector<double>{permute_ms, timed_trace(permuted_rays(), identity_, permute_hits_,
+                                                                               "waiting for the trace of the permuted rays")};
+                          }});
+      }
+      m.targets.push_back([trace = "trace:" + c.access](const Series& s) { return ratio_interval(s.at("nosort"), s.at(trace)); });
+    }
+    const Outcome o = measure(m, settings);
+
+    // Checks: the order is a permutation, and each access mode's hits scattered back equal NoSort's.
+    std::vector<std::uint32_t> order;
+    s_.rt.download("sorted order", values_, order, n_);
+    std::vector<std::uint8_t> seen(n_, 0);
+    bool perm = true;
+    for (auto v : order)
+      if (v >= n_ || seen[v]++) {
+        perm = false;
+        break;
+      }
+    bool same_order = perm;
+    for (std::uint32_t i = 0; same_order && i < n_; ++i) same_order = order[i] == i;
+    std::vector<std::uint64_t> sorted_keys = download_keys(s_.rt, keys, bits, n_, "sorted keys");
+    // ANC of the codes the sort used: a top-k sort orders by the highest k bits only.
+    if (top > 0)
+      for (auto& k : sorted_keys) k >>= (bits - top);
+    const double anc = average_number_of_codes(sorted_keys);
+    SimtModel simt;
+    if (perm) simt = simt_model(bvh_, batch_.rays, order.data(), batch_.any_hit(), s_.tracer.variant());
+
+    const auto &nosort = o.series.at("nosort"), &aa = o.series.at("aa");
+    const auto &encode = o.series.at("encode"), &sort = o.series.at("sort");
+    for (CellRecord& c : cells) {
+      std::vector<RsHit> hits;
+      s_.rt.download("sorted hits", c.access == "gather" ? gather_hits_ : permute_hits_, hits, n_);
+      std::size_t bad = 0;
+      if (perm)
+        for (std::uint32_t i = 0; i < n_; ++i)
+          bad += std::memcmp(&hits[i], &nosort_hits_host_[order[i]], sizeof(RsHit)) != 0;
+      c.order_is_permutation = perm;
+      c.hits_match_nosort = perm && bad == 0;
+      c.same_order_as_nosort = same_order;
+      c.keys_hash = fnv1a_hex(unsorted.data(), unsorted.size() * sizeof(std::uint64_t));
+      c.order_hash = fnv1a_hex(order.data(), order.size() * sizeof(std::uint32_t));
+      if (!c.hits_match_nosort) {
+        c.status = "failed";
+        c.error = perm ? fmt::format("{} of {} hits differ from NoSort after scattering back ({})", bad, n_, c.access)
+                       : "the sorted order is not a permutation of the rays";
+        continue;
+      }
+      const std::vector<double>& trace = o.series.at("trace:" + c.access);
+      std::vector<const std::vector<double>*> overhead_stages{&encode, &sort};
+      if (c.access == "permute") overhead_stages.push_back(&o.series.at("permute"));
+      const std::vector<double> overhead = per_round_sums(overhead_stages);
+      c.encode = Timing::of(encode);
+      c.sort = Timing::of(sort);
+      if (c.access == "permute") c.permute = Timing::of(o.series.at("permute"));
+      c.trace = Timing::of(trace);
+      c.nosort_trace = Timing::of(nosort);
+      c.trace_mrays = c.trace.median_ms > 0 ? n_ / (c.trace.median_ms * 1e3) : 0.0;
+      const Estimate measured = ratio_interval(nosort, trace, settings.confidence);
+      // The same rays in the same order as NoSort: whatever the clock says is noise, not a speedup.
+      c.speedup = same_order ? Estimate{1.0, 1.0, 1.0, measured.n} : measured;
+      c.net_speedup = ratio_interval(nosort, per_round_sums({&overhead, &trace}), settings.confidence);
+      c.overhead_pct = scaled(ratio_interval(overhead, trace, settings.confidence), 100.0);
+      c.aa = ratio_interval(nosort, aa, settings.confidence);
+      c.rounds = o.rounds;
+      c.stopped_by = stop_reason_name(o.stop);
+      c.noise = measured.relative_half_width();
+      c.samples = {{"nosort", nosort}, {"aa", aa}, {"encode", encode}, {"sort", sort}, {"trace", trace}};
+      if (c.access == "permute") c.samples["permute"] = o.series.at("permute");
+      c.anc = anc;
+      c.simt_lane_efficiency = simt.lane_efficiency;
+      c.simt_distinct_per_visit = simt.distinct_nodes_per_visit;
+      c.simt_lane_efficiency_ratio =
+          nosort_simt_.lane_efficiency > 0 ? simt.lane_efficiency / nosort_simt_.lane_efficiency : 0;
+      c.simt_distinct_per_visit_ratio = nosort_simt_.distinct_nodes_per_visit > 0
+                                            ? simt.distinct_nodes_per_visit / nosort_simt_.distinct_nodes_per_visit
+                                            : 0;
+    }
+  } catch (const TimedOut& t) {
+    return fail_all("timeout", t.what());
+  } catch (const Error& err) {
+    // A device fault (allocation, build, launch) fails these cells; the run goes on.
+    return fail_all("failed", err.what());
+  }
+  return cells;
+}
+
+}  // namespace raysort

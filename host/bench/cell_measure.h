@@ -1,0 +1,75 @@
+#pragma once
+// One cell's life: encode → radix sort → [permute] → trace, timed against NoSort in the rounds of
+// the measurement protocol (bench/protocol.h), checked bit for bit, and summarised in a
+// CellRecord. The runner (bench/runner.cpp) decides which cells to measure; this file decides how
+// one is measured (docs/measurement.md tells the same story with the figures behind it).
+//
+// The arms of a cell's rounds, run in a seeded random order after the prologue (encode + sort):
+//   nosort          the batch in generation order: the baseline of the speedup
+//   aa              the same NoSort trace once more: the A/A check (nosort / aa should be 1)
+//   trace:gather    the rays traced through the sorted order (access mode gather)
+//   permute         the rays moved into sorted order, then traced (access mode permute; stages
+//                   "permute" and "trace:permute")
+// When a matrix asks for both access modes, the gather and permute cells of one encoder and key
+// length share their rounds: one encode + sort feeds both, and both are paired with the same
+// NoSort traces.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "bench/metrics.h"
+#include "bench/protocol.h"
+#include "bench/record.h"
+#include "bvh/bvh.h"
+#include "cl/runtime.h"
+#include "encode/encode.h"
+#include "render/rays.h"
+#include "sort/permute.h"
+#include "sort/radix_sort.h"
+#include "trace/tracer.h"
+
+namespace raysort {
+
+// What every cell of one batch and trace variant shares: the rays on the device, the buffers the
+// stages write, the NoSort hits every sorted trace must reproduce, and the NoSort SIMT model.
+class BatchBench {
+ public:
+  struct Stages {
+    Runtime& rt;
+    DeviceEncoder& encoder;
+    RadixSort& sorter;
+    RayPermuter& permuter;
+    Tracer& tracer;
+  };
+  // Uploads the batch, traces it once in generation order (untimed) and checks those hits against
+  // `reference` (the host traversal of the same variant). A device fault or a mismatch does not
+  // throw: it is kept in setup_error() and fails every cell of the batch.
+  BatchBench(const Stages& stages, const Bvh& bvh, const RayBatch& batch, const std::vector<RsHit>& reference);
+
+  const std::string& setup_error() const { return setup_error_; }
+  const RayBatch& batch() const { return batch_; }
+
+  // The NoSort cell: rounds of the nosort and aa arms only. `cell` names the cell (its identity
+  // fields are kept); the figures are filled in.
+  CellRecord measure_nosort(CellRecord cell, const ProtocolSettings& settings);
+  // The cells of one encoder × key length × top-k, one per access mode (identity fields set; all
+  // with the same encoder, bits and top_bits), measured in shared rounds.
+  std::vector<CellRecord> measure_sorted(std::vector<CellRecord> cells, Encoder encoder,
+                                         const ProtocolSettings& settings);
+
+ private:
+  cl::Event trace(const cl::Buffer& rays, const cl::Buffer& order, const cl::Buffer& hits);
+  double timed_trace(const cl::Buffer& rays, const cl::Buffer& order, const cl::Buffer& hits, const char* doing);
+  const cl::Buffer& permuted_rays();
+
+  Stages s_;
+  const Bvh& bvh_;
+  const RayBatch& batch_;
+  const std::uint32_t n_;
+  std::string setup_error_;
+  cl::Buffer rays_, identity_, values_, keys32_, keys64_, nosort_hits_, gather_hits_, permute_hits_, permuted_;
+  std::vector<RsHit> nosort_hits_host_;
+  SimtModel nosort_simt_;
+};
+
+}  // namespace raysort

@@ -1,0 +1,190 @@
+#include "bench/protocol.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <numeric>
+
+namespace raysort {
+
+double Estimate::relative_half_width() const {
+  if (!has_interval() || !has_value() || value == 0.0) return std::numeric_limits<double>::infinity();
+  return (hi - lo) / (2.0 * std::abs(value));
+}
+
+namespace {
+
+// P(Binomial(n, 1/2) <= j), summed in the log domain so that n in the thousands does not underflow.
+double binomial_half_cdf(std::size_t n, std::size_t j) {
+  const double log_half_n = -static_cast<double>(n) * std::log(2.0);
+  double p = 0.0;
+  for (std::size_t i = 0; i <= j && i <= n; ++i) {
+    const double log_choose = std::lgamma(static_cast<double>(n) + 1) - std::lgamma(static_cast<double>(i) + 1) -
+                              std::lgamma(static_cast<double>(n - i) + 1);
+    p += std::exp(log_choose + log_half_n);
+  }
+  return std::min(1.0, p);
+}
+
+double median_of_sorted(const std::vector<double>& s) {
+  const std::size_t n = s.size();
+  return n % 2 ? s[n / 2] : 0.5 * (s[n / 2 - 1] + s[n / 2]);
+}
+
+}  // namespace
+
+double median_coverage(std::size_t n, std::size_t k) {
+  if (k == 0 || 2 * k > n + 1) return 0.0;
+  return 1.0 - 2.0 * binomial_half_cdf(n, k - 1);
+}
+
+std::size_t median_interval_rank(std::size_t n, double confidence) {
+  // Coverage falls as k grows; take the largest k that still reaches the confidence.
+  std::size_t k = 0;
+  for (std::size_t c = 1; 2 * c <= n + 1; ++c) {
+    if (median_coverage(n, c) + 1e-12 < confidence) break;
+    k = c;
+  }
+  return k;
+}
+
+Estimate median_interval(std::vector<double> samples, double confidence) {
+  Estimate e;
+  e.n = samples.size();
+  if (samples.empty()) return e;
+  for (double x : samples)
+    if (!std::isfinite(x)) throw Error(fmt::format("a timing sample is {} (a broken profiling event?)", x));
+  std::sort(samples.begin(), samples.end());
+  e.value = median_of_sorted(samples);
+  if (const std::size_t k = median_interval_rank(samples.size(), confidence); k > 0) {
+    e.lo = samples[k - 1];
+    e.hi = samples[samples.size() - k];
+  }
+  return e;
+}
+
+std::vector<double> per_round_ratios(const std::vector<double>& num, const std::vector<double>& den) {
+  if (num.size() != den.size())
+    throw Error(fmt::format("per_round_ratios: {} numerators against {} denominators", num.size(), den.size()));
+  std::vector<double> r(num.size());
+  for (std::size_t i = 0; i < num.size(); ++i) r[i] = den[i] > 0 ? num[i] / den[i] : std::numeric_limits<double>::infinity();
+  return r;
+}
+
+Estimate ratio_interval(const std::vector<double>& num, const std::vector<double>& den, double confidence) {
+  std::vector<double> r = per_round_ratios(num, den);
+  // A zero-time denominator (an empty batch) has no ratio; report none rather than infinity.
+  if (std::any_of(r.begin(), r.end(), [](double x) { return !std::isfinite(x); })) {
+    Estimate e;
+    e.n = r.size();
+    return e;
+  }
+  return median_interval(std::move(r), confidence);
+}
+
+std::vector<double> per_round_sums(const std::vector<const std::vector<double>*>& series) {
+  std::vector<double> sum;
+  for (const auto* s : series) {
+    if (sum.empty()) sum.assign(s->size(), 0.0);
+    if (s->size() != sum.size()) throw Error("per_round_sums: series of different lengths");
+    for (std::size_t i = 0; i < s->size(); ++i) sum[i] += (*s)[i];
+  }
+  return sum;
+}
+
+Timing Timing::of(const std::vector<double>& samples) {
+  Timing t;
+  if (samples.empty()) return t;
+  const Estimate e = median_interval(samples);
+  t.median_ms = e.value, t.lo_ms = e.lo, t.hi_ms = e.hi, t.n = e.n;
+  t.min_ms = *std::min_element(samples.begin(), samples.end());
+  t.max_ms = *std::max_element(samples.begin(), samples.end());
+  return t;
+}
+
+const char* stop_reason_name(StopReason r) {
+  switch (r) {
+    case StopReason::Noise: return "noise";
+    case StopReason::Time: return "time";
+    case StopReason::Rounds: return "rounds";
+  }
+  return "?";
+}
+
+std::uint64_t protocol_seed(const std::string& key) {
+  std::uint64_t h = 0xcbf29ce484222325ull;
+  for (unsigned char c : key) {
+    h ^= c;
+    h *= 0x100000001b3ull;
+  }
+  return h;
+}
+
+std::vector<std::size_t> round_order(std::size_t count, std::uint64_t seed, std::uint64_t round) {
+  // SplitMix64 (Steele et al. 2014) on (seed, round): a fixed, portable stream per round.
+  std::uint64_t state = seed * 0x9E3779B97F4A7C15ull + round * 0xD1B54A32D192ED03ull;
+  auto next = [&state] {
+    std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+  };
+  std::vector<std::size_t> order(count);
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  for (std::size_t i = count; i > 1; --i) std::swap(order[i - 1], order[next() % i]);
+  return order;
+}
+
+Outcome measure(const Measurement& m, const ProtocolSettings& s) {
+  using Clock = std::chrono::steady_clock;
+  auto seconds_since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
+  const Clock::time_point start = Clock::now();
+  Outcome out;
+  auto check_hard_limit = [&] {
+    if (s.hard_limit_s > 0 && seconds_since(start) > s.hard_limit_s)
+      throw TimedOut(fmt::format("timed out: {:.3f} s, over --timeout {} s (remaining rounds skipped)",
+                                 seconds_since(start), s.hard_limit_s));
+  };
+  auto run_arm = [&](const Arm& arm, bool timed) {
+    check_hard_limit();
+    const std::vector<double> ms = arm.run();
+    if (ms.size() != arm.stages.size())
+      throw Error(fmt::format("measure: an arm returned {} stage times for {} stages", ms.size(), arm.stages.size()));
+    if (timed)
+      for (std::size_t i = 0; i < ms.size(); ++i) out.series[arm.stages[i]].push_back(ms[i]);
+  };
+  std::uint64_t round = 0;
+  auto run_round = [&](bool timed) {
+    if (m.prologue.run) run_arm(m.prologue, timed);
+    for (std::size_t i : round_order(m.arms.size(), s.seed, round)) run_arm(m.arms[i], timed);
+    ++round;
+  };
+
+  for (unsigned w = 0; w < s.warmup; ++w) run_round(false);
+  const Clock::time_point sampling = Clock::now();
+  const unsigned min_rounds = std::max(1u, s.min_rounds);
+  for (;;) {
+    run_round(true);
+    ++out.rounds;
+    if (out.rounds < min_rounds) continue;
+    out.noise = 0.0;
+    for (const auto& target : m.targets) out.noise = std::max(out.noise, target(out.series).relative_half_width());
+    if (out.noise <= s.max_noise) {
+      out.stop = StopReason::Noise;
+      break;
+    }
+    if (out.rounds >= std::max(min_rounds, s.max_rounds)) {
+      out.stop = StopReason::Rounds;
+      break;
+    }
+    if (seconds_since(sampling) >= s.max_time_s) {
+      out.stop = StopReason::Time;
+      break;
+    }
+  }
+  out.sampling_s = seconds_since(sampling);
+  return out;
+}
+
+}  // namespace raysort

@@ -1,0 +1,146 @@
+#pragma once
+// How raysort measures time: the one protocol behind every timed figure of `raysort run`,
+// `raysort trace` and `raysort encodebench`. docs/measurement.md explains it with its reasons and
+// the figures that back them; this header is the reference.
+//
+// A measurement times a few *arms* against each other. For a matrix cell: the NoSort trace, a
+// second NoSort trace (the A/A check) and the sorted trace; for `trace --variant both` the two
+// variants; for encodebench an encode and a trace of the same batch.
+//
+//  1. Warm-up. `warmup` untimed rounds of every arm: kernels are compiled at their first launch
+//     (PoCL), buffers are touched, caches and clocks settle.
+//  2. Rounds. A round runs the prologue (the work every arm of the round depends on, e.g. encode
+//     and sort) and then every arm once, in an order drawn from a seeded generator. Arms compared
+//     with each other ran within one round, so the machine's drift is common to both, and no arm
+//     always runs first or always right after the prologue.
+//  3. Estimate. A figure that compares two arms is the median over rounds of the per-round ratio
+//     (paired); one arm's time is the median of its samples. Each comes with the exact
+//     distribution-free confidence interval of a median, the order statistics x(k) and x(n+1-k)
+//     of the sign test (median_interval). It assumes independent rounds and nothing about the
+//     shape of their distribution; trace times on a shared CPU are bimodal (two cores, or one
+//     while the host lends the other away), so a normal-theory interval would be wrong.
+//  4. Stopping rule (after nvbench's). At least min_rounds rounds; then stop as soon as every
+//     target figure's interval has a relative half-width of at most max_noise, or when max_time_s
+//     of sampling has passed, or at max_rounds. Which of the three stopped it is recorded.
+#include <cmath>
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "util/error.h"
+
+namespace raysort {
+
+// ---- Step 3: the estimate and its interval ----------------------------------------------------
+
+inline constexpr double kConfidence = 0.95;
+
+// A median and its confidence interval. lo and hi are NaN when there are too few samples for an
+// interval at the requested confidence (fewer than 6 at 95 %).
+struct Estimate {
+  double value = std::numeric_limits<double>::quiet_NaN();
+  double lo = std::numeric_limits<double>::quiet_NaN();
+  double hi = std::numeric_limits<double>::quiet_NaN();
+  std::size_t n = 0;  // samples (rounds) it was estimated from
+
+  bool has_value() const { return std::isfinite(value); }
+  bool has_interval() const { return std::isfinite(lo) && std::isfinite(hi); }
+  // (hi − lo) / 2 relative to the value: the "noise" the stopping rule compares with max_noise.
+  // Infinite without an interval.
+  double relative_half_width() const;
+  bool contains(double x) const { return has_interval() && lo <= x && x <= hi; }
+  // Both have intervals and they share a point.
+  bool overlaps(const Estimate& o) const { return has_interval() && o.has_interval() && lo <= o.hi && o.lo <= hi; }
+  // An exact value with no uncertainty (e.g. a speedup that is 1 by definition).
+  static Estimate exact(double v) { return {v, v, v, 0}; }
+};
+
+// The sign-test rank: the largest k >= 1 with 2 · P(Binomial(n, 1/2) <= k − 1) <= 1 − confidence,
+// so that [x(k), x(n+1−k)] of n sorted samples covers the median with probability at least
+// `confidence` (exactly median_coverage(n, k) for a continuous distribution). 0 when no k qualifies.
+std::size_t median_interval_rank(std::size_t n, double confidence = kConfidence);
+// 1 − 2 · P(Binomial(n, 1/2) <= k − 1): the exact coverage of [x(k), x(n+1−k)].
+double median_coverage(std::size_t n, std::size_t k);
+
+// The sample median (the mean of the two middle values for an even count) with its interval.
+// Non-finite samples are an Error (a time of NaN means a broken event, not noise).
+Estimate median_interval(std::vector<double> samples, double confidence = kConfidence);
+
+// Per-round ratios num[i] / den[i] (equal lengths), and their median_interval: the paired estimate.
+std::vector<double> per_round_ratios(const std::vector<double>& num, const std::vector<double>& den);
+Estimate ratio_interval(const std::vector<double>& num, const std::vector<double>& den,
+                        double confidence = kConfidence);
+// Per-round sums of several series of equal length (e.g. encode + sort + trace).
+std::vector<double> per_round_sums(const std::vector<const std::vector<double>*>& series);
+
+// One timed quantity summarised: its median with the interval, and the range of its samples.
+struct Timing {
+  double median_ms = 0.0, min_ms = 0.0, max_ms = 0.0;
+  double lo_ms = std::numeric_limits<double>::quiet_NaN(), hi_ms = std::numeric_limits<double>::quiet_NaN();
+  std::size_t n = 0;
+  static Timing of(const std::vector<double>& samples);  // no samples: zeros, no interval
+  Estimate estimate() const { return {median_ms, lo_ms, hi_ms, n}; }
+};
+
+// ---- Steps 1, 2 and 4: warm-up, rounds, stopping rule ------------------------------------------
+
+struct ProtocolSettings {
+  unsigned warmup = 1;       // untimed rounds first
+  unsigned min_rounds = 6;   // the fewest rounds with a 95 % interval of a median
+  unsigned max_rounds = 2000;
+  double max_noise = 0.02;   // target relative half-width of every target's interval
+  double max_time_s = 5.0;   // sampling budget; past it (and min_rounds) the measurement stops
+  // A hard limit on the whole measurement, warm-up included (run --timeout; 0: none). Checked
+  // between arms: a kernel in flight runs to completion. Past it, measure() throws TimedOut.
+  double hard_limit_s = 0.0;
+  std::uint64_t seed = 1;    // of the arm order
+  double confidence = kConfidence;
+};
+
+enum class StopReason { Noise, Time, Rounds };
+const char* stop_reason_name(StopReason r);  // "noise", "time", "rounds"
+
+// The samples of a measurement: one value per timed round for every stage name.
+using Series = std::map<std::string, std::vector<double>>;
+
+// Something timed once per round. run() does it once and returns the milliseconds of each of its
+// stages, in the order of `stages` (names unique within a measurement: they key the Series).
+struct Arm {
+  std::vector<std::string> stages;
+  std::function<std::vector<double>()> run;
+};
+
+struct Measurement {
+  Arm prologue;           // runs first in every round when it has a run(); e.g. encode + sort
+  std::vector<Arm> arms;  // then these, in a seeded random order
+  // The figures the stopping rule watches; each is computed from the series so far.
+  std::vector<std::function<Estimate(const Series&)>> targets;
+};
+
+struct Outcome {
+  Series series;
+  unsigned rounds = 0;
+  StopReason stop = StopReason::Rounds;
+  double noise = std::numeric_limits<double>::infinity();  // the largest target half-width at the stop
+  double sampling_s = 0.0;                                 // wall clock of the timed rounds
+};
+
+// Thrown by measure() past ProtocolSettings::hard_limit_s.
+struct TimedOut : Error {
+  using Error::Error;
+};
+
+Outcome measure(const Measurement& m, const ProtocolSettings& s);
+
+// A measurement's seed from a text that names it (e.g. "1/sibenik/bounce1/hcc/32"): FNV-1a 64, the
+// same on every platform, so the same command draws the same arm orders.
+std::uint64_t protocol_seed(const std::string& key);
+
+// The order of `count` arms in round `round` (0-based, warm-up rounds first) of a measurement
+// seeded with `seed`: a Fisher–Yates shuffle driven by SplitMix64, the same on every platform.
+std::vector<std::size_t> round_order(std::size_t count, std::uint64_t seed, std::uint64_t round);
+
+}  // namespace raysort
