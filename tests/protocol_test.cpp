@@ -1,6 +1,7 @@
 // The measurement protocol (host/bench/protocol.h) on synthetic samples, no device: the interval
 // of a median covers the true median as often as its exact coverage says, for skewed and bimodal
-// distributions too; the paired ratio is immune to drift that moves both arms; the stopping rule
+// distributions too; so does the paired (Hodges–Lehmann, signed-rank) interval of a ratio whose arms
+// share a skewed noise; the paired ratio is immune to drift that moves both arms; the stopping rule
 // stops for the reason it reports; warm-up rounds are not recorded; the arm order is a seeded
 // permutation that puts every arm first about equally often.
 #include <gtest/gtest.h>
@@ -96,6 +97,62 @@ TEST(Protocol, IntervalCoverageMatchesTheExactCoverage) {
     const double pick = u01(r), x = u01(r);
     return pick < 0.7 ? 2.0 + 0.1 * x : 4.0 + 0.2 * x;
   });
+}
+
+// The signed-rank ranks are the classic two-sided 5 % critical values plus one (n = 6: 0, 7: 2,
+// 8: 3, 10: 8, 12: 13, 20: 52); the normal approximation takes over above 100 rounds without a jump.
+TEST(Protocol, SignedRankRankIsTheExactWilcoxonRank) {
+  const std::pair<std::size_t, std::size_t> ranks[] = {{5, 0}, {6, 1}, {7, 3}, {8, 4}, {10, 9}, {12, 14}, {20, 53}};
+  for (auto [n, k] : ranks) {
+    EXPECT_EQ(signed_rank_interval_rank(n), k) << "n = " << n;
+    if (k > 0) {
+      EXPECT_GE(signed_rank_coverage(n, k), 0.95) << "n = " << n;
+      EXPECT_LT(signed_rank_coverage(n, k + 1), 0.95) << "n = " << n;
+    }
+  }
+  EXPECT_DOUBLE_EQ(signed_rank_coverage(6, 1), 1.0 - 2.0 / 64.0);
+  EXPECT_LT(signed_rank_interval_rank(100), signed_rank_interval_rank(101));  // exact, then normal
+  EXPECT_LT(signed_rank_interval_rank(101), signed_rank_interval_rank(102));
+  EXPECT_GE(signed_rank_coverage(101, signed_rank_interval_rank(101)), 0.95);
+  EXPECT_LT(signed_rank_coverage(101, signed_rank_interval_rank(101)), 0.952);
+  EXPECT_GE(signed_rank_coverage(500, signed_rank_interval_rank(500)), 0.95);
+  EXPECT_LT(signed_rank_coverage(500, signed_rank_interval_rank(500)), 0.952);
+  // Hodges–Lehmann of known samples: Walsh averages of {1, 2, 4} are 1, 1.5, 2, 2.5, 3, 4.
+  const Estimate hl = hodges_lehmann_interval({4, 1, 2});
+  EXPECT_DOUBLE_EQ(hl.value, 2.25);
+  EXPECT_FALSE(hl.has_interval());
+  const Estimate six = hodges_lehmann_interval({3, 1, 2, 6, 5, 4});  // n = 6: [min, max] of the Walsh averages
+  EXPECT_DOUBLE_EQ(six.value, 3.5);
+  EXPECT_DOUBLE_EQ(six.lo, 1.0);
+  EXPECT_DOUBLE_EQ(six.hi, 6.0);
+  // A ratio is estimated on the log scale: ratios 2 and 8 give their geometric centre 4.
+  EXPECT_NEAR(ratio_interval({2, 8}, {1, 1}).value, 4.0, 1e-12);
+  EXPECT_FALSE(ratio_interval({1, 2, 3, 4, 5, 6}, {1, 0, 1, 1, 1, 1}).has_value());  // a zero time
+}
+
+// Coverage of the paired interval: per round, the ratio of two arms whose times have the same
+// (here bimodal, very skewed) distribution, times a true speedup. The log ratio is symmetric, so
+// the interval covers the true speedup as often as signed_rank_coverage says.
+TEST(Protocol, PairedIntervalCoverageOnSkewedArmNoise) {
+  std::mt19937_64 rng(99);
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  auto arm = [&](double ms) {  // 70 %: both cores; 30 %: one core, twice as slow
+    const double jitter = 1.0 + 0.03 * u01(rng);
+    return (u01(rng) < 0.7 ? ms : 2.0 * ms) * jitter;
+  };
+  const double speedup = 1.15;
+  const int trials = 4000;
+  for (std::size_t n : {6u, 7u, 9u, 12u, 25u}) {
+    int covered = 0;
+    for (int t = 0; t < trials; ++t) {
+      std::vector<double> nosort(n), sorted(n);
+      for (std::size_t i = 0; i < n; ++i) nosort[i] = arm(10.0), sorted[i] = arm(10.0 / speedup);
+      covered += ratio_interval(nosort, sorted).contains(speedup);
+    }
+    const double expected = signed_rank_coverage(n, signed_rank_interval_rank(n));
+    const double observed = static_cast<double>(covered) / trials;
+    EXPECT_NEAR(observed, expected, 4 * std::sqrt(expected * (1 - expected) / trials)) << "n = " << n;
+  }
 }
 
 // Pairing: a drift that moves both arms of a round (the machine slowing down and speeding up)

@@ -58,7 +58,7 @@ int run_encodebench(const EncodeBenchArgs& args) {
   fmt::print("device   {} ({})\n", rt.info().name, rt.info().platform_name);
   fmt::print("scene    {}: {} triangles; batch {}: {} rays\n", scene.name, tris.size(), batch.name, batch.size());
   fmt::print("timing   each encode paired with a trace of the same batch in the same rounds (docs/measurement.md): "
-             "ms = median [95 % interval], % trace = median of per-round encode / trace\n\n");
+             "ms = median [95 % interval], % trace = paired estimate of encode / trace per round\n\n");
   DeviceEncoder enc(rt, bvh, bvh.bounds());
   Tracer tracer(rt, bvh);
   enc.warm_up();

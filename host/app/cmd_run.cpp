@@ -41,7 +41,7 @@ void register_run_command(CLI::App& app) {
   cmd->add_option("--resolution", a->resolution, "WxH");
   auto* spp_opt = cmd->add_option("--spp", a->spp, "samples per pixel");
   auto* reps_opt = cmd->add_option("--reps", a->reps,
-                                   "the fewest timed rounds per cell (default 6, the fewest with a 95 % interval); "
+                                   "the fewest timed rounds per cell (default 7: from 7 on the 95 % interval leaves out the extremes); "
                                    "more follow until --max-noise or --max-time is reached (docs/measurement.md)");
   cmd->add_option("--warmup", a->warmup, "untimed rounds before timing")->each([a](const std::string&) { a->warmup_set = true; });
   auto* noise_opt = cmd->add_option("--max-noise", a->max_noise_pct,

@@ -180,7 +180,7 @@ int run_trace(const TraceArgs& args) {
     }
 #endif
     fmt::print("timing   every arm of a batch in the same rounds (docs/measurement.md): ms = median [95 % interval]; "
-               "ratios are medians of per-round ratios\n");
+               "ratios are paired estimates of the per-round ratios\n");
     if (both) {
       fmt::print("variant  fast and robust, in the same rounds on each batch ({} BVH)\n", trace_layout_name(layout));
       fmt::print("{:<9} {:>9} {:>24} {:>9} {:>24} {:>9} {:>24} {:>9} {:>8} {:>10} {:>7}{}\n", "batch", "rays", "fast ms",

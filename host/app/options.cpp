@@ -45,7 +45,7 @@ ProtocolSettings ProtocolOptions::settings(std::uint64_t seed) const {
 
 void add_protocol_options(CLI::App& cmd, ProtocolOptions& o) {
   cmd.add_option("--reps", o.reps,
-                 "the fewest timed rounds (6 is the fewest with a 95 % interval); more follow until --max-noise or "
+                 "the fewest timed rounds (default 7: from 7 on the 95 % interval leaves out the extremes); more follow until --max-noise or "
                  "--max-time (docs/measurement.md)")
       ->check(CLI::Range(1u, 100000u))
       ->capture_default_str();

@@ -25,7 +25,7 @@ void add_common_options(CLI::App& cmd, CommonOptions& o);
 // The measurement protocol's knobs (bench/protocol.h) for the commands that time one batch at a
 // time (trace, encodebench); `run` has its own, stored in the matrix.
 struct ProtocolOptions {
-  unsigned reps = 6;          // --reps: the fewest timed rounds
+  unsigned reps = 7;          // --reps: the fewest timed rounds
   unsigned warmup = 1;        // --warmup: untimed rounds first
   double max_noise_pct = 2;   // --max-noise: target half-width of the intervals, percent
   double max_time_s = 3;      // --max-time: sampling budget per batch, seconds

@@ -70,6 +70,13 @@ double BatchBench::timed_trace(const cl::Buffer& rays, const cl::Buffer& order, 
   return event_ms(ev);
 }
 
+std::vector<Arm> BatchBench::baseline_arms() {
+  auto nosort_trace = [this] {
+    return std::vector<double>{timed_trace(rays_, identity_, nosort_hits_, "waiting for the NoSort trace")};
+  };
+  return {{{"nosort"}, nosort_trace}, {{"aa"}, nosort_trace}};
+}
+
 const cl::Buffer& BatchBench::permuted_rays() {
   // Only cells of the permute access mode need the second copy of the rays.
   if (!permuted_()) permuted_ = s_.rt.buffer("rays in sorted order (permute)", std::max<std::size_t>(1, n_) * sizeof(RsRay));
@@ -94,8 +101,7 @@ CellRecord BatchBench::measure_nosort(CellRecord c, const ProtocolSettings& sett
   }
   try {
     Measurement m;
-    m.arms = {{{"nosort"}, [&] { return std::vector<double>{timed_trace(rays_, identity_, nosort_hits_, "waiting for the NoSort trace")}; }},
-              {{"aa"}, [&] { return std::vector<double>{timed_trace(rays_, identity_, nosort_hits_, "waiting for the NoSort trace")}; }}};
+    m.arms = baseline_arms();
     m.targets = {[](const Series& s) { return ratio_interval(s.at("nosort"), s.at("aa")); }};
     const Outcome o = measure(m, settings);
     const auto &nosort = o.series.at("nosort"), &aa = o.series.at("aa");
@@ -146,8 +152,7 @@ std::vector<CellRecord> BatchBench::measure_sorted(std::vector<CellRecord> cells
                     const SortStats st = s_.sorter.sort(keys, values_, n_, cfg);
                     return std::vector<double>{ev.ms(), st.ms};
                   }};
-    m.arms = {{{"nosort"}, [&] { return std::vector<double>{timed_trace(rays_, identity_, nosort_hits_, "waiting for the NoSort trace")}; }},
-              {{"aa"}, [&] { return std::vector<double>{timed_trace(rays_, identity_, nosort_hits_, "waiting for the NoSort trace")}; }}};
+    m.arms = baseline_arms();
     for (const CellRecord& c : cells) {
       if (c.access == "gather") {
         m.arms.push_back({{"trace:gather"}, [&] {

@@ -61,6 +61,9 @@ class BatchBench {
   cl::Event trace(const cl::Buffer& rays, const cl::Buffer& order, const cl::Buffer& hits);
   double timed_trace(const cl::Buffer& rays, const cl::Buffer& order, const cl::Buffer& hits, const char* doing);
   const cl::Buffer& permuted_rays();
+  // The two NoSort arms every cell's rounds hold: "nosort" (the baseline) and "aa" (the same trace
+  // again, the A/A check).
+  std::vector<Arm> baseline_arms();
 
   Stages s_;
   const Bvh& bvh_;

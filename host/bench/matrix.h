@@ -39,7 +39,7 @@ struct MatrixSpec {
   // is at most max_noise (--max-noise, in percent on the command line) or after max_time_s of
   // sampling (--max-time).
   unsigned warmup = 1;
-  unsigned reps = 6;
+  unsigned reps = 7;
   double max_noise = 0.02;
   double max_time_s = 5.0;
   double cell_timeout_s = 0;          // hard limit per cell (--timeout); 0: none

@@ -13,12 +13,16 @@
 //     and sort) and then every arm once, in an order drawn from a seeded generator. Arms compared
 //     with each other ran within one round, so the machine's drift is common to both, and no arm
 //     always runs first or always right after the prologue.
-//  3. Estimate. A figure that compares two arms is the median over rounds of the per-round ratio
-//     (paired); one arm's time is the median of its samples. Each comes with the exact
-//     distribution-free confidence interval of a median, the order statistics x(k) and x(n+1-k)
-//     of the sign test (median_interval). It assumes independent rounds and nothing about the
-//     shape of their distribution; trace times on a shared CPU are bimodal (two cores, or one
-//     while the host lends the other away), so a normal-theory interval would be wrong.
+//  3. Estimate. A figure that compares two arms (a speedup) is paired: per round the log of the
+//     ratio of the two arms' times; the estimate is their Hodges–Lehmann location (the median of the
+//     Walsh averages (l_i + l_j) / 2, i <= j) and the interval the Walsh averages at the ranks of the
+//     exact Wilcoxon signed-rank distribution (ratio_interval). This needs independent rounds and
+//     a log ratio symmetric about its centre, and nothing else: with the arms in a random order
+//     their noise is alike, and the difference of two alike noises is symmetric however skewed
+//     each is (trace times on a shared CPU are bimodal: two cores, or one while the host lends the
+//     other away). One arm's time is the median of its samples, with the distribution-free
+//     interval of a median: the order statistics x(k) and x(n+1-k) of the sign test
+//     (median_interval), which needs no symmetry.
 //  4. Stopping rule (after nvbench's). At least min_rounds rounds; then stop as soon as every
 //     target figure's interval has a relative half-width of at most max_noise, or when max_time_s
 //     of sampling has passed, or at max_rounds. Which of the three stopped it is recorded.
@@ -69,7 +73,21 @@ double median_coverage(std::size_t n, std::size_t k);
 // Non-finite samples are an Error (a time of NaN means a broken event, not noise).
 Estimate median_interval(std::vector<double> samples, double confidence = kConfidence);
 
-// Per-round ratios num[i] / den[i] (equal lengths), and their median_interval: the paired estimate.
+// The signed-rank rank: the largest k >= 1 with 2 · P(W <= k − 1) <= 1 − confidence, W the Wilcoxon
+// signed-rank statistic of n samples (exact distribution up to n = 100, its normal approximation
+// with continuity correction above), so that the Walsh averages w(k) and w(M+1−k), M = n(n+1)/2,
+// bound the centre of a symmetric distribution with probability at least `confidence` (exactly
+// signed_rank_coverage(n, k) for a continuous one). 0 when no k qualifies (n < 6 at 95 %).
+std::size_t signed_rank_interval_rank(std::size_t n, double confidence = kConfidence);
+double signed_rank_coverage(std::size_t n, std::size_t k);  // 1 − 2 · P(W <= k − 1)
+
+// The Hodges–Lehmann location of samples from a symmetric distribution (the median of the Walsh
+// averages) with its signed-rank interval.
+Estimate hodges_lehmann_interval(const std::vector<double>& samples, double confidence = kConfidence);
+
+// Per-round ratios num[i] / den[i] (equal lengths), and the paired estimate of their typical value:
+// exp of the Hodges–Lehmann interval of the log ratios. No estimate when a ratio is not a positive
+// finite number (an empty batch's zero times).
 std::vector<double> per_round_ratios(const std::vector<double>& num, const std::vector<double>& den);
 Estimate ratio_interval(const std::vector<double>& num, const std::vector<double>& den,
                         double confidence = kConfidence);
@@ -89,8 +107,10 @@ struct Timing {
 
 struct ProtocolSettings {
   unsigned warmup = 1;       // untimed rounds first
-  unsigned min_rounds = 6;   // the fewest rounds with a 95 % interval of a median
-  unsigned max_rounds = 2000;
+  // The fewest timed rounds. 6 is the fewest with a 95 % interval at all (then [min, max]); from 7
+  // on the signed-rank interval leaves out the extremes, so it narrows quickly.
+  unsigned min_rounds = 7;
+  unsigned max_rounds = 1000;
   double max_noise = 0.02;   // target relative half-width of every target's interval
   double max_time_s = 5.0;   // sampling budget; past it (and min_rounds) the measurement stops
   // A hard limit on the whole measurement, warm-up included (run --timeout; 0: none). Checked

@@ -78,8 +78,10 @@ nlohmann::json run_meta(const MatrixSpec& spec, const RunOptions& opts, const De
       {"protocol",
        {{"doc", "docs/measurement.md"},
         {"arms", "per round, after encode + sort: nosort, aa (nosort again), and the cell's trace(s), in a seeded random order"},
-        {"estimate", "median over rounds of the per-round ratio (paired)"},
-        {"interval", fmt::format("exact order-statistic (sign-test) interval of the median, {:.0f} %", kConfidence * 100)},
+        {"estimate", "paired: Hodges-Lehmann location of the per-round log ratios; one arm's time: the median"},
+        {"interval", fmt::format("{:.0f} %: exact Wilcoxon signed-rank interval of the Walsh averages (ratios), exact "
+                                 "order-statistic (sign-test) interval of the median (times)",
+                                 kConfidence * 100)},
         {"stop", "min rounds (reps), then relative half-width <= max_noise, or max_time_s of sampling"}}},
       {"device",
        {{"name", dev.name},

@@ -134,9 +134,9 @@ std::string render_tables(const std::vector<CellRecord>& cells, const nlohmann::
   }
   md += "Times are medians of OpenCL profiling events over the rounds of the measurement protocol "
         "(docs/measurement.md): each round runs encode + sort, then, in a random order, the NoSort trace, a second "
-        "NoSort trace (the A/A check) and the cell's own trace(s). Speedup = the median over rounds of NoSort trace / "
-        "trace, with its exact 95 % interval in brackets; net = NoSort trace / (encode + sort + permute + trace), per "
-        "round likewise. **Bold**: a column's best speedup whose interval does not overlap the second best's. "
+        "NoSort trace (the A/A check) and the cell's own trace(s). Speedup = the typical per-round NoSort trace / "
+        "trace (Hodges–Lehmann estimate of the log ratios) with its exact 95 % signed-rank interval in brackets; net = "
+        "NoSort trace / (encode + sort + permute + trace), per round likewise. **Bold**: a column's best speedup whose interval does not overlap the second best's. "
         "*Italic*: the interval contains 1. \"= NoSort\": the sorted order is the generation order, so no speedup is "
         "reported. A cell whose sorted trace does not reproduce the NoSort hits exactly is listed under failed cells "
         "and has no speed.\n\n";
