@@ -20,7 +20,8 @@ void register_compare_command(CLI::App& app) {
   cmd->add_option("--metrics", a->metrics, "metrics to tabulate")->delimiter(',');
   cmd->add_option("--fail-if", a->fail_if,
                   "regression rule, repeatable: 'speedup<-5%', 'overhead_pct>+10%', 'anc!=', 'anc!=0.01', 'missing'; "
-                  "a relative rule on a timed figure fires only when the two 95 % intervals do not overlap");
+                  "a relative rule on a timed figure fires only when the change passes the threshold between the "
+                  "nearest ends of the two 95 % intervals");
   cmd->add_option("--out", a->out, "also write the report to this markdown file");
   cmd->callback([a] {
     std::vector<FailRule> rules;
@@ -30,8 +31,8 @@ void register_compare_command(CLI::App& app) {
     fmt::print("{}", res.report);
     if (!a->out.empty()) write_file_atomically(a->out, res.report);
     if (!res.within_noise.empty())
-      fmt::print(stderr, "raysort compare: {} change(s) past a --fail-if threshold stayed within the noise (their 95 % "
-                         "intervals overlap), not counted as regressions\n",
+      fmt::print(stderr, "raysort compare: {} change(s) past a --fail-if threshold on the points stayed within the "
+                         "noise (not past it between the 95 % intervals' nearest ends), not counted as regressions\n",
                  res.within_noise.size());
     if (!res.violations.empty()) {
       fmt::print(stderr, "raysort compare: {} regression(s) past the --fail-if rules\n", res.violations.size());

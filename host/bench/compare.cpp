@@ -173,32 +173,36 @@ CompareResult compare_result_sets(const ResultSet& a, const ResultSet& b, const 
       if (numeric_metrics().count(rule.metric)) {
         const Estimate ea = numeric_metrics().at(rule.metric)(*x), eb = numeric_metrics().at(rule.metric)(*y);
         const double va = ea.value, vb = eb.value;
-        bool bad = false;
-        bool relative = false;
+        const bool relative = rule.kind == FailRule::RelativeDrop || rule.kind == FailRule::RelativeRise;
+        const bool intervals = relative && ea.has_interval() && eb.has_interval();
+        bool bad = false;   // the rule, on the intervals where both have one
+        bool point = false;  // the same rule on the points alone
         switch (rule.kind) {
           case FailRule::AnyChange: bad = va != vb; break;
           case FailRule::AbsoluteChange: bad = std::abs(vb - va) > rule.threshold; break;
           case FailRule::RelativeDrop:
-            relative = true;
-            bad = va > 0 && (vb - va) / va < -rule.threshold;
+            point = va > 0 && (vb - va) / va < -rule.threshold;
+            // Even B's highest plausible value is more than the threshold below A's lowest.
+            bad = intervals ? va > 0 && eb.hi < ea.lo * (1.0 - rule.threshold) : point;
             break;
           case FailRule::RelativeRise:
-            relative = true;
-            bad = va > 0 && (vb - va) / va > rule.threshold;
+            point = va > 0 && (vb - va) / va > rule.threshold;
+            bad = intervals ? va > 0 && eb.lo > ea.hi * (1.0 + rule.threshold) : point;
             break;
           case FailRule::Missing: break;
         }
-        if (bad && relative && ea.has_interval() && eb.has_interval() && ea.overlaps(eb)) {
-          out.within_noise.push_back(fmt::format("{}: {} {} -> {} (rule {}; the intervals overlap)", id, rule.metric,
-                                                 shown(ea), shown(eb), rule.text));
+        if (!bad && point) {
+          out.within_noise.push_back(fmt::format("{}: {} {} -> {} (rule {}; not beyond the threshold between the "
+                                                 "intervals' nearest ends)",
+                                                 id, rule.metric, shown(ea), shown(eb), rule.text));
           continue;
         }
         if (bad)
           out.violations.push_back(fmt::format("{}: {} {} -> {} (rule {}{})", id, rule.metric, shown(ea), shown(eb),
                                                rule.text,
-                                               relative && (!ea.has_interval() || !eb.has_interval())
-                                                   ? "; point rule: no interval in both sets"
-                                                   : relative ? "; the intervals do not overlap" : ""));
+                                               !relative    ? ""
+                                               : intervals  ? "; beyond the threshold between the intervals' nearest ends"
+                                                            : "; point rule: no interval in both sets"));
       } else {
         std::string va = text_metrics().at(rule.metric)(*x), vb = text_metrics().at(rule.metric)(*y);
         if (va != vb) out.violations.push_back(fmt::format("{}: {} {} -> {} (rule {})", id, rule.metric, va, vb, rule.text));
