@@ -294,6 +294,12 @@ TEST(Matrix, EndToEndAndResume) {
   ASSERT_TRUE(meta.contains("fingerprints"));
   EXPECT_EQ(meta["fingerprints"].size(), rs.cells().size());
   EXPECT_EQ(meta["fingerprints"]["cornell/bounce1/hcc/32"]["keys"], rs.find("cornell/bounce1/hcc/32")->keys_hash);
+  // raysort report writes the views and plots again from the cell files alone.
+  fs::remove(opts.out + "/tables.md");
+  fs::remove(opts.out + "/overhead-vs-gain-bounce1-32b.png");
+  ASSERT_EQ(run_cli({"report", opts.out}), 0);
+  EXPECT_EQ(read_file(opts.out + "/tables.md"), tables);
+  EXPECT_TRUE(fs::exists(opts.out + "/overhead-vs-gain-bounce1-32b.png"));
   RunSummary again = run_matrix(spec, opts);
   EXPECT_EQ(again.cells_run, 0u);
   // Every cell carries its own NoSort traces, so NoSort cells are skipped like the others.

@@ -19,6 +19,7 @@ void register_commands(CLI::App& app) {
   register_run_command(app);
   register_compare_command(app);
   register_merge_command(app);
+  register_report_command(app);
 }
 
 }  // namespace raysort

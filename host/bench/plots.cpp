@@ -46,6 +46,18 @@ class Chart {
       case 3: seg(x - r, y - r, x + r, y + r), seg(x - r, y + r, x + r, y - r); break;  // x
       case 4: seg(x - r, y, x + r, y), seg(x, y - r, x, y + r); break;                  // +
       case 5: IBA::render_box(buf_, x - r, y - r, x + r, y + r, {c, 3}, false); break;  // hollow square
+      case 6:  // filled triangle
+        for (int dy = 0; dy <= 2 * r; ++dy) IBA::render_line(buf_, x - dy / 2, y - r + dy, x + dy / 2, y - r + dy, {c, 3});
+        break;
+      case 7:  // filled diamond
+        for (int dy = -r; dy <= r; ++dy) IBA::render_line(buf_, x - (r - std::abs(dy)), y + dy, x + (r - std::abs(dy)), y + dy, {c, 3});
+        break;
+      case 8:  // octagon
+        seg(x - 2, y - r, x + 2, y - r), seg(x + 2, y - r, x + r, y - 2), seg(x + r, y - 2, x + r, y + 2),
+            seg(x + r, y + 2, x + 2, y + r), seg(x + 2, y + r, x - 2, y + r), seg(x - 2, y + r, x - r, y + 2),
+            seg(x - r, y + 2, x - r, y - 2), seg(x - r, y - 2, x - 2, y - r);
+        break;
+      case 9: seg(x - r, y - r, x + r, y + r), seg(x - r, y + r, x + r, y - r), seg(x - r, y, x + r, y); break;  // asterisk
     }
   }
   // A vertical error bar from y0 to y1 at x, with caps.
@@ -54,7 +66,7 @@ class Chart {
     IBA::render_line(buf_, px(x) - 3, py(y0), px(x) + 3, py(y0), {c, 3});
     IBA::render_line(buf_, px(x) - 3, py(y1), px(x) + 3, py(y1), {c, 3});
   }
-  static constexpr int kShapes = 6;
+  static constexpr int kShapes = 10;
   void text(int x, int y, const std::string& s, int size = 14, const float* c = kBlack,
             OIIO::ImageBufAlgo::TextAlignX ax = OIIO::ImageBufAlgo::TextAlignX::Left) {
     if (font_.empty()) return;
@@ -118,6 +130,10 @@ double high_of(const Estimate& e) { return e.has_interval() ? e.hi : e.value; }
 std::string facet_suffix(const std::string& variant, const std::string& access) {
   return (variant != "robust" ? "-" + variant : std::string()) + (access != "gather" ? "-" + access : std::string());
 }
+// ", fast, permute": the same facets in a title.
+std::string facet_title(const std::string& variant, const std::string& access) {
+  return (variant != "robust" ? ", " + variant : std::string()) + (access != "gather" ? ", " + access : std::string());
+}
 
 }  // namespace
 
@@ -154,7 +170,7 @@ std::vector<std::string> write_plots(const std::vector<CellRecord>& cells, const
     if (bits.size() < 2) continue;
     Chart ch(900, 560, *bits.begin() - 4.0, *bits.rbegin() + 4.0, std::floor(ymin * 10) / 10, std::ceil(ymax * 10) / 10 + 0.05);
     ch.axes(fmt::format("{} {}{}: trace speedup vs NoSort (95 % interval) against key bits", scene, batch,
-                        facet_suffix(variant, access)),
+                        facet_title(variant, access)),
             "key bits", "speedup", std::vector<double>(bits.begin(), bits.end()));
     std::size_t i = 0;
     for (auto& e : encoders) {
@@ -205,7 +221,7 @@ std::vector<std::string> write_plots(const std::vector<CellRecord>& cells, const
     std::vector<double> xt;
     for (int k = 0; k <= 5; ++k) xt.push_back(xmax * k / 5);
     ch.axes(fmt::format("{}, {}-bit keys{}: what ordering costs (x) against what it buys (y)", batch, bits,
-                        facet_suffix(variant, access)),
+                        facet_title(variant, access)),
             access == "permute" ? "encode + sort + permute, % of NoSort trace time" : "encode + sort, % of NoSort trace time",
             "trace speedup", xt);
     // Break-even: net speedup = 1 where overhead/T0 = 1 - 1/s, i.e. s = 1 / (1 - x/100).

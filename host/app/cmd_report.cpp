@@ -1,0 +1,29 @@
+// raysort report DIR: writes a result set's views again from its cell files (tables.md, cells.csv,
+// cells.json, meta.json's fingerprints and noise summary, the plots), e.g. after an upgrade of
+// raysort changed how they are drawn. Measures nothing; the cell files are not touched.
+#include <fmt/format.h>
+
+#include "app/commands.h"
+#include "bench/result_set.h"
+
+namespace raysort {
+
+void register_report_command(CLI::App& app) {
+  auto dir = std::make_shared<std::string>();
+  auto* cmd = app.add_subcommand("report", "write a result set's tables, CSV/JSON and plots again from its cell files");
+  cmd->add_option("DIR", *dir, "result set folder")->required();
+  cmd->callback([dir] {
+    const ResultSet rs = ResultSet::load(*dir);
+    rs.write_views();
+    rs.write_plots();
+    const NoiseSummary noise = summarize_noise(rs.cells());
+    fmt::print("{}: {} cells; tables: {}/tables.md\n", *dir, rs.cells().size(), *dir);
+    if (noise.aa_intervals > 0)
+      fmt::print("noise: A/A calibration {} of {} intervals contain 1.00 ({:.1f} %); speedup interval half-width "
+                 "median {:.1f} %\n",
+                 noise.aa_containing_one, noise.aa_intervals, 100.0 * noise.aa_coverage(),
+                 100.0 * noise.median_half_width);
+  });
+}
+
+}  // namespace raysort
