@@ -256,8 +256,12 @@ int run_render(const RenderArgs& args) {
   std::optional<Encoder> encoder;
   if (args.overlay != "none") {
     encoder = parse_encoder(args.overlay);
-    if (!encoder || (*encoder != Encoder::HCC && *encoder != Encoder::MLHCC && *encoder != Encoder::RegularGrid))
-      throw Error(fmt::format("--overlay '{}': expected none, hcc, mlhcc or grid", args.overlay));
+    if (!encoder || !encoder_info(*encoder).overlay) {
+      std::string names = "none";
+      for (const EncoderInfo& info : encoder_table())
+        if (info.overlay) names += fmt::format(", {}", info.name);
+      throw Error(fmt::format("--overlay '{}': expected {}", args.overlay, names));
+    }
   }
 
   const Rendered r = path_trace(args, scene, tris, bvh, gen);

@@ -51,11 +51,8 @@ namespace {
 
 // Encode + sort on top of the trace, in percent of one trace (see matrix_cells in shard.h).
 std::uint64_t encoder_weight_pct(const std::string& encoder) {
-  static const std::map<std::string, std::uint64_t> weights = {
-      {"nosort", 100}, {"origin", 115}, {"reis", 128},  {"costa", 128}, {"aila", 125},   {"twopoint", 122},
-      {"grid", 128},   {"hcc", 128},    {"mlhcc", 142}, {"ppc", 165},   {"hcc-dir", 150}};
-  auto it = weights.find(encoder);
-  return it == weights.end() ? 130 : it->second;
+  const auto e = parse_encoder(encoder);
+  return e ? encoder_info(*e).cost_weight_pct : 130;
 }
 
 // The batches render/batches.cpp generate_batches can produce for these effects, in its order:

@@ -11,11 +11,7 @@ namespace {
 
 constexpr cl_uint kSpatialFirstArg = 3;  // encode_<spatial>_k*(frame, rays, order, first, ...)
 
-bool is_spatial(Encoder e) {
-  return e == Encoder::Origin || e == Encoder::Reis || e == Encoder::Costa || e == Encoder::Aila ||
-         e == Encoder::TwoPoint;
-}
-bool is_box_set(Encoder e) { return e == Encoder::RegularGrid || e == Encoder::HCC || e == Encoder::HCC_DIR; }
+EncoderFamily family(Encoder e) { return encoder_info(e).family; }
 
 // A kernel without a count guard (the spatial encoders, cl/encode.cl) over [0, count): whole
 // work-groups over [0, full), then the rest, one work-item per group, with argument first_arg set
@@ -43,15 +39,11 @@ DeviceEncoder::DeviceEncoder(Runtime& rt, const Bvh& bvh, const Aabb& scene_box,
   cl::Program program = rt.build({"cl/encode.cl"});
   cl_call("creating the encode kernels", [&] {
     for (auto [k, suffix] : {std::pair{&k32_, "k32"}, std::pair{&k64_, "k64"}}) {
-      k->nosort = cl::Kernel(program, (std::string("encode_nosort_") + suffix).c_str());
-      k->box_set = cl::Kernel(program, (std::string("encode_box_set_") + suffix).c_str());
+      for (const EncoderInfo& info : encoder_table())
+        k->by_encoder[info.id] = cl::Kernel(program, (std::string(info.kernel) + "_" + suffix).c_str());
+      // HCC_DIR's two passes when it has more than one direction bit (enqueue).
       k->box_set_or = cl::Kernel(program, (std::string("encode_box_set_or_") + suffix).c_str());
       k->direction = cl::Kernel(program, (std::string("encode_direction_") + suffix).c_str());
-      k->two_level = cl::Kernel(program, (std::string("encode_two_level_") + suffix).c_str());
-      k->prefix_path = cl::Kernel(program, (std::string("encode_prefix_path_") + suffix).c_str());
-      for (Encoder e : all_encoders())
-        if (is_spatial(e))
-          k->spatial[e] = cl::Kernel(program, ("encode_" + std::string(encoder_name(e)) + "_" + suffix).c_str());
     }
   });
   // 64 work-items suit PoCL (the group is a loop; 256 measured no faster) and GPUs (two warps).
@@ -65,11 +57,11 @@ const DeviceEncoder::Uploaded& DeviceEncoder::uploaded(Encoder e, unsigned bits)
   if (it != uploads_.end()) return it->second;
   Uploaded u;
   const std::string what = std::string(encoder_name(e)) + " " + std::to_string(bits) + "-bit ";
-  if (is_box_set(e)) {
+  if (family(e) == EncoderFamily::BoxSet) {
     const auto& set = scene_.cut_set(e, bits);
     u.a = rt_.upload(what + "cut boxes", set.groups);
     u.n = set.box_count;
-  } else if (e == Encoder::MLHCC) {
+  } else if (family(e) == EncoderFamily::TwoLevel) {
     const auto& t = scene_.two_level(bits);
     u.a = rt_.upload(what + "top-level cut boxes", t.top_groups);
     u.b = rt_.upload(what + "low-level cut boxes", t.low_groups);
@@ -134,53 +126,56 @@ DeviceEncoder::Events DeviceEncoder::enqueue(Encoder e, unsigned bits, const cl:
               std::to_string(bits) + " bits)",
           [&] {
             int arg = 0;
-            if (e == Encoder::NoSort) {
-              k = &ks.nosort;
-            } else if (is_spatial(e)) {
-              k = &ks.spatial.at(e);
-              k->setArg(arg++, sizeof(RsEncodeFrame), &scene_.frame());
-              k->setArg(arg++, rays);
-              k->setArg(arg++, order);
-              k->setArg(arg++, 0u);  // first: set per launch below
-            } else if (is_box_set(e)) {
-              // HCC_DIR: the direction bits are in keys already; OR in the box field.
-              const cl_uint dir = e == Encoder::HCC_DIR ? scene_.params().direction_bits : 0u;
-              k = two_pass ? &ks.box_set_or : &ks.box_set;
-              k->setArg(arg++, u.a);
-              k->setArg(arg++, u.n);
-              k->setArg(arg++, static_cast<cl_uint>(bits - dir));
-              k->setArg(arg++, two_pass ? 0u : dir);
-              k->setArg(arg++, rays);
-              k->setArg(arg++, order);
-              k->setArg(arg++, count);
-            } else if (e == Encoder::MLHCC) {
-              k = &ks.two_level;
-              k->setArg(arg++, u.a);
-              k->setArg(arg++, u.n);
-              k->setArg(arg++, u.b);
-              k->setArg(arg++, u.c);
-              k->setArg(arg++, static_cast<cl_uint>(bits / 2));
-              k->setArg(arg++, rays);
-              k->setArg(arg++, order);
-              k->setArg(arg++, count);
-            } else {
-              k = &ks.prefix_path;
-              k->setArg(arg++, nodes_);
-              k->setArg(arg++, triangles_);
-              k->setArg(arg++, rays);
-              k->setArg(arg++, order);
-              k->setArg(arg++, count);
+            k = two_pass ? &ks.box_set_or : &ks.by_encoder.at(e);
+            switch (family(e)) {
+              case EncoderFamily::None: break;
+              case EncoderFamily::Spatial:
+                k->setArg(arg++, sizeof(RsEncodeFrame), &scene_.frame());
+                k->setArg(arg++, rays);
+                k->setArg(arg++, order);
+                k->setArg(arg++, 0u);  // first: set per launch below
+                break;
+              case EncoderFamily::BoxSet: {
+                // HCC_DIR: the direction bits are in keys already; OR in the box field.
+                const cl_uint dir = e == Encoder::HCC_DIR ? scene_.params().direction_bits : 0u;
+                k->setArg(arg++, u.a);
+                k->setArg(arg++, u.n);
+                k->setArg(arg++, static_cast<cl_uint>(bits - dir));
+                k->setArg(arg++, two_pass ? 0u : dir);
+                k->setArg(arg++, rays);
+                k->setArg(arg++, order);
+                k->setArg(arg++, count);
+                break;
+              }
+              case EncoderFamily::TwoLevel:
+                k->setArg(arg++, u.a);
+                k->setArg(arg++, u.n);
+                k->setArg(arg++, u.b);
+                k->setArg(arg++, u.c);
+                k->setArg(arg++, static_cast<cl_uint>(bits / 2));
+                k->setArg(arg++, rays);
+                k->setArg(arg++, order);
+                k->setArg(arg++, count);
+                break;
+              case EncoderFamily::PrefixPath:
+                k->setArg(arg++, nodes_);
+                k->setArg(arg++, triangles_);
+                k->setArg(arg++, rays);
+                k->setArg(arg++, order);
+                k->setArg(arg++, count);
+                break;
             }
-            if (e == Encoder::NoSort)
+            if (family(e) == EncoderFamily::None)
               k->setArg(arg++, count);
             else
               k->setArg(arg++, static_cast<cl_uint>(bits));
             k->setArg(arg++, keys);
             k->setArg(arg++, values);
             // MLHCC's work-items take RS_TWO_LEVEL_RAYS rays each (cl/keys.h, rs_two_level_cut_code2).
-            const std::size_t items =
-                e == Encoder::MLHCC ? (std::size_t(count) + RS_TWO_LEVEL_RAYS - 1) / RS_TWO_LEVEL_RAYS : count;
-            if (count > 0 && is_spatial(e)) {
+            const std::size_t items = family(e) == EncoderFamily::TwoLevel
+                                          ? (std::size_t(count) + RS_TWO_LEVEL_RAYS - 1) / RS_TWO_LEVEL_RAYS
+                                          : count;
+            if (count > 0 && family(e) == EncoderFamily::Spatial) {
               const Events launched = enqueue_whole_groups(rt_.queue(), *k, count, local_, kSpatialFirstArg);
               first = launched.first;
               ev = launched.last;
@@ -229,19 +224,16 @@ double DeviceEncoder::warm_up() {
   // One whole work-group and one ray more: the spatial kernels launch both shapes (enqueue), and
   // PoCL compiles a kernel per local size.
   std::vector<RsRay> rays(local_ + 1, ray);
+  // Best effort: an encoder's cut data is per key length, and if it cannot be made here (HCC_DIR
+  // whose direction bits do not fit, a device out of memory), the cell that needs it fails with
+  // that message and the other cells still run.
   for (unsigned bits : {32u, 64u})
-    for (Encoder e : {Encoder::NoSort, Encoder::Origin, Encoder::Reis, Encoder::Costa, Encoder::Aila, Encoder::TwoPoint,
-                      Encoder::HCC, Encoder::MLHCC, Encoder::PPC})
-      run(e, bits, rays);
-  // The kernels only HCC_DIR uses (its two passes). Best effort: their cut data is per encoder and
-  // key length, and if it cannot be allocated here, the cell that needs it fails with that message
-  // and the other cells still run (tests/cli_test.cpp).
-  for (auto [e, bits] : {std::pair{Encoder::HCC_DIR, 32u}, std::pair{Encoder::HCC_DIR, 64u}}) {
-    try {
-      run(e, bits, rays);
-    } catch (const Error&) {
+    for (Encoder e : all_encoders()) {
+      try {
+        run(e, bits, rays);
+      } catch (const Error&) {
+      }
     }
-  }
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 

@@ -14,45 +14,57 @@ namespace raysort {
 static_assert(sizeof(RsBox) == 24 && sizeof(RsEncodeFrame) == 48 && sizeof(RsCutGroup) == 384,
               "device struct layouts (cl/keys.h)");
 
-std::string_view encoder_name(Encoder e) {
-  switch (e) {
-    case Encoder::NoSort: return "nosort";
-    case Encoder::Origin: return "origin";
-    case Encoder::Reis: return "reis";
-    case Encoder::Costa: return "costa";
-    case Encoder::Aila: return "aila";
-    case Encoder::TwoPoint: return "twopoint";
-    case Encoder::RegularGrid: return "grid";
-    case Encoder::HCC: return "hcc";
-    case Encoder::MLHCC: return "mlhcc";
-    case Encoder::PPC: return "ppc";
-    case Encoder::HCC_DIR: return "hcc-dir";
-  }
-  return "?";
+const std::vector<EncoderInfo>& encoder_table() {
+  // Cost weights: encode + sort as a share of one trace, measured on PoCL in the quick preset
+  // (bench/shard.h, matrix_cells).
+  using F = EncoderFamily;
+  static const std::vector<EncoderInfo> table = {
+      {Encoder::NoSort, "nosort", {"none", "nosorting"}, F::None, "encode_nosort", 100, false},
+      {Encoder::Origin, "origin", {}, F::Spatial, "encode_origin", 115, false},
+      {Encoder::Reis, "reis", {}, F::Spatial, "encode_reis", 128, false},
+      {Encoder::Costa, "costa", {}, F::Spatial, "encode_costa", 128, false},
+      {Encoder::Aila, "aila", {"aila_compact"}, F::Spatial, "encode_aila", 125, false},
+      {Encoder::TwoPoint, "twopoint", {}, F::Spatial, "encode_twopoint", 122, false},
+      {Encoder::RegularGrid, "grid", {"regular-grid"}, F::BoxSet, "encode_box_set", 128, true},
+      {Encoder::HCC, "hcc", {"hierarchy-cut", "hierarchy-cut-code"}, F::BoxSet, "encode_box_set", 128, true},
+      {Encoder::MLHCC, "mlhcc", {}, F::TwoLevel, "encode_two_level", 142, true},
+      {Encoder::PPC, "ppc", {"prefix-path", "prefix-path-code"}, F::PrefixPath, "encode_prefix_path", 165, false},
+      {Encoder::HCC_DIR, "hcc-dir", {}, F::BoxSet, "encode_box_set", 150, false},
+  };
+  return table;
 }
 
+const EncoderInfo& encoder_info(Encoder e) {
+  const auto& table = encoder_table();
+  const auto i = static_cast<std::size_t>(e);
+  if (i >= table.size() || table[i].id != e) throw Error("encoder_info: an encoder outside the table");
+  return table[i];
+}
+
+std::string_view encoder_name(Encoder e) { return encoder_info(e).name; }
+
 std::optional<Encoder> parse_encoder(std::string_view name) {
-  std::string s;
-  for (char c : name)
-    if (c != '-' && c != '_' && c != ' ') s += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  for (Encoder e : all_encoders()) {
-    std::string n;
-    for (char c : encoder_name(e))
-      if (c != '-') n += c;
-    if (s == n) return e;
+  auto folded = [](std::string_view text) {
+    std::string s;
+    for (char c : text)
+      if (c != '-' && c != '_' && c != ' ') s += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return s;
+  };
+  const std::string wanted = folded(name);
+  for (const EncoderInfo& info : encoder_table()) {
+    if (folded(info.name) == wanted) return info.id;
+    for (std::string_view alias : info.aliases)
+      if (folded(alias) == wanted) return info.id;
   }
-  if (s == "none" || s == "nosorting") return Encoder::NoSort;
-  if (s == "regulargrid") return Encoder::RegularGrid;
-  if (s == "ailacompact") return Encoder::Aila;
-  if (s == "prefixpath" || s == "prefixpathcode") return Encoder::PPC;
-  if (s == "hierarchycut" || s == "hierarchycutcode") return Encoder::HCC;
   return std::nullopt;
 }
 
 const std::vector<Encoder>& all_encoders() {
-  static const std::vector<Encoder> all = {Encoder::NoSort,      Encoder::Origin, Encoder::Reis,  Encoder::Costa,
-                                           Encoder::Aila,        Encoder::TwoPoint, Encoder::RegularGrid,
-                                           Encoder::HCC,         Encoder::MLHCC,  Encoder::PPC,   Encoder::HCC_DIR};
+  static const std::vector<Encoder> all = [] {
+    std::vector<Encoder> ids;
+    for (const EncoderInfo& info : encoder_table()) ids.push_back(info.id);
+    return ids;
+  }();
   return all;
 }
 
@@ -179,29 +191,23 @@ const EncodeScene::TwoLevel& EncodeScene::two_level(unsigned bits) const {
 }
 
 std::uint64_t encode_ray(Encoder e, unsigned bits, const EncodeScene& scene, const RsRay& ray) {
-  switch (e) {
-    case Encoder::NoSort: return 0;
-    case Encoder::Origin:
-    case Encoder::Reis:
-    case Encoder::Costa:
-    case Encoder::Aila:
-    case Encoder::TwoPoint:
+  switch (encoder_info(e).family) {
+    case EncoderFamily::None: return 0;
+    case EncoderFamily::Spatial:
       return rs_key_from_code(rs_spatial_code(static_cast<int>(e), &scene.frame(), ray), bits);
-    case Encoder::RegularGrid:
-    case Encoder::HCC:
-    case Encoder::HCC_DIR: {
+    case EncoderFamily::BoxSet: {
       const auto& set = scene.cut_set(e, bits);
       const unsigned dir = e == Encoder::HCC_DIR ? scene.params().direction_bits : 0u;
       const rs_u64 code = rs_box_set_code(ray, set.groups.data(), set.box_count, bits - dir, dir);
       return rs_key_from_code(code, bits);
     }
-    case Encoder::MLHCC: {
+    case EncoderFamily::TwoLevel: {
       const auto& t = scene.two_level(bits);
-      return rs_key_from_code(rs_two_level_cut_code(ray, t.top_groups.data(), static_cast<rs_u32>(t.top.size()), t.low_groups.data(),
-                                                    t.low_count.data(), t.half),
+      return rs_key_from_code(rs_two_level_cut_code(ray, t.top_groups.data(), static_cast<rs_u32>(t.top.size()),
+                                                    t.low_groups.data(), t.low_count.data(), t.half),
                               bits);
     }
-    case Encoder::PPC:
+    case EncoderFamily::PrefixPath:
       return rs_key_from_code(rs_prefix_path_code(scene.bvh().nodes.data(), scene.bvh().triangles.data(), ray, bits),
                               bits);
   }
@@ -212,8 +218,8 @@ std::vector<std::uint64_t> encode_on_host(Encoder e, unsigned bits, const Encode
                                           const std::vector<RsRay>& rays) {
   check_key_bits(e, bits, scene.params());
   // Build the cached cut data before the threads read it.
-  if (e == Encoder::RegularGrid || e == Encoder::HCC || e == Encoder::HCC_DIR) scene.cut_set(e, bits);
-  if (e == Encoder::MLHCC) scene.two_level(bits);
+  if (encoder_info(e).family == EncoderFamily::BoxSet) scene.cut_set(e, bits);
+  if (encoder_info(e).family == EncoderFamily::TwoLevel) scene.two_level(bits);
   std::vector<std::uint64_t> keys(rays.size());
   auto work = [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) keys[i] = encode_ray(e, bits, scene, rays[i]);

@@ -37,9 +37,35 @@ enum class Encoder : int {
   HCC_DIR = RS_ENC_HCC_DIR,
 };
 
+// How an encoder computes its key; the family decides the kernel, the host twin and the per-scene
+// data the key needs (docs/encoders.md).
+enum class EncoderFamily {
+  None,        // NoSort: no key, the generation order
+  Spatial,     // a Morton-style code of origin, direction or termination point (frame only)
+  BoxSet,      // one bit per box the ray segment overlaps: HCC cut nodes, grid cells (+ direction bits)
+  TwoLevel,    // MLHCC: a top-level cut, then the low-level cut under the first top node hit
+  PrefixPath,  // PPC: the first box tests of a traversal (the BVH itself)
+};
+
+// One row of the encoder table: everything the code knows about an encoder, in one place. Adding
+// an encoder is a row here, its key code in cl/ (and, for a new family, a kernel and a host branch).
+struct EncoderInfo {
+  Encoder id;
+  std::string_view name;                  // as the CLI and result sets spell it
+  std::vector<std::string_view> aliases;  // other spellings parse_encoder accepts
+  EncoderFamily family;
+  std::string_view kernel;                // its cl/encode.cl kernel, without the _k32 / _k64 suffix
+  unsigned cost_weight_pct;               // encode + sort on top of a trace, % (the shard planner's cost)
+  bool overlay;                           // `raysort render --overlay NAME` draws its boxes
+};
+
+// Every encoder, NoSort first, in the order of the enum.
+const std::vector<EncoderInfo>& encoder_table();
+const EncoderInfo& encoder_info(Encoder e);
+
 // "nosort", "origin", "reis", "costa", "aila", "twopoint", "grid", "hcc", "mlhcc", "ppc", "hcc-dir".
 std::string_view encoder_name(Encoder e);
-// Case-insensitive; also accepts a few aliases ("regular-grid", "aila_compact", "hcc_dir", ...).
+// Case-insensitive, ignoring '-', '_' and spaces; also accepts the table's aliases.
 std::optional<Encoder> parse_encoder(std::string_view name);
 // Every encoder, NoSort first, in the order of the enum.
 const std::vector<Encoder>& all_encoders();
@@ -166,8 +192,8 @@ class DeviceEncoder {
   EncodeScene scene_;
   cl::Buffer nodes_, triangles_;
   struct Kernels {
-    cl::Kernel nosort, box_set, box_set_or, direction, two_level, prefix_path;
-    std::map<Encoder, cl::Kernel> spatial;  // one kernel per spatial encoder: encode_<name>_k32/k64
+    std::map<Encoder, cl::Kernel> by_encoder;  // EncoderInfo::kernel of each encoder, _k32 / _k64
+    cl::Kernel box_set_or, direction;          // HCC_DIR's two passes (more than one direction bit)
   } k32_, k64_;
   std::map<std::pair<int, unsigned>, Uploaded> uploads_;
   std::size_t local_ = 64;
