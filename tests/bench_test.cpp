@@ -217,21 +217,30 @@ TEST(ResultSet, ReadsFormatVersionOne) {
 }
 
 TEST(Matrix, RefusesImpossibleCombinationsBeforeWork) {
+  // The command line's text is refused where it is parsed, naming the value and the valid ones.
+  EXPECT_THROW(parse_encoders({"no-such-encoder"}), Error);
+  EXPECT_EQ(parse_encoders({"all"}).size(), all_encoders().size());
+  EXPECT_EQ(parse_encoders({"HCC", "hierarchy_cut", "regular-grid"}), (std::vector<Encoder>{Encoder::HCC, Encoder::RegularGrid}));
+  EXPECT_THROW(parse_resolution("0x100"), Error);
+  EXPECT_THROW(parse_resolution("640x"), Error);
+  EXPECT_THROW(parse_ray_accesses("gather,scatter"), Error);
+  EXPECT_EQ(parse_ray_accesses("all").size(), 2u);
+  EXPECT_THROW(parse_trace_variants("robust,slow"), Error);
+  EXPECT_EQ(parse_trace_variants("both"), (std::vector<TraceVariant>{TraceVariant::Robust, TraceVariant::Fast}));
+  EXPECT_EQ(parse_trace_variants("fast,robust,fast"), (std::vector<TraceVariant>{TraceVariant::Fast, TraceVariant::Robust}));
+  // What parsing cannot see, validate_matrix refuses before any work.
   MatrixSpec m = matrix_preset("quick");
-  m.encoders = {"no-such-encoder"};
-  EXPECT_THROW(validate_matrix(m), Error);
-  m = matrix_preset("quick");
-  m.resolution = "0x100";
+  m.frame.width = 0;
   EXPECT_THROW(validate_matrix(m), Error);
   m = matrix_preset("quick");
   m.batches = {"bounce0"};
   EXPECT_THROW(validate_matrix(m), Error);
   m = matrix_preset("quick");
-  m.encoders = {"mlhcc"};
+  m.encoders = {Encoder::MLHCC};
   m.bits = {33};
   EXPECT_THROW(validate_matrix(m), Error);
   m = matrix_preset("quick");
-  m.access = "gather,scatter";
+  m.accesses.clear();
   EXPECT_THROW(validate_matrix(m), Error);
   m = matrix_preset("quick");
   m.max_noise = 0;
@@ -252,7 +261,7 @@ TEST(Matrix, EndToEndAndResume) {
   spec.scenes = {"cornell", "multi-instance"};
   spec.key_length_scenes = {"cornell"};
   spec.top_bits = {8};
-  spec.resolution = "48x27";
+  spec.frame = {48, 27, 1};
   spec.reps = 1;
   spec.warmup = 0;
   spec.max_time_s = 0;
@@ -316,10 +325,10 @@ TEST(Matrix, IdenticalOrderIsNeverReportedAsASpeedup) {
   MatrixSpec spec;
   spec.scenes = {"detail-room"};
   spec.batches = {"primary", "bounce1"};
-  spec.encoders = {"origin", "hcc"};
+  spec.encoders = {Encoder::Origin, Encoder::HCC};
   spec.bits = {32};
-  spec.resolution = "96x54";
-  spec.access = "gather,permute";
+  spec.frame = {96, 54, 1};
+  spec.accesses = {RayAccess::Gather, RayAccess::Permute};
   spec.reps = 12;
   spec.max_time_s = 0.5;
   RunOptions opts;

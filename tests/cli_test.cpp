@@ -63,7 +63,7 @@ TEST(Cli, ImpossibleCombinationsRefusedBeforeWork) {
   expect_refused({"run", "--scenes", "cornell", "--encoders", "origin", "--bits", "0"}, {"origin keys have 1 to 64 bits, not 0"});
   expect_refused({"run", "--scenes", "cornell", "--bits", "65"}, {"65-bit keys", "not 65"});
   expect_refused({"run", "--scenes", "cornell", "--encoders", "MLHCC", "--bits", "31"},
-                 {"encoder MLHCC with 31-bit keys", "even number of bits"});
+                 {"encoder mlhcc with 31-bit keys", "even number of bits"});
   expect_refused({"run", "--scenes", "cornell", "--top-bits", "40", "--bits", "32"}, {"--top-bits 40"});
   expect_refused({"run", "--scenes", "cornell", "--reps", "0"}, {"--reps"});
   expect_refused({"run", "--scenes", "cornell", "--timeout", "-1"}, {"--timeout -1"});

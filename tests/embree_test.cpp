@@ -40,12 +40,16 @@ namespace {
 using testing::ray;
 
 // Every batch of the scene's pipeline, for both variants: same triangle for >= 99.9 % of rays.
-void expect_agreement(const Scene& scene, const RayGenOptions& gen) {
-  Scene::Flat tris = scene.flatten();
-  Bvh bvh = build_bvh(tris);
+void expect_agreement(const std::string& name, const FrameSize& frame) {
+  SceneOptions opts;
+  opts.frame = frame;
+  const PreparedScene p = prepare_scene(name, opts);
+  const Scene& scene = p.scene;
+  const Scene::Flat& tris = p.tris;
+  const Bvh& bvh = p.bvh;
   EmbreeScene embree(tris);
   bool primary = false, shadow = false, bounce = false;
-  for (const ReferencedBatch& rb : generate_batches(scene, tris, bvh, gen)) {
+  for (const ReferencedBatch& rb : generate_batches(scene, tris, bvh, {})) {
     const RayBatch& b = rb.batch;
     primary |= b.kind == BatchKind::Primary;
     shadow |= b.kind == BatchKind::Shadow;
@@ -140,18 +144,11 @@ TEST(Embree, AgreementCountsEveryKind) {
 }
 
 TEST(Embree, CornellAgreesOnPrimaryShadowAndBounce) {
-  RayGenOptions gen;
-  gen.width = 96;
-  gen.height = 72;
-  gen.spp = 2;
-  expect_agreement(load_scene("cornell"), gen);
+  expect_agreement("cornell", {96, 72, 2});
 }
 
 TEST(Embree, DetailRoomAgreesOnPrimaryShadowAndBounce) {
-  RayGenOptions gen;
-  gen.width = 160;
-  gen.height = 90;
-  expect_agreement(load_scene("detail-room"), gen);
+  expect_agreement("detail-room", {160, 90, 0});
 }
 
 TEST(Embree, TraceCommandComparesWithEmbree) {

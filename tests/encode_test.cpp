@@ -12,7 +12,7 @@
 #include <random>
 #include <set>
 
-#include "bvh/bvh.h"
+#include "bvh/prepared_scene.h"
 #include "encode/encode.h"
 #include "render/batches.h"
 #include "scene/load.h"
@@ -359,14 +359,11 @@ TEST(Encode, RaysThatMissEverythingGetZeroCutBits) {
 namespace {
 
 void check_scene(const std::string& name, std::uint32_t w, std::uint32_t h) {
-  Scene scene = load_scene(name);
-  Scene::Flat tris = scene.flatten();
-  Bvh bvh = build_bvh(tris);
-  RayGenOptions gen;
-  gen.width = w;
-  gen.height = h;
-  gen.spp = 1;
-  auto batches = generate_batches(scene, tris, bvh, gen);
+  SceneOptions opts;
+  opts.frame = {w, h, 1};
+  const PreparedScene p = prepare_scene(name, opts);
+  const Bvh& bvh = p.bvh;
+  auto batches = generate_batches(p.scene, p.tris, bvh, {});
   ASSERT_GE(batches.size(), 3u) << name;
   DeviceEncoder dev(testing::runtime(), bvh, bvh.bounds());
   for (const auto& rb : batches) expect_all_encoders_bit_exact(dev, rb.batch.rays, name + " " + rb.batch.name);
@@ -542,17 +539,15 @@ Scene scaled(Scene s, float k) {
 }  // namespace
 
 TEST(Encode, LargeAndSmallSceneScales) {
-  Scene base = load_scene("cornell");
+  SceneOptions opts;
+  opts.frame = {48, 27, 1};
+  Scene base = load_scene("cornell", opts);
   std::size_t base_distinct = 0;
   for (float k : {1.0f, 1e6f, 1e-4f}) {
     Scene scene = scaled(base, k);
     Scene::Flat tris = scene.flatten();
     Bvh bvh = build_bvh(tris);
-    RayGenOptions gen;
-    gen.width = 48;
-    gen.height = 27;
-    gen.spp = 1;
-    auto batches = generate_batches(scene, tris, bvh, gen);
+    auto batches = generate_batches(scene, tris, bvh, {});
     ASSERT_GE(batches.size(), 2u);
     DeviceEncoder dev(testing::runtime(), bvh, bvh.bounds());
     for (const auto& rb : batches)

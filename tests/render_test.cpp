@@ -128,9 +128,8 @@ std::string room_scene(const std::string& ball, const std::string& room_material
 TEST(WhiteFurnace, ConvexSphereAlbedoOneIsOne) {
   Prepared p = prepare(sphere_scene(0.0, "albedo = [1.0, 1.0, 1.0]", std::string(kWhiteSky) +
                                                                         "[effects]\nmax_bounces = 8\n"));
-  RayGenOptions gen;
-  gen.spp = 4;
-  Traced t = trace_host(p, gen);
+  apply_frame_size(p.scene, {0, 0, 4});
+  Traced t = trace_host(p);
   Stats ball = radiance_stats(t, true, 1.0), sky = radiance_stats(t, false, 1.0);
   ASSERT_GT(ball.n, 2000u);
   EXPECT_EQ(sky.exact, sky.n);
@@ -148,9 +147,8 @@ TEST(WhiteFurnace, BumpySphereAlbedoOneWithEnoughBouncesIsOne) {
                                     std::string(kWhiteSky) +
                                         "[effects]\nmax_bounces = 16\nrussian_roulette_start = 3\n"
                                         "russian_roulette_survival = 0.8\n"));
-  RayGenOptions gen;
-  gen.spp = 8;
-  Traced t = trace_host(p, gen);
+  apply_frame_size(p.scene, {0, 0, 8});
+  Traced t = trace_host(p);
   Stats ball = radiance_stats(t, true, 1.0);
   std::size_t deep = 0;  // paths that did bounce more than once: the test would be the convex one otherwise
   for (const auto& b : t.batches)
@@ -177,9 +175,8 @@ TEST(WhiteFurnace, AlbedoHalfMatchesTheAnalyticValue) {
                                     std::string(kWhiteSky) +
                                         "[effects]\nmax_bounces = 4\nrussian_roulette_start = 1\n"
                                         "russian_roulette_survival = 0.5\n"));
-  RayGenOptions gen;
-  gen.spp = 8;
-  Traced t = trace_host(p, gen);
+  apply_frame_size(p.scene, {0, 0, 8});
+  Traced t = trace_host(p);
   Stats ball = radiance_stats(t, true, 0.5);
   EXPECT_NEAR(ball.mean, 0.5, 4.0 * ball.stderr_);
   EXPECT_LT(ball.stderr_, 0.01);
@@ -218,9 +215,8 @@ power = 39.47841760435743
 max_bounces = 0
 shadow_rays_per_bounce = 4
 )");
-  RayGenOptions gen;
-  gen.spp = 64;
-  Traced t = trace_host(p, gen);
+  apply_frame_size(p.scene, {0, 0, 64});
+  Traced t = trace_host(p);
   ASSERT_EQ(t.batches.size(), 2u);  // primary, shadow0: no bounce at max_bounces = 0
   Stats floor = radiance_stats(t, true, 0.5);
   ASSERT_EQ(floor.n, 16u * 16u * 64u);
@@ -254,9 +250,13 @@ min = [-2.0, 0.0, -2.0]
 max = [2.0, 2.5, 2.0]
 inverted = 1
 )";
+  // The batches the path tracer produces are the ones possible_batches states (the shard planner
+  // and `scenes --describe` read that statement), here where no batch is empty.
   auto names = [](const Prepared& p) {
-    std::vector<std::string> out;
+    std::vector<std::string> out, stated;
     for (const auto& b : generate_batches(p.scene, p.tris, p.bvh, {})) out.push_back(b.batch.name);
+    for (const auto& b : possible_batches(p.scene)) stated.push_back(b.name);
+    EXPECT_EQ(out, stated);
     return out;
   };
   using V = std::vector<std::string>;
@@ -309,11 +309,10 @@ TEST(Batches, SizesEqualLivePathCounts) {
 }
 
 TEST(Batches, SameCommandSameBatches) {
-  Scene scene = load_scene("cornell");
+  Scene scene = load_scene("cornell", {"", {48, 27, 2}});
   Scene::Flat tris = scene.flatten();
   Bvh bvh = build_bvh(tris);
   RayGenOptions gen;
-  gen.width = 48, gen.height = 27, gen.spp = 2;
   auto a = generate_batches(scene, tris, bvh, gen), b = generate_batches(scene, tris, bvh, gen);
   ASSERT_EQ(a.size(), b.size());
   ASSERT_EQ(a.size(), 4u);
@@ -365,8 +364,8 @@ TEST(DevicePathTracer, EqualsHostTwinOnCornell) {
   p.scene = load_scene("cornell");
   p.tris = p.scene.flatten();
   p.bvh = build_bvh(p.tris);
+  apply_frame_size(p.scene, {64, 36, 2});
   RayGenOptions gen;
-  gen.width = 64, gen.height = 36, gen.spp = 2;
   FrameOptions fo;
   fo.count_visits = true;
   expect_device_equals_host(p, gen, fo, 4);
@@ -385,8 +384,8 @@ TEST(DevicePathTracer, EqualsHostTwinWithEveryEffect) {
                                     "[[sphere_light]]\ncenter = [-2.0, 1.0, 2.0]\nradius = 0.02\npower = 5.0\n"
                                     "[effects]\nmax_bounces = 4\nshadow_rays_per_bounce = 2\n"
                                     "russian_roulette_start = 2\nrussian_roulette_survival = 0.6\n"));
+  apply_frame_size(p.scene, {40, 30, 3});
   RayGenOptions gen;
-  gen.width = 40, gen.height = 30, gen.spp = 3;
   FrameOptions fo;
   fo.count_visits = true;
   fo.sample_begin = 1;
@@ -400,8 +399,8 @@ TEST(PathTracer, SamplePassesPartitionTheFrame) {
   p.scene = load_scene("cornell");
   p.tris = p.scene.flatten();
   p.bvh = build_bvh(p.tris);
+  apply_frame_size(p.scene, {16, 9, 3});
   RayGenOptions gen;
-  gen.width = 16, gen.height = 9, gen.spp = 3;
   ShadeInputs in = make_shade_inputs(p.scene, p.tris, gen);
   Frame whole = trace_frame_host(in, p.bvh, {});
   FrameOptions a, b;

@@ -373,12 +373,10 @@ TEST(Robust, DegenerateTrianglesNeverHit) {
 // every edge in both scenes, and no other surface within 0.05 behind the hit), and bounce rays leaving a hit (origin offset as in host/render/rays.cpp)
 // never hit their own plane again (self-intersection at t ≈ 0).
 TEST(Robust, TranslatedAndScaledSceneKeepsHits) {
-  Scene scene = load_scene("cornell");
+  Scene scene = load_scene("cornell", {"", {64, 48, 0}});
   Scene::Flat base = scene.flatten();
   Bvh base_bvh = build_bvh(base);
   RayGenOptions gen;
-  gen.width = 64;
-  gen.height = 48;
   auto batches = generate_batches(scene, base, base_bvh, gen);
   ASSERT_FALSE(batches.empty());
   const std::vector<RsRay>& primary = batches[0].batch.rays;
@@ -504,18 +502,11 @@ void expect_robust_device_equals_reference(const Scene& scene, const RayGenOptio
 }  // namespace
 
 TEST(Robust, CornellEveryBatchMatchesReference) {
-  RayGenOptions gen;
-  gen.width = 96;
-  gen.height = 72;
-  gen.spp = 2;
-  expect_robust_device_equals_reference(load_scene("cornell"), gen, 4);
+  expect_robust_device_equals_reference(load_scene("cornell", {"", {96, 72, 2}}), {}, 4);
 }
 
 TEST(Robust, DetailRoomEveryBatchMatchesReference) {
-  RayGenOptions gen;
-  gen.width = 64;
-  gen.height = 36;
-  expect_robust_device_equals_reference(load_scene("detail-room"), gen, 3);
+  expect_robust_device_equals_reference(load_scene("detail-room", {"", {64, 36, 0}}), {}, 3);
 }
 
 }  // namespace raysort

@@ -83,9 +83,7 @@ TEST(SceneToml, ValidSceneParses) {
 
 TEST(SceneToml, OptionsOverrideResolutionAndSpp) {
   SceneOptions o;
-  o.width = 64;
-  o.height = 32;
-  o.spp = 4;
+  o.frame = {64, 32, 4};
   Scene s = parse_scene_toml(kValid, "ok.toml", o);
   EXPECT_EQ(s.camera.width, 64u);
   EXPECT_EQ(s.camera.height, 32u);

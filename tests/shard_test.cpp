@@ -44,7 +44,7 @@ MatrixSpec fake_matrix() {
   spec.batches = {};  // every batch the effects imply
   spec.key_length_scenes = {"large"};
   spec.top_bits = {8};
-  spec.variant = "robust,fast";
+  spec.variants = {TraceVariant::Robust, TraceVariant::Fast};
   return spec;
 }
 
@@ -139,7 +139,7 @@ TEST(ShardPlan, DeterministicCompleteAndBalancedByCost) {
 // quick preset run on one machine); loads the procedural scenes, no device needed.
 TEST(ShardPlan, QuickPresetPlanEqualsTheCellsOfAFullRun) {
   MatrixSpec spec = matrix_preset("quick");
-  spec.resolution = "48x27";
+  spec.frame = {48, 27, 1};
   spec.reps = 1;
   spec.warmup = 0;
   std::set<std::string> planned, golden;

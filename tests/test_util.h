@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "bvh/bvh.h"
+#include "bvh/prepared_scene.h"
 #include "cl/runtime.h"
 #include "render/batches.h"
 #include "scene/load.h"
@@ -52,14 +52,11 @@ struct SceneBatches {
   std::vector<ReferencedBatch> batches;
 };
 inline SceneBatches scene_batches(const std::string& name, std::uint32_t width, std::uint32_t height) {
-  SceneBatches s;
-  s.scene = load_scene(name);
-  s.tris = s.scene.flatten();
-  s.bvh = build_bvh(s.tris);
-  RayGenOptions gen;
-  gen.width = width;
-  gen.height = height;
-  s.batches = generate_batches(s.scene, s.tris, s.bvh, gen);
+  SceneOptions opts;
+  opts.frame = {width, height, 0};
+  PreparedScene p = prepare_scene(name, opts);
+  SceneBatches s{std::move(p.scene), std::move(p.tris), std::move(p.bvh), {}};
+  s.batches = generate_batches(s.scene, s.tris, s.bvh, {});
   return s;
 }
 

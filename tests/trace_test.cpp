@@ -104,30 +104,23 @@ TEST(Trace, EmptyBatchIsFine) {
 }
 
 TEST(Trace, CornellEveryBatchMatchesReference) {
-  Scene scene = load_scene("cornell");
+  Scene scene = load_scene("cornell", {"", {96, 72, 2}});
   RayGenOptions gen;
-  gen.width = 96;
-  gen.height = 72;
-  gen.spp = 2;
   // primary, shadow0, bounce1, shadow1 at least.
   expect_device_equals_reference(scene, gen, 4);
 }
 
 TEST(Trace, DetailRoomEveryBatchMatchesReference) {
-  Scene scene = load_scene("detail-room");
+  Scene scene = load_scene("detail-room", {"", {64, 36, 0}});
   RayGenOptions gen;
-  gen.width = 64;
-  gen.height = 36;
   expect_device_equals_reference(scene, gen, 3);
 }
 
 TEST(Trace, SameCommandSameBatches) {
-  Scene scene = load_scene("cornell");
+  Scene scene = load_scene("cornell", {"", {32, 24, 0}});
   Scene::Flat tris = scene.flatten();
   Bvh bvh = build_bvh(tris);
   RayGenOptions gen;
-  gen.width = 32;
-  gen.height = 24;
   auto a = generate_batches(scene, tris, bvh, gen);
   auto b = generate_batches(scene, tris, bvh, gen);
   ASSERT_EQ(a.size(), b.size());
@@ -139,12 +132,10 @@ TEST(Trace, SameCommandSameBatches) {
 
 TEST(Trace, SibenikPrimaryMatchesReference) {
   RAYSORT_REQUIRE_REAL_SCENES();
-  Scene scene = load_scene("sibenik");
+  Scene scene = load_scene("sibenik", {"", {80, 45, 0}});
   Scene::Flat tris = scene.flatten();
   Bvh bvh = build_bvh(tris);
   RayGenOptions gen;
-  gen.width = 80;
-  gen.height = 45;
   auto batches = generate_batches(scene, tris, bvh, gen);
   Tracer tracer(testing::runtime(), bvh);
   for (const auto& rb : batches) {
@@ -161,12 +152,10 @@ TEST(Trace, SibenikPrimaryMatchesReference) {
 // occluded/free answer.
 namespace raysort {
 TEST(Trace, WideAndBinaryLayoutsAgree) {
-  Scene scene = load_scene("detail-room");
+  Scene scene = load_scene("detail-room", {"", {64, 36, 0}});
   Scene::Flat tris = scene.flatten();
   Bvh bvh = build_bvh(tris);
   RayGenOptions gen;
-  gen.width = 64;
-  gen.height = 36;
   for (TraceVariant v : {TraceVariant::Fast, TraceVariant::Robust}) {
     Tracer wide(testing::runtime(), bvh, v, TraceLayout::Wide);
     Tracer binary(testing::runtime(), bvh, v, TraceLayout::Binary);

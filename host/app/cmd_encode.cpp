@@ -10,7 +10,7 @@
 #include "app/commands.h"
 #include "app/options.h"
 #include "bench/protocol.h"
-#include "bvh/bvh.h"
+#include "bvh/prepared_scene.h"
 #include "encode/encode.h"
 #include "render/batches.h"
 #include "scene/load.h"
@@ -33,11 +33,11 @@ struct EncodeBenchArgs {
 
 int run_encodebench(const EncodeBenchArgs& args) {
   Runtime rt(select_device(args.common.device));
-  Scene scene = load_scene(args.scene, args.common.scene_options());
-  Scene::Flat tris = scene.flatten();
-  Bvh bvh = build_bvh(tris);
-  RayGenOptions gen = args.common.raygen_options();
-  auto batches = generate_batches(scene, tris, bvh, gen);
+  const PreparedScene prepared = prepare_scene(args.scene, args.common.scene_options());
+  const Scene& scene = prepared.scene;
+  const Scene::Flat& tris = prepared.tris;
+  const Bvh& bvh = prepared.bvh;
+  auto batches = generate_batches(scene, tris, bvh, args.common.raygen_options());
   const ReferencedBatch* rb = nullptr;
   std::string names;
   for (const auto& b : batches) {
@@ -45,13 +45,7 @@ int run_encodebench(const EncodeBenchArgs& args) {
     if (b.batch.name == args.batch) rb = &b;
   }
   if (!rb) throw Error(fmt::format("scene '{}' has no batch '{}'; it has: {}", scene.name, args.batch, names));
-  std::vector<Encoder> encoders;
-  for (const auto& name : args.encoders) {
-    auto e = parse_encoder(name);
-    if (!e) throw Error(fmt::format("--encoders: unknown encoder '{}'", name));
-    encoders.push_back(*e);
-  }
-  if (encoders.empty()) encoders = all_encoders();
+  const std::vector<Encoder> encoders = args.encoders.empty() ? all_encoders() : parse_encoders(args.encoders);
 
   const RayBatch& batch = rb->batch;
   const auto n = static_cast<std::uint32_t>(batch.size());
@@ -136,7 +130,7 @@ int run_encodebench(const EncodeBenchArgs& args) {
 void register_encode_command(CLI::App& app) {
   auto args = std::make_shared<EncodeBenchArgs>();
   auto* cmd = app.add_subcommand("encodebench", "time every encoder and key length on one ray batch of a scene");
-  cmd->add_option("--scene", args->scene, "scene name, .toml or .obj path")->required();
+  cmd->add_option("--scene,--scenes", args->scene, "scene name, .toml or .obj path (one)")->required();
   cmd->add_option("--batch", args->batch, "batch name: primary, shadow<k>, bounce<k>")->capture_default_str();
   cmd->add_option("--encoders", args->encoders, "comma-separated encoders (default: all)")->delimiter(',');
   cmd->add_option("--bits", args->bits, "comma-separated key lengths")->delimiter(',')->capture_default_str();

@@ -20,7 +20,7 @@
 
 #include "app/commands.h"
 #include "app/options.h"
-#include "bvh/bvh.h"
+#include "bvh/prepared_scene.h"
 #include "bvh/cut.h"
 #include "encode/encode.h"
 #include "render/pathtrace.h"
@@ -236,12 +236,12 @@ Image heatmap(const std::vector<double>& cost, std::uint32_t width, std::uint32_
 }
 
 int run_render(const RenderArgs& args) {
-  Scene scene = load_scene(args.scene, args.common.scene_options());
-  Scene::Flat tris = scene.flatten();
-  Bvh bvh = build_bvh(tris);
-  RayGenOptions gen = args.common.raygen_options();
-  const std::uint32_t w = gen.width ? gen.width : scene.camera.width;
-  const std::uint32_t h = gen.height ? gen.height : scene.camera.height;
+  const PreparedScene prepared = prepare_scene(args.scene, args.common.scene_options());
+  const Scene& scene = prepared.scene;
+  const Scene::Flat& tris = prepared.tris;
+  const Bvh& bvh = prepared.bvh;
+  const RayGenOptions gen = args.common.raygen_options();
+  const std::uint32_t w = scene.camera.width, h = scene.camera.height;
   const RsCamera cam = make_camera(scene.camera, w, h);
   fmt::print("scene    {}: {} triangles, bvh {} nodes, {} leaves\n", scene.name, tris.size(), bvh.nodes.size(),
              bvh.leaf_count);
@@ -265,7 +265,7 @@ int run_render(const RenderArgs& args) {
   }
 
   const Rendered r = path_trace(args, scene, tris, bvh, gen);
-  const std::uint32_t spp = gen.spp ? gen.spp : scene.effects.samples_per_pixel;
+  const std::uint32_t spp = scene.effects.samples_per_pixel;
   fmt::print("frame    {}x{}, {} spp: {} rays in {:.0f} ms ({:.2f} MRays/s incl. shading and compaction)\n", w, h, spp,
              r.rays, r.ms, r.ms > 0 ? static_cast<double>(r.rays) / r.ms / 1e3 : 0.0);
   for (const auto& b : r.first_pass) fmt::print("  {:<10} {:>10} rays\n", b.name, b.rays);
@@ -328,7 +328,7 @@ void register_render_command(CLI::App& app) {
   auto args = std::make_shared<RenderArgs>();
   auto* cmd = app.add_subcommand("render", "path-trace a scene (EXR + PNG) with a traversal-cost heatmap, optionally "
                                            "with the HCC cut boxes drawn on a preview");
-  cmd->add_option("--scene", args->scene, "scene name, .toml or .obj path")->required();
+  cmd->add_option("--scene,--scenes", args->scene, "scene name, .toml or .obj path (one)")->required();
   cmd->add_option("--overlay", args->overlay,
                   "boxes to draw on <base>-<overlay>.png: none, hcc (cut nodes), mlhcc (top-level), grid")
       ->capture_default_str();

@@ -2,6 +2,7 @@
 #include <fmt/format.h>
 
 #include "app/commands.h"
+#include "app/options.h"
 #include "bench/result_set.h"
 #include "bench/runner.h"
 #include "bench/shard.h"
@@ -15,9 +16,9 @@ struct RunArgs {
   std::string preset;
   std::vector<std::string> scenes, batches, encoders;
   std::vector<unsigned> bits, top_bits;
-  std::string resolution;
+  CommonOptions common;  // --device, --scene-root, --resolution, --spp, --seed
   std::string variant, access;
-  unsigned spp = 0, reps = 0, warmup = 0, seed = 0;
+  unsigned reps = 0, warmup = 0;
   double max_noise_pct = 0, max_time_s = 0;
   bool warmup_set = false;
   float lambda = -1, twopoint = -1;
@@ -27,36 +28,70 @@ struct RunArgs {
   unsigned shard_plan = 0;
   RunOptions opts;
 };
+
+// The matrix the command line asks for: a preset (or the custom default) with the given axes and
+// settings over it, every text parsed here into typed values.
+MatrixSpec matrix_from(const RunArgs& a, const CLI::App& cmd) {
+  MatrixSpec spec;
+  if (!a.preset.empty()) {
+    spec = matrix_preset(a.preset);
+  } else {
+    spec.encoders = all_encoders();
+    spec.batches = {"primary", "shadow0", "bounce1"};
+    spec.frame = {640, 360, 1};
+  }
+  auto is_all = [](const std::vector<std::string>& v) { return v.size() == 1 && v[0] == "all"; };
+  if (!a.scenes.empty()) spec.scenes = a.scenes;
+  if (!a.batches.empty()) spec.batches = is_all(a.batches) ? std::vector<std::string>{} : a.batches;
+  if (!a.encoders.empty()) spec.encoders = parse_encoders(a.encoders);
+  if (!a.bits.empty()) {
+    spec.bits = a.bits;
+    spec.key_length_bits.clear();
+    spec.key_length_scenes.clear();
+  }
+  if (!a.top_bits.empty()) spec.top_bits = a.top_bits;
+  const FrameSize frame = a.common.frame();
+  if (frame.width) spec.frame.width = frame.width, spec.frame.height = frame.height;
+  if (cmd.count("--spp")) spec.frame.spp = a.common.spp;  // given values are taken as given (0 is refused)
+  if (cmd.count("--seed")) spec.seed = a.common.seed;
+  if (!a.variant.empty()) spec.variants = parse_trace_variants(a.variant);
+  if (!a.access.empty()) spec.accesses = parse_ray_accesses(a.access);
+  if (cmd.count("--reps")) spec.reps = a.reps;
+  if (a.warmup_set) spec.warmup = a.warmup;
+  if (cmd.count("--max-noise")) spec.max_noise = a.max_noise_pct / 100.0;
+  if (cmd.count("--max-time")) spec.max_time_s = a.max_time_s;
+  if (a.lambda >= 0) spec.params.had_lambda = a.lambda;
+  if (a.twopoint >= 0) spec.params.twopoint_length_fraction = a.twopoint;
+  if (a.direction_bits >= 0) spec.params.direction_bits = static_cast<unsigned>(a.direction_bits);
+  spec.cell_timeout_s = a.timeout_s;
+  return spec;
+}
 }  // namespace
 
 void register_run_command(CLI::App& app) {
   auto a = std::make_shared<RunArgs>();
   auto* cmd = app.add_subcommand("run", "run a scenario matrix (encoders x key bits x scenes x batches) into a result set");
   cmd->add_option("--preset", a->preset, "quick (what `make bench` runs) or paper (the paper's setup)");
-  cmd->add_option("--scenes", a->scenes, "scenes (names, .toml or .obj paths)")->delimiter(',');
+  add_scene_list_option(*cmd, a->scenes, "scenes (names, .toml or .obj paths, comma-separated)");
   cmd->add_option("--batches", a->batches, "batches: primary, shadow<k>, bounce<k>, or all")->delimiter(',');
   cmd->add_option("--encoders", a->encoders, "encoders, or all")->delimiter(',');
   cmd->add_option("--bits", a->bits, "key bits, e.g. 16,32,64")->delimiter(',');
   cmd->add_option("--top-bits", a->top_bits, "also sort by only the highest k bits (top-k cells)")->delimiter(',');
-  cmd->add_option("--resolution", a->resolution, "WxH");
-  auto* spp_opt = cmd->add_option("--spp", a->spp, "samples per pixel");
-  auto* reps_opt = cmd->add_option("--reps", a->reps,
-                                   "the fewest timed rounds per cell (default 7: from 7 on the 95 % interval leaves out the extremes); "
-                                   "more follow until --max-noise or --max-time is reached (docs/measurement.md)");
+  add_common_options(*cmd, a->common);
+  cmd->add_option("--reps", a->reps,
+                  "the fewest timed rounds per cell (default 7: from 7 on the 95 % interval leaves out the extremes); "
+                  "more follow until --max-noise or --max-time is reached (docs/measurement.md)");
   cmd->add_option("--warmup", a->warmup, "untimed rounds before timing")->each([a](const std::string&) { a->warmup_set = true; });
-  auto* noise_opt = cmd->add_option("--max-noise", a->max_noise_pct,
-                                    "stop sampling a cell once its speedup's 95 % interval is within +-this many "
-                                    "percent (default 2)");
-  auto* time_opt = cmd->add_option("--max-time", a->max_time_s,
-                                   "stop sampling a cell after this many seconds of rounds (past --reps) even if "
-                                   "--max-noise is not reached; the cell records that it stopped on time "
-                                   "(default 5; quick preset 0.3)");
+  cmd->add_option("--max-noise", a->max_noise_pct,
+                  "stop sampling a cell once its speedup's 95 % interval is within +-this many percent (default 2)");
+  cmd->add_option("--max-time", a->max_time_s,
+                  "stop sampling a cell after this many seconds of rounds (past --reps) even if --max-noise is not "
+                  "reached; the cell records that it stopped on time (default 5; quick preset 0.3)");
   cmd->add_option("--access", a->access,
                   "ray access modes, comma-separated: gather (trace through the sorted order), permute (move the "
                   "rays into sorted order first, timed as a stage), or all");
-  auto* seed_opt = cmd->add_option("--seed", a->seed, "seed of the ray generator");
   cmd->add_option("--variant", a->variant,
-                  "trace variants, comma-separated: robust (watertight, default), fast (Moller-Trumbore)");
+                  "trace variants, comma-separated: robust (watertight, default), fast (Moller-Trumbore), or both");
   cmd->add_option("--lambda", a->lambda, "HAD lambda (paper Eq. 1; default 0.125)");
   cmd->add_option("--twopoint-length", a->twopoint, "TwoPoint ray length as a fraction of the largest extent (0.25)");
   cmd->add_option("--direction-bits", a->direction_bits, "HCC_DIR direction bits");
@@ -64,47 +99,16 @@ void register_run_command(CLI::App& app) {
                   "per-cell wall-clock limit in seconds (0: none); a cell over it is recorded as \"timeout\" "
                   "(checked between the arms of a round: a kernel in flight runs to completion)");
   cmd->add_option("--out", a->opts.out, "result folder (default results/<device>/<preset>-<hash>)");
-  cmd->add_option("--device", a->opts.device, "device index, cpu, gpu or part of its name (env RAYSORT_DEVICE)");
-  cmd->add_option("--scene-root", a->opts.scene_root, "folder of the real scenes (env RAYSORT_SCENE_ROOT)");
   auto* shard_opt = cmd->add_option("--shard", a->shard,
                                     "run only shard i of N (i/N, numbered from 1: 1/4 ... 4/4), a deterministic share "
                                     "of the cells balanced by estimated cost; merge the shards with raysort merge");
   cmd->add_option("--shard-plan", a->shard_plan,
                   "print which cells each of N shards would run, with their estimated costs, and exit")
       ->excludes(shard_opt);
-  cmd->callback([a, cmd, spp_opt, reps_opt, seed_opt, noise_opt, time_opt] {
-    MatrixSpec spec;
-    if (!a->preset.empty()) {
-      spec = matrix_preset(a->preset);
-    } else {
-      for (Encoder e : all_encoders()) spec.encoders.emplace_back(encoder_name(e));
-      spec.batches = {"primary", "shadow0", "bounce1"};
-      spec.resolution = "640x360";
-    }
-    auto is_all = [](const std::vector<std::string>& v) { return v.size() == 1 && v[0] == "all"; };
-    if (!a->scenes.empty()) spec.scenes = a->scenes;
-    if (!a->batches.empty()) spec.batches = is_all(a->batches) ? std::vector<std::string>{} : a->batches;
-    if (!a->encoders.empty() && !is_all(a->encoders)) spec.encoders = a->encoders;
-    if (!a->bits.empty()) {
-      spec.bits = a->bits;
-      spec.key_length_bits.clear();
-      spec.key_length_scenes.clear();
-    }
-    if (!a->top_bits.empty()) spec.top_bits = a->top_bits;
-    if (!a->resolution.empty()) spec.resolution = a->resolution;
-    if (!a->variant.empty()) spec.variant = a->variant;
-    if (!a->access.empty()) spec.access = a->access == "all" ? "gather,permute" : a->access;
-    if (noise_opt->count()) spec.max_noise = a->max_noise_pct / 100.0;
-    if (time_opt->count()) spec.max_time_s = a->max_time_s;
-    // Given values are taken as given (--reps 0 is refused by validate_matrix, not ignored).
-    if (spp_opt->count()) spec.spp = a->spp;
-    if (reps_opt->count()) spec.reps = a->reps;
-    if (a->warmup_set) spec.warmup = a->warmup;
-    if (seed_opt->count()) spec.seed = a->seed;
-    if (a->lambda >= 0) spec.params.had_lambda = a->lambda;
-    if (a->twopoint >= 0) spec.params.twopoint_length_fraction = a->twopoint;
-    if (a->direction_bits >= 0) spec.params.direction_bits = static_cast<unsigned>(a->direction_bits);
-    spec.cell_timeout_s = a->timeout_s;
+  cmd->callback([a, cmd] {
+    MatrixSpec spec = matrix_from(*a, *cmd);
+    a->opts.device = a->common.device;
+    a->opts.scene_root = a->common.scene_root;
     // The command line as given, for meta.json.
     std::string line = "raysort run";
     for (auto* opt : cmd->get_options())

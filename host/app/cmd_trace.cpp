@@ -15,13 +15,12 @@
 #include "app/commands.h"
 #include "app/options.h"
 #include "bench/protocol.h"
-#include "bvh/bvh.h"
+#include "bvh/prepared_scene.h"
 #include "cl/runtime.h"
 #ifdef RAYSORT_HAVE_EMBREE
 #include "embree/embree_reference.h"
 #endif
 #include "render/batches.h"
-#include "scene/load.h"
 #include "trace/tracer.h"
 #include "util/error.h"
 
@@ -129,129 +128,140 @@ std::size_t count_triangle_differences(const std::vector<RsHit>& a, const std::v
   return n;
 }
 
-double ms_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+// What the batches of all scenes found, for the exit code.
+struct TraceTotals {
+  std::size_t mismatches = 0;           // hits that differ from the host reference
+  std::size_t disagreeing_batches = 0;  // batches below the Embree agreement
+};
+
+#ifdef RAYSORT_HAVE_EMBREE
+// Embree's columns for one batch: its median ms, ours/Embree speed per variant (paired), the lowest
+// agreement; notes on the rays that differ.
+std::string embree_columns(const BatchRun& run, const std::vector<Tracer>& tracers, const RayBatch& b,
+                           std::vector<std::string>& notes, TraceTotals& totals) {
+  std::string cols = fmt::format(" {:>8.2f}", run.embree_ms.median_ms);
+  double worst = 1.0, worst_ties = 1.0;
+  bool below = false;
+  for (std::size_t i = 0; i < tracers.size(); ++i) {
+    cols += fmt::format(" {:>14}", ratio_text(ratio_interval(run.outcome.series.at("embree"),
+                                                             run.outcome.series.at(stage_of(tracers[i])))));
+    const HitAgreement a = compare_with_embree(run.hits[i], run.embree_hits, b.any_hit());
+    worst = std::min(worst, a.fraction());
+    worst_ties = std::min(worst_ties, a.fraction_with_ties());
+    below = below || a.fraction_with_ties() < kEmbreeMinAgreement;
+    if (a.differences())
+      notes.push_back(fmt::format("{:<9} {}{} of {} rays differ from Embree: {}", "",
+                                  tracers.size() > 1 ? fmt::format("{}: ", trace_variant_name(tracers[i].variant())) : "",
+                                  a.differences(), a.rays, a.describe()));
+  }
+  cols += fmt::format(" {:>7.3f} {:>7.3f}", 100.0 * worst, 100.0 * worst_ties);
+  if (below) {
+    ++totals.disagreeing_batches;
+    notes.push_back(fmt::format("{:<9} below the required {:.1f} % agreement with Embree (same triangle or a tie)", "",
+                                100.0 * kEmbreeMinAgreement));
+  }
+  return cols;
+}
+#endif
+
+void print_batch_header(const std::vector<Tracer>& tracers, TraceLayout layout, bool with_embree) {
+  fmt::print("timing   every arm of a batch in the same rounds (docs/measurement.md): ms = median [95 % interval]; "
+             "ratios are paired estimates of the per-round ratios\n");
+  if (tracers.size() == 2) {
+    fmt::print("variant  fast and robust, in the same rounds on each batch ({} BVH)\n", trace_layout_name(layout));
+    fmt::print("{:<9} {:>9} {:>24} {:>9} {:>24} {:>9} {:>24} {:>9} {:>8} {:>10} {:>7}{}\n", "batch", "rays", "fast ms",
+               "fast MR/s", "robust ms", "rob MR/s", "robust/fast time", "hits", "tri diff", "mismatches", "rounds",
+               with_embree ? "   emb ms  fast/emb speed  rob/emb speed  same %  +ties %" : "");
+  } else {
+    fmt::print("variant  {} ({} BVH)\n", trace_variant_name(tracers[0].variant()), trace_layout_name(layout));
+    fmt::print("{:<9} {:>9} {:>24} {:>9} {:>9} {:>10} {:>7}{}\n", "batch", "rays", "ms", "MRays/s", "hits",
+               "mismatches", "rounds", with_embree ? "   emb ms  ours/emb speed  same %  +ties %" : "");
+  }
+}
+
+void print_batch_row(const BatchRun& run, const std::vector<Tracer>& tracers, const RayBatch& b, std::size_t mismatches,
+                     const std::string& emb_cols) {
+  const std::string rounds = fmt::format("{}{}", run.outcome.rounds, run.outcome.stop == StopReason::Noise ? "" : "*");
+  if (tracers.size() == 2) {
+    fmt::print("{:<9} {:>9} {:>24} {:>9.2f} {:>24} {:>9.2f} {:>24} {:>9} {:>8} {:>10} {:>7}{}\n", b.name, b.size(),
+               ms_text(run.ms[0]), mrays(b.size(), run.ms[0]), ms_text(run.ms[1]), mrays(b.size(), run.ms[1]),
+               ratio_text(ratio_interval(run.outcome.series.at(stage_of(tracers[1])),
+                                         run.outcome.series.at(stage_of(tracers[0])))),
+               run.hit_count, count_triangle_differences(run.hits[0], run.hits[1]), mismatches, rounds, emb_cols);
+  } else {
+    fmt::print("{:<9} {:>9} {:>24} {:>9.2f} {:>9} {:>10} {:>7}{}\n", b.name, b.size(), ms_text(run.ms[0]),
+               mrays(b.size(), run.ms[0]), run.hit_count, mismatches, rounds, emb_cols);
+  }
+}
+
+// One scene: its BVH and kernels, then every batch its effects imply, traced by each variant (and
+// Embree) in the rounds of one measurement and checked against the host reference.
+void trace_scene(Runtime& rt, const std::string& scene_name, const TraceArgs& args, TraceTotals& totals) {
+  const PreparedScene p = prepare_scene(scene_name, args.common.scene_options());
+  const FrameSize frame = p.frame();
+  fmt::print("\nscene    {}: {} triangles, loaded in {:.0f} ms; {}x{} x {} spp\n", p.scene.name, p.tris.size(), p.load_ms,
+             frame.width, frame.height, frame.spp);
+  fmt::print("bvh      {} nodes, {} leaves, depth {}, built in {:.0f} ms\n", p.bvh.nodes.size(), p.bvh.leaf_count,
+             p.bvh.depth, p.bvh.build_ms);
+  // Two variants are shown fast first, then robust, with their ratio.
+  std::vector<TraceVariant> variants = parse_trace_variants(args.variant);
+  if (variants.size() == 2) variants = {TraceVariant::Fast, TraceVariant::Robust};
+  const double build_before = rt.build_ms();
+  std::vector<Tracer> tracers;
+  const TraceLayout layout = parse_trace_layout(args.layout);
+  for (TraceVariant v : variants) tracers.emplace_back(rt, p.bvh, v, layout);
+  fmt::print("kernels  built in {:.0f} ms (reported apart from trace times)\n", rt.build_ms() - build_before);
+  const bool with_embree = args.reference == "embree";
+  const void* embree_scene = nullptr;
+#ifdef RAYSORT_HAVE_EMBREE
+  std::optional<EmbreeScene> embree;
+  if (with_embree) {
+    embree.emplace(p.tris);
+    embree_scene = &*embree;
+    fmt::print("embree   Embree {}, {} threads, rtcIntersect1 / rtcOccluded1, build quality high: BVH built in {:.0f} ms "
+               "(ours {:.0f} ms = {:.2f}x Embree's)\n",
+               EmbreeScene::version(), embree->threads(), embree->build_ms(), p.bvh.build_ms,
+               embree->build_ms() > 0 ? p.bvh.build_ms / embree->build_ms() : 0.0);
+  }
+#endif
+  print_batch_header(tracers, layout, with_embree);
+  // The pipeline of docs/measurement.md, as far as the scene's effects ask.
+  for (const ReferencedBatch& rb : generate_batches(p.scene, p.tris, p.bvh, args.common.raygen_options())) {
+    const RayBatch& b = rb.batch;
+    const BatchRun run = trace_batch(rt, tracers, embree_scene, p.bvh, rb,
+                                     args.protocol.settings(protocol_seed(p.scene.name + "/" + b.name)));
+    std::size_t mismatches = 0;
+    for (std::size_t m : run.mismatches) mismatches += m;
+    std::string emb_cols;
+    std::vector<std::string> emb_notes;
+#ifdef RAYSORT_HAVE_EMBREE
+    if (embree) emb_cols = embree_columns(run, tracers, b, emb_notes, totals);
+#endif
+    print_batch_row(run, tracers, b, mismatches, emb_cols);
+    for (const auto& note : emb_notes) fmt::print("{}\n", note);
+    std::fflush(stdout);
+    totals.mismatches += mismatches;
+  }
+  fmt::print("rounds   * = stopped by --max-time before every interval was within --max-noise\n");
 }
 
 int run_trace(const TraceArgs& args) {
-  const bool with_embree = args.reference == "embree";
 #ifndef RAYSORT_HAVE_EMBREE
-  if (with_embree) throw Error("this build has no Embree: install libembree-dev and reconfigure");
+  if (args.reference == "embree") throw Error("this build has no Embree: install libembree-dev and reconfigure");
 #endif
+  parse_trace_variants(args.variant);  // a bad --variant is refused before any work
   Runtime rt(select_device(args.common.device));
   fmt::print("device   {} ({}, {})\n", rt.info().name, rt.info().platform_name, rt.info().driver_version);
-  std::size_t total_mismatches = 0;
-  std::size_t disagreeing_batches = 0;
-  for (const auto& scene_name : args.scenes) {
-    auto t0 = std::chrono::steady_clock::now();
-    Scene scene = load_scene(scene_name, args.common.scene_options());
-    Scene::Flat tris = scene.flatten();
-    double load_ms = ms_since(t0);
-    Bvh bvh = build_bvh(tris);
-    RayGenOptions gen = args.common.raygen_options();
-    const std::uint32_t w = gen.width ? gen.width : scene.camera.width;
-    const std::uint32_t h = gen.height ? gen.height : scene.camera.height;
-    const std::uint32_t spp = gen.spp ? gen.spp : scene.effects.samples_per_pixel;
-    fmt::print("\nscene    {}: {} triangles, loaded in {:.0f} ms; {}x{} x {} spp\n", scene.name, tris.size(), load_ms, w, h,
-               spp);
-    fmt::print("bvh      {} nodes, {} leaves, depth {}, built in {:.0f} ms\n", bvh.nodes.size(), bvh.leaf_count, bvh.depth,
-               bvh.build_ms);
-    const bool both = args.variant == "both";
-    std::vector<TraceVariant> variants;
-    if (both)
-      variants = {TraceVariant::Fast, TraceVariant::Robust};
-    else
-      variants = {parse_trace_variant(args.variant)};
-    double build_before = rt.build_ms();
-    std::vector<Tracer> tracers;
-    const TraceLayout layout = parse_trace_layout(args.layout);
-    for (TraceVariant v : variants) tracers.emplace_back(rt, bvh, v, layout);
-    fmt::print("kernels  built in {:.0f} ms (reported apart from trace times)\n", rt.build_ms() - build_before);
-    const void* embree_scene = nullptr;
-#ifdef RAYSORT_HAVE_EMBREE
-    std::optional<EmbreeScene> embree;
-    if (with_embree) {
-      embree.emplace(tris);
-      embree_scene = &*embree;
-      fmt::print("embree   Embree {}, {} threads, rtcIntersect1 / rtcOccluded1, build quality high: BVH built in {:.0f} ms "
-                 "(ours {:.0f} ms = {:.2f}x Embree's)\n",
-                 EmbreeScene::version(), embree->threads(), embree->build_ms(), bvh.build_ms,
-                 embree->build_ms() > 0 ? bvh.build_ms / embree->build_ms() : 0.0);
-    }
-#endif
-    fmt::print("timing   every arm of a batch in the same rounds (docs/measurement.md): ms = median [95 % interval]; "
-               "ratios are paired estimates of the per-round ratios\n");
-    if (both) {
-      fmt::print("variant  fast and robust, in the same rounds on each batch ({} BVH)\n", trace_layout_name(layout));
-      fmt::print("{:<9} {:>9} {:>24} {:>9} {:>24} {:>9} {:>24} {:>9} {:>8} {:>10} {:>7}{}\n", "batch", "rays", "fast ms",
-                 "fast MR/s", "robust ms", "rob MR/s", "robust/fast time", "hits", "tri diff", "mismatches", "rounds",
-                 with_embree ? "   emb ms  fast/emb speed  rob/emb speed  same %  +ties %" : "");
-    } else {
-      fmt::print("variant  {} ({} BVH)\n", trace_variant_name(variants[0]), trace_layout_name(layout));
-      fmt::print("{:<9} {:>9} {:>24} {:>9} {:>9} {:>10} {:>7}{}\n", "batch", "rays", "ms", "MRays/s", "hits",
-                 "mismatches", "rounds", with_embree ? "   emb ms  ours/emb speed  same %  +ties %" : "");
-    }
-
-    // The pipeline of DESIGN.md section 1, as far as the scene's effects ask.
-    for (const ReferencedBatch& rb : generate_batches(scene, tris, bvh, gen)) {
-      const RayBatch& b = rb.batch;
-      const BatchRun run = trace_batch(rt, tracers, embree_scene, bvh, rb,
-                                       args.protocol.settings(protocol_seed(scene.name + "/" + b.name)));
-      std::size_t mismatches = 0;
-      for (std::size_t m : run.mismatches) mismatches += m;
-      // Embree's columns: its median ms, ours/Embree speed per variant (paired), the lowest agreement.
-      std::string emb_cols;
-      std::vector<std::string> emb_notes;
-#ifdef RAYSORT_HAVE_EMBREE
-      if (embree) {
-        emb_cols = fmt::format(" {:>8.2f}", run.embree_ms.median_ms);
-        double worst = 1.0, worst_ties = 1.0;
-        bool below = false;
-        for (std::size_t i = 0; i < tracers.size(); ++i) {
-          emb_cols += fmt::format(" {:>14}", ratio_text(ratio_interval(run.outcome.series.at("embree"),
-                                                                       run.outcome.series.at(stage_of(tracers[i])))));
-          const HitAgreement a = compare_with_embree(run.hits[i], run.embree_hits, b.any_hit());
-          worst = std::min(worst, a.fraction());
-          worst_ties = std::min(worst_ties, a.fraction_with_ties());
-          below = below || a.fraction_with_ties() < kEmbreeMinAgreement;
-          if (a.differences())
-            emb_notes.push_back(fmt::format("{:<9} {}{} of {} rays differ from Embree: {}", "",
-                                            both ? fmt::format("{}: ", trace_variant_name(tracers[i].variant())) : "",
-                                            a.differences(), a.rays, a.describe()));
-        }
-        emb_cols += fmt::format(" {:>7.3f} {:>7.3f}", 100.0 * worst, 100.0 * worst_ties);
-        if (below) {
-          ++disagreeing_batches;
-          emb_notes.push_back(fmt::format("{:<9} below the required {:.1f} % agreement with Embree (same triangle or a tie)",
-                                          "", 100.0 * kEmbreeMinAgreement));
-        }
-      }
-#endif
-      const std::string rounds = fmt::format("{}{}", run.outcome.rounds, run.outcome.stop == StopReason::Noise ? "" : "*");
-      if (both) {
-        fmt::print("{:<9} {:>9} {:>24} {:>9.2f} {:>24} {:>9.2f} {:>24} {:>9} {:>8} {:>10} {:>7}{}\n", b.name, b.size(),
-                   ms_text(run.ms[0]), mrays(b.size(), run.ms[0]), ms_text(run.ms[1]), mrays(b.size(), run.ms[1]),
-                   ratio_text(ratio_interval(run.outcome.series.at(stage_of(tracers[1])),
-                                             run.outcome.series.at(stage_of(tracers[0])))),
-                   run.hit_count, count_triangle_differences(run.hits[0], run.hits[1]), mismatches, rounds, emb_cols);
-      } else {
-        fmt::print("{:<9} {:>9} {:>24} {:>9.2f} {:>9} {:>10} {:>7}{}\n", b.name, b.size(), ms_text(run.ms[0]),
-                   mrays(b.size(), run.ms[0]), run.hit_count, mismatches, rounds, emb_cols);
-      }
-      for (const auto& note : emb_notes) fmt::print("{}\n", note);
-      std::fflush(stdout);
-      total_mismatches += mismatches;
-    }
-    fmt::print("rounds   * = stopped by --max-time before every interval was within --max-noise\n");
-  }
+  TraceTotals totals;
+  for (const auto& scene_name : args.scenes) trace_scene(rt, scene_name, args, totals);
   int code = 0;
-  if (total_mismatches > 0) {
-    fmt::print(stderr, "raysort: {} hits differ from the host reference\n", total_mismatches);
+  if (totals.mismatches > 0) {
+    fmt::print(stderr, "raysort: {} hits differ from the host reference\n", totals.mismatches);
     code = 1;
   }
-  if (disagreeing_batches > 0) {
+  if (totals.disagreeing_batches > 0) {
     fmt::print(stderr, "raysort: {} batches agree with Embree on fewer than 99.9 % of rays (same triangle or a tie)\n",
-               disagreeing_batches);
+               totals.disagreeing_batches);
     code = 1;
   }
   return code;
@@ -262,14 +272,12 @@ int run_trace(const TraceArgs& args) {
 void register_trace_command(CLI::App& app) {
   auto args = std::make_shared<TraceArgs>();
   auto* cmd = app.add_subcommand("trace", "trace a scene's ray batches on the device and verify every hit");
-  cmd->add_option("--scene", args->scenes, "scene name, .toml or .obj path (comma-separated for several)")
-      ->required()
-      ->delimiter(',');
+  add_scene_list_option(*cmd, args->scenes, "scene names, .toml or .obj paths (comma-separated)")->required();
   add_common_options(*cmd, args->common);
   add_protocol_options(*cmd, args->protocol);
   cmd->add_option("--variant", args->variant,
-                  "traversal arithmetic: robust (watertight), fast (Moller-Trumbore), or both side by side")
-      ->check(CLI::IsMember({"robust", "fast", "both"}))
+                  "traversal arithmetic: robust (watertight), fast (Moller-Trumbore), or both side by side "
+                  "(robust,fast or both)")
       ->capture_default_str();
   cmd->add_option("--layout", args->layout,
                   "BVH the kernels walk: wide (4-wide, the default) or binary (to measure what the wide layout gains)")

@@ -4,33 +4,45 @@
 
 #include <cstdio>
 
-#include "bench/matrix.h"  // parse_resolution
-
 namespace raysort {
 
+FrameSize CommonOptions::frame() const {
+  FrameSize f = resolution.empty() ? FrameSize{} : parse_resolution(resolution);
+  f.spp = spp;
+  return f;
+}
 
 SceneOptions CommonOptions::scene_options() const {
   SceneOptions o;
   o.scene_root = scene_root;
-  if (!resolution.empty()) parse_resolution(resolution, o.width, o.height);
-  o.spp = spp;
+  o.frame = frame();
   return o;
 }
 
 RayGenOptions CommonOptions::raygen_options() const {
   RayGenOptions o;
-  if (!resolution.empty()) parse_resolution(resolution, o.width, o.height);
-  o.spp = spp;
   o.seed = seed;
   return o;
 }
 
-void add_common_options(CLI::App& cmd, CommonOptions& o) {
-  cmd.add_option("--device", o.device, "device index, 'cpu', 'gpu' or part of its name (env RAYSORT_DEVICE)");
+void add_scene_options(CLI::App& cmd, CommonOptions& o) {
   cmd.add_option("--scene-root", o.scene_root, "folder the scene files' OBJ paths are relative to (env RAYSORT_SCENE_ROOT)");
   cmd.add_option("--resolution", o.resolution, "image size WxH (default: the scene's)");
   cmd.add_option("--spp", o.spp, "samples per pixel (default: the scene's)");
-  cmd.add_option("--seed", o.seed, "seed of the counter-based ray generator");
+  cmd.add_option("--seed", o.seed, "seed of the counter-based ray generator")->capture_default_str();
+}
+
+void add_device_option(CLI::App& cmd, CommonOptions& o) {
+  cmd.add_option("--device", o.device, "device index, 'cpu', 'gpu' or part of its name (env RAYSORT_DEVICE)");
+}
+
+void add_common_options(CLI::App& cmd, CommonOptions& o) {
+  add_device_option(cmd, o);
+  add_scene_options(cmd, o);
+}
+
+CLI::Option* add_scene_list_option(CLI::App& cmd, std::vector<std::string>& scenes, const std::string& help) {
+  return cmd.add_option("--scene,--scenes", scenes, help)->delimiter(',');
 }
 
 ProtocolSettings ProtocolOptions::settings(std::uint64_t seed) const {

@@ -1,8 +1,12 @@
 #pragma once
-// Options shared by the subcommands that load a scene and run on a device.
+// Options shared by the subcommands: the scene and frame options (every command that loads a
+// scene), the device option (every command that runs kernels), the scene list (--scene and
+// --scenes, one option), and the measurement protocol's knobs. Parsed here, at the command line's
+// boundary, into typed values.
 #include <CLI/CLI.hpp>
 
 #include <string>
+#include <vector>
 
 #include "bench/protocol.h"
 #include "render/rays.h"
@@ -16,14 +20,24 @@ struct CommonOptions {
   std::string resolution;   // --resolution WxH; empty: the scene's
   std::uint32_t spp = 0;    // --spp; 0: the scene's
   std::uint32_t seed = 1;   // --seed of the ray generator
-  SceneOptions scene_options() const;
+  // The frame overrides (0: the scene's own); parses --resolution (throws Error on bad text).
+  FrameSize frame() const;
+  SceneOptions scene_options() const;  // scene root + frame
   RayGenOptions raygen_options() const;
 };
 
+// --scene-root, --resolution, --spp, --seed.
+void add_scene_options(CLI::App& cmd, CommonOptions& o);
+// --device.
+void add_device_option(CLI::App& cmd, CommonOptions& o);
+// Both of the above.
 void add_common_options(CLI::App& cmd, CommonOptions& o);
+// The scenes to work on: `--scene` and `--scenes` name the same option (names, .toml or .obj
+// paths, comma-separated).
+CLI::Option* add_scene_list_option(CLI::App& cmd, std::vector<std::string>& scenes, const std::string& help);
 
 // The measurement protocol's knobs (bench/protocol.h) for the commands that time one batch at a
-// time (trace, encodebench); `run` has its own, stored in the matrix.
+// time (trace, encodebench); `run` keeps them in its matrix.
 struct ProtocolOptions {
   unsigned reps = 7;          // --reps: the fewest timed rounds
   unsigned warmup = 1;        // --warmup: untimed rounds first

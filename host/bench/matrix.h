@@ -1,7 +1,10 @@
 #pragma once
-// The scenario matrix: axes (scenes × batches × encoders × key bits, plus top-k sorting), the
-// run settings, and named presets. Every axis is narrowed on the command line with one syntax:
-// a comma-separated list, or "all".
+// The scenario matrix: axes (scenes × batches × encoders × key bits × trace variants × access
+// modes, plus top-k sorting), the run settings, and named presets. The axes are typed: the command
+// line is parsed once, at its boundary, by each axis's own parser (parse_encoders in encode/,
+// parse_trace_variants in trace/, parse_ray_accesses in sort/permute.h, parse_resolution in
+// scene/), and everything after it reads values, not text. Every axis is narrowed on the
+// command line with one syntax: a comma-separated list, or "all".
 #include <nlohmann/json.hpp>
 
 #include <string>
@@ -9,29 +12,26 @@
 
 #include "bench/protocol.h"
 #include "encode/encode.h"
+#include "scene/load.h"
+#include "sort/permute.h"
+#include "trace/tracer.h"
 
 namespace raysort {
 
 struct MatrixSpec {
   std::string preset;                 // "", "quick", "paper"
-  std::vector<std::string> scenes;
+  std::vector<std::string> scenes;    // names, .toml or .obj paths
   std::vector<std::string> batches;   // "primary", "shadow<k>", "bounce<k>"; empty: every batch
-  std::vector<std::string> encoders;  // encoder names (NoSort always runs: it is the baseline)
+  std::vector<Encoder> encoders;      // NoSort always runs (every batch has its NoSort cell)
   std::vector<unsigned> bits{32};
   // Scenes that also run key_length_bits (the paper's key-length tables: 16/32/64 on sibenik).
   std::vector<std::string> key_length_scenes;
   std::vector<unsigned> key_length_bits;
   std::vector<unsigned> top_bits;     // extra top-k sorted cells at the largest key length (0: none)
-  std::string resolution = "1920x1080";
-  unsigned spp = 1;
+  FrameSize frame{1920, 1080, 1};     // resolution and samples per pixel of every scene
   unsigned seed = 1;
-  std::string variant = "robust";     // trace variants, comma-separated: robust (watertight), fast
-  std::vector<std::string> variant_list() const;  // "robust,fast" -> {"robust", "fast"}
-  // Ray access modes, comma-separated (docs/measurement.md): gather (the trace reads rays through
-  // the sorted order) and permute (a kernel moves the rays into sorted order first, timed as its
-  // own stage). NoSort runs once per batch and variant: its order is the identity either way.
-  std::string access = "gather";
-  std::vector<std::string> access_list() const;
+  std::vector<TraceVariant> variants{TraceVariant::Robust};  // the first is the tables' main one
+  std::vector<RayAccess> accesses{RayAccess::Gather};        // the first is the tables' main one
   EncoderParams params;
 
   // The measurement protocol of every cell (bench/protocol.h): warm-up rounds, the fewest timed
@@ -56,12 +56,8 @@ struct MatrixSpec {
 MatrixSpec matrix_preset(const std::string& name);
 std::vector<std::string> preset_names();
 
-// Checks the matrix before any work starts: encoder names, key bits valid per encoder, batch
-// names well formed, resolution non-zero, trace variants and access modes known, protocol
-// settings in range. Throws Error naming the offending value and the valid ones.
+// Checks what parsing cannot: key bits valid per encoder, batch names well formed, resolution and
+// spp non-zero, axes non-empty, protocol settings in range. Throws Error naming the offending value.
 void validate_matrix(const MatrixSpec& spec);
-
-// "1920x1080" -> width, height (throws Error).
-void parse_resolution(const std::string& s, std::uint32_t& w, std::uint32_t& h);
 
 }  // namespace raysort

@@ -19,7 +19,7 @@
 
 #include "bench/cell_measure.h"
 #include "bench/result_set.h"
-#include "bvh/bvh.h"
+#include "bvh/prepared_scene.h"
 #include "cl/runtime.h"
 #include "render/batches.h"
 #include "scene/load.h"
@@ -161,29 +161,23 @@ std::vector<std::vector<PlannedCell>> runs_of(const std::vector<PlannedCell>& ce
 // A scene loaded for measuring: triangles, BVH, the batches its effects imply (generated once:
 // every encoder sees the same rays), its tracers and encoder kernels.
 struct SceneBench {
-  Scene scene;
-  Scene::Flat tris;
-  Bvh bvh;
+  PreparedScene prepared;
+  const Bvh& bvh = prepared.bvh;
   std::vector<ReferencedBatch> batches;
   std::map<std::string, std::unique_ptr<Tracer>> tracers;  // by variant name
   std::unique_ptr<DeviceEncoder> encoder;
   std::map<std::string, std::vector<RsHit>> robust_references;  // by batch, traced when first asked
 
   SceneBench(Runtime& rt, const std::string& name, const MatrixSpec& spec, const std::string& scene_root,
-             Progress& progress) {
-    SceneOptions scene_opts;
-    scene_opts.scene_root = scene_root;
-    parse_resolution(spec.resolution, scene_opts.width, scene_opts.height);
-    scene_opts.spp = spec.spp;
-    scene = load_scene(name, scene_opts);
-    tris = scene.flatten();
-    bvh = build_bvh(tris);
-    progress.line(fmt::format("{}: {} triangles, BVH {:.0f} ms; generating batches", name, tris.size(), bvh.build_ms));
+             Progress& progress)
+      : prepared(prepare_scene(name, SceneOptions{scene_root, spec.frame})) {
+    progress.line(fmt::format("{}: {} triangles, BVH {:.0f} ms; generating batches", name, prepared.tris.size(),
+                              bvh.build_ms));
     RayGenOptions gen;
-    gen.width = scene_opts.width, gen.height = scene_opts.height, gen.spp = spec.spp, gen.seed = spec.seed;
-    batches = generate_batches(scene, tris, bvh, gen);
-    for (const auto& v : spec.variant_list()) tracers[v] = std::make_unique<Tracer>(rt, bvh, parse_trace_variant(v));
-    encoder = std::make_unique<DeviceEncoder>(rt, bvh, scene.bounds(), spec.params);
+    gen.seed = spec.seed;
+    batches = generate_batches(prepared.scene, prepared.tris, bvh, gen);
+    for (TraceVariant v : spec.variants) tracers[trace_variant_name(v)] = std::make_unique<Tracer>(rt, bvh, v);
+    encoder = std::make_unique<DeviceEncoder>(rt, bvh, prepared.scene.bounds(), spec.params);
     encoder->warm_up();
   }
   const ReferencedBatch* batch(const std::string& name) const {
@@ -219,7 +213,7 @@ struct SceneBench {
 void check_scenes_before_work(const MatrixSpec& spec, const RunOptions& opts) {
   SceneOptions scene_opts;
   scene_opts.scene_root = opts.scene_root;
-  scene_opts.width = scene_opts.height = 1;
+  scene_opts.frame = {1, 1, 1};
   std::vector<SceneListing> listed = list_scenes();
   for (const auto& name : spec.scenes) {
     auto it = std::find_if(listed.begin(), listed.end(), [&](const SceneListing& l) { return l.name == name; });
@@ -282,7 +276,7 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
   sorter.warm_up();
   RayPermuter permuter(rt);
   permuter.warm_up();
-  const bool both_variants = spec.variant_list().size() > 1;
+  const bool both_variants = spec.variants.size() > 1;
   std::vector<std::string> absent;  // planned cells whose batch turned out empty
 
   auto record = [&](const CellRecord& c) {

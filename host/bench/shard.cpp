@@ -10,6 +10,7 @@
 #include <set>
 
 #include "bench/record.h"
+#include "render/batches.h"
 #include "scene/load.h"
 #include "util/error.h"
 
@@ -35,14 +36,12 @@ std::string ShardSpec::str() const { return fmt::format("{}/{}", index, count); 
 SceneFacts load_scene_facts(const std::string& scene, const MatrixSpec& spec, const std::string& scene_root) {
   SceneOptions opts;
   opts.scene_root = scene_root;
-  opts.width = opts.height = 1;  // the camera's resolution does not change the geometry or effects
+  opts.frame = {1, 1, 1};  // the camera's resolution does not change the geometry or effects
   Scene s = load_scene(scene, opts);
-  std::uint32_t w = 0, h = 0;
-  parse_resolution(spec.resolution, w, h);
   SceneFacts f;
   f.triangles = s.triangle_count();
-  f.rays_per_batch = std::uint64_t{w} * h * spec.spp;
-  f.shadow_rays_per_bounce = s.sphere_lights.empty() ? 0 : s.effects.shadow_rays_per_bounce;
+  f.rays_per_batch = std::uint64_t{spec.frame.width} * spec.frame.height * spec.frame.spp;
+  f.shadow_rays_per_bounce = next_event_estimation(s) ? s.effects.shadow_rays_per_bounce : 0;
   f.max_bounces = s.effects.max_bounces;
   return f;
 }
@@ -50,39 +49,23 @@ SceneFacts load_scene_facts(const std::string& scene, const MatrixSpec& spec, co
 namespace {
 
 // Encode + sort on top of the trace, in percent of one trace (see matrix_cells in shard.h).
-std::uint64_t encoder_weight_pct(const std::string& encoder) {
-  const auto e = parse_encoder(encoder);
-  return e ? encoder_info(*e).cost_weight_pct : 130;
-}
-
-// The batches render/batches.cpp generate_batches can produce for these effects, in its order:
-// primary, then per bounce depth k its shadow rays and bounce k+1.
-std::vector<std::string> possible_batches(const SceneFacts& f) {
-  std::vector<std::string> out{"primary"};
-  for (std::uint32_t k = 0;; ++k) {
-    if (f.shadow_rays_per_bounce > 0) out.push_back(fmt::format("shadow{}", k));
-    if (k >= f.max_bounces) break;
-    out.push_back(fmt::format("bounce{}", k + 1));
-  }
-  return out;
-}
+std::uint64_t encoder_weight_pct(Encoder e) { return encoder_info(e).cost_weight_pct; }
 
 }  // namespace
 
 std::vector<PlannedCell> matrix_cells(const MatrixSpec& spec,
                                       const std::function<SceneFacts(const std::string&)>& facts) {
   // The encoders the runner visits: the spec's order, NoSort apart (it is every batch's baseline).
-  std::vector<std::string> encoders;
-  for (const auto& n : spec.encoders)
-    if (auto e = parse_encoder(n); e && *e != Encoder::NoSort) {
-      std::string name(encoder_name(*e));
-      if (std::find(encoders.begin(), encoders.end(), name) == encoders.end()) encoders.push_back(name);
-    }
+  std::vector<Encoder> encoders;
+  for (Encoder e : spec.encoders)
+    if (e != Encoder::NoSort && std::find(encoders.begin(), encoders.end(), e) == encoders.end()) encoders.push_back(e);
   std::vector<PlannedCell> out;
   std::set<std::string> seen;
   for (const auto& scene : spec.scenes) {
     const SceneFacts f = facts(scene);
-    const std::vector<std::string> possible = possible_batches(f);
+    std::vector<std::string> possible;
+    for (const PossibleBatch& b : possible_batches(f.shadow_rays_per_bounce > 0, f.max_bounces))
+      possible.push_back(b.name);
     std::vector<std::string> batches;
     for (const auto& b : spec.batches.empty() ? possible : spec.batches)
       if (std::find(possible.begin(), possible.end(), b) != possible.end()) batches.push_back(b);
@@ -90,22 +73,22 @@ std::vector<PlannedCell> matrix_cells(const MatrixSpec& spec,
     for (const auto& batch : batches) {
       const std::uint64_t rays = batch.rfind("shadow", 0) == 0 ? f.rays_per_batch * f.shadow_rays_per_bounce
                                                                : f.rays_per_batch;
-      for (const auto& variant : spec.variant_list()) {
-        auto add = [&](const std::string& encoder, unsigned bits, unsigned top, const std::string& access) {
+      for (const TraceVariant variant : spec.variants) {
+        auto add = [&](Encoder encoder, unsigned bits, unsigned top, RayAccess access) {
           CellRecord c;
-          c.scene = scene, c.batch = batch, c.encoder = encoder, c.bits = bits, c.top_bits = top, c.variant = variant;
-          c.access = access;
+          c.scene = scene, c.batch = batch, c.encoder = encoder_name(encoder), c.bits = bits, c.top_bits = top;
+          c.variant = trace_variant_name(variant), c.access = ray_access_name(access);
           if (!seen.insert(c.id()).second) return;  // a scene named twice runs once
-          out.push_back({c.id(), scene, batch, variant, rays * depth * encoder_weight_pct(encoder), 0, encoder, access,
-                         bits, top});
+          out.push_back({c.id(), scene, batch, c.variant, rays * depth * encoder_weight_pct(encoder), 0, c.encoder,
+                         c.access, bits, top});
         };
-        add(kBaselineEncoder, 0, 0, "gather");  // the identity order: no access mode to choose
+        add(Encoder::NoSort, 0, 0, RayAccess::Gather);  // the identity order: no access mode to choose
         const std::vector<unsigned> bits = spec.bits_for(scene);
-        for (const auto& e : encoders) {
+        for (Encoder e : encoders) {
           for (unsigned b : bits)
-            for (const auto& a : spec.access_list()) add(e, b, 0, a);
+            for (RayAccess a : spec.accesses) add(e, b, 0, a);
           for (unsigned k : spec.top_bits)
-            for (const auto& a : spec.access_list()) add(e, bits.back(), k, a);
+            for (RayAccess a : spec.accesses) add(e, bits.back(), k, a);
         }
       }
     }

@@ -68,6 +68,21 @@ const std::vector<Encoder>& all_encoders() {
   return all;
 }
 
+std::vector<Encoder> parse_encoders(const std::vector<std::string>& names) {
+  if (names.size() == 1 && names[0] == "all") return all_encoders();
+  std::vector<Encoder> out;
+  for (const auto& name : names) {
+    const auto e = parse_encoder(name);
+    if (!e) {
+      std::string valid;
+      for (const EncoderInfo& info : encoder_table()) valid += (valid.empty() ? "" : ", ") + std::string(info.name);
+      throw Error("unknown encoder '" + name + "'; encoders are: " + valid);
+    }
+    if (std::find(out.begin(), out.end(), *e) == out.end()) out.push_back(*e);
+  }
+  return out;
+}
+
 unsigned max_key_bits(Encoder) { return RS_MAX_KEY_BITS; }
 
 std::string key_bits_problem(Encoder e, unsigned bits, const EncoderParams& params) {

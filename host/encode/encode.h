@@ -69,6 +69,9 @@ std::string_view encoder_name(Encoder e);
 std::optional<Encoder> parse_encoder(std::string_view name);
 // Every encoder, NoSort first, in the order of the enum.
 const std::vector<Encoder>& all_encoders();
+// A command line's encoder list: names or aliases, or {"all"}. Throws Error naming an unknown one
+// and listing the encoders.
+std::vector<Encoder> parse_encoders(const std::vector<std::string>& names);
 // The widest key an encoder supports (64 for all of them today).
 unsigned max_key_bits(Encoder e);
 

@@ -28,4 +28,22 @@ std::vector<ReferencedBatch> generate_batches(const Scene& scene, const Scene::F
   return out;
 }
 
+bool next_event_estimation(const Scene& scene) {
+  return !scene.sphere_lights.empty() && scene.effects.shadow_rays_per_bounce > 0;
+}
+
+std::vector<PossibleBatch> possible_batches(bool next_event, std::uint32_t max_bounces) {
+  std::vector<PossibleBatch> out{{batch_name(BatchKind::Primary, 0), BatchKind::Primary, 0}};
+  for (std::uint32_t k = 0;; ++k) {
+    if (next_event) out.push_back({batch_name(BatchKind::Shadow, k), BatchKind::Shadow, k});
+    if (k >= max_bounces) break;
+    out.push_back({batch_name(BatchKind::Bounce, k + 1), BatchKind::Bounce, k + 1});
+  }
+  return out;
+}
+
+std::vector<PossibleBatch> possible_batches(const Scene& scene) {
+  return possible_batches(next_event_estimation(scene), scene.effects.max_bounces);
+}
+
 }  // namespace raysort

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <numeric>
 
+#include "render/batches.h"
 #include "util/error.h"
 
 namespace raysort {
@@ -46,9 +47,11 @@ std::string batch_name(BatchKind kind, std::uint32_t bounce) {
 
 ShadeInputs make_shade_inputs(const Scene& scene, const Scene::Flat& tris, const RayGenOptions& o) {
   ShadeInputs in;
-  in.width = o.width ? o.width : scene.camera.width;
-  in.height = o.height ? o.height : scene.camera.height;
-  in.spp = o.spp ? o.spp : scene.effects.samples_per_pixel;
+  // The frame is the scene's: a command's --resolution / --spp were applied when it was loaded
+  // (scene/load.h, apply_frame_size).
+  in.width = scene.camera.width;
+  in.height = scene.camera.height;
+  in.spp = scene.effects.samples_per_pixel;
   if (in.spp == 0) throw Error("samples per pixel must be at least 1");
   in.camera = make_camera(scene.camera, in.width, in.height);
 
@@ -93,7 +96,7 @@ ShadeInputs make_shade_inputs(const Scene& scene, const Scene::Flat& tris, const
   p.rr_survival = scene.effects.russian_roulette_survival;
   p.rr_start = scene.effects.russian_roulette_start;
   // No sphere lights: no next-event estimation, so no shadow batches (the sky is reached by misses).
-  p.shadow_per_hit = in.lights.empty() ? 0u : scene.effects.shadow_rays_per_bounce;
+  p.shadow_per_hit = next_event_estimation(scene) ? scene.effects.shadow_rays_per_bounce : 0u;
   if (p.shadow_per_hit > RS_MAX_SHADOW_PER_HIT)
     throw Error(fmt::format("{} shadow rays per bounce is more than the {} supported", p.shadow_per_hit,
                             RS_MAX_SHADOW_PER_HIT));
@@ -344,7 +347,7 @@ Frame DevicePathTracer::trace_frame(const FrameOptions& opts) {
 
 std::vector<std::string> describe_stages(const Scene& scene) {
   const Effects& e = scene.effects;
-  const bool nee = !scene.sphere_lights.empty() && e.shadow_rays_per_bounce > 0;
+  const bool nee = next_event_estimation(scene);
   bool mirror = false, diffuse = false;
   for (const Material& m : scene.materials) (m.mirror ? mirror : diffuse) = true;
   std::vector<std::string> out;

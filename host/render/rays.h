@@ -28,8 +28,9 @@ struct RayBatch {
   std::size_t size() const { return rays.size(); }
 };
 
+// How a frame's rays are drawn. Its size and samples per pixel are the scene's (scene.camera,
+// scene.effects), set where the scene is loaded (scene/load.h, SceneOptions::frame).
 struct RayGenOptions {
-  std::uint32_t width = 0, height = 0, spp = 0;  // 0: the scene's own
   std::uint32_t seed = 1;
 };
 

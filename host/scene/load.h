@@ -9,12 +9,24 @@
 
 namespace raysort {
 
+// The size of a frame and its samples per pixel. As an override (SceneOptions::frame), 0 keeps
+// the scene's own value.
+struct FrameSize {
+  std::uint32_t width = 0, height = 0, spp = 0;
+};
+
+// "1920x1080" -> {1920, 1080, 0}. Throws Error naming the text and the expected form.
+FrameSize parse_resolution(const std::string& text);
+
+// Applies the non-zero fields of `frame` to the scene's camera and samples per pixel: the one
+// place a command's --resolution and --spp take effect (load_scene calls it).
+void apply_frame_size(Scene& scene, const FrameSize& frame);
+
 struct SceneOptions {
   // Root for OBJ paths in scene files. Empty: env RAYSORT_SCENE_ROOT, else the compiled-in
   // default (../shared/scenes beside the source tree).
   std::string scene_root;
-  // Overrides of the scene's own camera resolution / spp when non-zero.
-  std::uint32_t width = 0, height = 0, spp = 0;
+  FrameSize frame;  // overrides of the scene's resolution / spp (0: the scene's own)
 };
 
 // The scene root in effect for these options (see SceneOptions::scene_root).

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -192,9 +193,6 @@ class SceneBuilder {
       e.samples_per_pixel = static_cast<std::uint32_t>(t.integer("samples_per_pixel", e.samples_per_pixel, 1, 1 << 16));
     }
 
-    if (opts_.width) s.camera.width = opts_.width;
-    if (opts_.height) s.camera.height = opts_.height;
-    if (opts_.spp) s.effects.samples_per_pixel = opts_.spp;
     return s;
   }
 
@@ -384,7 +382,7 @@ std::vector<std::string> embedded_scene_names() {
 }
 
 // A bare OBJ: one mesh, a camera looking at its bounding box from a 3/4 view, and a sky light.
-Scene load_bare_obj(const std::string& path, const SceneOptions& opts) {
+Scene load_bare_obj(const std::string& path) {
   Scene s;
   s.name = fs::path(path).stem().string();
   s.description = "bare OBJ " + path;
@@ -401,13 +399,12 @@ Scene load_bare_obj(const std::string& path, const SceneOptions& opts) {
   for (int a = 0; a < 3; ++a) s.camera.position[a] = static_cast<float>(c[a] + dir[a] / dl * dist);
   s.camera.look_at = c;
   s.camera.up = {0, 1, 0};
-  s.camera.width = opts.width ? opts.width : kDefaultWidth;
-  s.camera.height = opts.height ? opts.height : kDefaultHeight;
+  s.camera.width = kDefaultWidth;
+  s.camera.height = kDefaultHeight;
   s.sky.enabled = true;
   s.sky.zenith = {0.6f, 0.7f, 0.9f};
   s.sky.horizon = {0.9f, 0.9f, 0.9f};
   s.effects.max_bounces = 1;
-  if (opts.spp) s.effects.samples_per_pixel = opts.spp;
   return s;
 }
 
@@ -419,9 +416,25 @@ std::string resolve_scene_root(const SceneOptions& opts) {
   return fs::path(RAYSORT_DEFAULT_SCENE_ROOT).lexically_normal().string();
 }
 
+FrameSize parse_resolution(const std::string& text) {
+  unsigned a = 0, b = 0;
+  char x = 0, extra = 0;
+  if (std::sscanf(text.c_str(), "%u%c%u%c", &a, &x, &b, &extra) != 3 || (x != 'x' && x != 'X') || a == 0 || b == 0)
+    throw Error(fmt::format("resolution '{}': expected WIDTHxHEIGHT with both at least 1, e.g. 1920x1080", text));
+  return {a, b, 0};
+}
+
+void apply_frame_size(Scene& scene, const FrameSize& frame) {
+  if (frame.width) scene.camera.width = frame.width;
+  if (frame.height) scene.camera.height = frame.height;
+  if (frame.spp) scene.effects.samples_per_pixel = frame.spp;
+}
+
 Scene parse_scene_toml(const std::string& text, const std::string& origin, const SceneOptions& opts) {
   toml::table root = parse_toml_text(text, origin);
-  return SceneBuilder(origin, opts).build(root);
+  Scene s = SceneBuilder(origin, opts).build(root);
+  apply_frame_size(s, opts.frame);
+  return s;
 }
 
 void check_scene_reference(const std::string& name_or_path) {
@@ -454,7 +467,9 @@ Scene load_scene(const std::string& name_or_path, const SceneOptions& opts) {
       return parse_scene_toml(std::string(*text), "embedded:" + embedded_path, opts);
   }
   if (ends_with(name_or_path, ".toml")) return parse_scene_toml(read_text_file(name_or_path), name_or_path, opts);
-  return load_bare_obj(name_or_path, opts);
+  Scene s = load_bare_obj(name_or_path);
+  apply_frame_size(s, opts.frame);
+  return s;
 }
 
 std::vector<SceneListing> list_scenes() {

@@ -2,12 +2,20 @@
 // Applying a sorted order to the rays themselves: the "permute" access mode (cl/permute.cl;
 // docs/measurement.md, "Access modes"). out[i] = rays[order[i]], on the device and on the host.
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "cl/runtime.h"
 #include "shared.h"
 
 namespace raysort {
+
+// How a sorted trace reads its rays (docs/measurement.md, "Access modes"): through the sorted
+// order, ray[order[i]] (gather), or moved into sorted order by this stage first (permute).
+enum class RayAccess { Gather, Permute };
+const char* ray_access_name(RayAccess a);  // "gather", "permute"
+// A command line's access list: "gather,permute" or "all". Throws Error naming an unknown mode.
+std::vector<RayAccess> parse_ray_accesses(const std::string& list);
 
 class RayPermuter {
  public:

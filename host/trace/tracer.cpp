@@ -7,6 +7,7 @@
 
 #include "traverse.h"
 #include "util/error.h"
+#include "util/text.h"
 
 namespace raysort {
 
@@ -17,6 +18,19 @@ TraceVariant parse_trace_variant(std::string_view name) {
 }
 
 const char* trace_variant_name(TraceVariant v) { return v == TraceVariant::Robust ? "robust" : "fast"; }
+
+std::vector<TraceVariant> parse_trace_variants(const std::string& list) {
+  if (list == "both" || list == "all") return {TraceVariant::Robust, TraceVariant::Fast};
+  std::vector<TraceVariant> out;
+  for (const auto& v : split_list(list)) {
+    if (v != "robust" && v != "fast")
+      throw Error("--variant '" + v + "': the trace variants are robust and fast (or both)");
+    const TraceVariant t = parse_trace_variant(v);
+    if (std::find(out.begin(), out.end(), t) == out.end()) out.push_back(t);
+  }
+  if (out.empty()) throw Error("--variant: name at least one trace variant (robust, fast)");
+  return out;
+}
 
 TraceLayout parse_trace_layout(std::string_view name) {
   if (name == "wide") return TraceLayout::Wide;

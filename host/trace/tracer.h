@@ -19,6 +19,9 @@ enum class TraceVariant { Fast, Robust };
 // "fast" / "robust"; parse throws an Error naming the accepted values.
 TraceVariant parse_trace_variant(std::string_view name);
 const char* trace_variant_name(TraceVariant v);
+// A command line's variant list: "robust,fast" (in that order), "both" or "all" for robust,fast.
+// Throws Error naming an unknown variant.
+std::vector<TraceVariant> parse_trace_variants(const std::string& list);
 
 // Which tree the kernels walk: the 4-wide collapse of the BVH (the default, host/bvh/wide.cpp) or
 // the binary BVH itself (kept to measure what the wide layout gains; docs/trace.md).
