@@ -4,17 +4,20 @@
  * Conventions shared with trace.cl: the ray of work-item i is rays[order[i]]; the global size is
  * padded to a multiple of the local size and every kernel guards on count, except the spatial
  * kernels (below). Each kernel writes keys[i] and values[i] = i, ready for the key-value radix
- * sort. The key layouts themselves live in keys.h, shared with the host twin (host/encode/), so
- * both give the same bits.
+ * sort. The key layouts themselves live in keys.h (what they share) and keys_spatial.h,
+ * keys_cut.h, keys_ppc.h (one per family), shared with the host twin (host/encode/), so both give
+ * the same bits.
  *
  * Every kernel exists twice: *_k32 writes uint keys (key bits ≤ 32), *_k64 ulong keys.
  * Cut nodes (HCC, RegularGrid cells, MLHCC top nodes) come as sixteen-box SoA groups (RsCutGroup,
- * keys.h) in __constant memory: every work-item reads the same boxes, which GPUs broadcast from the
- * constant cache, and PoCL needs no per-group copy or barrier (Xiang et al. Alg. 1, line 1, keeps
+ * keys_cut.h) in __constant memory: every work-item reads the same boxes, which GPUs broadcast
+ * from the constant cache, and PoCL needs no per-group copy or barrier (Xiang et al. Alg. 1, line 1, keeps
  * them in shared memory; the constant cache plays that part here). MLHCC's low-level rows (one per
  * ray, chosen by its first top-level hit) stay in global memory.
  */
-#include "keys.h"
+#include "keys_cut.h"
+#include "keys_ppc.h"
+#include "keys_spatial.h"
 
 /* Key stores. A 64-bit key goes out as two 32-bit words on a little-endian device: PoCL's
  * work-group vectoriser sizes its vectors by the widest type stored, so a ulong store runs the
@@ -33,7 +36,7 @@
 
 /* The code bits a key of this width can hold: a key of at most 32 bits comes from bits 63..32 of the
  * code. Masking the rest lets the compiler drop the low half of the cut-bit accumulation
- * (keys.h, rs_cut_bits) in the 32-bit kernels. */
+ * (keys_cut.h, rs_cut_bits) in the 32-bit kernels. */
 #define RS_CODE_MASK_k32 0xFFFFFFFF00000000UL
 #define RS_CODE_MASK_k64 0xFFFFFFFFFFFFFFFFUL
 
@@ -68,7 +71,7 @@ inline RsRay rs_load_ray(__global const RsRay* rays, uint index) {
     values[i] = i;                                                                                       \
   }
 
-/* HCC, RegularGrid, HCC_DIR (keys.h, rs_box_set_code); the _or form for HCC_DIR's second pass. */
+/* HCC, RegularGrid, HCC_DIR (keys_cut.h, rs_box_set_code); the _or form for HCC_DIR's second pass. */
 #define RS_DEFINE_BOX_SET_KERNEL(NAME, CODE, STORE, SUFFIX, KEY_T)                                        \
   __kernel void encode_##NAME##_##SUFFIX(__constant const RsCutGroup* set, uint box_count, uint field,    \
                                          uint dir_bits, __global const RsRay* rays,                      \
@@ -87,7 +90,7 @@ inline RsRay rs_load_ray(__global const RsRay* rays, uint index) {
  * kernel of its own PoCL runs it 8 rays at a time, which it cannot in the box-set kernel (its
  * float16 cut tests are vector-typed). The key is the same: key_from_code(a | b) =
  * key_from_code(a) | key_from_code(b). With d = 1 (the default) the box-set kernel reads the bit
- * from the signs of dx and dy (keys.h, rs_direction_top_bit), one pass. */
+ * from the signs of dx and dy (keys_spatial.h, rs_direction_top_bit), one pass. */
 #define RS_DEFINE_DIRECTION_KERNEL(SUFFIX, KEY_T)                                                          \
   __kernel void encode_direction_##SUFFIX(__global const RsRay* rays, __global const uint* order,        \
                                           uint count, uint field, uint dir_bits, uint bits,              \

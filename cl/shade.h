@@ -22,6 +22,7 @@
 #ifndef RAYSORT_SHADE_H
 #define RAYSORT_SHADE_H
 
+#include "sampling.h"
 #include "shared.h"
 
 /* RNG dimensions within a bounce: rs_hash4(seed, pixel, sample, RS_DIM(bounce, dim)). */

@@ -3,15 +3,17 @@
  * Woop et al. 2013, conservative slab test of Ize 2013), one kernel per variant so that each
  * compiles with its variant as a constant.
  *
- * One ray per work-item; the ray is read through an index buffer, ray[order[i]], so a sorted
- * order needs no copy of the rays, and its hit is written to hits[i] (trace order). The host
- * scatters hits back with the same order when it compares against NoSort.
- * The traversal itself (rs_traverse_wide: the 4-wide BVH of host/bvh/wide.cpp) lives in
- * traverse.h, shared with the host reference.
+ * One ray per work-item; the ray is read through an index buffer, ray[order[i]] (the "gather"
+ * access mode; the "permute" mode passes rays already moved into order, cl/permute.cl, and the
+ * identity order), and its hit is written to hits[i] (trace order). The host scatters hits back
+ * with the same order when it compares against NoSort.
+ * The traversals themselves live in traverse_wide.h (rs_traverse_wide: the 4-wide BVH of
+ * host/bvh/wide.cpp, the default) and traverse_binary.h, shared with the host reference.
  * The global size is padded to a multiple of the local size (PoCL 3.1 has no non-uniform
  * work-groups), so every kernel guards on count.
  */
-#include "traverse.h"
+#include "traverse_binary.h"
+#include "traverse_wide.h"
 
 /* Each variant gets the same three kernels: closest hit, any hit (shadow rays), and an
  * instrumented closest hit that also writes the number of BVH nodes each ray fetched.

@@ -74,13 +74,13 @@ TEST(ClRuntime, OversizedAllocationNamesBufferAndLimit) {
   }
 }
 
-// rs4_bits (cl/shared.h) is one movmskps on x86 devices and an AND/OR form elsewhere: on the device,
+// rs4_bits (cl/lanes.h) is one movmskps on x86 devices and an AND/OR form elsewhere: on the device,
 // both give lane i -> bit i for each of the sixteen -1/0 masks, and the x86 form is the one PoCL
 // builds here (a test that could only ever see the portable form would check nothing new). The
 // sixteen- and eight-lane forms (rs16_mask_bits, rs8_mask_bits: one instruction on AVX-512 devices) on bit patterns.
 TEST(ClRuntime, MaskBitsFormsAgree) {
   Runtime& rt = testing::runtime();
-  const std::string src = kernel_source("cl/shared.h") + R"(
+  const std::string src = kernel_source("cl/lanes.h") + R"(
 __kernel void mask_bits(__global int* out) {
   const int i = get_global_id(0);
   const int4 m = (int4)((i & 1) ? -1 : 0, (i & 2) ? -1 : 0, (i & 4) ? -1 : 0, (i & 8) ? -1 : 0);

@@ -413,7 +413,7 @@ TEST(Encode, ThroughAnOrderBuffer) {
     for (std::size_t i = 0; i < rays.size(); ++i) bad += run.keys[i] != host[reversed[i]] || run.values[i] != i;
     EXPECT_EQ(bad, 0u) << encoder_name(e);
   }
-  // Odd and tiny counts: MLHCC's work-items take two rays each (cl/keys.h, RS_TWO_LEVEL_RAYS).
+  // Odd and tiny counts: MLHCC's work-items take two rays each (cl/keys_cut.h, RS_TWO_LEVEL_RAYS).
   for (std::size_t n : {1u, 2u, 3u, 5u, 577u}) {
     std::vector<RsRay> some(rays.begin(), rays.begin() + static_cast<std::ptrdiff_t>(n));
     for (unsigned bits : {16u, 64u}) {
@@ -798,7 +798,7 @@ TEST(Encode, HccDirPassesMatchTheHostForEveryDirectionWidth) {
 // an at-most-half last group, placed from the top of the code and from a first bit below it.
 TEST(Encode, DeviceCutBitsInBothFormsEqualTheHost) {
   Runtime& rt = testing::runtime();
-  const std::string src = kernel_source("cl/keys.h") + R"(
+  const std::string src = kernel_source("cl/keys_cut.h") + R"(
 __kernel void cut_bits(__global const RsCutGroup* g, uint n, uint first_bit, __global const RsRay* rays,
                        __global ulong* out, __global int* mask_form) {
   const uint i = get_global_id(0);

@@ -21,7 +21,9 @@
 #include "scene/load.h"
 #include "test_util.h"
 #include "trace/tracer.h"
-#include "traverse.h"  // cl/traverse.h: the triangle tests themselves
+#include "intersect.h"  // cl/intersect.h: the triangle tests themselves
+#include "sampling.h"
+#include "traverse_wide.h"
 
 namespace raysort {
 

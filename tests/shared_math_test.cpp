@@ -1,9 +1,10 @@
-// The arithmetic in cl/shared.h that host and kernels share: RNG, sin/cos, ray offsets.
+// The arithmetic in cl/shared.h and cl/sampling.h that host and kernels share: RNG, sin/cos, ray offsets.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <set>
 
+#include "sampling.h"
 #include "shared.h"
 
 namespace raysort {

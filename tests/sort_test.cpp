@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "cl/runtime.h"
+#include "runtime/runtime.h"
 #include "sort/permute.h"
 #include "sort/radix_sort.h"
 

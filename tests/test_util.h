@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "bvh/prepared_scene.h"
-#include "cl/runtime.h"
+#include "runtime/runtime.h"
 #include "render/batches.h"
 #include "scene/load.h"
 #include "shared.h"

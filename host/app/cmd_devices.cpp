@@ -2,7 +2,7 @@
 #include <fmt/format.h>
 
 #include "app/commands.h"
-#include "cl/runtime.h"
+#include "runtime/runtime.h"
 
 namespace raysort {
 

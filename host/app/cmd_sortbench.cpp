@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "app/commands.h"
-#include "cl/runtime.h"
+#include "runtime/runtime.h"
 #include "sort/radix_sort.h"
 
 #if __has_include(<boost/compute/algorithm/sort_by_key.hpp>)

@@ -16,7 +16,7 @@
 #include "app/options.h"
 #include "bench/protocol.h"
 #include "bvh/prepared_scene.h"
-#include "cl/runtime.h"
+#include "runtime/runtime.h"
 #ifdef RAYSORT_HAVE_EMBREE
 #include "embree/embree_reference.h"
 #endif

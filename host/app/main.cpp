@@ -5,7 +5,7 @@
 #include <cstdio>
 
 #include "app/commands.h"
-#include "cl/runtime.h"
+#include "runtime/runtime.h"
 
 int main(int argc, char** argv) {
   CLI::App app{"raysort: ray reordering benchmark suite (encode -> radix sort -> trace) on OpenCL"};

@@ -21,7 +21,7 @@
 #include "bench/protocol.h"
 #include "bench/record.h"
 #include "bvh/bvh.h"
-#include "cl/runtime.h"
+#include "runtime/runtime.h"
 #include "encode/encode.h"
 #include "render/rays.h"
 #include "sort/permute.h"

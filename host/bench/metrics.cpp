@@ -3,7 +3,8 @@
 #include <algorithm>
 #include <thread>
 
-#include "traverse.h"
+#include "traverse_binary.h"
+#include "traverse_wide.h"
 
 namespace raysort {
 

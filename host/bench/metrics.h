@@ -31,7 +31,7 @@ struct SimtModel {
 // The model from per-ray traversal trails (node ids in visit order), rays in trace order.
 SimtModel simt_model_from_trails(const std::vector<std::vector<std::uint32_t>>& trails);
 
-// Traces rays[order[i]] with the host reference (cl/traverse.h) recording every ray's trail,
+// Traces rays[order[i]] with the host reference (cl/traverse_binary.h) recording every ray's trail,
 // warp by warp on host threads, and returns the model. order null = identity.
 SimtModel simt_model(const Bvh& bvh, const std::vector<RsRay>& rays, const std::uint32_t* order, bool any_hit,
                      TraceVariant variant = TraceVariant::Fast);

@@ -20,7 +20,7 @@
 #include "bench/cell_measure.h"
 #include "bench/result_set.h"
 #include "bvh/prepared_scene.h"
-#include "cl/runtime.h"
+#include "runtime/runtime.h"
 #include "render/batches.h"
 #include "scene/load.h"
 #include "util/error.h"

@@ -1,6 +1,6 @@
 #pragma once
 // The BVH: a binary tree over world-space triangles in the flat layout the kernels read
-// (RsBvhNode / RsTriangle in cl/shared.h: children adjacent, triangles in leaf order).
+// (RsBvhNode / RsTriangle in cl/bvh_layout.h: children adjacent, triangles in leaf order).
 // This binary tree is the reference structure: HCC cuts, PPC and the host reference traversal
 // all work on it.
 #include <cstdint>
@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "scene/scene.h"
-#include "shared.h"
+#include "bvh_layout.h"
 
 namespace raysort {
 
@@ -19,7 +19,7 @@ struct BvhBuildOptions {
   float intersection_cost = 1.0f;
 };
 
-// The 4-wide form the trace kernels traverse (RsWideNode / RsTriPacket in cl/shared.h), collapsed
+// The 4-wide form the trace kernels traverse (RsWideNode / RsTriPacket in cl/bvh_layout.h), collapsed
 // from the binary tree: a wide node holds its binary node's grandchildren, or a child itself when
 // that child is a leaf. Same boxes, same leaves; only the branching factor changes.
 struct WideBvh {

@@ -1,4 +1,4 @@
-// Collapsing the binary BVH into the 4-wide layout of the trace kernels (cl/shared.h, RsWideNode).
+// Collapsing the binary BVH into the 4-wide layout of the trace kernels (cl/bvh_layout.h, RsWideNode).
 // Each wide node takes the two levels below a binary node: a child that is a leaf (or a small
 // subtree that becomes one leaf packet, see leafish) fills one slot, an inner child gives its
 // two children. So every wide level spans two binary levels, which is
@@ -17,7 +17,7 @@ namespace raysort {
 namespace {
 
 // Zero area in exact arithmetic: differences and products of floats are exact in double, so this
-// is the robust test's degenerate-triangle check (cl/traverse.h), decided once here.
+// is the robust test's degenerate-triangle check (cl/intersect.h), decided once here.
 bool exactly_degenerate(const RsTriangle& t) {
   const double a1x = double(t.v1[0]) - t.v0[0], a1y = double(t.v1[1]) - t.v0[1], a1z = double(t.v1[2]) - t.v0[2];
   const double a2x = double(t.v2[0]) - t.v0[0], a2y = double(t.v2[1]) - t.v0[1], a2z = double(t.v2[2]) - t.v0[2];
@@ -234,7 +234,7 @@ std::string validate_wide(const WideBvh& wide, const Bvh& bvh) {
   return "";
 }
 
-static_assert(sizeof(RsWideNode) == 128, "RsWideNode layout (cl/shared.h)");
-static_assert(sizeof(RsTriPacket) == 192, "RsTriPacket layout (cl/shared.h)");
+static_assert(sizeof(RsWideNode) == 128, "RsWideNode layout (cl/bvh_layout.h)");
+static_assert(sizeof(RsTriPacket) == 192, "RsTriPacket layout (cl/bvh_layout.h)");
 
 }  // namespace raysort

@@ -171,7 +171,7 @@ DeviceEncoder::Events DeviceEncoder::enqueue(Encoder e, unsigned bits, const cl:
               k->setArg(arg++, static_cast<cl_uint>(bits));
             k->setArg(arg++, keys);
             k->setArg(arg++, values);
-            // MLHCC's work-items take RS_TWO_LEVEL_RAYS rays each (cl/keys.h, rs_two_level_cut_code2).
+            // MLHCC's work-items take RS_TWO_LEVEL_RAYS rays each (cl/keys_cut.h, rs_two_level_cut_code2).
             const std::size_t items = family(e) == EncoderFamily::TwoLevel
                                           ? (std::size_t(count) + RS_TWO_LEVEL_RAYS - 1) / RS_TWO_LEVEL_RAYS
                                           : count;

@@ -1,5 +1,5 @@
 // Host side of the encoders: names, key-length rules, the per-scene inputs (frame, HAD, cuts,
-// grid cells) and the host twin. The key arithmetic is cl/keys.h, the same source the kernels run.
+// grid cells) and the host twin. The key arithmetic is cl/keys*.h, the same source the kernels run.
 #include "encode/encode.h"
 
 #include <algorithm>
@@ -12,7 +12,7 @@
 namespace raysort {
 
 static_assert(sizeof(RsBox) == 24 && sizeof(RsEncodeFrame) == 48 && sizeof(RsCutGroup) == 384,
-              "device struct layouts (cl/keys.h)");
+              "device struct layouts (cl/keys.h, cl/keys_cut.h)");
 
 const std::vector<EncoderInfo>& encoder_table() {
   // Cost weights: encode + sort as a share of one trace, measured on PoCL in the quick preset

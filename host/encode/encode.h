@@ -1,6 +1,6 @@
 #pragma once
 // Ray sort keys: every encoder of DESIGN.md section 3, on the device (cl/encode.cl) and on the host
-// (a bit-exact twin running the same key code, cl/keys.h). Layouts: docs/encoders.md.
+// (a bit-exact twin running the same key code, cl/keys*.h). Layouts: docs/encoders.md.
 //
 //   EncodeScene   per-scene inputs of the keys: the scene box frame, HAD, cuts, grid cells
 //   encode_on_host(encoder, bits, scene, rays)            host twin, keys as uint64
@@ -17,9 +17,12 @@
 #include <vector>
 
 #include "bvh/bvh.h"
-#include "cl/runtime.h"
+#include "runtime/runtime.h"
 #include "bvh/cut.h"
-#include "keys.h"  // cl/keys.h: the key layouts shared with the kernels
+// The key layouts shared with the kernels (cl/keys*.h).
+#include "keys_cut.h"
+#include "keys_ppc.h"
+#include "keys_spatial.h"
 
 namespace raysort {
 
@@ -134,7 +137,7 @@ class EncodeScene {
 };
 
 RsBox to_rs_box(const Aabb& b);
-// Boxes [0, n ≤ 64) transposed into ceil(n / 16) RsCutGroups (cl/keys.h): box i in lane 15 − i % 16
+// Boxes [0, n ≤ 64) transposed into ceil(n / 16) RsCutGroups (cl/keys_cut.h): box i in lane 15 − i % 16
 // of group i / 16 (rs_cut_bits places it at code bit 63 − first_bit − i); missing lanes are zero
 // boxes. Throws Error for a box with lo > hi or NaN bounds.
 std::vector<RsCutGroup> rs_cut_groups(const RsBox* boxes, std::size_t n);

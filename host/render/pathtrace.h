@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "bvh/bvh.h"
-#include "cl/runtime.h"
+#include "runtime/runtime.h"
 #include "render/rays.h"
 #include "scene/scene.h"
 #include "shade.h"

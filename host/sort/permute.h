@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "cl/runtime.h"
+#include "runtime/runtime.h"
 #include "shared.h"
 
 namespace raysort {

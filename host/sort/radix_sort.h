@@ -8,7 +8,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "cl/runtime.h"
+#include "runtime/runtime.h"
 
 namespace raysort {
 

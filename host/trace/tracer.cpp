@@ -5,7 +5,8 @@
 #include <numeric>
 #include <thread>
 
-#include "traverse.h"
+#include "traverse_binary.h"
+#include "traverse_wide.h"
 #include "util/error.h"
 #include "util/text.h"
 

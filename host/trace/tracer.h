@@ -1,13 +1,13 @@
 #pragma once
 // Tracing a ray batch on the device (cl/trace.cl) and on the host (the reference twin, which
-// runs the same traversal source, cl/traverse.h).
+// runs the same traversal source, cl/traverse_wide.h and cl/traverse_binary.h).
 #include <cstdint>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "bvh/bvh.h"
-#include "cl/runtime.h"
+#include "runtime/runtime.h"
 #include "shared.h"
 
 namespace raysort {
@@ -70,7 +70,7 @@ class Tracer {
   TraceLayout layout_ = TraceLayout::Wide;
 };
 
-// Host reference: the same traversal (cl/traverse.h) on host threads. order may be null
+// Host reference: the same traversal (cl/traverse_wide.h, cl/traverse_binary.h) on host threads. order may be null
 // (identity). hits[i] belongs to rays[order[i]]. node_visits: per ray, the nodes visited (wide
 // nodes and leaves for the wide layout, boxes fetched for the binary one).
 std::vector<RsHit> trace_reference(const Bvh& bvh, const std::vector<RsRay>& rays, const std::uint32_t* order,

@@ -1,4 +1,4 @@
-#include "cl/runtime.h"
+#include "runtime/runtime.h"
 
 #include <fmt/format.h>
 
@@ -284,7 +284,7 @@ std::string Runtime::build_options(const std::string& extra) const {
   if (info_.correctly_rounded_divide_sqrt) opts += " -cl-fp32-correctly-rounded-divide-sqrt";
   if (!extra.empty()) opts += " " + extra;
   // Options for every kernel build, e.g. -DRS_PORTABLE_MASK_BITS on an x86 OpenCL compiler that
-  // lacks the target builtins cl/shared.h uses there (docs/trace.md).
+  // lacks the target builtins cl/lanes.h uses there (docs/trace.md).
   if (const char* env = std::getenv("RAYSORT_CL_OPTIONS"); env && *env) opts += std::string(" ") + env;
   return opts;
 }
@@ -324,7 +324,7 @@ cl::Program Runtime::build_source(const std::string& source, const std::string& 
     }
     throw ClError(fmt::format("OpenCL build of {} failed with {} on device '{}' ({})\n  options: {}\n  build log:\n{}\n"
                               "  (RAYSORT_CL_OPTIONS adds build options; -DRS_PORTABLE_MASK_BITS avoids the x86 "
-                              "target builtins of cl/shared.h)",
+                              "target builtins of cl/lanes.h)",
                               names, cl_error_name(err), info_.name, info_.platform_name, opts, trim(log)),
                   err);
   }

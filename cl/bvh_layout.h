@@ -1,0 +1,70 @@
+/* raysort — the BVH as the kernels read it: the binary tree (RsBvhNode, RsTriangle: the reference
+ * structure, which HCC cuts, PPC and the SIMT model work on) and its 4-wide collapse (RsWideNode,
+ * RsTriPacket: what the trace kernels walk), with the stack bounds that tree depth guarantees.
+ * host/bvh/ builds both (build_sah.cpp, wide.cpp).
+ */
+#ifndef RAYSORT_BVH_LAYOUT_H
+#define RAYSORT_BVH_LAYOUT_H
+
+#include "lanes.h"
+#include "shared.h"
+
+/* Traversal stack entries per work-item (private memory). The BVH builder guarantees that the
+ * tree depth stays below this bound (host/bvh/build_sah.cpp, kMaxDepth); nearest-child-first
+ * traversal pushes at most one node per level, so the stack cannot overflow. */
+#define RS_STACK_SIZE 64
+
+/* A node of the flat binary BVH, 32 bytes: [bmin.x bmin.y bmin.z first | bmax.x bmax.y bmax.z count].
+ * count == 0: inner node; its children are nodes[first] (left) and nodes[first + 1] (right).
+ * count  > 0: leaf holding triangles [first, first + count) of the leaf-ordered triangle array.
+ * Node 0 is the root. Children are stored next to each other so one index names both. */
+typedef struct {
+  float bmin[3];
+  rs_u32 first;
+  float bmax[3];
+  rs_u32 count;
+} RsBvhNode;
+
+/* A triangle in leaf order, 48 bytes: [v0 id | v1 pad | v2 pad], id = the triangle's index in the
+ * scene's flattened triangle list (what hits report). */
+typedef struct {
+  float v0[3];
+  rs_u32 id;
+  float v1[3];
+  rs_u32 pad0;
+  float v2[3];
+  rs_u32 pad1;
+} RsTriangle;
+
+/* A node of the 4-wide BVH the trace kernels traverse, 128 bytes (two cache lines): the boxes of
+ * up to four children, one axis bound per vector ("SoA", so one vector operation tests four
+ * boxes), then per child: valid (-1 / 0) and a reference:
+ *   RS_WIDE_LEAF clear: index of an inner node;
+ *   RS_WIDE_LEAF set:   a leaf, packets [first, first + count) with first = (ref & ~RS_WIDE_LEAF) >> 2
+ *                       and count = (ref & 3) + 1.
+ * Node 0 is the root. host/bvh/wide.cpp collapses the binary BVH into this layout. */
+#define RS_WIDE_LEAF 0x80000000u
+typedef struct {
+  rs_f4 lo_x, hi_x, lo_y, hi_y, lo_z, hi_z;
+  rs_i4 valid;
+  rs_u32 child[4];
+} RsWideNode;
+
+/* Four triangles of a leaf, 192 bytes, one vertex coordinate per vector so one pass of the
+ * intersection test serves four triangles. id[i] = the triangle's index in the scene's flat list
+ * (RS_NO_HIT in an empty lane); valid = -1 for a real triangle; nondegenerate = -1 unless the
+ * triangle has exactly zero area (its cross product is 0 in exact arithmetic), which the robust
+ * test must reject and which is cheaper to decide once on the host. */
+typedef struct {
+  rs_f4 v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z;
+  rs_i4 valid;
+  rs_i4 nondegenerate;
+  rs_u32 id[4];
+} RsTriPacket;
+
+/* Traversal stack entries for the 4-wide BVH. Every wide node spans two levels of the binary
+ * tree (host/bvh/wide.cpp), so its depth is at most ceil(RS_STACK_SIZE / 2) = 32, and a node
+ * pushes at most three children: 3 * 32 = 96 entries suffice. */
+#define RS_WIDE_STACK_SIZE 96
+
+#endif /* RAYSORT_BVH_LAYOUT_H */

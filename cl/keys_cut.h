@@ -1,0 +1,189 @@
+/* raysort — the cut keys (Xiang et al. Alg. 1, sections 4.2–4.3 and 5): one bit per box the ray
+ * segment overlaps, for HCC (cut nodes by descending HAD), RegularGrid (grid cells) and HCC_DIR
+ * (cut bits, then direction bits from keys_spatial.h), and MLHCC's two-level cut. Boxes come in
+ * sixteen-lane groups (RsCutGroup) tested with lanes.h's sixteen-lane operations.
+ */
+#ifndef RAYSORT_KEYS_CUT_H
+#define RAYSORT_KEYS_CUT_H
+
+#include "keys.h"
+#include "keys_spatial.h"
+#include "lanes.h"
+
+/* Does the segment [tmin, tmax] of r overlap box b? The same slab arithmetic, in the same order,
+ * as rs_intersect_box in intersect.h (which takes a __global node; this takes a box by value):
+ * a cut-node bit is 1 exactly when traversal would enter it.
+ * (The key kernels test sixteen boxes at once, rs_cut_mask; this one-box form is kept for
+ * reference and tests.) */
+RS_KEY_INLINE int rs_segment_overlaps_box(RsTraversalRay r, RsBox b) {
+  float tx0 = (b.bmin[0] - r.o.x) * r.inv_d.x, tx1 = (b.bmax[0] - r.o.x) * r.inv_d.x;
+  float ty0 = (b.bmin[1] - r.o.y) * r.inv_d.y, ty1 = (b.bmax[1] - r.o.y) * r.inv_d.y;
+  float tz0 = (b.bmin[2] - r.o.z) * r.inv_d.z, tz1 = (b.bmax[2] - r.o.z) * r.inv_d.z;
+  float tnear = rs_max(rs_max(rs_min(tx0, tx1), rs_min(ty0, ty1)), rs_max(rs_min(tz0, tz1), r.tmin));
+  float tfar = rs_min(rs_min(rs_max(tx0, tx1), rs_max(ty0, ty1)), rs_min(rs_max(tz0, tz1), r.tmax));
+  return tnear <= tfar;
+}
+
+/* Sixteen cut boxes, one axis bound per vector (SoA), so one pass of the slab test serves sixteen
+ * boxes. Box j of a group sits in lane 15 − j, so that the group's hit mask, as bits (lane l ->
+ * bit l, rs16_mask_bits), is the group's field of the code: shifted into place, lane l of group k is
+ * code bit 48 + l − first_bit − 16k. An empty lane is a zero box, masked off by the box count.
+ * 384 bytes. Built on the host (host/encode/encode.cpp, rs_cut_groups). The bounds must come in
+ * this order: rs_cut_mask indexes them as (&lo_x)[2·axis + side]. */
+#define RS_CUT_LANES 16u
+typedef struct {
+  rs_f16 lo_x, hi_x, lo_y, hi_y, lo_z, hi_z;
+} RsCutGroup;
+
+/* The number of groups holding n boxes. */
+RS_KEY_INLINE rs_u32 rs_cut_group_count(rs_u32 n) { return (n + RS_CUT_LANES - 1u) / RS_CUT_LANES; }
+
+/* A ray broadcast to sixteen lanes, and per axis the side of the box its slab enters first
+ * (near_x = 1: the hi plane, where 1/d < 0). */
+typedef struct {
+  rs_f16 ox, oy, oz, ix, iy, iz, tmin, tmax;
+  rs_u32 near_x, near_y, near_z;
+} RsCutRay;
+
+RS_KEY_INLINE RsCutRay rs_cut_ray(RsTraversalRay r) {
+  RsCutRay c;
+  c.ox = rs16_splat(r.o.x), c.oy = rs16_splat(r.o.y), c.oz = rs16_splat(r.o.z);
+  c.ix = rs16_splat(r.inv_d.x), c.iy = rs16_splat(r.inv_d.y), c.iz = rs16_splat(r.inv_d.z);
+  c.tmin = rs16_splat(r.tmin), c.tmax = rs16_splat(r.tmax);
+  c.near_x = r.inv_d.x < 0.0f, c.near_y = r.inv_d.y < 0.0f, c.near_z = r.inv_d.z < 0.0f;
+  return c;
+}
+
+/* rs_segment_overlaps_box on the sixteen boxes of g: -1 in each lane whose box the segment overlaps.
+ * The same values as there, with the near and far plane of each axis picked by the sign of 1/d
+ * instead of a min and a max per box (the trace kernels' rs_wide_boxes does the same): for
+ * lo <= hi, (lo − o)·inv and (hi − o)·inv keep their order after rounding, so the min is the near
+ * plane's t. inv is never 0 or NaN (rs_safe_rcp) and rays are finite; a box must have lo <= hi
+ * (rs_cut_groups checks). min/max are selects, see rs16_min. */
+#define RS_DEFINE_CUT_MASK(NAME, SPACE, MASK_T, VEC_T, HALF, MIN, MAX)                                     \
+  RS_KEY_INLINE MASK_T NAME(const RsCutRay* r, SPACE const RsCutGroup* g) {                                   \
+    SPACE const rs_f16* b = &g->lo_x;                                                                         \
+    const VEC_T tnx = (b[r->near_x] HALF - r->ox HALF) * r->ix HALF;                                          \
+    const VEC_T tfx = (b[1u - r->near_x] HALF - r->ox HALF) * r->ix HALF;                                     \
+    const VEC_T tny = (b[2u + r->near_y] HALF - r->oy HALF) * r->iy HALF;                                     \
+    const VEC_T tfy = (b[3u - r->near_y] HALF - r->oy HALF) * r->iy HALF;                                     \
+    const VEC_T tnz = (b[4u + r->near_z] HALF - r->oz HALF) * r->iz HALF;                                     \
+    const VEC_T tfz = (b[5u - r->near_z] HALF - r->oz HALF) * r->iz HALF;                                     \
+    const VEC_T tnear = MAX(MAX(tnx, tny), MAX(tnz, r->tmin HALF));                                           \
+    const VEC_T tfar = MIN(MIN(tfx, tfy), MIN(tfz, r->tmax HALF));                                            \
+    return tnear <= tfar;                                                                                     \
+  }
+
+/* The code bits of the n boxes of g that the segment overlaps (n <= 64; box i in group i / 16,
+ * code bit 63 − first_bit − i): each group's hit mask as bits (rs16_mask_bits: one kmovd on
+ * AVX-512 devices, lanes.h), restricted to its boxes' lanes and shifted into place.
+ * On the device, a last group with at most eight boxes (in lanes 8..15) is tested on its upper
+ * eight lanes only (rs_cut_mask_half_*): with AVX-512, PoCL runs a sixteen-lane operation as one
+ * zmm instruction, which Zen 4 executes in two halves, so a half-empty group would cost a full one
+ * (MLHCC at 16 bits has two such groups per key). The host tests every group whole; the code is
+ * the same.
+ * One definition per address space (OpenCL C 1.2 has no generic pointers): _p private/host,
+ * _c constant, _g global. */
+#ifdef __OPENCL_VERSION__
+#define RS_CUT_WHOLE_ABOVE (RS_CUT_LANES / 2u) /* a last group with more boxes is tested whole */
+#define RS_DEFINE_CUT_MASK_HALF(SUFFIX, SPACE)                                                       \
+  RS_DEFINE_CUT_MASK(rs_cut_mask_half_##SUFFIX, SPACE, int8, float8, .hi, rs8_min, rs8_max)
+#define RS_CUT_BITS_HALF(SUFFIX)                                                                     \
+  if (rest > 0u && rest <= RS_CUT_WHOLE_ABOVE) {                                                     \
+    const rs_u32 m = rs8_mask_bits(rs_cut_mask_half_##SUFFIX(r, &g[full])) & (0xFF00u >> rest);      \
+    code |= (RS_U64(m) << 56) >> (first_bit + RS_CUT_LANES * full);                                  \
+  }
+#else
+#define RS_CUT_WHOLE_ABOVE 0u
+#define RS_DEFINE_CUT_MASK_HALF(SUFFIX, SPACE)
+#define RS_CUT_BITS_HALF(SUFFIX)
+#endif
+#define RS_DEFINE_CUT_BITS(SUFFIX, SPACE)                                                            \
+  RS_DEFINE_CUT_MASK(rs_cut_mask_##SUFFIX, SPACE, rs_i16, rs_f16, , rs16_min, rs16_max)              \
+  RS_DEFINE_CUT_MASK_HALF(SUFFIX, SPACE)                                                             \
+  RS_KEY_INLINE rs_u64 rs_cut_bits_##SUFFIX(const RsCutRay* r, SPACE const RsCutGroup* g, rs_u32 n,  \
+                                            rs_u32 first_bit) {                                      \
+    rs_u64 code = 0;                                                                                 \
+    const rs_u32 full = n / RS_CUT_LANES, rest = n % RS_CUT_LANES;                                   \
+    for (rs_u32 k = 0; k < full + (rest > RS_CUT_WHOLE_ABOVE); ++k) {                                \
+      const rs_u32 left = n - RS_CUT_LANES * k; /* boxes from this group on, in lanes 15, 14, ... */   \
+      const rs_u32 boxes = left < RS_CUT_LANES ? left : RS_CUT_LANES;                                \
+      const rs_u32 m = rs16_mask_bits(rs_cut_mask_##SUFFIX(r, &g[k])) & (0xFFFF0000u >> boxes);      \
+      code |= (RS_U64(m) << 48) >> (first_bit + RS_CUT_LANES * k);                                   \
+    }                                                                                                \
+    RS_CUT_BITS_HALF(SUFFIX)                                                                         \
+    return code;                                                                                     \
+  }
+#ifdef __OPENCL_VERSION__
+RS_DEFINE_CUT_BITS(c, __constant)
+RS_DEFINE_CUT_BITS(g, __global)
+#define RS_CUT_BITS_TOP rs_cut_bits_c
+#else
+RS_DEFINE_CUT_BITS(p, )
+#define RS_CUT_BITS_TOP rs_cut_bits_p
+#define rs_cut_bits_g rs_cut_bits_p
+#endif
+
+/* The space the box-set kernels read the cut groups from (HCC, grid, HCC_DIR, MLHCC top level). */
+#define RS_CUT_SPACE RS_CONSTANT
+
+/* HCC / RegularGrid / HCC_DIR: bit 63 − i = overlap with box i of the set (n boxes in
+ * ceil(n / 16) groups, built on the host by rs_cut_groups; n ≤ 64 − dir_bits); then dir_bits
+ * direction bits right below the box field of `field` bits (HCC_DIR). Every group is tested:
+ * testing a group's union box first and skipping the groups it misses (a summary group, tried with
+ * eight-box groups, in bit order and in Morton order) gave the same bits but was 1.2–1.9x slower
+ * on PoCL for HCC and no faster for grid cells: sibenik's shadow rays are long and meet most of the
+ * union boxes, and the data-dependent loop costs more than the groups it skips. */
+RS_KEY_INLINE rs_u64 rs_box_set_code(RsRay ray, RS_CUT_SPACE const RsCutGroup* set, rs_u32 n, rs_u32 field,
+                                     rs_u32 dir_bits) {
+  RsTraversalRay r = rs_prepare_ray(ray);
+  RsCutRay c = rs_cut_ray(r);
+  rs_u64 code = RS_CUT_BITS_TOP(&c, set, n, 0u);
+  if (dir_bits > 0u) code |= rs_direction_field(ray, dir_bits) << (64u - field - dir_bits);
+  return code;
+}
+
+/* MLHCC (Xiang et al. section 4.3): the top `half_bits` bits are the HCC of the top-level cut; the
+ * representative top node is the first one hit (top nodes are in descending HAD order); the next
+ * `half_bits` bits are the HCC of its low-level cut: row rep of `low` (ceil(half_bits / 16)
+ * groups, box j in group j / 16, j < low_count[rep], its code bit already 63 − half_bits − j). No
+ * top node hit: the low bits are 0. */
+RS_KEY_INLINE rs_u64 rs_two_level_cut_code(RsRay ray, RS_CUT_SPACE const RsCutGroup* top, rs_u32 n_top,
+                                           RS_GLOBAL const RsCutGroup* low, RS_GLOBAL const rs_u32* low_count,
+                                           rs_u32 half_bits) {
+  RsTraversalRay r = rs_prepare_ray(ray);
+  RsCutRay c = rs_cut_ray(r);
+  rs_u64 code = RS_CUT_BITS_TOP(&c, top, n_top, 0u);
+  if (code != 0u) {
+    const rs_u32 rep = rs_clz64(code);
+    code |= rs_cut_bits_g(&c, low + rep * rs_cut_group_count(half_bits), low_count[rep], half_bits);
+  }
+  return code;
+}
+
+/* Rays per work-item of the MLHCC kernel (rs_two_level_cut_code2 below; the host sizes the launch). */
+#define RS_TWO_LEVEL_RAYS 2u
+#ifdef __OPENCL_VERSION__
+/* rs_two_level_cut_code for two rays, a and b (the device kernel's form; the host twin is the
+ * one-ray function above, and the tests compare the two). A key's low-level test needs its own
+ * top-level result first (which row), so one ray's work is a chain of dependent steps longer than
+ * the processor can look ahead over; placed one after the other, two rays' chains overlap. The row
+ * test runs with no branch on whether a top node was hit; its bits are dropped if not. (Four rays,
+ * through private arrays, measured slower than one.) */
+RS_KEY_INLINE void rs_two_level_cut_code2(RsRay ray_a, RsRay ray_b, RS_CUT_SPACE const RsCutGroup* top, rs_u32 n_top,
+                                          RS_GLOBAL const RsCutGroup* low, RS_GLOBAL const rs_u32* low_count,
+                                          rs_u32 half_bits, rs_u64* code_a, rs_u64* code_b) {
+  const RsCutRay a = rs_cut_ray(rs_prepare_ray(ray_a));
+  const RsCutRay b = rs_cut_ray(rs_prepare_ray(ray_b));
+  const rs_u64 top_a = RS_CUT_BITS_TOP(&a, top, n_top, 0u);
+  const rs_u64 top_b = RS_CUT_BITS_TOP(&b, top, n_top, 0u);
+  const rs_u32 rep_a = top_a != 0u ? rs_clz64(top_a) : 0u, rep_b = top_b != 0u ? rs_clz64(top_b) : 0u;
+  const rs_u32 row = rs_cut_group_count(half_bits);
+  const rs_u64 low_a = rs_cut_bits_g(&a, low + rep_a * row, low_count[rep_a], half_bits);
+  const rs_u64 low_b = rs_cut_bits_g(&b, low + rep_b * row, low_count[rep_b], half_bits);
+  *code_a = top_a | (top_a != 0u ? low_a : 0u);
+  *code_b = top_b | (top_b != 0u ? low_b : 0u);
+}
+#endif
+
+#endif /* RAYSORT_KEYS_CUT_H */

@@ -1,0 +1,176 @@
+/* raysort — lane types: four, eight and sixteen floats or ints processed as one value. OpenCL's
+ * vector types on the device; on the host, structs of the same layout with per-lane IEEE
+ * operations, so the same source gives the same bits. The 4-wide BVH (bvh_layout.h,
+ * traverse_wide.h) tests four boxes or triangles per operation; the cut keys (keys_cut.h) test
+ * sixteen boxes. The mask-to-bits helpers turn a lane comparison into an int bit mask.
+ */
+#ifndef RAYSORT_LANES_H
+#define RAYSORT_LANES_H
+
+#include "shared.h"
+
+/* ---------------------------------------------------------------------------------------------
+ * Four-lane vectors for the 4-wide BVH (traverse_wide.h). OpenCL's float4/int4 on the device; on the
+ * host a 16-byte struct with the same layout and per-lane IEEE operations, so the same source gives
+ * the same bits. Comparisons give -1 (true) / 0 (false) per lane, as OpenCL's do. min/max are
+ * selects (a < b ? a : b), not fmin/fmax: no NaN special case, one instruction on SSE.
+ * ------------------------------------------------------------------------------------------- */
+#ifdef __OPENCL_VERSION__
+typedef float4 rs_f4;
+typedef int4 rs_i4;
+RS_INLINE rs_f4 rs4_splat(float x) { return (float4)(x); }
+RS_INLINE rs_f4 rs4_min(rs_f4 a, rs_f4 b) { return select(b, a, a < b); }
+RS_INLINE rs_f4 rs4_max(rs_f4 a, rs_f4 b) { return select(b, a, a > b); }
+RS_INLINE rs_f4 rs4_select(rs_f4 if_false, rs_f4 if_true, rs_i4 m) { return select(if_false, if_true, m); }
+/* The lanes of a -1/0 mask as bits, lane i -> bit i. The traversal branches on these bits at every
+ * node, so on x86 devices (PoCL) it is one movmskps; the portable form (AND with 1, 2, 4, 8, then OR
+ * the lanes) put a shuffle-and-OR chain on that path, and the trace took 4-13 % longer (sibenik,
+ * docs/trace.md). GPUs and other CPUs use the portable form; ClRuntime.MaskBitsFormsAgree compares
+ * the two on the device for every mask. */
+RS_INLINE int rs4_bits_portable(rs_i4 m) { return (m.s0 & 1) | (m.s1 & 2) | (m.s2 & 4) | (m.s3 & 8); }
+#if defined(__x86_64__) && defined(__SSE__) && !defined(RS_PORTABLE_MASK_BITS)
+#define RS_MASK_BITS_MOVMSK 1
+RS_INLINE int rs4_bits(rs_i4 m) { return __builtin_ia32_movmskps(as_float4(m)); }
+#else
+#define RS_MASK_BITS_MOVMSK 0
+RS_INLINE int rs4_bits(rs_i4 m) { return rs4_bits_portable(m); }
+#endif
+RS_INLINE void rs4_store(rs_f4 a, float* p) { vstore4(a, 0, p); }
+/* Index of the lowest set bit of x != 0 (OpenCL 1.2 has clz but no ctz). */
+RS_INLINE int rs_lowest_bit(int x) { return 31 - clz(x & -x); }
+RS_INLINE rs_f4 rs4_load(const float* p) { return vload4(0, p); }
+#else
+typedef struct alignas(16) rs_f4 {
+  float s[4];
+} rs_f4;
+typedef struct alignas(16) rs_i4 {
+  rs_i32 s[4];
+} rs_i4;
+/* Per-lane operators of the host lane structs (N lanes; comparisons give -1 / 0 like OpenCL's).
+ * Defined once here and used for the 8-lane structs below too. */
+#define RS_LANES_BINARY(T, R, N, op)                         \
+  RS_INLINE R operator op(T a, T b) {                        \
+    R r;                                                     \
+    for (int i = 0; i < N; ++i) r.s[i] = a.s[i] op b.s[i];   \
+    return r;                                                \
+  }
+#define RS_LANES_COMPARE(F, I, N, op)                                          \
+  RS_INLINE I operator op(F a, F b) {                                          \
+    I r;                                                                       \
+    for (int i = 0; i < N; ++i) r.s[i] = a.s[i] op b.s[i] ? -1 : 0;            \
+    return r;                                                                  \
+  }
+#define RS4_COMPARE(op)                  \
+  RS_LANES_COMPARE(rs_f4, rs_i4, 4, op) \
+  RS_INLINE rs_i4 operator op(rs_f4 a, float b) { return a op rs_f4{{b, b, b, b}}; }
+RS_LANES_BINARY(rs_f4, rs_f4, 4, +)
+RS_LANES_BINARY(rs_f4, rs_f4, 4, -)
+RS_LANES_BINARY(rs_f4, rs_f4, 4, *)
+RS_LANES_BINARY(rs_f4, rs_f4, 4, /)
+RS_LANES_BINARY(rs_i4, rs_i4, 4, &)
+RS_LANES_BINARY(rs_i4, rs_i4, 4, |)
+RS4_COMPARE(<)
+RS4_COMPARE(>)
+RS4_COMPARE(<=)
+RS4_COMPARE(>=)
+RS4_COMPARE(==)
+RS4_COMPARE(!=)
+#undef RS4_COMPARE
+RS_INLINE rs_f4 rs4_splat(float x) { return rs_f4{{x, x, x, x}}; }
+RS_INLINE rs_f4 operator*(rs_f4 a, float b) { return a * rs4_splat(b); }
+RS_INLINE rs_f4 operator*(float a, rs_f4 b) { return rs4_splat(a) * b; }
+RS_INLINE rs_f4 operator-(rs_f4 a, float b) { return a - rs4_splat(b); }
+RS_INLINE rs_f4 operator-(float a, rs_f4 b) { return rs4_splat(a) - b; }
+RS_INLINE rs_f4 rs4_select(rs_f4 if_false, rs_f4 if_true, rs_i4 m) {
+  rs_f4 r;
+  for (int i = 0; i < 4; ++i) r.s[i] = m.s[i] < 0 ? if_true.s[i] : if_false.s[i];
+  return r;
+}
+RS_INLINE rs_f4 rs4_min(rs_f4 a, rs_f4 b) { return rs4_select(b, a, a < b); }
+RS_INLINE rs_f4 rs4_max(rs_f4 a, rs_f4 b) { return rs4_select(b, a, a > b); }
+RS_INLINE int rs4_bits(rs_i4 m) { return (m.s[0] & 1) | (m.s[1] & 2) | (m.s[2] & 4) | (m.s[3] & 8); }
+RS_INLINE int rs_lowest_bit(int x) { return std::countr_zero(static_cast<unsigned>(x)); }
+RS_INLINE void rs4_store(rs_f4 a, float* p) {
+  for (int i = 0; i < 4; ++i) p[i] = a.s[i];
+}
+RS_INLINE rs_f4 rs4_load(const float* p) { return rs_f4{{p[0], p[1], p[2], p[3]}}; }
+#endif
+
+/* |x| per lane, as max(x, 0 − x): the same bits on both sides (±0 gives +0). */
+RS_INLINE rs_f4 rs4_abs(rs_f4 x) { return rs4_max(x, 0.0f - x); }
+
+/* Sixteen-lane vectors in the same style (the encoders' cut-box tests, keys_cut.h): OpenCL's
+ * float16/int16 on the device, a 64-byte struct with per-lane IEEE operations on the host. min/max
+ * are selects, as rs4_min/rs4_max. Sixteen lanes because a CPU with AVX-512 runs them as one
+ * instruction (PoCL turns float16 into zmm operations), which halves the instructions of a key
+ * against eight-lane groups; elsewhere they are two eight-lane or sixteen scalar operations. */
+#ifdef __OPENCL_VERSION__
+typedef float16 rs_f16;
+typedef int16 rs_i16;
+RS_INLINE rs_f16 rs16_splat(float x) { return (float16)(x); }
+RS_INLINE rs_f16 rs16_min(rs_f16 a, rs_f16 b) { return select(b, a, a < b); }
+RS_INLINE rs_f16 rs16_max(rs_f16 a, rs_f16 b) { return select(b, a, a > b); }
+/* Eight-lane forms for a half-full group (device only, keys_cut.h rs_cut_bits). */
+RS_INLINE float8 rs8_min(float8 a, float8 b) { return select(b, a, a < b); }
+RS_INLINE float8 rs8_max(float8 a, float8 b) { return select(b, a, a > b); }
+/* The OR of the eight lanes. */
+RS_INLINE int rs8_or_lanes(int8 m) {
+  int4 h = m.lo | m.hi;
+  int2 q = h.lo | h.hi;
+  return q.s0 | q.s1;
+}
+/* The lanes of a sixteen- or eight-lane -1/0 mask as bits, lane i -> bit i (the cut-box tests,
+ * keys_cut.h rs_cut_bits). On AVX-512 devices (PoCL on such CPUs) the compare's mask register is
+ * the answer (kmovd, RS_MASK16_BITS = 1); elsewhere the lanes are ANDed with their bits and ORed,
+ * a fold of the lanes per group (on PoCL 1.2-1.6x slower box-set keys).
+ * ClRuntime.MaskBitsFormsAgree checks them on the device. */
+#if defined(__AVX512F__) && defined(__AVX512DQ__) && !defined(RS_PORTABLE_MASK_BITS)
+#define RS_MASK16_BITS 1
+RS_INLINE uint rs16_mask_bits(int16 m) { return (uint)__builtin_ia32_cvtd2mask512(m); }
+RS_INLINE uint rs8_mask_bits(int8 m) { return (uint)__builtin_ia32_movmskps256(as_float8(m)); }
+#else
+#define RS_MASK16_BITS 0
+RS_INLINE uint rs8_mask_bits(int8 m) { return (uint)rs8_or_lanes(m & (int8)(1, 2, 4, 8, 16, 32, 64, 128)); }
+RS_INLINE uint rs16_mask_bits(int16 m) { return rs8_mask_bits(m.lo) | (rs8_mask_bits(m.hi) << 8); }
+#endif
+#else
+typedef struct alignas(64) rs_f16 {
+  float s[16];
+} rs_f16;
+typedef struct alignas(64) rs_i16 {
+  rs_i32 s[16];
+} rs_i16;
+RS_LANES_BINARY(rs_f16, rs_f16, 16, +)
+RS_LANES_BINARY(rs_f16, rs_f16, 16, -)
+RS_LANES_BINARY(rs_f16, rs_f16, 16, *)
+RS_LANES_BINARY(rs_i16, rs_i16, 16, &)
+RS_LANES_BINARY(rs_i16, rs_i16, 16, |)
+RS_LANES_COMPARE(rs_f16, rs_i16, 16, <)
+RS_LANES_COMPARE(rs_f16, rs_i16, 16, >)
+RS_LANES_COMPARE(rs_f16, rs_i16, 16, <=)
+#undef RS_LANES_BINARY
+#undef RS_LANES_COMPARE
+RS_INLINE rs_f16 rs16_splat(float x) {
+  rs_f16 r;
+  for (int i = 0; i < 16; ++i) r.s[i] = x;
+  return r;
+}
+RS_INLINE rs_f16 rs16_min(rs_f16 a, rs_f16 b) {
+  rs_f16 r;
+  for (int i = 0; i < 16; ++i) r.s[i] = a.s[i] < b.s[i] ? a.s[i] : b.s[i];
+  return r;
+}
+RS_INLINE rs_f16 rs16_max(rs_f16 a, rs_f16 b) {
+  rs_f16 r;
+  for (int i = 0; i < 16; ++i) r.s[i] = a.s[i] > b.s[i] ? a.s[i] : b.s[i];
+  return r;
+}
+/* Lane i -> bit i (the device's rs16_mask_bits). */
+RS_INLINE rs_u32 rs16_mask_bits(rs_i16 m) {
+  rs_u32 b = 0;
+  for (int i = 0; i < 16; ++i) b |= static_cast<rs_u32>(m.s[i] != 0) << i;
+  return b;
+}
+#endif
+
+#endif /* RAYSORT_LANES_H */

@@ -1,0 +1,115 @@
+/* raysort — traversal of the binary BVH (bvh_layout.h, RsBvhNode): the reference structure. The
+ * host twin uses it for the SIMT model's trails, `raysort trace --layout binary` runs it on the
+ * device, and it is what the 4-wide traversal (traverse_wide.h) must agree with.
+ *
+ * Algorithm: stack-based traversal, one ray per work-item, nearest child first (Aila & Laine 2009,
+ * "Understanding the Efficiency of Ray Traversal on GPUs", the "while-while" loop without
+ * persistent threads), with the tests of intersect.h. The variant is an int argument (OpenCL C has
+ * no templates); the kernels pass a constant, so each kernel compiles to one variant only.
+ */
+#ifndef RAYSORT_TRAVERSE_BINARY_H
+#define RAYSORT_TRAVERSE_BINARY_H
+
+#include "intersect.h"
+
+/* Closest hit (any_hit = 0) or first hit found (any_hit = 1, shadow rays), fast (robust = 0) or
+ * robust (robust = 1) variant.
+ * *node_visits, when not null, counts the nodes whose box was fetched (for cost heatmaps).
+ * trail, when not null, receives the id of every node the loop steps through, in order, up to
+ * trail_cap entries; *trail_len gets the full step count (the SIMT model, host only: kernels pass
+ * null and the compiler drops the recording). */
+RS_INLINE RsHit rs_traverse_variant_recorded(RS_GLOBAL const RsBvhNode* nodes, RS_GLOBAL const RsTriangle* tris,
+                                             RsRay ray, int robust, int any_hit, rs_u32* node_visits, rs_u32* trail,
+                                             rs_u32 trail_cap, rs_u32* trail_len) {
+  rs_u32 steps = 0;
+  RsTraversalRay r = rs_prepare_ray(ray);
+  RsRobustRay rr = rs_prepare_robust_ray(ray);
+  RsHit hit = rs_miss(ray.tmax);
+  rs_u32 visits = 1;
+
+  int root_hit;
+  if (robust)
+    rs_intersect_box_robust(&rr, &nodes[0], hit.t, &root_hit);
+  else
+    rs_intersect_box(r, &nodes[0], hit.t, &root_hit);
+  if (robust && !rr.valid) root_hit = 0;
+  if (!root_hit) {
+    if (node_visits) *node_visits = visits;
+    if (trail_len) *trail_len = 0;
+    return hit;
+  }
+
+  rs_u32 stack[RS_STACK_SIZE];
+  int sp = 0;
+  rs_u32 node = 0;
+  for (;;) {
+    RS_GLOBAL const RsBvhNode* n = &nodes[node];
+    if (trail && steps < trail_cap) trail[steps] = node;
+    ++steps;
+    if (n->count > 0) {
+      for (rs_u32 i = n->first; i < n->first + n->count; ++i) {
+        float t, u, v;
+        int found = robust ? rs_intersect_triangle_robust(&rr, &tris[i], hit.t, &t, &u, &v)
+                           : rs_intersect_triangle(r, &tris[i], hit.t, &t, &u, &v);
+        if (found) {
+          hit.t = t;
+          hit.tri = tris[i].id;
+          hit.u = u;
+          hit.v = v;
+          if (any_hit) {
+            if (node_visits) *node_visits = visits;
+            if (trail_len) *trail_len = steps;
+            return hit;
+          }
+        }
+      }
+    } else {
+      rs_u32 left = n->first;
+      int hit_l, hit_r;
+      float t_l = robust ? rs_intersect_box_robust(&rr, &nodes[left], hit.t, &hit_l)
+                         : rs_intersect_box(r, &nodes[left], hit.t, &hit_l);
+      float t_r = robust ? rs_intersect_box_robust(&rr, &nodes[left + 1], hit.t, &hit_r)
+                         : rs_intersect_box(r, &nodes[left + 1], hit.t, &hit_r);
+      visits += 2;
+      if (hit_l && hit_r) {
+        /* Nearest child first; ties go left so the order is fixed. */
+        rs_u32 near_child = t_r < t_l ? left + 1 : left;
+        stack[sp++] = near_child == left ? left + 1 : left;
+        node = near_child;
+        continue;
+      }
+      if (hit_l) {
+        node = left;
+        continue;
+      }
+      if (hit_r) {
+        node = left + 1;
+        continue;
+      }
+    }
+    if (sp == 0) break;
+    node = stack[--sp];
+  }
+  if (node_visits) *node_visits = visits;
+  if (trail_len) *trail_len = steps;
+  return hit;
+}
+
+/* The fast variant with a trail (the SIMT model, host/bench/metrics.cpp). */
+RS_INLINE RsHit rs_traverse_recorded(RS_GLOBAL const RsBvhNode* nodes, RS_GLOBAL const RsTriangle* tris, RsRay ray,
+                                     int any_hit, rs_u32* node_visits, rs_u32* trail, rs_u32 trail_cap,
+                                     rs_u32* trail_len) {
+  return rs_traverse_variant_recorded(nodes, tris, ray, 0, any_hit, node_visits, trail, trail_cap, trail_len);
+}
+
+RS_INLINE RsHit rs_traverse(RS_GLOBAL const RsBvhNode* nodes, RS_GLOBAL const RsTriangle* tris, RsRay ray, int any_hit,
+                            rs_u32* node_visits) {
+  return rs_traverse_variant_recorded(nodes, tris, ray, 0, any_hit, node_visits, 0, 0, 0);
+}
+
+RS_INLINE RsHit rs_traverse_robust(RS_GLOBAL const RsBvhNode* nodes, RS_GLOBAL const RsTriangle* tris, RsRay ray,
+                                   int any_hit, rs_u32* node_visits) {
+  return rs_traverse_variant_recorded(nodes, tris, ray, 1, any_hit, node_visits, 0, 0, 0);
+}
+
+#endif /* RAYSORT_TRAVERSE_BINARY_H */
