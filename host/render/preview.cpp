@@ -1,0 +1,155 @@
+#include "render/preview.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <memory>
+
+#include "sampling.h"
+#include "trace/tracer.h"
+
+namespace raysort {
+
+namespace {
+
+void set(Image& img, int x, int y, const Vec3& c) { img.set(x, y, c[0], c[1], c[2]); }
+
+// Heatmap colours: black -> purple -> orange -> yellow -> white, t in [0, 1].
+Vec3 heat_color(float t) {
+  static const Vec3 stops[] = {{0.0f, 0.0f, 0.02f}, {0.33f, 0.06f, 0.43f}, {0.87f, 0.32f, 0.23f},
+                               {0.99f, 0.75f, 0.2f}, {1.0f, 1.0f, 0.9f}};
+  t = std::clamp(t, 0.0f, 1.0f) * 4.0f;
+  const int i = std::min(3, static_cast<int>(t));
+  const float f = t - static_cast<float>(i);
+  Vec3 c;
+  for (int a = 0; a < 3; ++a) c[a] = stops[i][a] + (stops[i + 1][a] - stops[i][a]) * f;
+  return c;
+}
+
+void draw_segment(Image& img, const RsCamera& cam, RsVec3 a, RsVec3 b, const Vec3& color, float near) {
+  const RsVec3 pos = rs_load3(cam.pos), fwd = rs_load3(cam.forward), right = rs_load3(cam.right), up = rs_load3(cam.up);
+  auto to_camera = [&](RsVec3 p) {
+    RsVec3 v = rs_sub(p, pos);
+    return rs_vec3(rs_dot(v, right), rs_dot(v, up), rs_dot(v, fwd));
+  };
+  RsVec3 ca = to_camera(a), cb = to_camera(b);
+  if (ca.z < near && cb.z < near) return;
+  if (ca.z < near || cb.z < near) {
+    const float t = (near - ca.z) / (cb.z - ca.z);
+    RsVec3 c = rs_add(ca, rs_scale(rs_sub(cb, ca), t));
+    (ca.z < near ? ca : cb) = c;
+  }
+  auto project = [&](RsVec3 c, float& px, float& py) {
+    const float sx = c.x / c.z / (cam.tan_half_fov_y * cam.aspect), sy = c.y / c.z / cam.tan_half_fov_y;
+    px = (sx + 1.0f) * 0.5f * static_cast<float>(cam.width);
+    py = (1.0f - sy) * 0.5f * static_cast<float>(cam.height);
+  };
+  float x0, y0, x1, y1;
+  project(ca, x0, y0);
+  project(cb, x1, y1);
+  // Keep far-off endpoints from making the loop huge.
+  const float len = std::max(std::fabs(x1 - x0), std::fabs(y1 - y0));
+  if (!(len < 1e7f)) return;
+  const int steps = std::max(1, static_cast<int>(std::ceil(len)));
+  for (int s = 0; s <= steps; ++s) {
+    const float t = static_cast<float>(s) / static_cast<float>(steps);
+    const int x = static_cast<int>(std::floor(x0 + (x1 - x0) * t)), y = static_cast<int>(std::floor(y0 + (y1 - y0) * t));
+    if (x < -1 || y < -1 || x > static_cast<int>(img.width) || y > static_cast<int>(img.height)) continue;
+    set(img, x, y, color);
+    set(img, x + 1, y, color);
+    set(img, x, y + 1, color);
+  }
+}
+
+}  // namespace
+
+RenderedFrame render_frame(const PreparedScene& p, const RayGenOptions& gen, Runtime* rt) {
+  const ShadeInputs in = make_shade_inputs(p.scene, p.tris, gen);
+  const std::size_t pixels = std::size_t{in.width} * in.height;
+  const auto per_pass = static_cast<std::uint32_t>(std::max<std::size_t>(1, (std::size_t{2} << 20) / pixels));
+  std::unique_ptr<DevicePathTracer> device;
+  if (rt) device = std::make_unique<DevicePathTracer>(*rt, p.bvh, in);
+  RenderedFrame r;
+  r.image = Image(in.width, in.height);
+  r.cost.assign(pixels, 0.0);
+  std::vector<double> sum(pixels * 3, 0.0);
+  const auto t0 = std::chrono::steady_clock::now();
+  for (std::uint32_t s = 0; s < in.spp; s += per_pass) {
+    FrameOptions fo;
+    fo.sample_begin = s;
+    fo.sample_count = per_pass;
+    fo.count_visits = true;
+    Frame f = device ? device->trace_frame(fo) : trace_frame_host(in, p.bvh, fo);
+    if (s == 0) r.first_pass = f.batches;
+    for (const auto& b : f.batches) r.rays += b.rays;
+    for (std::size_t path = 0; path < f.visits.size(); ++path) {
+      const std::size_t pixel = path / f.spp;
+      for (int c = 0; c < 3; ++c) sum[3 * pixel + c] += f.radiance[3 * path + c];
+      r.cost[pixel] += f.visits[path];
+    }
+  }
+  r.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  for (std::size_t i = 0; i < sum.size(); ++i) r.image.rgb[i] = static_cast<float>(sum[i] / in.spp);
+  for (double& c : r.cost) c /= in.spp;
+  return r;
+}
+
+Image cost_heatmap(const std::vector<double>& cost, std::uint32_t width, std::uint32_t height, double& low,
+                   double& top) {
+  std::vector<double> sorted(cost);
+  std::sort(sorted.begin(), sorted.end());
+  auto percentile = [&](std::size_t q) {
+    return sorted.empty() ? 0.0 : sorted[std::min(sorted.size() - 1, sorted.size() * q / 100)];
+  };
+  low = percentile(1);
+  top = std::max(low + 1.0, percentile(99));
+  Image img(width, height);
+  for (std::size_t i = 0; i < cost.size(); ++i) {
+    const Vec3 c = heat_color(static_cast<float>((cost[i] - low) / (top - low)));
+    img.rgb[3 * i] = c[0], img.rgb[3 * i + 1] = c[1], img.rgb[3 * i + 2] = c[2];
+  }
+  return img;
+}
+
+Image shade_primary(const PreparedScene& p, const RsCamera& cam) {
+  Image img(cam.width, cam.height);
+  std::vector<RsRay> rays;
+  rays.reserve(static_cast<std::size_t>(cam.width) * cam.height);
+  for (std::uint32_t y = 0; y < cam.height; ++y)
+    for (std::uint32_t x = 0; x < cam.width; ++x) rays.push_back(rs_camera_ray(cam, x, y, 0.5f, 0.5f));
+  const auto hits = trace_reference(p.bvh, rays, nullptr, false);
+  const Vec3 background = p.scene.sky.enabled ? p.scene.sky.horizon : Vec3{0.05f, 0.05f, 0.05f};
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    const int x = static_cast<int>(i % cam.width), y = static_cast<int>(i / cam.width);
+    if (hits[i].tri == RS_NO_HIT) {
+      set(img, x, y, background);
+      continue;
+    }
+    const auto t = hits[i].tri;
+    const RsVec3 d = rs_load3(rays[i].d);
+    const RsVec3 n = rs_facing_normal(rs_load3(p.tris.v0[t].data()), rs_load3(p.tris.v1[t].data()),
+                                      rs_load3(p.tris.v2[t].data()), d);
+    const float cosine = std::fabs(rs_dot(n, d));
+    const std::int32_t m = p.tris.material.empty() ? 0 : p.tris.material[t];
+    const Vec3 albedo = m >= 0 && static_cast<std::size_t>(m) < p.scene.materials.size()
+                            ? p.scene.materials[m].albedo
+                            : Vec3{0.7f, 0.7f, 0.7f};
+    const float s = 0.15f + 0.85f * cosine;
+    set(img, x, y, {albedo[0] * s, albedo[1] * s, albedo[2] * s});
+  }
+  return img;
+}
+
+void draw_boxes(Image& img, const RsCamera& cam, const std::vector<Aabb>& boxes, float near) {
+  const Vec3 orange{1.0f, 0.45f, 0.0f};
+  for (const Aabb& b : boxes) {
+    auto corner = [&](int i) {
+      return rs_vec3((i & 1) ? b.max[0] : b.min[0], (i & 2) ? b.max[1] : b.min[1], (i & 4) ? b.max[2] : b.min[2]);
+    };
+    for (int i = 0; i < 8; ++i)
+      for (int axis = 0; axis < 3; ++axis)
+        if (!(i & (1 << axis))) draw_segment(img, cam, corner(i), corner(i | (1 << axis)), orange, near);
+  }
+}
+
+}  // namespace raysort
