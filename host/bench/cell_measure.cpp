@@ -126,6 +126,93 @@ CellRecord BatchBench::measure_nosort(CellRecord c, const ProtocolSettings& sett
   return c;
 }
 
+Measurement BatchBench::sorted_measurement(const std::vector<CellRecord>& cells, Encoder encoder,
+                                           const cl::Buffer& keys, const RadixSortConfig& cfg) {
+  Measurement m;
+  m.prologue = {{"encode", "sort"}, [this, encoder, &keys, cfg] {
+                  const DeviceEncoder::Events ev =
+                      s_.encoder.enqueue(encoder, cfg.key_bits, rays_, identity_, n_, keys, values_);
+                  ev.wait();
+                  cl::Buffer k = keys;
+                  const SortStats st = s_.sorter.sort(k, values_, n_, cfg);
+                  return std::vector<double>{ev.ms(), st.ms};
+                }};
+  m.arms = baseline_arms();
+  for (const CellRecord& c : cells) {
+    if (c.access == "gather") {
+      m.arms.push_back({{"trace:gather"}, [this] {
+                          return std::vector<double>{timed_trace(rays_, values_, gather_hits_, "waiting for the sorted trace")};
+                        }});
+    } else {
+      m.arms.push_back({{"permute", "trace:permute"}, [this] {
+                          cl::Event p = s_.permuter.enqueue(rays_, values_, n_, permuted_rays());
+                          cl_call("waiting for the permute kernel", [&] { p.wait(); });
+                          const double permute_ms = event_ms(p);
+                          return std::vector<double>{permute_ms, timed_trace(permuted_rays(), identity_, permute_hits_,
+                                                                             "waiting for the trace of the permuted rays")};
+                        }});
+    }
+    m.targets.push_back([trace = "trace:" + c.access](const Series& s) { return ratio_interval(s.at("nosort"), s.at(trace)); });
+  }
+  return m;
+}
+
+BatchBench::SortedOrder BatchBench::check_order(const cl::Buffer& keys, unsigned bits, unsigned top) {
+  SortedOrder so;
+  s_.rt.download("sorted order", values_, so.order, n_);
+  std::vector<std::uint8_t> seen(n_, 0);
+  so.permutation = true;
+  for (auto v : so.order)
+    if (v >= n_ || seen[v]++) {
+      so.permutation = false;
+      break;
+    }
+  so.identity = so.permutation;
+  for (std::uint32_t i = 0; so.identity && i < n_; ++i) so.identity = so.order[i] == i;
+  std::vector<std::uint64_t> sorted_keys = download_keys(s_.rt, keys, bits, n_, "sorted keys");
+  // ANC of the codes the sort used: a top-k sort orders by the highest k bits only.
+  if (top > 0)
+    for (auto& k : sorted_keys) k >>= (bits - top);
+  so.anc = average_number_of_codes(sorted_keys);
+  if (so.permutation) so.simt = simt_model(bvh_, batch_.rays, so.order.data(), batch_.any_hit(), s_.tracer.variant());
+  return so;
+}
+
+void BatchBench::fill_sorted_cell(CellRecord& c, const Outcome& o, const SortedOrder& so,
+                                  const ProtocolSettings& settings) {
+  const auto &nosort = o.series.at("nosort"), &aa = o.series.at("aa");
+  const auto &encode = o.series.at("encode"), &sort = o.series.at("sort");
+  const std::vector<double>& trace = o.series.at("trace:" + c.access);
+  std::vector<const std::vector<double>*> overhead_stages{&encode, &sort};
+  if (c.access == "permute") overhead_stages.push_back(&o.series.at("permute"));
+  const std::vector<double> overhead = per_round_sums(overhead_stages);
+  c.encode = Timing::of(encode);
+  c.sort = Timing::of(sort);
+  if (c.access == "permute") c.permute = Timing::of(o.series.at("permute"));
+  c.trace = Timing::of(trace);
+  c.nosort_trace = Timing::of(nosort);
+  c.trace_mrays = c.trace.median_ms > 0 ? n_ / (c.trace.median_ms * 1e3) : 0.0;
+  const Estimate measured = ratio_interval(nosort, trace, settings.confidence);
+  // The same rays in the same order as NoSort: whatever the clock says is noise, not a speedup.
+  c.speedup = so.identity ? Estimate{1.0, 1.0, 1.0, measured.n} : measured;
+  c.net_speedup = ratio_interval(nosort, per_round_sums({&overhead, &trace}), settings.confidence);
+  c.overhead_pct = scaled(ratio_interval(overhead, trace, settings.confidence), 100.0);
+  c.aa = ratio_interval(nosort, aa, settings.confidence);
+  c.rounds = o.rounds;
+  c.stopped_by = stop_reason_name(o.stop);
+  c.noise = measured.relative_half_width();
+  c.samples = {{"nosort", nosort}, {"aa", aa}, {"encode", encode}, {"sort", sort}, {"trace", trace}};
+  if (c.access == "permute") c.samples["permute"] = o.series.at("permute");
+  c.anc = so.anc;
+  c.simt_lane_efficiency = so.simt.lane_efficiency;
+  c.simt_distinct_per_visit = so.simt.distinct_nodes_per_visit;
+  c.simt_lane_efficiency_ratio =
+      nosort_simt_.lane_efficiency > 0 ? so.simt.lane_efficiency / nosort_simt_.lane_efficiency : 0;
+  c.simt_distinct_per_visit_ratio = nosort_simt_.distinct_nodes_per_visit > 0
+                                        ? so.simt.distinct_nodes_per_visit / nosort_simt_.distinct_nodes_per_visit
+                                        : 0;
+}
+
 std::vector<CellRecord> BatchBench::measure_sorted(std::vector<CellRecord> cells, Encoder encoder,
                                                    const ProtocolSettings& settings) {
   const unsigned bits = cells.front().bits, top = cells.front().top_bits;
@@ -137,7 +224,7 @@ std::vector<CellRecord> BatchBench::measure_sorted(std::vector<CellRecord> cells
   if (!setup_error_.empty()) return fail_all("failed", "the batch's setup failed: " + setup_error_);
   try {
     s_.encoder.prepare(encoder, bits);
-    cl::Buffer& keys = bits > 32 ? keys64_ : keys32_;
+    const cl::Buffer& keys = bits > 32 ? keys64_ : keys32_;
     RadixSortConfig cfg;
     cfg.key_bits = bits;
     cfg.top_bits = top;
@@ -145,101 +232,30 @@ std::vector<CellRecord> BatchBench::measure_sorted(std::vector<CellRecord> cells
     s_.encoder.enqueue(encoder, bits, rays_, identity_, n_, keys, values_).wait();
     const std::vector<std::uint64_t> unsorted = download_keys(s_.rt, keys, bits, n_, "keys");
 
-    Measurement m;
-    m.prologue = {{"encode", "sort"}, [&] {
-                    const DeviceEncoder::Events ev = s_.encoder.enqueue(encoder, bits, rays_, identity_, n_, keys, values_);
-                    ev.wait();
-                    const SortStats st = s_.sorter.sort(keys, values_, n_, cfg);
-                    return std::vector<double>{ev.ms(), st.ms};
-                  }};
-    m.arms = baseline_arms();
-    for (const CellRecord& c : cells) {
-      if (c.access == "gather") {
-        m.arms.push_back({{"trace:gather"}, [&] {
-                            return std::vector<double>{timed_trace(rays_, values_, gather_hits_, "waiting for the sorted trace")};
-                          }});
-      } else {
-        m.arms.push_back({{"permute", "trace:permute"}, [&] {
-                            cl::Event p = s_.permuter.enqueue(rays_, values_, n_, permuted_rays());
-                            cl_call("waiting for the permute kernel", [&] { p.wait(); });
-                            const double permute_ms = event_ms(p);
-                            return std::vector<double>{permute_ms, timed_trace(permuted_rays(), identity_, permute_hits_,
-                                                                               "waiting for the trace of the permuted rays")};
-                          }});
-      }
-      m.targets.push_back([trace = "trace:" + c.access](const Series& s) { return ratio_interval(s.at("nosort"), s.at(trace)); });
-    }
-    const Outcome o = measure(m, settings);
+    const Outcome o = measure(sorted_measurement(cells, encoder, keys, cfg), settings);
 
     // Checks: the order is a permutation, and each access mode's hits scattered back equal NoSort's.
-    std::vector<std::uint32_t> order;
-    s_.rt.download("sorted order", values_, order, n_);
-    std::vector<std::uint8_t> seen(n_, 0);
-    bool perm = true;
-    for (auto v : order)
-      if (v >= n_ || seen[v]++) {
-        perm = false;
-        break;
-      }
-    bool same_order = perm;
-    for (std::uint32_t i = 0; same_order && i < n_; ++i) same_order = order[i] == i;
-    std::vector<std::uint64_t> sorted_keys = download_keys(s_.rt, keys, bits, n_, "sorted keys");
-    // ANC of the codes the sort used: a top-k sort orders by the highest k bits only.
-    if (top > 0)
-      for (auto& k : sorted_keys) k >>= (bits - top);
-    const double anc = average_number_of_codes(sorted_keys);
-    SimtModel simt;
-    if (perm) simt = simt_model(bvh_, batch_.rays, order.data(), batch_.any_hit(), s_.tracer.variant());
-
-    const auto &nosort = o.series.at("nosort"), &aa = o.series.at("aa");
-    const auto &encode = o.series.at("encode"), &sort = o.series.at("sort");
+    const SortedOrder so = check_order(keys, bits, top);
     for (CellRecord& c : cells) {
       std::vector<RsHit> hits;
       s_.rt.download("sorted hits", c.access == "gather" ? gather_hits_ : permute_hits_, hits, n_);
       std::size_t bad = 0;
-      if (perm)
+      if (so.permutation)
         for (std::uint32_t i = 0; i < n_; ++i)
-          bad += std::memcmp(&hits[i], &nosort_hits_host_[order[i]], sizeof(RsHit)) != 0;
-      c.order_is_permutation = perm;
-      c.hits_match_nosort = perm && bad == 0;
-      c.same_order_as_nosort = same_order;
+          bad += std::memcmp(&hits[i], &nosort_hits_host_[so.order[i]], sizeof(RsHit)) != 0;
+      c.order_is_permutation = so.permutation;
+      c.hits_match_nosort = so.permutation && bad == 0;
+      c.same_order_as_nosort = so.identity;
       c.keys_hash = fnv1a_hex(unsorted.data(), unsorted.size() * sizeof(std::uint64_t));
-      c.order_hash = fnv1a_hex(order.data(), order.size() * sizeof(std::uint32_t));
-      if (!c.hits_match_nosort) {
+      c.order_hash = fnv1a_hex(so.order.data(), so.order.size() * sizeof(std::uint32_t));
+      if (c.hits_match_nosort) {
+        fill_sorted_cell(c, o, so, settings);
+      } else {
         c.status = "failed";
-        c.error = perm ? fmt::format("{} of {} hits differ from NoSort after scattering back ({})", bad, n_, c.access)
-                       : "the sorted order is not a permutation of the rays";
-        continue;
+        c.error = so.permutation
+                      ? fmt::format("{} of {} hits differ from NoSort after scattering back ({})", bad, n_, c.access)
+                      : "the sorted order is not a permutation of the rays";
       }
-      const std::vector<double>& trace = o.series.at("trace:" + c.access);
-      std::vector<const std::vector<double>*> overhead_stages{&encode, &sort};
-      if (c.access == "permute") overhead_stages.push_back(&o.series.at("permute"));
-      const std::vector<double> overhead = per_round_sums(overhead_stages);
-      c.encode = Timing::of(encode);
-      c.sort = Timing::of(sort);
-      if (c.access == "permute") c.permute = Timing::of(o.series.at("permute"));
-      c.trace = Timing::of(trace);
-      c.nosort_trace = Timing::of(nosort);
-      c.trace_mrays = c.trace.median_ms > 0 ? n_ / (c.trace.median_ms * 1e3) : 0.0;
-      const Estimate measured = ratio_interval(nosort, trace, settings.confidence);
-      // The same rays in the same order as NoSort: whatever the clock says is noise, not a speedup.
-      c.speedup = same_order ? Estimate{1.0, 1.0, 1.0, measured.n} : measured;
-      c.net_speedup = ratio_interval(nosort, per_round_sums({&overhead, &trace}), settings.confidence);
-      c.overhead_pct = scaled(ratio_interval(overhead, trace, settings.confidence), 100.0);
-      c.aa = ratio_interval(nosort, aa, settings.confidence);
-      c.rounds = o.rounds;
-      c.stopped_by = stop_reason_name(o.stop);
-      c.noise = measured.relative_half_width();
-      c.samples = {{"nosort", nosort}, {"aa", aa}, {"encode", encode}, {"sort", sort}, {"trace", trace}};
-      if (c.access == "permute") c.samples["permute"] = o.series.at("permute");
-      c.anc = anc;
-      c.simt_lane_efficiency = simt.lane_efficiency;
-      c.simt_distinct_per_visit = simt.distinct_nodes_per_visit;
-      c.simt_lane_efficiency_ratio =
-          nosort_simt_.lane_efficiency > 0 ? simt.lane_efficiency / nosort_simt_.lane_efficiency : 0;
-      c.simt_distinct_per_visit_ratio = nosort_simt_.distinct_nodes_per_visit > 0
-                                            ? simt.distinct_nodes_per_visit / nosort_simt_.distinct_nodes_per_visit
-                                            : 0;
     }
   } catch (const TimedOut& t) {
     return fail_all("timeout", t.what());

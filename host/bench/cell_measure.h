@@ -64,6 +64,21 @@ class BatchBench {
   // The two NoSort arms every cell's rounds hold: "nosort" (the baseline) and "aa" (the same trace
   // again, the A/A check).
   std::vector<Arm> baseline_arms();
+  // The rounds of sorted cells: encode + sort as the prologue, the baseline arms, and one trace arm
+  // per access mode.
+  Measurement sorted_measurement(const std::vector<CellRecord>& cells, Encoder encoder, const cl::Buffer& keys,
+                                 const RadixSortConfig& cfg);
+  // What the sort left after the rounds: the order, whether it is a permutation and the identity,
+  // and its ANC and SIMT model.
+  struct SortedOrder {
+    std::vector<std::uint32_t> order;
+    bool permutation = false, identity = false;
+    double anc = 0.0;
+    SimtModel simt;
+  };
+  SortedOrder check_order(const cl::Buffer& keys, unsigned bits, unsigned top);
+  // The figures of a checked cell from its rounds.
+  void fill_sorted_cell(CellRecord& c, const Outcome& o, const SortedOrder& so, const ProtocolSettings& settings);
 
   Stages s_;
   const Bvh& bvh_;

@@ -48,16 +48,17 @@ struct Input {
 
 }  // namespace
 
-MergeSummary merge_result_sets(const std::vector<std::string>& inputs, const std::string& out,
-                               const std::string& command) {
-  if (inputs.empty()) throw Error("raysort merge: name the shards' result folders to merge, e.g. shards/* -o merged");
-  std::error_code ec;
-  if (fs::exists(out, ec) && !(fs::is_directory(out, ec) && fs::is_empty(out, ec)))
-    throw Error(fmt::format("-o {}: the folder already exists and is not empty; merge into a new folder (merge never "
-                            "overwrites results)",
-                            out));
+namespace {
 
-  std::vector<std::string> problems;
+// One line per problem, after the folder merge would write.
+[[noreturn]] void refuse(const std::string& out, const std::vector<std::string>& problems) {
+  std::string text = fmt::format("cannot merge into {}:", out);
+  for (const auto& p : problems) text += "\n  - " + p;
+  throw Error(text);
+}
+
+// The inputs that are shards; what is not (or cannot be read) goes to problems.
+std::vector<Input> load_shards(const std::vector<std::string>& inputs, std::vector<std::string>& problems) {
   std::vector<Input> sets;
   for (const auto& dir : inputs) {
     try {
@@ -75,8 +76,12 @@ MergeSummary merge_result_sets(const std::vector<std::string>& inputs, const std
       problems.push_back(e.what());
     }
   }
+  return sets;
+}
 
-  // Configuration: everything must match the first shard.
+// The shards must be one run's: the same matrix, split, plan, device and build, each shard once.
+// Returns shard index -> input folder.
+std::map<unsigned, std::string> check_one_run(const std::vector<Input>& sets, std::vector<std::string>& problems) {
   for (std::size_t i = 1; i < sets.size(); ++i) {
     const Input& ref = sets[0];
     const Input& in = sets[i];
@@ -108,18 +113,17 @@ MergeSummary merge_result_sets(const std::vector<std::string>& inputs, const std
       problems.push_back(fmt::format("{} and {} are both shard {}/{}; pass each shard once", it->second, in.dir,
                                      in.index, in.count));
   }
-  if (!problems.empty() || sets.empty()) {
-    std::string text = fmt::format("cannot merge into {}:", out);
-    for (const auto& p : problems) text += "\n  - " + p;
-    throw Error(text);
-  }
+  return shard_dir;
+}
 
-  // Coverage: every planned cell exactly once (or absent: its batch does not exist).
+// Every planned cell exactly once (or absent: its batch does not exist); returns the cells, and
+// the absent ids in `absent`.
+std::vector<CellRecord> collect_cells(const std::vector<Input>& sets, const std::map<unsigned, std::string>& shard_dir,
+                                      std::set<std::string>& absent, std::vector<std::string>& problems) {
   const nlohmann::json& plan = sets[0].set.meta()["shard"].value("plan", nlohmann::json::object());
   std::map<std::string, const Input*> owner;
   std::map<std::pair<std::string, std::string>, std::vector<std::string>> duplicates;  // (a, b) -> cells
   std::map<std::string, std::vector<std::string>> unplanned;                           // dir -> cells
-  std::set<std::string> absent;
   std::vector<CellRecord> cells;
   for (const auto& in : sets) {
     for (const auto& id : in.set.meta().value("absent_cells", std::vector<std::string>{})) absent.insert(id);
@@ -166,13 +170,13 @@ MergeSummary merge_result_sets(const std::vector<std::string>& inputs, const std
                                    in.dir, shard, count, ids.size(), planned_per_shard[shard], ids[0],
                                    in.set.meta().value("command", "raysort run ... --shard i/N")));
   }
-  if (!problems.empty()) {
-    std::string text = fmt::format("cannot merge into {}:", out);
-    for (const auto& p : problems) text += "\n  - " + p;
-    throw Error(text);
-  }
+  return cells;
+}
 
-  // The merged meta: the first shard's, without what belonged to one shard, plus where it came from.
+// The merged meta: the first shard's, without what belonged to one shard, plus where it came from.
+nlohmann::json merged_meta(const std::vector<Input>& sets, const std::map<unsigned, std::string>& shard_dir,
+                           const std::set<std::string>& absent, const std::string& command) {
+  const unsigned count = sets[0].count;
   nlohmann::json meta = sets[0].set.meta();
   nlohmann::json from = nlohmann::json::array();
   for (const auto& [index, dir] : shard_dir) {
@@ -190,7 +194,12 @@ MergeSummary merge_result_sets(const std::vector<std::string>& inputs, const std
   meta["sharding"] = {{"count", count}, {"plan_hash", sets[0].set.meta()["shard"].value("plan_hash", "")}};
   if (!absent.empty()) meta["absent_cells"] = std::vector<std::string>(absent.begin(), absent.end());
 
-  // Built beside OUT (same file system, so the rename is atomic), then renamed into place.
+  return meta;
+}
+
+// Built beside OUT (same file system, so the rename is atomic), then renamed into place.
+void write_merged(const std::string& out, const nlohmann::json& meta, const std::vector<CellRecord>& cells) {
+  std::error_code ec;
   fs::path target = fs::absolute(fs::path(out).lexically_normal());
   if (target.filename().empty()) target = target.parent_path();  // "merged/" names the folder "merged"
   const fs::path parent = target.parent_path();
@@ -211,11 +220,31 @@ MergeSummary merge_result_sets(const std::vector<std::string>& inputs, const std
     fs::remove_all(tmp, ec);
     throw;
   }
+}
+
+}  // namespace
+
+MergeSummary merge_result_sets(const std::vector<std::string>& inputs, const std::string& out,
+                               const std::string& command) {
+  if (inputs.empty()) throw Error("raysort merge: name the shards' result folders to merge, e.g. shards/* -o merged");
+  std::error_code ec;
+  if (fs::exists(out, ec) && !(fs::is_directory(out, ec) && fs::is_empty(out, ec)))
+    throw Error(fmt::format("-o {}: the folder already exists and is not empty; merge into a new folder (merge never "
+                            "overwrites results)",
+                            out));
+  std::vector<std::string> problems;
+  const std::vector<Input> sets = load_shards(inputs, problems);
+  const std::map<unsigned, std::string> shard_dir = check_one_run(sets, problems);
+  if (!problems.empty() || sets.empty()) refuse(out, problems);
+  std::set<std::string> absent;
+  const std::vector<CellRecord> cells = collect_cells(sets, shard_dir, absent, problems);
+  if (!problems.empty()) refuse(out, problems);
+  write_merged(out, merged_meta(sets, shard_dir, absent, command), cells);
   MergeSummary s;
   s.cells = cells.size();
   s.absent = absent.size();
   for (const auto& c : cells) s.failed += !c.ok();
-  s.shard_count = count;
+  s.shard_count = sets[0].count;
   return s;
 }
 

@@ -149,27 +149,31 @@ std::string facet_title(const std::string& variant, const std::string& access) {
   return (variant != "robust" ? ", " + variant : std::string()) + (access != "gather" ? ", " + access : std::string());
 }
 
-}  // namespace
-
-std::vector<std::string> write_plots(const std::vector<CellRecord>& cells, const std::string& dir) {
-  std::vector<std::string> written;
+// What both kinds of plot read: the plotted cells' encoders (one colour each) and scenes (one
+// marker shape each), in the order they come.
+struct PlotLegend {
   std::vector<std::string> encoders, scenes;
-  std::set<std::tuple<std::string, std::string, std::string, std::string>> scene_batch_facets;  // scene, batch, variant, access
-  std::set<std::tuple<std::string, unsigned, std::string, std::string>> batch_facets;          // batch, bits, variant, access
-  for (auto& c : cells) {
-    if (!plotted(c)) continue;
-    if (std::find(encoders.begin(), encoders.end(), c.encoder) == encoders.end()) encoders.push_back(c.encoder);
-    if (std::find(scenes.begin(), scenes.end(), c.scene) == scenes.end()) scenes.push_back(c.scene);
-    scene_batch_facets.insert({c.scene, c.batch, c.variant, c.access});
-    if (c.top_bits == 0) batch_facets.insert({c.batch, c.bits, c.variant, c.access});
+  explicit PlotLegend(const std::vector<CellRecord>& cells) {
+    for (auto& c : cells) {
+      if (!plotted(c)) continue;
+      if (std::find(encoders.begin(), encoders.end(), c.encoder) == encoders.end()) encoders.push_back(c.encoder);
+      if (std::find(scenes.begin(), scenes.end(), c.scene) == scenes.end()) scenes.push_back(c.scene);
+    }
   }
-  auto shape_of = [&](const std::string& scene) {
+  int shape_of(const std::string& scene) const {
     return static_cast<int>(std::find(scenes.begin(), scenes.end(), scene) - scenes.begin());
-  };
+  }
+};
 
-  // Speedup against key bits with 95 % intervals, per scene, batch, variant and access mode with
-  // more than one key length.
-  for (auto& [scene, batch, variant, access] : scene_batch_facets) {
+// Speedup against key bits with 95 % intervals, per scene, batch, variant and access mode with
+// more than one key length.
+void speed_vs_bits_plots(const std::vector<CellRecord>& cells, const PlotLegend& legend, const std::string& dir,
+                         std::vector<std::string>& written) {
+  const auto& encoders = legend.encoders;
+  std::set<std::tuple<std::string, std::string, std::string, std::string>> facets;  // scene, batch, variant, access
+  for (auto& c : cells)
+    if (plotted(c)) facets.insert({c.scene, c.batch, c.variant, c.access});
+  for (auto& [scene, batch, variant, access] : facets) {
     std::map<std::string, std::map<unsigned, const CellRecord*>> series;
     std::set<unsigned> bits;
     double ymax = 1.0, ymin = 1.0;
@@ -214,9 +218,17 @@ std::vector<std::string> write_plots(const std::vector<CellRecord>& cells, const
     if (ch.write((std::filesystem::path(dir) / name).string())) written.push_back(name);
   }
 
-  // Overhead against gain, per batch, key length, variant and access mode: colour = encoder,
-  // shape = scene, error bar = the speedup's 95 % interval.
-  for (auto& [batch, bits, variant, access] : batch_facets) {
+}
+
+// Overhead against gain, per batch, key length, variant and access mode: colour = encoder, shape =
+// scene, error bar = the speedup's 95 % interval.
+void overhead_vs_gain_plots(const std::vector<CellRecord>& cells, const PlotLegend& legend, const std::string& dir,
+                            std::vector<std::string>& written) {
+  const auto& encoders = legend.encoders;
+  std::set<std::tuple<std::string, unsigned, std::string, std::string>> facets;  // batch, bits, variant, access
+  for (auto& c : cells)
+    if (plotted(c) && c.top_bits == 0) facets.insert({c.batch, c.bits, c.variant, c.access});
+  for (auto& [batch, bits, variant, access] : facets) {
     auto in_facet = [&](const CellRecord& c) {
       return plotted(c) && c.batch == batch && c.bits == bits && c.top_bits == 0 && c.variant == variant &&
              c.access == access;
@@ -256,15 +268,15 @@ std::vector<std::string> write_plots(const std::vector<CellRecord>& cells, const
       for (auto& c : cells)
         if (in_facet(c) && c.encoder == e) {
           if (c.speedup.has_interval()) ch.error_bar(overhead_x(c), c.speedup.lo, c.speedup.hi, col);
-          ch.marker(overhead_x(c), c.speedup.value, col, shape_of(c.scene));
+          ch.marker(overhead_x(c), c.speedup.value, col, legend.shape_of(c.scene));
         }
       ch.text(900 - 160, legend_y, e, 14, col);
       legend_y += 20;
       ++i;
     }
     legend_y += 10;
-    for (auto& sc : scenes) {
-      ch.marker_px(900 - 155, legend_y - 5, Chart::kBlack, shape_of(sc));
+    for (auto& sc : legend.scenes) {
+      ch.marker_px(900 - 155, legend_y - 5, Chart::kBlack, legend.shape_of(sc));
       ch.text(900 - 143, legend_y, sc, 13);
       legend_y += 18;
     }
@@ -272,6 +284,15 @@ std::vector<std::string> write_plots(const std::vector<CellRecord>& cells, const
     std::string name = fmt::format("overhead-vs-gain-{}-{}b{}.png", file_safe(batch), bits, facet_suffix(variant, access));
     if (ch.write((std::filesystem::path(dir) / name).string())) written.push_back(name);
   }
+}
+
+}  // namespace
+
+std::vector<std::string> write_plots(const std::vector<CellRecord>& cells, const std::string& dir) {
+  std::vector<std::string> written;
+  const PlotLegend legend(cells);
+  speed_vs_bits_plots(cells, legend, dir, written);
+  overhead_vs_gain_plots(cells, legend, dir, written);
   return written;
 }
 

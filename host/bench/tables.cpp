@@ -116,9 +116,41 @@ std::string noise_section(const std::vector<CellRecord>& cells) {
   return md;
 }
 
-}  // namespace
+// What every section of the tables reads: the cells, the axes in the matrix's order, and the view
+// the main tables show.
+struct TableContext {
+  const std::vector<CellRecord>& cells;
+  View main_view;
+  std::vector<std::string> scenes, batches, encoders, accesses;
+  std::vector<unsigned> bits;
+  unsigned overview_bits = 0;
 
-std::string render_tables(const std::vector<CellRecord>& cells, const nlohmann::json& meta) {
+  TableContext(const std::vector<CellRecord>& all, const nlohmann::json& meta) : cells(all) {
+    main_view = {first_of(meta, "variant", cells.empty() ? "robust" : cells.front().variant),
+                 first_of(meta, "access", "gather")};
+    scenes = ordered(cells, meta, "scenes", &CellRecord::scene);
+    batches = ordered(cells, meta, "batches", &CellRecord::batch);
+    encoders = ordered(cells, meta, "encoders", &CellRecord::encoder);
+    std::set<std::string> access_set;
+    std::set<unsigned> bit_set;
+    for (auto& c : cells)
+      if (c.encoder != kBaselineEncoder) {
+        if (c.top_bits == 0) bit_set.insert(c.bits);
+        access_set.insert(c.access);
+      }
+    for (const std::string a : {"gather", "permute"})
+      if (access_set.count(a)) accesses.push_back(a);
+    if (accesses.empty()) accesses.push_back(main_view.access);
+    bits.assign(bit_set.begin(), bit_set.end());
+    overview_bits = bit_set.count(32) ? 32 : (bits.empty() ? 0 : bits.back());
+  }
+  const CellRecord* at(const View& v, const std::string& scene, const std::string& batch, const std::string& encoder,
+                       unsigned b) const {
+    return find(cells, v, scene, batch, encoder, b);
+  }
+};
+
+std::string introduction(const nlohmann::json& meta) {
   std::string md = "# raysort results\n\n";
   if (meta.contains("device"))
     md += fmt::format("Device: {} ({}, driver {}). ", meta["device"].value("name", "?"), meta["device"].value("platform", "?"),
@@ -136,48 +168,32 @@ std::string render_tables(const std::vector<CellRecord>& cells, const nlohmann::
         "(docs/measurement.md): each round runs encode + sort, then, in a random order, the NoSort trace, a second "
         "NoSort trace (the A/A check) and the cell's own trace(s). Speedup = the typical per-round NoSort trace / "
         "trace (Hodges–Lehmann estimate of the log ratios) with its exact 95 % signed-rank interval in brackets; net = "
-        "NoSort trace / (encode + sort + permute + trace), per round likewise. **Bold**: a column's best speedup whose interval does not overlap the second best's. "
-        "*Italic*: the interval contains 1. \"= NoSort\": the sorted order is the generation order, so no speedup is "
-        "reported. A cell whose sorted trace does not reproduce the NoSort hits exactly is listed under failed cells "
-        "and has no speed.\n\n";
-  md += noise_section(cells);
+        "NoSort trace / (encode + sort + permute + trace), per round likewise. **Bold**: a column's best speedup whose "
+        "interval does not overlap the second best's. *Italic*: the interval contains 1. \"= NoSort\": the sorted "
+        "order is the generation order, so no speedup is reported. A cell whose sorted trace does not reproduce the "
+        "NoSort hits exactly is listed under failed cells and has no speed.\n\n";
+  return md;
+}
 
-  View main_view{first_of(meta, "variant", cells.empty() ? "robust" : cells.front().variant),
-                 first_of(meta, "access", "gather")};
-  auto scenes = ordered(cells, meta, "scenes", &CellRecord::scene);
-  auto batches = ordered(cells, meta, "batches", &CellRecord::batch);
-  auto encoders = ordered(cells, meta, "encoders", &CellRecord::encoder);
-  std::set<std::string> access_set;
-  std::set<unsigned> bit_set;
-  for (auto& c : cells)
-    if (c.encoder != kBaselineEncoder) {
-      if (c.top_bits == 0) bit_set.insert(c.bits);
-      access_set.insert(c.access);
-    }
-  std::vector<std::string> accesses;
-  for (const std::string a : {"gather", "permute"})
-    if (access_set.count(a)) accesses.push_back(a);
-  if (accesses.empty()) accesses.push_back(main_view.access);
-  std::vector<unsigned> bits(bit_set.begin(), bit_set.end());
-  const unsigned overview_bits = bit_set.count(32) ? 32 : (bits.empty() ? 0 : bits.back());
-
-  // Trace speed per batch and access mode (Tables 2-4).
-  for (auto& access : accesses) {
-    const View view{main_view.variant, access};
-    for (auto& batch : batches) {
+// Trace speed per batch and access mode (Tables 2-4).
+std::string trace_speed_sections(const TableContext& t) {
+  std::string md;
+  for (auto& access : t.accesses) {
+    const View view{t.main_view.variant, access};
+    for (auto& batch : t.batches) {
       md += fmt::format("## Trace speed, {} rays, {}-bit keys, access {}: MRays/s (speedup [95 % interval])\n\n", batch,
-                        overview_bits, access);
-      md += header("encoder", scenes);
+                        t.overview_bits, access);
+      md += header("encoder", t.scenes);
       std::map<std::string, const CellRecord*> best;
-      for (auto& s : scenes) {
+      for (auto& s : t.scenes) {
         std::vector<const CellRecord*> column;
-        for (auto& e : encoders) column.push_back(find(cells, view, s, batch, e, overview_bits));
+        for (auto& e : t.encoders) column.push_back(t.at(view, s, batch, e, t.overview_bits));
         best[s] = significant_best(column);
       }
-      for (auto& e : encoders) {
+      for (auto& e : t.encoders) {
         md += fmt::format("| {} |", e);
-        for (auto& s : scenes) {
-          auto* c = find(cells, view, s, batch, e, overview_bits);
+        for (auto& s : t.scenes) {
+          auto* c = t.at(view, s, batch, e, t.overview_bits);
           if (!c) md += " – |";
           else if (!c->ok()) md += " failed |";
           else if (c->encoder == kBaselineEncoder)
@@ -190,20 +206,24 @@ std::string render_tables(const std::vector<CellRecord>& cells, const nlohmann::
       md += "\n";
     }
   }
+  return md;
+}
 
-  // Overhead (Table 5).
-  for (auto& access : accesses) {
-    const View view{main_view.variant, access};
-    for (auto& batch : batches) {
+// Overhead (Table 5).
+std::string overhead_sections(const TableContext& t) {
+  std::string md;
+  for (auto& access : t.accesses) {
+    const View view{t.main_view.variant, access};
+    for (auto& batch : t.batches) {
       md += fmt::format("## Overhead, {} rays, {}-bit keys, access {}: encode + sort{} ms (% of trace) → net speedup "
                         "[95 % interval]\n\n",
-                        batch, overview_bits, access, access == "permute" ? " + permute" : "");
-      md += header("encoder", scenes);
-      for (auto& e : encoders) {
+                        batch, t.overview_bits, access, access == "permute" ? " + permute" : "");
+      md += header("encoder", t.scenes);
+      for (auto& e : t.encoders) {
         if (e == kBaselineEncoder) continue;
         md += fmt::format("| {} |", e);
-        for (auto& s : scenes) {
-          auto* c = find(cells, view, s, batch, e, overview_bits);
+        for (auto& s : t.scenes) {
+          auto* c = t.at(view, s, batch, e, t.overview_bits);
           if (!c) md += " – |";
           else if (!c->ok()) md += " failed |";
           else
@@ -216,156 +236,172 @@ std::string render_tables(const std::vector<CellRecord>& cells, const nlohmann::
       md += "\n";
     }
   }
+  return md;
+}
 
-  // Gather against permute, when both ran: the same order read two ways.
-  if (accesses.size() > 1) {
-    md += fmt::format("## Gather against permute, {}-bit keys: trace speedup, permute ms, net speedup\n\n"
-                      "Each cell's speedups are paired with the NoSort traces of its own rounds; the gather and "
-                      "permute cells of one encoder share their rounds.\n\n"
-                      "| scene | batch | encoder | speedup gather | speedup permute | permute ms (% of trace) | net "
-                      "gather | net permute |\n|---|---|---|---:|---:|---:|---:|---:|\n",
-                      overview_bits);
-    const View g{main_view.variant, "gather"}, p{main_view.variant, "permute"};
-    for (auto& s : scenes)
-      for (auto& batch : batches)
-        for (auto& e : encoders) {
-          if (e == kBaselineEncoder) continue;
-          auto* cg = find(cells, g, s, batch, e, overview_bits);
-          auto* cp = find(cells, p, s, batch, e, overview_bits);
-          if (!cg || !cp || !cg->ok() || !cp->ok()) continue;
-          md += fmt::format("| {} | {} | {} | {} | {} | {:.2f} ({:.1f}%) | {} | {} |\n", s, batch, e,
-                            speedup_text(*cg, false), speedup_text(*cp, false), cp->permute.median_ms,
-                            cp->trace.median_ms > 0 ? 100.0 * cp->permute.median_ms / cp->trace.median_ms : 0.0,
-                            interval_text(cg->net_speedup), interval_text(cp->net_speedup));
-        }
-    md += "\n";
-  }
+// Gather against permute, when both ran: the same order read two ways.
+std::string gather_permute_section(const TableContext& t) {
+  if (t.accesses.size() < 2) return "";
+  std::string md = fmt::format(
+      "## Gather against permute, {}-bit keys: trace speedup, permute ms, net speedup\n\n"
+      "Each cell's speedups are paired with the NoSort traces of its own rounds; the gather and permute cells of one "
+      "encoder share their rounds.\n\n"
+      "| scene | batch | encoder | speedup gather | speedup permute | permute ms (% of trace) | net gather | net "
+      "permute |\n|---|---|---|---:|---:|---:|---:|---:|\n",
+      t.overview_bits);
+  const View g{t.main_view.variant, "gather"}, p{t.main_view.variant, "permute"};
+  for (auto& s : t.scenes)
+    for (auto& batch : t.batches)
+      for (auto& e : t.encoders) {
+        if (e == kBaselineEncoder) continue;
+        auto* cg = t.at(g, s, batch, e, t.overview_bits);
+        auto* cp = t.at(p, s, batch, e, t.overview_bits);
+        if (!cg || !cp || !cg->ok() || !cp->ok()) continue;
+        md += fmt::format("| {} | {} | {} | {} | {} | {:.2f} ({:.1f}%) | {} | {} |\n", s, batch, e,
+                          speedup_text(*cg, false), speedup_text(*cp, false), cp->permute.median_ms,
+                          cp->trace.median_ms > 0 ? 100.0 * cp->permute.median_ms / cp->trace.median_ms : 0.0,
+                          interval_text(cg->net_speedup), interval_text(cp->net_speedup));
+      }
+  return md + "\n";
+}
 
-  // Key length (Tables 6 and 7): per scene and batch, when several key lengths ran.
-  if (bits.size() > 1) {
-    std::vector<std::string> bit_cols;
-    for (auto b : bits) bit_cols.push_back(fmt::format("{} bits", b));
-    for (auto& s : scenes)
-      for (auto& batch : batches) {
-        bool any = false;
-        for (auto& e : encoders)
-          for (auto b : bits) any |= find(cells, main_view, s, batch, e, b) && e != kBaselineEncoder;
-        if (!any) continue;
-        md += fmt::format("## Key length, {} {}, access {}: MRays/s (speedup [95 % interval]) | ANC\n\n", s, batch,
-                          main_view.access);
-        md += header("encoder", bit_cols);
-        for (auto& e : encoders) {
-          if (e == kBaselineEncoder) continue;
-          md += fmt::format("| {} |", e);
-          for (auto b : bits) {
-            auto* c = find(cells, main_view, s, batch, e, b);
-            if (!c) md += " – |";
-            else if (!c->ok()) md += " failed |";
-            else md += fmt::format(" {:.2f} ({}) \\| {:.2f} |", c->trace_mrays, speedup_text(*c, false), c->anc);
-          }
-          md += "\n";
+// Key length (Tables 6 and 7): per scene and batch, when several key lengths ran.
+std::string key_length_sections(const TableContext& t) {
+  if (t.bits.size() < 2) return "";
+  std::string md;
+  std::vector<std::string> bit_cols;
+  for (auto b : t.bits) bit_cols.push_back(fmt::format("{} bits", b));
+  for (auto& s : t.scenes)
+    for (auto& batch : t.batches) {
+      bool any = false;
+      for (auto& e : t.encoders)
+        for (auto b : t.bits) any |= t.at(t.main_view, s, batch, e, b) && e != kBaselineEncoder;
+      if (!any) continue;
+      md += fmt::format("## Key length, {} {}, access {}: MRays/s (speedup [95 % interval]) | ANC\n\n", s, batch,
+                        t.main_view.access);
+      md += header("encoder", bit_cols);
+      for (auto& e : t.encoders) {
+        if (e == kBaselineEncoder) continue;
+        md += fmt::format("| {} |", e);
+        for (auto b : t.bits) {
+          auto* c = t.at(t.main_view, s, batch, e, b);
+          if (!c) md += " – |";
+          else if (!c->ok()) md += " failed |";
+          else md += fmt::format(" {:.2f} ({}) \\| {:.2f} |", c->trace_mrays, speedup_text(*c, false), c->anc);
         }
         md += "\n";
       }
-  }
-
-  // ANC table (Table 7) at every key length, all scenes.
-  md += "## ANC: average number of distinct keys per 32 consecutive sorted rays\n\n";
-  {
-    std::vector<std::string> cols;
-    for (auto& s : scenes)
-      for (auto& batch : batches)
-        for (auto b : bits) cols.push_back(fmt::format("{} {} {}b", s, batch, b));
-    md += header("encoder", cols);
-    for (auto& e : encoders) {
-      if (e == kBaselineEncoder) continue;
-      md += fmt::format("| {} |", e);
-      for (auto& s : scenes)
-        for (auto& batch : batches)
-          for (auto b : bits) {
-            auto* c = find(cells, main_view, s, batch, e, b);
-            md += c && c->ok() ? fmt::format(" {:.2f} |", c->anc) : " – |";
-          }
       md += "\n";
     }
-    md += "\n";
-  }
+  return md;
+}
 
-  // SIMT model.
-  md += fmt::format(
-      "## SIMT model, {}-bit keys: lane efficiency (ratio vs NoSort) / distinct nodes per visit (ratio vs NoSort)\n\n"
-      "Device-independent: what a 32-wide GPU warp would see in this trace order (DESIGN.md §3).\n\n",
-      overview_bits);
-  {
-    std::vector<std::string> cols;
-    for (auto& s : scenes)
-      for (auto& batch : batches) cols.push_back(s + " " + batch);
-    md += header("encoder", cols);
-    for (auto& e : encoders) {
-      md += fmt::format("| {} |", e);
-      for (auto& s : scenes)
-        for (auto& batch : batches) {
-          auto* c = find(cells, main_view, s, batch, e, overview_bits);
-          md += c && c->ok() ? fmt::format(" {:.3f} ({:.2f}) / {:.3f} ({:.2f}) |", c->simt_lane_efficiency,
-                                           c->simt_lane_efficiency_ratio, c->simt_distinct_per_visit,
-                                           c->simt_distinct_per_visit_ratio)
-                             : " – |";
+// The deterministic figures: ANC at every key length (Table 7) and the SIMT model.
+std::string deterministic_sections(const TableContext& t) {
+  std::string md = "## ANC: average number of distinct keys per 32 consecutive sorted rays\n\n";
+  std::vector<std::string> cols;
+  for (auto& s : t.scenes)
+    for (auto& batch : t.batches)
+      for (auto b : t.bits) cols.push_back(fmt::format("{} {} {}b", s, batch, b));
+  md += header("encoder", cols);
+  for (auto& e : t.encoders) {
+    if (e == kBaselineEncoder) continue;
+    md += fmt::format("| {} |", e);
+    for (auto& s : t.scenes)
+      for (auto& batch : t.batches)
+        for (auto b : t.bits) {
+          auto* c = t.at(t.main_view, s, batch, e, b);
+          md += c && c->ok() ? fmt::format(" {:.2f} |", c->anc) : " – |";
         }
-      md += "\n";
-    }
     md += "\n";
   }
-
-  // Top-k sorting, when run.
-  bool any_topk = std::any_of(cells.begin(), cells.end(), [](const CellRecord& c) { return c.top_bits > 0; });
-  if (any_topk) {
-    md += "## Top-k sorting: sort by the highest k key bits only\n\n";
-    md += "| cell | sort ms | trace MRays/s (speedup [95 % interval]) | net | ANC |\n|---|---:|---:|---:|---:|\n";
-    for (auto& c : cells)
-      if (c.top_bits > 0 && c.ok())
-        md += fmt::format("| {} | {:.2f} | {:.2f} ({}) | {} | {:.2f} |\n", c.id(), c.sort.median_ms, c.trace_mrays,
-                          speedup_text(c, false), interval_text(c.net_speedup), c.anc);
-    md += "\n";
-  }
-
-  // Robust vs fast (issue 7): what watertightness costs, and what the fast variant leaks.
-  std::set<std::string> variants;
-  for (auto& c : cells) variants.insert(c.variant);
-  if (variants.count("robust") && variants.count("fast")) {
-    md += "## Robust vs fast trace: what watertight intersection costs\n\n"
-          "NoSort trace MRays/s of each variant on the same rays, their ratio, and leaks per million rays "
-          "(rays the variant misses that the other one hits: the fast variant's leaks through shared edges and "
-          "vertices). Best = the encoder with the highest speedup at the overview key length in that variant. The "
-          "two variants' NoSort cells ran at different times, so their ratio carries no interval.\n\n"
-          "| scene | batch | fast MRays/s | robust MRays/s | robust/fast | fast leaks/M | robust leaks/M | best fast | best robust |\n"
-          "|---|---|---:|---:|---:|---:|---:|---|---|\n";
-    for (auto& s : scenes)
-      for (auto& batch : batches) {
-        auto* f = find(cells, {"fast", main_view.access}, s, batch, kBaselineEncoder, 0);
-        auto* r = find(cells, {"robust", main_view.access}, s, batch, kBaselineEncoder, 0);
-        if (!f || !r || !f->ok() || !r->ok()) continue;
-        auto best = [&](const std::string& v) {
-          const CellRecord* b = nullptr;
-          for (auto& e : encoders)
-            if (auto* c = find(cells, {v, main_view.access}, s, batch, e, overview_bits);
-                c && c->ok() && e != kBaselineEncoder && !c->same_order_as_nosort)
-              if (!b || c->speedup.value > b->speedup.value) b = c;
-          return b ? fmt::format("{} {}", b->encoder, speedup_text(*b, false)) : std::string("–");
-        };
-        md += fmt::format("| {} | {} | {:.2f} | {:.2f} | {:.3f} | {:.1f} | {:.1f} | {} | {} |\n", s, batch, f->trace_mrays,
-                          r->trace_mrays, f->trace_mrays > 0 ? r->trace_mrays / f->trace_mrays : 0.0, f->leaks_per_million,
-                          r->leaks_per_million, best("fast"), best("robust"));
+  md += fmt::format(
+      "\n## SIMT model, {}-bit keys: lane efficiency (ratio vs NoSort) / distinct nodes per visit (ratio vs NoSort)\n\n"
+      "Device-independent: what a 32-wide GPU warp would see in this trace order (DESIGN.md §3).\n\n",
+      t.overview_bits);
+  cols.clear();
+  for (auto& s : t.scenes)
+    for (auto& batch : t.batches) cols.push_back(s + " " + batch);
+  md += header("encoder", cols);
+  for (auto& e : t.encoders) {
+    md += fmt::format("| {} |", e);
+    for (auto& s : t.scenes)
+      for (auto& batch : t.batches) {
+        auto* c = t.at(t.main_view, s, batch, e, t.overview_bits);
+        md += c && c->ok() ? fmt::format(" {:.3f} ({:.2f}) / {:.3f} ({:.2f}) |", c->simt_lane_efficiency,
+                                         c->simt_lane_efficiency_ratio, c->simt_distinct_per_visit,
+                                         c->simt_distinct_per_visit_ratio)
+                           : " – |";
       }
     md += "\n";
   }
+  return md + "\n";
+}
 
+// Top-k sorting, when run.
+std::string top_k_section(const TableContext& t) {
+  if (std::none_of(t.cells.begin(), t.cells.end(), [](const CellRecord& c) { return c.top_bits > 0; })) return "";
+  std::string md = "## Top-k sorting: sort by the highest k key bits only\n\n"
+                   "| cell | sort ms | trace MRays/s (speedup [95 % interval]) | net | ANC |\n|---|---:|---:|---:|---:|\n";
+  for (auto& c : t.cells)
+    if (c.top_bits > 0 && c.ok())
+      md += fmt::format("| {} | {:.2f} | {:.2f} ({}) | {} | {:.2f} |\n", c.id(), c.sort.median_ms, c.trace_mrays,
+                        speedup_text(c, false), interval_text(c.net_speedup), c.anc);
+  return md + "\n";
+}
+
+// Robust vs fast (issue 7): what watertightness costs, and what the fast variant leaks.
+std::string variants_section(const TableContext& t) {
+  std::set<std::string> variants;
+  for (auto& c : t.cells) variants.insert(c.variant);
+  if (!variants.count("robust") || !variants.count("fast")) return "";
+  std::string md =
+      "## Robust vs fast trace: what watertight intersection costs\n\n"
+      "NoSort trace MRays/s of each variant on the same rays, their ratio, and leaks per million rays "
+      "(rays the variant misses that the other one hits: the fast variant's leaks through shared edges and "
+      "vertices). Best = the encoder with the highest speedup at the overview key length in that variant. The "
+      "two variants' NoSort cells ran at different times, so their ratio carries no interval; `raysort trace "
+      "--variant both` times both variants in the same rounds.\n\n"
+      "| scene | batch | fast MRays/s | robust MRays/s | robust/fast | fast leaks/M | robust leaks/M | best fast | best robust |\n"
+      "|---|---|---:|---:|---:|---:|---:|---|---|\n";
+  const std::string access = t.main_view.access;
+  for (auto& s : t.scenes)
+    for (auto& batch : t.batches) {
+      auto* f = t.at({"fast", access}, s, batch, kBaselineEncoder, 0);
+      auto* r = t.at({"robust", access}, s, batch, kBaselineEncoder, 0);
+      if (!f || !r || !f->ok() || !r->ok()) continue;
+      auto best = [&](const std::string& v) {
+        const CellRecord* b = nullptr;
+        for (auto& e : t.encoders)
+          if (auto* c = t.at({v, access}, s, batch, e, t.overview_bits);
+              c && c->ok() && e != kBaselineEncoder && !c->same_order_as_nosort)
+            if (!b || c->speedup.value > b->speedup.value) b = c;
+        return b ? fmt::format("{} {}", b->encoder, speedup_text(*b, false)) : std::string("–");
+      };
+      md += fmt::format("| {} | {} | {:.2f} | {:.2f} | {:.3f} | {:.1f} | {:.1f} | {} | {} |\n", s, batch, f->trace_mrays,
+                        r->trace_mrays, f->trace_mrays > 0 ? r->trace_mrays / f->trace_mrays : 0.0, f->leaks_per_million,
+                        r->leaks_per_million, best("fast"), best("robust"));
+    }
+  return md + "\n";
+}
+
+std::string failed_section(const std::vector<CellRecord>& cells) {
   std::vector<const CellRecord*> failed;
   for (auto& c : cells)
     if (!c.ok()) failed.push_back(&c);
-  md += fmt::format("## Failed cells: {}\n\n", failed.size());
+  std::string md = fmt::format("## Failed cells: {}\n\n", failed.size());
   for (auto* c : failed) md += fmt::format("- `{}`: {} — {}\n", c->id(), c->status, c->error);
   if (!failed.empty()) md += "\n";
   return md;
+}
+
+}  // namespace
+
+std::string render_tables(const std::vector<CellRecord>& cells, const nlohmann::json& meta) {
+  const TableContext t(cells, meta);
+  return introduction(meta) + noise_section(cells) + trace_speed_sections(t) + overhead_sections(t) +
+         gather_permute_section(t) + key_length_sections(t) + deterministic_sections(t) + top_k_section(t) +
+         variants_section(t) + failed_section(cells);
 }
 
 }  // namespace raysort

@@ -120,6 +120,124 @@ void RadixSort::enqueue(cl::Kernel& k, std::size_t global, std::size_t local) {
                                    nullptr, &events_.back());
 }
 
+// One sort's passes: the kernels' arguments, which buffers hold the pairs now (ping-pong between
+// the caller's and the scratch buffers), and the launches of each kind of pass.
+struct RadixSort::Passes {
+  RadixSort& rs;
+  Kernels& k;
+  const cl_uint n, n_items, hi;
+  const std::size_t wg, tiles, bins;
+  SortStats& stats;
+  cl::Buffer *src_keys, *src_values, *dst_keys, *dst_values;
+
+  void count(cl_uint shift) {
+    k.count.setArg(0, *src_keys);
+    k.count.setArg(1, n);
+    k.count.setArg(2, n_items);
+    k.count.setArg(3, shift);
+    k.count.setArg(4, hi);
+    k.count.setArg(5, rs.counts_);
+    rs.enqueue(k.count, tiles * wg, wg);
+  }
+  void scan() {
+    k.scan.setArg(0, rs.counts_);
+    k.scan.setArg(1, static_cast<cl_uint>(bins));
+    rs.enqueue(k.scan, rs.tuning_.scan_work_group, rs.tuning_.scan_work_group);
+  }
+  void flip() {
+    std::swap(src_keys, dst_keys);
+    std::swap(src_values, dst_values);
+    ++stats.passes_run;
+  }
+  void scatter(cl_uint shift) {
+    k.scatter.setArg(0, *src_keys);
+    k.scatter.setArg(1, *src_values);
+    k.scatter.setArg(2, *dst_keys);
+    k.scatter.setArg(3, *dst_values);
+    k.scatter.setArg(4, n);
+    k.scatter.setArg(5, n_items);
+    k.scatter.setArg(6, shift);
+    k.scatter.setArg(7, hi);
+    k.scatter.setArg(8, rs.counts_);
+    rs.enqueue(k.scatter, tiles * wg, wg);
+    flip();
+  }
+  // The hybrid's LSD passes over the lower digits `pass_mask`, one work-item per top-digit bucket.
+  void bucket_sort(cl_uint lo, cl_uint pass_mask, std::size_t radix) {
+    k.bucket_sort.setArg(0, *src_keys);
+    k.bucket_sort.setArg(1, *src_values);
+    k.bucket_sort.setArg(2, *dst_keys);
+    k.bucket_sort.setArg(3, *dst_values);
+    k.bucket_sort.setArg(4, n);
+    k.bucket_sort.setArg(5, static_cast<cl_uint>(tiles));
+    k.bucket_sort.setArg(6, rs.counts_);
+    k.bucket_sort.setArg(7, lo);
+    k.bucket_sort.setArg(8, hi);
+    k.bucket_sort.setArg(9, pass_mask);
+    rs.enqueue(k.bucket_sort, radix, 1);
+  }
+};
+
+// The first read of the keys: the tile counts of digit `shift`, and which key bits vary at all
+// (the OR and AND of every key, read back: 16 bytes).
+std::uint64_t RadixSort::first_read(Kernels& k, const cl::Buffer& keys, cl_uint n, cl_uint n_items, cl_uint shift,
+                                    cl_uint hi, std::size_t tiles, std::size_t key_bytes) {
+  std::uint64_t varying = 0;
+  cl_call("running the radix sort's first read", [&] {
+    k.count_bounds.setArg(0, keys);
+    k.count_bounds.setArg(1, n);
+    k.count_bounds.setArg(2, n_items);
+    k.count_bounds.setArg(3, shift);
+    k.count_bounds.setArg(4, hi);
+    k.count_bounds.setArg(5, counts_);
+    k.count_bounds.setArg(6, tile_bounds_);
+    enqueue(k.count_bounds, tiles * tuning_.work_group, tuning_.work_group);
+    k.reduce_bounds.setArg(0, tile_bounds_);
+    k.reduce_bounds.setArg(1, static_cast<cl_uint>(tiles));
+    k.reduce_bounds.setArg(2, bounds_);
+    enqueue(k.reduce_bounds, tuning_.scan_work_group, tuning_.scan_work_group);
+    std::uint64_t bounds[2] = {0, 0};  // OR, AND of all keys
+    events_.emplace_back();
+    rt_.queue().enqueueReadBuffer(bounds_, CL_TRUE, 0, 2 * key_bytes, bounds, nullptr, &events_.back());
+    if (key_bytes == 4) {
+      std::uint32_t b32[2];
+      std::memcpy(b32, bounds, sizeof b32);
+      bounds[0] = b32[0];
+      bounds[1] = b32[1];
+    }
+    varying = bounds[0] ^ bounds[1];
+  });
+  return varying;
+}
+
+// The MSD-first hybrid: bucket by the highest varying digit, then sort each bucket by the lower
+// digits while it sits in cache. False (nothing moved) when one bucket would hold more than
+// 1 / hybrid_skew of the pairs; the LSD passes then do the whole sort.
+bool RadixSort::hybrid_passes(Passes& ps, const std::vector<unsigned>& run, int counted, cl_uint lo,
+                              std::size_t count) {
+  const RadixSortTuning& t = tuning_;
+  const std::size_t radix = std::size_t(1) << t.radix_bits;
+  const unsigned top = run.back();
+  const cl_uint top_shift = lo + top * t.radix_bits;
+  if (static_cast<int>(top) != counted) ps.count(top_shift);
+  ps.scan();
+  bucket_offsets_.resize(ps.bins);  // the scanned counts: bucket d starts at [d * tiles]
+  events_.emplace_back();
+  rt_.queue().enqueueReadBuffer(counts_, CL_TRUE, 0, ps.bins * 4, bucket_offsets_.data(), nullptr, &events_.back());
+  std::size_t largest = 0;
+  for (std::size_t d = 0; d < radix; ++d) {
+    const std::size_t end = d + 1 < radix ? bucket_offsets_[(d + 1) * ps.tiles] : count;
+    largest = std::max<std::size_t>(largest, end - bucket_offsets_[d * ps.tiles]);
+  }
+  if (largest * t.hybrid_skew > count) return false;
+  ps.scatter(top_shift);  // keys -> scratch, bucketed stably by the top digit
+  cl_uint pass_mask = 0;
+  for (std::size_t i = 0; i + 1 < run.size(); ++i) pass_mask |= cl_uint(1) << run[i];
+  ps.bucket_sort(lo, pass_mask, radix);
+  for (std::size_t i = 0; i + 1 < run.size(); ++i) ps.flip();  // the result lies where these passes leave it
+  return true;
+}
+
 SortStats RadixSort::sort(cl::Buffer& keys, cl::Buffer& values, std::size_t count, const RadixSortConfig& cfg) {
   if (cfg.key_bits < 1 || cfg.key_bits > 64 || cfg.top_bits > cfg.key_bits)
     throw Error(fmt::format("radix sort: key_bits must be 1..64 and top_bits 0..key_bits (got key_bits {}, top_bits {})",
@@ -142,18 +260,16 @@ SortStats RadixSort::sort(cl::Buffer& keys, cl::Buffer& values, std::size_t coun
                             "buffer {} bytes; they need {} and {}",
                             count, key_bytes, keys_size, values_size, count * key_bytes, count * 4));
 
+  // The shape: a tile is items × work_group keys; on the CPU shape a tile's size follows N.
   const RadixSortTuning& t = tuning_;
-  const std::size_t radix = std::size_t(1) << t.radix_bits;
   const std::size_t wg = t.work_group;
   std::size_t items = t.items;
   if (wg == 1) {
     const std::size_t target_tiles = std::max<std::size_t>(1, std::size_t(rt_.info().compute_units) * t.tiles_per_unit);
     items = std::max<std::size_t>(t.min_tile, (count + target_tiles - 1) / target_tiles);
   }
-  const std::size_t tile = items * wg;
-  const std::size_t tiles = (count + tile - 1) / tile;
-  const std::size_t bins = radix * tiles;
-
+  const std::size_t tiles = (count + items * wg - 1) / (items * wg);
+  const std::size_t bins = (std::size_t(1) << t.radix_bits) * tiles;
   ensure(rt_, keys_tmp_, keys_tmp_bytes_, count * key_bytes, "radix sort scratch keys");
   ensure(rt_, values_tmp_, values_tmp_bytes_, count * 4, "radix sort scratch values");
   ensure(rt_, counts_, counts_bytes_, bins * 4, "radix sort tile counts");
@@ -161,44 +277,14 @@ SortStats RadixSort::sort(cl::Buffer& keys, cl::Buffer& values, std::size_t coun
   ensure(rt_, bounds_, bounds_bytes_, 2 * 8, "radix sort key bounds");
 
   Kernels& k = kernels_for(cfg);
-  const cl_uint n = static_cast<cl_uint>(count);
-  const cl_uint n_items = static_cast<cl_uint>(items);
-  const cl_uint lo = cfg.lo_bit();
-  const cl_uint hi = cfg.key_bits;
+  const cl_uint n = static_cast<cl_uint>(count), n_items = static_cast<cl_uint>(items);
+  const cl_uint lo = cfg.lo_bit(), hi = cfg.key_bits;
   events_.clear();
-
   // The MSD-first hybrid (large N on the CPU shape) wants the most significant digit's counts
   // first; the plain LSD passes the lowest digit's.
   const bool hybrid = t.hybrid() && count >= t.hybrid_min && total_passes >= 2;
   int counted = hybrid ? static_cast<int>(total_passes) - 1 : 0;  // the pass whose counts are in counts_
-
-  // First read of the keys: one digit's tile counts, and which key bits vary at all.
-  std::uint64_t varying = 0;
-  cl_call("running the radix sort's first read", [&] {
-    k.count_bounds.setArg(0, keys);
-    k.count_bounds.setArg(1, n);
-    k.count_bounds.setArg(2, n_items);
-    k.count_bounds.setArg(3, static_cast<cl_uint>(lo + counted * t.radix_bits));
-    k.count_bounds.setArg(4, hi);
-    k.count_bounds.setArg(5, counts_);
-    k.count_bounds.setArg(6, tile_bounds_);
-    enqueue(k.count_bounds, tiles * wg, wg);
-    k.reduce_bounds.setArg(0, tile_bounds_);
-    k.reduce_bounds.setArg(1, static_cast<cl_uint>(tiles));
-    k.reduce_bounds.setArg(2, bounds_);
-    enqueue(k.reduce_bounds, t.scan_work_group, t.scan_work_group);
-    std::uint64_t bounds[2] = {0, 0};  // OR, AND of all keys
-    events_.emplace_back();
-    rt_.queue().enqueueReadBuffer(bounds_, CL_TRUE, 0, 2 * key_bytes, bounds, nullptr, &events_.back());
-    if (key_bytes == 4) {
-      std::uint32_t b32[2];
-      std::memcpy(b32, bounds, sizeof b32);
-      bounds[0] = b32[0];
-      bounds[1] = b32[1];
-    }
-    varying = bounds[0] ^ bounds[1];
-  });
-
+  const std::uint64_t varying = first_read(k, keys, n, n_items, lo + counted * t.radix_bits, hi, tiles, key_bytes);
   std::vector<unsigned> run;  // the passes that move keys
   for (unsigned p = 0; p < total_passes; ++p) {
     const unsigned shift = lo + p * t.radix_bits;
@@ -207,86 +293,20 @@ SortStats RadixSort::sort(cl::Buffer& keys, cl::Buffer& values, std::size_t coun
   }
   stats.passes_skipped = total_passes - static_cast<unsigned>(run.size());  // same digit in every key
 
-  cl::Buffer* src_keys = &keys;
-  cl::Buffer* src_values = &values;
-  cl::Buffer* dst_keys = &keys_tmp_;
-  cl::Buffer* dst_values = &values_tmp_;
-  auto count_pass = [&](cl_uint shift) {
-    k.count.setArg(0, *src_keys);
-    k.count.setArg(1, n);
-    k.count.setArg(2, n_items);
-    k.count.setArg(3, shift);
-    k.count.setArg(4, hi);
-    k.count.setArg(5, counts_);
-    enqueue(k.count, tiles * wg, wg);
-  };
-  auto scan_pass = [&] {
-    k.scan.setArg(0, counts_);
-    k.scan.setArg(1, static_cast<cl_uint>(bins));
-    enqueue(k.scan, t.scan_work_group, t.scan_work_group);
-  };
-  auto scatter_pass = [&](cl_uint shift) {
-    k.scatter.setArg(0, *src_keys);
-    k.scatter.setArg(1, *src_values);
-    k.scatter.setArg(2, *dst_keys);
-    k.scatter.setArg(3, *dst_values);
-    k.scatter.setArg(4, n);
-    k.scatter.setArg(5, n_items);
-    k.scatter.setArg(6, shift);
-    k.scatter.setArg(7, hi);
-    k.scatter.setArg(8, counts_);
-    enqueue(k.scatter, tiles * wg, wg);
-    std::swap(src_keys, dst_keys);
-    std::swap(src_values, dst_values);
-    ++stats.passes_run;
-  };
+  Passes ps{*this, k, n, n_items, hi, wg, tiles, bins, stats, &keys, &values, &keys_tmp_, &values_tmp_};
   cl_call("running the radix sort passes", [&] {
     bool done = false;
     if (hybrid && run.size() >= 2) {
-      // MSD-first: bucket by the highest varying digit, unless one bucket would hold too much.
-      const unsigned top = run.back();
-      const cl_uint top_shift = lo + top * t.radix_bits;
-      if (static_cast<int>(top) != counted) count_pass(top_shift);
-      counted = -1;  // scanned below: no pass can use these counts as they are
-      scan_pass();
-      bucket_offsets_.resize(bins);  // the scanned counts: bucket d starts at [d * tiles]
-      events_.emplace_back();
-      rt_.queue().enqueueReadBuffer(counts_, CL_TRUE, 0, bins * 4, bucket_offsets_.data(), nullptr, &events_.back());
-      std::size_t largest = 0;
-      for (std::size_t d = 0; d < radix; ++d) {
-        const std::size_t end = d + 1 < radix ? bucket_offsets_[(d + 1) * tiles] : count;
-        largest = std::max<std::size_t>(largest, end - bucket_offsets_[d * tiles]);
-      }
-      if (largest * t.hybrid_skew <= count) {
-        scatter_pass(top_shift);  // keys -> scratch, bucketed stably by the top digit
-        cl_uint pass_mask = 0;
-        for (std::size_t i = 0; i + 1 < run.size(); ++i) pass_mask |= cl_uint(1) << run[i];
-        k.bucket_sort.setArg(0, *src_keys);
-        k.bucket_sort.setArg(1, *src_values);
-        k.bucket_sort.setArg(2, *dst_keys);
-        k.bucket_sort.setArg(3, *dst_values);
-        k.bucket_sort.setArg(4, n);
-        k.bucket_sort.setArg(5, static_cast<cl_uint>(tiles));
-        k.bucket_sort.setArg(6, counts_);
-        k.bucket_sort.setArg(7, lo);
-        k.bucket_sort.setArg(8, hi);
-        k.bucket_sort.setArg(9, pass_mask);
-        enqueue(k.bucket_sort, radix, 1);
-        for (std::size_t i = 0; i + 1 < run.size(); ++i) {  // the result lies where these passes leave it
-          std::swap(src_keys, dst_keys);
-          std::swap(src_values, dst_values);
-          ++stats.passes_run;
-        }
-        done = true;
-      }
+      done = hybrid_passes(ps, run, counted, lo, count);
+      counted = -1;  // scanned by the hybrid's check: no pass can use these counts as they are
     }
     if (!done) {
       for (unsigned p : run) {
         const cl_uint shift = lo + p * t.radix_bits;
-        if (static_cast<int>(p) != counted) count_pass(shift);  // each pass counts its own digit
-        counted = -1;  // ... except a first pass the first read (or the hybrid's check) counted
-        scan_pass();
-        scatter_pass(shift);
+        if (static_cast<int>(p) != counted) ps.count(shift);  // each pass counts its own digit
+        counted = -1;  // ... except a first pass the first read counted
+        ps.scan();
+        ps.scatter(shift);
       }
     }
     if (stats.passes_run % 2 == 1) {  // the result is in the scratch buffers: copy it home

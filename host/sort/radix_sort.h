@@ -90,6 +90,10 @@ class RadixSort {
   };
   Kernels& kernels_for(const RadixSortConfig& cfg) { return cfg.wide_keys() ? wide_ : narrow_; }
   void enqueue(cl::Kernel& k, std::size_t global, std::size_t local);
+  struct Passes;  // one sort's launches and ping-pong buffers (radix_sort.cpp)
+  std::uint64_t first_read(Kernels& k, const cl::Buffer& keys, cl_uint n, cl_uint n_items, cl_uint shift, cl_uint hi,
+                           std::size_t tiles, std::size_t key_bytes);
+  bool hybrid_passes(Passes& ps, const std::vector<unsigned>& run, int counted, cl_uint lo, std::size_t count);
   static void ensure(Runtime& rt, cl::Buffer& b, std::size_t& have, std::size_t need, const char* name);
   template <class Key>
   SortStats sort_host(std::vector<Key>& keys, std::vector<std::uint32_t>& values, const RadixSortConfig& cfg);
