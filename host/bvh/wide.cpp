@@ -74,7 +74,7 @@ class Collapser {
   // other subtrees). The SAH builder's leaves hold about two triangles, so their packets were half
   // empty. Without the area condition breakfast_room's shadow rays were 13-15 % slower; with it,
   // side by side (ours/Embree, median of 5): sibenik bounce1 +7 %, shadow1 +5 %, breakfast_room
-  // shadow0 +7 %, shadow1 +9 %, no batch slower beyond noise (docs/trace.md).
+  // shadow0 +7 %, shadow1 +9 %, no batch slower beyond noise (results/history/trace-kernels.md).
   static constexpr std::uint32_t kMergeTriangles = 4;
   bool leafish(std::uint32_t n) const {
     return bvh_.is_leaf(n) ||
