@@ -61,7 +61,7 @@ inline RsRay rs_load_ray(__global const RsRay* rays, uint index) {
  *  - No count guard: a guarded body makes every load a masked one. The host launches whole
  *    work-groups over rays [0, full) and the rest, one work-item per group, from `first` on
  *    (DeviceEncoder::enqueue), so every work-item has a ray.
- * Measured on breakfast_room's shadow rays (docs/encoders.md): 0.7–0.9x the time. */
+ * Measured on breakfast_room's shadow rays (results/history/encoder-kernels.md): 0.7–0.9x the time. */
 #define RS_DEFINE_SPATIAL_KERNEL(NAME, SUFFIX, KEY_T)                                                    \
   __kernel void encode_##NAME##_##SUFFIX(const RsEncodeFrame frame, __global const RsRay* rays,           \
                                          __global const uint* order, uint first, uint bits,             \
