@@ -16,7 +16,10 @@ namespace {
 template <class T, class Name>
 std::string joined(const std::vector<T>& items, Name name) {
   std::string s;
-  for (const T& x : items) s += (s.empty() ? "" : ",") + std::string(name(x));
+  for (const T& x : items) {
+    if (!s.empty()) s += ',';
+    s += name(x);
+  }
   return s;
 }
 
