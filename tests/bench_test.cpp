@@ -26,17 +26,17 @@ namespace fs = std::filesystem;
 namespace {
 
 std::string temp_dir(const std::string& name) {
-  fs::path p = fs::temp_directory_path() / ("raysort-test-" + name + "-" + std::to_string(::getpid()));
-  fs::remove_all(p);
+  const std::string p = raysort::testing::temp_path(name);  // removed when every test passed
   fs::create_directories(p);
-  return p.string();
+  return p;
 }
 
+// Strings are moved in, not assigned from const char* (g++ 12 -O2 flags a false -Wrestrict there).
 CellRecord cell(const std::string& encoder, unsigned bits, double mrays, double anc) {
   CellRecord c;
-  c.scene = "s", c.batch = "bounce1", c.encoder = encoder, c.bits = bits, c.rays = 100;
+  c.scene = std::string("s"), c.batch = std::string("bounce1"), c.encoder = encoder, c.bits = bits, c.rays = 100;
   c.trace_mrays = mrays, c.speedup = {mrays / 10.0, NAN, NAN, 0}, c.anc = anc;
-  c.keys_hash = "00000000000000aa", c.order_hash = "00000000000000bb";
+  c.keys_hash = std::string("00000000000000aa"), c.order_hash = std::string("00000000000000bb");
   c.hits_match_nosort = c.order_is_permutation = true;
   return c;
 }

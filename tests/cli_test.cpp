@@ -24,9 +24,7 @@ using raysort::testing::CliResult;
 using raysort::testing::run_cli;
 
 std::string temp_dir(const std::string& name) {
-  fs::path p = fs::temp_directory_path() / ("raysort_cli_test_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(p);
-  return p.string();
+  return raysort::testing::temp_path(name);  // removed when every test passed
 }
 
 // Expects exit code != 0, exactly one line on stderr containing every one of `parts`, and (for
@@ -68,7 +66,7 @@ TEST(Cli, ImpossibleCombinationsRefusedBeforeWork) {
   expect_refused({"run", "--scenes", "cornell", "--reps", "0"}, {"--reps"});
   expect_refused({"run", "--scenes", "cornell", "--timeout", "-1"}, {"--timeout -1"});
   // A broken OBJ given by path is read before the run starts, not after the first scenes ran.
-  fs::path bad = fs::temp_directory_path() / ("raysort_cli_test_nan_" + std::to_string(::getpid()) + ".obj");
+  fs::path bad = raysort::testing::temp_path("nan.obj");
   std::ofstream(bad) << "v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n";
   expect_refused({"run", "--scenes", "cornell," + bad.string()}, {bad.string() + ":3: vertex 3 has a non-finite"});
   fs::remove(bad);

@@ -26,8 +26,7 @@ using namespace raysort;
 namespace {
 
 fs::path temp_dir(const std::string& name) {
-  fs::path dir = fs::temp_directory_path() / ("raysort_odd_input_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
+  fs::path dir = raysort::testing::temp_path(name);  // removed when every test passed
   fs::create_directories(dir);
   return dir;
 }

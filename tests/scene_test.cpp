@@ -11,6 +11,7 @@
 #include "scene/load.h"
 #include "scene/procedural.h"
 #include "util/error.h"
+#include "test_util.h"
 
 namespace fs = std::filesystem;
 using namespace raysort;
@@ -53,8 +54,7 @@ std::string replace(std::string s, const std::string& from, const std::string& t
 }
 
 fs::path temp_dir(const std::string& name) {
-  fs::path dir = fs::temp_directory_path() / ("raysort_scene_test_" + name);
-  fs::remove_all(dir);
+  fs::path dir = raysort::testing::temp_path(name);  // removed when every test passed
   fs::create_directories(dir);
   return dir;
 }

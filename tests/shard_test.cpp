@@ -186,8 +186,7 @@ void expect_merge_refused(const std::vector<fs::path>& inputs, const fs::path& o
 }  // namespace
 
 TEST(ShardedRun, MergeOfShardsEqualsTheFullRunAndRefusesWhatIsNotOneRun) {
-  const fs::path root = fs::temp_directory_path() / ("raysort_shard_test_" + std::to_string(::getpid()));
-  fs::remove_all(root);
+  const fs::path root = raysort::testing::temp_path("sharded");
   fs::create_directories(root);
   const std::vector<std::string> matrix{"run",     "--scenes",     "cornell,detail-room", "--encoders",
                                         "hcc,origin,mlhcc", "--bits",  "16,32",         "--batches",
@@ -273,9 +272,10 @@ TEST(ShardedRun, MergeOfShardsEqualsTheFullRunAndRefusesWhatIsNotOneRun) {
   expect_merge_refused({shards[0], shards[1], shards[2], shards[2]}, out, {"are both shard 3/3", "each shard once"});
   expect_merge_refused({shards[0], root / "full"}, out, {(root / "full").string(), "is not a shard", "--shard i/N"});
   expect_merge_refused({shards[0], root / "nowhere"}, out, {(root / "nowhere").string(), "not a result set"});
-  // A cell in two inputs.
+  // A cell in two inputs (under its own file name: a file named otherwise is refused on read).
   fs::copy(shards[1], root / "dup", fs::copy_options::recursive);
-  fs::copy_file(*fs::directory_iterator(shards[0] / "cells"), root / "dup" / "cells" / "extra.json");
+  const fs::path first_cell = fs::directory_iterator(shards[0] / "cells")->path();
+  fs::copy_file(first_cell, root / "dup" / "cells" / first_cell.filename());
   expect_merge_refused({shards[0], root / "dup", shards[2]}, out, {(root / "dup").string(), "both hold 1 cell"});
   // Another configuration, device or build.
   auto altered = [&](const std::string& name, const std::function<void(nlohmann::json&)>& f) {
@@ -297,11 +297,26 @@ TEST(ShardedRun, MergeOfShardsEqualsTheFullRunAndRefusesWhatIsNotOneRun) {
   EXPECT_NE(many.code, 0);
   EXPECT_GE(std::count(many.err.begin(), many.err.end(), '\n'), 3) << many.err;
   expect_contains(many.err, {"NVIDIA H100", "commit 0123456789ab"});
-  // An existing result set is never overwritten.
+  // An existing result set is never overwritten without --force, and never an input even with it.
   const std::string before = read_file((merged / "cells.csv").string());
   Cli onto = raysort::testing::run_cli({"merge", shards[0].string(), shards[1].string(), shards[2].string(), "-o", merged.string()});
   EXPECT_NE(onto.code, 0);
-  expect_contains(onto.err, {merged.string(), "not empty", "new folder"});
+  expect_contains(onto.err, {merged.string(), "already exists", "--force"});
   EXPECT_EQ(read_file((merged / "cells.csv").string()), before);
+  Cli forced = raysort::testing::run_cli(
+      {"merge", shards[0].string(), shards[1].string(), shards[2].string(), "-o", merged.string(), "--force"});
+  EXPECT_EQ(forced.code, 0) << forced.err;
+  EXPECT_EQ(deterministic(ResultSet::load(merged.string())), deterministic(a));
+  for (const auto& [target, part] : std::vector<std::pair<fs::path, std::string>>{
+           {shards[1] / "cells" / "merged.json", "inside the input"}, {shards[1], "inside the input"}, {root, "holds the input"}}) {
+    Cli into = raysort::testing::run_cli(
+        {"merge", shards[0].string(), shards[1].string(), shards[2].string(), "-o", target.string(), "--force"});
+    EXPECT_NE(into.code, 0) << target;
+    expect_contains(into.err, {part, "-o " + target.string()});
+  }
+  EXPECT_FALSE(fs::exists(shards[1] / "cells" / "merged.json"));
+  Cli still = run({"--shard", "2/3", "--out", shards[1].string()});  // the input still resumes
+  EXPECT_EQ(still.code, 0) << still.err;
+  EXPECT_NE(still.out.find("0 cells run,"), std::string::npos) << still.out;
   fs::remove_all(root);
 }

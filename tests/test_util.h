@@ -71,6 +71,31 @@ inline Scene two_quads() {
   return s;
 }
 
+// One temporary folder per test process, <tmp>/raysort-tests-<pid>, removed when the process
+// ends with every test passed (kept, for a look, when one failed): tests clean up after themselves.
+inline const std::filesystem::path& temp_root() {
+  struct Root {
+    std::filesystem::path path = std::filesystem::temp_directory_path() / ("raysort-tests-" + std::to_string(::getpid()));
+    Root() { std::filesystem::create_directories(path); }
+    ~Root() {
+      if (::getpid() != owner) return;  // a forked child exiting
+      if (!::testing::UnitTest::GetInstance()->Failed()) {
+        std::error_code ec;
+        std::filesystem::remove_all(path, ec);
+      }
+    }
+    pid_t owner = ::getpid();
+  };
+  static Root root;
+  return root.path;
+}
+// A fresh (absent) path below temp_root().
+inline std::string temp_path(const std::string& name) {
+  std::filesystem::path p = temp_root() / name;
+  std::filesystem::remove_all(p);
+  return p.string();
+}
+
 // What the raysort binary printed and its exit code (128 + signal when killed by one).
 struct CliResult {
   int code = -1;

@@ -1,9 +1,12 @@
 // raysort compare A B: two result sets side by side, with regression rules (--fail-if).
 #include <fmt/format.h>
 
+#include <filesystem>
+
 #include "app/commands.h"
 #include "bench/compare.h"
 #include "util/atomic_file.h"
+#include "util/error.h"
 
 namespace raysort {
 
@@ -12,6 +15,7 @@ void register_compare_command(CLI::App& app) {
     std::string a, b, out;
     std::vector<std::string> metrics{"trace_mrays", "speedup", "net_speedup", "overhead_pct", "anc"};
     std::vector<std::string> fail_if;
+    bool allow_different_matrix = false, force = false;
   };
   auto a = std::make_shared<Args>();
   auto* cmd = app.add_subcommand("compare", "compare two result sets cell by cell");
@@ -22,12 +26,22 @@ void register_compare_command(CLI::App& app) {
                   "regression rule, repeatable: 'speedup<-5%', 'overhead_pct>+10%', 'anc!=', 'anc!=0.01', 'missing'; "
                   "a relative rule on a timed figure fires only when the change passes the threshold between the "
                   "nearest ends of the two 95 % intervals");
-  cmd->add_option("--out", a->out, "also write the report to this markdown file");
+  cmd->add_option("--out", a->out, "also write the report to this markdown file (never inside A or B)");
+  cmd->add_flag("--force", a->force, "overwrite an existing --out file");
+  cmd->add_flag("--allow-different-matrix", a->allow_different_matrix,
+                "compare sets that ran different matrices (scenes, batches, encoders, bits, resolution, spp, seed, "
+                "variants, access modes); the report says what differs");
   cmd->callback([a] {
     std::vector<FailRule> rules;
     for (auto& r : a->fail_if) rules.push_back(FailRule::parse(r));
+    if (!a->out.empty()) {
+      check_output_path(a->out, {a->a, a->b}, a->force, "--out");
+      std::error_code ec;
+      if (std::filesystem::is_directory(a->out, ec))
+        throw Error(fmt::format("--out {}: a folder; name the markdown file to write, e.g. {}/compare.md", a->out, a->out));
+    }
     auto ra = ResultSet::load(a->a), rb = ResultSet::load(a->b);
-    CompareResult res = compare_result_sets(ra, rb, a->metrics, rules);
+    CompareResult res = compare_result_sets(ra, rb, a->metrics, rules, a->allow_different_matrix);
     fmt::print("{}", res.report);
     if (!a->out.empty()) write_file_atomically(a->out, res.report);
     if (!res.within_noise.empty())

@@ -13,7 +13,8 @@ void register_report_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("report", "write a result set's tables, CSV/JSON and plots again from its cell files");
   cmd->add_option("DIR", *dir, "result set folder")->required();
   cmd->callback([dir] {
-    const ResultSet rs = ResultSet::load(*dir);
+    ResultSet rs = ResultSet::load(*dir);
+    rs.lock_for_writing("raysort report " + *dir);  // one writer: not while a run writes into it
     rs.write_views();
     rs.write_plots();
     const NoiseSummary noise = summarize_noise(rs.cells());

@@ -98,6 +98,9 @@ void register_run_command(CLI::App& app) {
   cmd->add_option("--timeout", a->timeout_s,
                   "per-cell wall-clock limit in seconds (0: none); a cell over it is recorded as \"timeout\" "
                   "(checked between the arms of a round: a kernel in flight runs to completion)");
+  cmd->add_flag("--no-retry", a->opts.no_retry,
+                "when resuming, keep cells recorded as failed or timeout as they are (by default they run again); "
+                "the exit code still says whether every cell is ok");
   cmd->add_option("--out", a->opts.out, "result folder (default results/<device>/<preset>-<hash>)");
   auto* shard_opt = cmd->add_option("--shard", a->shard,
                                     "run only shard i of N (i/N, numbered from 1: 1/4 ... 4/4), a deterministic share "
@@ -123,8 +126,9 @@ void register_run_command(CLI::App& app) {
       return;
     }
     RunSummary s = run_matrix(spec, a->opts);
-    fmt::print("{} cells run, {} already done (skipped), {} failed; results in {}\n", s.cells_run, s.cells_skipped,
-               s.cells_failed, s.out_dir);
+    fmt::print("{} cells run{}, {} already done (skipped), {} failed; results in {}\n", s.cells_run,
+               s.cells_retried ? fmt::format(" ({} of them retries of failed or timed-out cells)", s.cells_retried) : "",
+               s.cells_skipped, s.cells_failed, s.out_dir);
     const NoiseSummary noise = summarize_noise(ResultSet::load(s.out_dir).cells());
     if (noise.aa_intervals > 0)
       fmt::print("noise: A/A calibration {} of {} intervals contain 1.00 ({:.1f} %); speedup interval half-width "
@@ -136,7 +140,11 @@ void register_run_command(CLI::App& app) {
     if (s.interrupted) {
       fmt::print(stderr, "interrupted: finished cells are saved; rerun the same command to resume\n");
       set_command_exit_code(130);
-    } else if (s.cells_failed > 0) {
+    } else if (s.cells_not_ok > 0 || s.cells_missing > 0) {
+      // The exit code is the state of the whole set, not of this run's cells: a resumed run that
+      // kept failed cells (--no-retry) or failed again does not report success.
+      fmt::print(stderr, "raysort run: {} has {} cell(s) not ok (failed or timeout) and {} missing; rerun the command "
+                 "to retry them\n", s.out_dir, s.cells_not_ok, s.cells_missing);
       set_command_exit_code(1);
     }
   });

@@ -6,6 +6,8 @@
 #include <limits>
 #include <functional>
 #include <map>
+#include <optional>
+#include <set>
 #include <regex>
 
 #include "util/error.h"
@@ -38,14 +40,55 @@ const std::map<std::string, Number>& numeric_metrics() {
       {"sort_ms", [](const CellRecord& c) { return c.sort.estimate(); }},
       {"permute_ms", [](const CellRecord& c) { return c.permute.estimate(); }},
       {"trace_ms", [](const CellRecord& c) { return c.trace.estimate(); }},
-      {"anc", [](const CellRecord& c) { return exact(c.anc); }},
-      {"simt_lane_efficiency", [](const CellRecord& c) { return exact(c.simt_lane_efficiency); }},
-      {"simt_distinct_per_visit", [](const CellRecord& c) { return exact(c.simt_distinct_per_visit); }},
-      {"simt_lane_efficiency_ratio", [](const CellRecord& c) { return exact(c.simt_lane_efficiency_ratio); }},
-      {"simt_distinct_per_visit_ratio", [](const CellRecord& c) { return exact(c.simt_distinct_per_visit_ratio); }},
-      {"rays", [](const CellRecord& c) { return exact(static_cast<double>(c.rays)); }},
+      {"nosort_trace_ms", [](const CellRecord& c) { return c.nosort_trace.estimate(); }},
   };
   return m;
+}
+
+// Every metric: the timed figures above with their intervals, then every other column of
+// cells.csv (record.h, cell_columns): numbers as exact values, text (status, flags, hashes...) as is.
+struct Metric {
+  bool numeric = true;
+  Number number;
+  Getter text;
+  const std::vector<std::string>* vocabulary = nullptr;
+};
+std::optional<Metric> find_metric(const std::string& name) {
+  if (auto it = numeric_metrics().find(name); it != numeric_metrics().end()) return Metric{true, it->second, {}, nullptr};
+  const CellColumn* col = find_cell_column(name);
+  if (!col) return std::nullopt;
+  if (col->kind == CellColumn::Number) {
+    auto value = col->value;
+    return Metric{true, [value](const CellRecord& c) { return exact(value(c)); }, {}, nullptr};
+  }
+  return Metric{false, {}, col->csv, &col->vocabulary};
+}
+
+std::string metric_names() {
+  std::string names;
+  for (auto& n : comparable_metrics()) names += (names.empty() ? "" : ", ") + n;
+  return names;
+}
+
+// A number as a rule writes it: digits with at most one point ("5", "0.5", ".5", "5."), nothing else.
+std::optional<double> rule_number(const std::string& text) {
+  static const std::regex re(R"(^([0-9]+\.?[0-9]*|\.[0-9]+)$)");
+  if (!std::regex_match(text, re)) return std::nullopt;
+  return std::strtod(text.c_str(), nullptr);
+}
+
+// The matrix entries that are the measurement protocol's (how precisely, not what, was measured):
+// two sets that differ only in these compare cell for cell.
+const std::set<std::string>& protocol_keys() {
+  static const std::set<std::string> k{"preset", "reps", "warmup", "max_noise", "max_time_s"};
+  return k;
+}
+
+std::string side_name(const ResultSet& s) {
+  const nlohmann::json& m = s.meta();
+  const nlohmann::json d = m.value("device", nlohmann::json::object());
+  return fmt::format("device '{}', driver {}, raysort commit {}", d.is_object() ? d.value("name", "?") : "?",
+                     d.is_object() ? d.value("driver", "?") : "?", m.value("git_commit", "?"));
 }
 
 std::string shown(const Estimate& e) {
@@ -54,21 +97,13 @@ std::string shown(const Estimate& e) {
   return fmt::format("{:.4g} [{:.4g}, {:.4g}]", e.value, e.lo, e.hi);
 }
 
-const std::map<std::string, Getter>& text_metrics() {
-  static const std::map<std::string, Getter> m = {
-      {"keys_hash", [](const CellRecord& c) { return c.keys_hash; }},
-      {"order_hash", [](const CellRecord& c) { return c.order_hash; }},
-      {"status", [](const CellRecord& c) { return c.status; }},
-  };
-  return m;
-}
-
 }  // namespace
 
 std::vector<std::string> comparable_metrics() {
   std::vector<std::string> out;
   for (auto& [k, v] : numeric_metrics()) out.push_back(k);
-  for (auto& [k, v] : text_metrics()) out.push_back(k);
+  for (const auto& c : cell_columns())
+    if (!numeric_metrics().count(c.name)) out.push_back(c.name);
   return out;
 }
 
@@ -79,85 +114,64 @@ FailRule FailRule::parse(const std::string& text) {
     r.kind = Missing;
     return r;
   }
+  const std::string grammar =
+      "expected METRIC<-X% (relative drop), METRIC>+X% (relative rise), METRIC!= (any change), METRIC!=X (a number: "
+      "absolute change; text: B's value is not X), METRIC==X (text: B's value is X) or 'missing'";
   std::smatch m;
-  static const std::regex re(R"(^([a-z_]+)\s*(<-|>\+|!=)\s*([0-9]*\.?[0-9]*)\s*(%?)$)");
-  if (!std::regex_match(text, m, re))
-    throw Error(fmt::format("--fail-if '{}': expected METRIC<-X% (relative drop), METRIC>+X% (relative rise), "
-                            "METRIC!= (any change), METRIC!=X (absolute change) or 'missing'",
-                            text));
+  static const std::regex re(R"(^([a-z_]+)\s*(<-|>\+|!=|==)\s*(.*?)\s*$)");
+  if (!std::regex_match(text, m, re)) throw Error(fmt::format("--fail-if '{}': {}", text, grammar));
   r.metric = m[1];
-  std::string op = m[2], num = m[3], pct = m[4];
-  if (!numeric_metrics().count(r.metric) && !text_metrics().count(r.metric)) {
-    std::string names;
-    for (auto& n : comparable_metrics()) names += (names.empty() ? "" : ", ") + n;
-    throw Error(fmt::format("--fail-if '{}': unknown metric '{}'; metrics are: {}", text, r.metric, names));
-  }
-  if (op == "!=") {
-    r.kind = num.empty() ? AnyChange : AbsoluteChange;
-    r.threshold = num.empty() ? 0.0 : std::stod(num);
-  } else {
-    if (num.empty() || pct.empty())
+  const std::string op = m[2], rest = m[3];
+  const std::optional<Metric> metric = find_metric(r.metric);
+  if (!metric)
+    throw Error(fmt::format("--fail-if '{}': unknown metric '{}'; metrics (the columns of cells.csv) are: {}", text,
+                            r.metric, metric_names()));
+  if (op == "<-" || op == ">+") {
+    if (!metric->numeric)
+      throw Error(fmt::format("--fail-if '{}': {} is text; use {}!= (any change), {}!=X or {}==X", text, r.metric,
+                              r.metric, r.metric, r.metric));
+    const std::optional<double> x =
+        rest.size() > 1 && rest.back() == '%' ? rule_number(rest.substr(0, rest.size() - 1)) : std::nullopt;
+    if (!x)
       throw Error(fmt::format("--fail-if '{}': a relative rule needs a percentage, e.g. {}{}5%", text, r.metric, op));
-    if (!numeric_metrics().count(r.metric))
-      throw Error(fmt::format("--fail-if '{}': {} is not numeric; use {}!=", text, r.metric, r.metric));
     r.kind = op == "<-" ? RelativeDrop : RelativeRise;
-    r.threshold = std::stod(num) / 100.0;
+    r.threshold = *x / 100.0;
+    return r;
   }
+  if (op == "!=" && rest.empty()) {
+    r.kind = AnyChange;
+    return r;
+  }
+  if (metric->numeric) {
+    const std::optional<double> x = op == "!=" ? rule_number(rest) : std::nullopt;
+    if (!x)
+      throw Error(fmt::format("--fail-if '{}': {} is a number: {}!=X takes a non-negative number X (e.g. {}!=0.01), "
+                              "and == is for text columns",
+                              text, r.metric, r.metric, r.metric));
+    r.kind = AbsoluteChange;
+    r.threshold = *x;
+    return r;
+  }
+  if (rest.empty()) throw Error(fmt::format("--fail-if '{}': {}", text, grammar));
+  const auto& vocab = *metric->vocabulary;
+  if (!vocab.empty() && std::find(vocab.begin(), vocab.end(), rest) == vocab.end()) {
+    std::string known;
+    for (const auto& v : vocab)
+      if (!v.empty()) known += (known.empty() ? "" : ", ") + v;
+    throw Error(fmt::format("--fail-if '{}': {} is one of {}, not '{}'", text, r.metric, known, rest));
+  }
+  r.kind = op == "==" ? ValueIs : ValueIsNot;
+  r.value = rest;
   return r;
 }
 
-CompareResult compare_result_sets(const ResultSet& a, const ResultSet& b, const std::vector<std::string>& metrics,
-                                  const std::vector<FailRule>& rules) {
-  CompareResult out;
-  auto ca = a.cells(), cb = b.cells();
-  std::map<std::string, const CellRecord*> ma, mb;
-  for (auto& c : ca) ma[c.id()] = &c;
-  for (auto& c : cb) mb[c.id()] = &c;
-  auto name_of = [](const ResultSet& s) {
-    return s.meta().contains("device") ? s.meta()["device"].value("name", s.dir()) + " @ " + s.meta().value("git_commit", "?")
-                                       : s.dir();
-  };
-  std::string& md = out.report;
-  md += fmt::format("# raysort compare\n\nA: {} ({})\nB: {} ({})\n\n", a.dir(), name_of(a), b.dir(), name_of(b));
+namespace {
 
-  for (auto& metric : metrics) {
-    bool numeric = numeric_metrics().count(metric) > 0;
-    if (!numeric && !text_metrics().count(metric)) {
-      std::string names;
-      for (auto& n : comparable_metrics()) names += (names.empty() ? "" : ", ") + n;
-      throw Error(fmt::format("unknown metric '{}'; metrics are: {}", metric, names));
-    }
-    md += fmt::format("## {}\n\n| cell | A | B | B/A | intervals |\n|---|---:|---:|---:|---|\n", metric);
-    for (auto& [id, x] : ma) {
-      auto it = mb.find(id);
-      if (it == mb.end()) continue;
-      const CellRecord* y = it->second;
-      if (numeric) {
-        const Estimate ea = numeric_metrics().at(metric)(*x), eb = numeric_metrics().at(metric)(*y);
-        const double va = ea.value, vb = eb.value;
-        const std::string overlap = !ea.has_interval() || !eb.has_interval() ? "–"
-                                    : ea.overlaps(eb)                        ? "overlap"
-                                                                             : "**apart**";
-        md += fmt::format("| {} | {} | {} | {} | {} |\n", id, shown(ea), shown(eb),
-                          va != 0 && std::isfinite(va) && std::isfinite(vb) ? fmt::format("{:.3f}", vb / va) : "–",
-                          overlap);
-      } else {
-        std::string va = text_metrics().at(metric)(*x), vb = text_metrics().at(metric)(*y);
-        md += fmt::format("| {} | {} | {} | {} | |\n", id, va, vb, va == vb ? "same" : "**differs**");
-      }
-    }
-    md += "\n";
-  }
+using CellsById = std::map<std::string, const CellRecord*>;
 
-  std::vector<std::string> only_a, only_b;
-  for (auto& [id, x] : ma)
-    if (!mb.count(id)) only_a.push_back(id);
-  for (auto& [id, y] : mb)
-    if (!ma.count(id)) only_b.push_back(id);
-  md += fmt::format("## Cells in one set only\n\nOnly in A: {}\n\nOnly in B: {}\n\n", only_a.size(), only_b.size());
-  for (auto& id : only_a) md += "- A only: `" + id + "`\n";
-  for (auto& id : only_b) md += "- B only: `" + id + "`\n";
-
+// The --fail-if rules, cell by cell: violations, and relative changes that stayed within the noise.
+void check_rules(const std::vector<FailRule>& rules, const CellsById& ma, CellsById& mb,
+                 const std::vector<std::string>& only_a, CompareResult& out) {
   for (const FailRule& rule : rules) {
     if (rule.kind == FailRule::Missing) {
       for (auto& id : only_a) out.violations.push_back(fmt::format("missing: cell {} is in A but not in B", id));
@@ -166,12 +180,21 @@ CompareResult compare_result_sets(const ResultSet& a, const ResultSet& b, const 
           out.violations.push_back(fmt::format("missing: cell {} failed in B: {}", id, mb[id]->error));
       continue;
     }
+    const Metric metric = *find_metric(rule.metric);
+    if (rule.kind == FailRule::ValueIs || rule.kind == FailRule::ValueIsNot) {
+      for (auto& [id, y] : mb) {
+        const std::string vb = metric.text(*y);
+        if ((vb == rule.value) == (rule.kind == FailRule::ValueIs))
+          out.violations.push_back(fmt::format("{}: {} is {} in B (rule {})", id, rule.metric, vb, rule.text));
+      }
+      continue;
+    }
     for (auto& [id, x] : ma) {
       auto it = mb.find(id);
       if (it == mb.end()) continue;
       const CellRecord* y = it->second;
-      if (numeric_metrics().count(rule.metric)) {
-        const Estimate ea = numeric_metrics().at(rule.metric)(*x), eb = numeric_metrics().at(rule.metric)(*y);
+      if (metric.numeric) {
+        const Estimate ea = metric.number(*x), eb = metric.number(*y);
         const double va = ea.value, vb = eb.value;
         const bool relative = rule.kind == FailRule::RelativeDrop || rule.kind == FailRule::RelativeRise;
         const bool intervals = relative && ea.has_interval() && eb.has_interval();
@@ -189,7 +212,9 @@ CompareResult compare_result_sets(const ResultSet& a, const ResultSet& b, const 
             point = va > 0 && (vb - va) / va > rule.threshold;
             bad = intervals ? va > 0 && eb.lo > ea.hi * (1.0 + rule.threshold) : point;
             break;
-          case FailRule::Missing: break;
+          case FailRule::Missing:
+          case FailRule::ValueIs:
+          case FailRule::ValueIsNot: break;
         }
         if (!bad && point) {
           out.within_noise.push_back(fmt::format("{}: {} {} -> {} (rule {}; not beyond the threshold between the "
@@ -204,11 +229,83 @@ CompareResult compare_result_sets(const ResultSet& a, const ResultSet& b, const 
                                                : intervals  ? "; beyond the threshold between the intervals' nearest ends"
                                                             : "; point rule: no interval in both sets"));
       } else {
-        std::string va = text_metrics().at(rule.metric)(*x), vb = text_metrics().at(rule.metric)(*y);
+        std::string va = metric.text(*x), vb = metric.text(*y);
         if (va != vb) out.violations.push_back(fmt::format("{}: {} {} -> {} (rule {})", id, rule.metric, va, vb, rule.text));
       }
     }
   }
+}
+
+}  // namespace
+
+std::string matrix_mismatch(const ResultSet& a, const ResultSet& b) {
+  const nlohmann::json ma = a.meta().value("matrix", nlohmann::json::object()),
+                       mb = b.meta().value("matrix", nlohmann::json::object());
+  std::vector<std::string> keys;
+  for (const auto* m : {&ma, &mb})
+    if (m->is_object())
+      for (auto& [k, v] : m->items())
+        if (!protocol_keys().count(k) && std::find(keys.begin(), keys.end(), k) == keys.end()) keys.push_back(k);
+  return keys.empty() && ma != mb ? "matrix entry of another shape" : json_differences(ma, mb, keys);
+}
+
+CompareResult compare_result_sets(const ResultSet& a, const ResultSet& b, const std::vector<std::string>& metrics,
+                                  const std::vector<FailRule>& rules, bool allow_different_matrix) {
+  CompareResult out;
+  const std::string mismatch = matrix_mismatch(a, b);
+  if (!mismatch.empty() && !allow_different_matrix)
+    throw Error(fmt::format("{} and {} ran different matrices ({}); their cells would be compared as if alike. "
+                            "Compare sets of one matrix (the device may differ), or pass --allow-different-matrix",
+                            a.dir(), b.dir(), mismatch));
+  auto ca = a.cells(), cb = b.cells();
+  std::map<std::string, const CellRecord*> ma, mb;
+  for (auto& c : ca) ma[c.id()] = &c;
+  for (auto& c : cb) mb[c.id()] = &c;
+  std::string& md = out.report;
+  md += fmt::format("# raysort compare\n\nA: {} ({})\nB: {} ({})\n\n", a.dir(), side_name(a), b.dir(), side_name(b));
+  if (!mismatch.empty()) md += fmt::format("**The matrices differ** (--allow-different-matrix): {}\n\n", mismatch);
+  if (std::string p = json_differences(a.meta().value("matrix", nlohmann::json::object()),
+                                       b.meta().value("matrix", nlohmann::json::object()),
+                                       {protocol_keys().begin(), protocol_keys().end()});
+      !p.empty())
+    md += fmt::format("Measurement settings differ (the intervals' widths may too): {}\n\n", p);
+
+  for (auto& metric : metrics) {
+    const std::optional<Metric> found = find_metric(metric);
+    if (!found) throw Error(fmt::format("--metrics: unknown metric '{}'; metrics are: {}", metric, metric_names()));
+    const bool numeric = found->numeric;
+    md += fmt::format("## {}\n\n| cell | A | B | B/A | intervals |\n|---|---:|---:|---:|---|\n", metric);
+    for (auto& [id, x] : ma) {
+      auto it = mb.find(id);
+      if (it == mb.end()) continue;
+      const CellRecord* y = it->second;
+      if (numeric) {
+        const Estimate ea = found->number(*x), eb = found->number(*y);
+        const double va = ea.value, vb = eb.value;
+        const std::string overlap = !ea.has_interval() || !eb.has_interval() ? "–"
+                                    : ea.overlaps(eb)                        ? "overlap"
+                                                                             : "**apart**";
+        md += fmt::format("| {} | {} | {} | {} | {} |\n", id, shown(ea), shown(eb),
+                          va != 0 && std::isfinite(va) && std::isfinite(vb) ? fmt::format("{:.3f}", vb / va) : "–",
+                          overlap);
+      } else {
+        std::string va = found->text(*x), vb = found->text(*y);
+        md += fmt::format("| {} | {} | {} | {} | |\n", id, va, vb, va == vb ? "same" : "**differs**");
+      }
+    }
+    md += "\n";
+  }
+
+  std::vector<std::string> only_a, only_b;
+  for (auto& [id, x] : ma)
+    if (!mb.count(id)) only_a.push_back(id);
+  for (auto& [id, y] : mb)
+    if (!ma.count(id)) only_b.push_back(id);
+  md += fmt::format("## Cells in one set only\n\nOnly in A: {}\n\nOnly in B: {}\n\n", only_a.size(), only_b.size());
+  for (auto& id : only_a) md += "- A only: `" + id + "`\n";
+  for (auto& id : only_b) md += "- B only: `" + id + "`\n";
+
+  check_rules(rules, ma, mb, only_a, out);
   if (!out.violations.empty()) {
     md += fmt::format("\n## Regressions: {}\n\n", out.violations.size());
     for (auto& v : out.violations) md += "- " + v + "\n";

@@ -11,9 +11,13 @@ namespace raysort {
 // A rule "METRIC OP THRESHOLD" checked per cell present in both sets (B against A):
 //   speedup<-5%       fail if B is more than 5 % below A (relative) and the change is significant
 //   overhead_pct>+10% fail if B is more than 10 % above A and the change is significant
-//   anc!=             fail on any difference (exact; also for keys_hash, order_hash, status)
-//   anc!=0.01         fail if |B − A| > 0.01
+//   anc!=             fail on any difference (exact; every column, text ones too: keys_hash, status...)
+//   anc!=0.01         fail if |B − A| > 0.01 (number columns)
+//   status!=ok        fail if a cell of B has another value (text columns)
+//   status==timeout   fail if a cell of B has this value (text columns)
 //   missing           fail if a cell of A is absent from B (or failed in B but not in A)
+// Every column of cells.csv is a metric (record.h, cell_columns); a text column whose values form
+// a closed set (status, stopped_by, the true/false flags) refuses a value outside it.
 // Significant (relative rules on timed figures: speedup, net_speedup, overhead_pct, aa,
 // trace_mrays and the stage times): the change passes the threshold even between the nearest ends
 // of the two cells' 95 % intervals (speedup<-5%: B's upper end is more than 5 % below A's lower
@@ -23,13 +27,14 @@ namespace raysort {
 // the point rule, and the report says so. Deterministic figures (anc, simt_*) have no interval.
 struct FailRule {
   std::string metric;
-  enum Kind { RelativeDrop, RelativeRise, AnyChange, AbsoluteChange, Missing } kind = AnyChange;
+  enum Kind { RelativeDrop, RelativeRise, AnyChange, AbsoluteChange, Missing, ValueIs, ValueIsNot } kind = AnyChange;
   double threshold = 0.0;
+  std::string value;  // ValueIs, ValueIsNot
   static FailRule parse(const std::string& text);  // throws Error with the grammar and metric names
   std::string text;
 };
 
-// Metric names compare knows: numeric fields and fingerprints of CellRecord.
+// Metric names compare knows: the columns of cells.csv, and the timed figures with intervals.
 std::vector<std::string> comparable_metrics();
 
 struct CompareResult {
@@ -39,7 +44,14 @@ struct CompareResult {
   std::vector<std::string> within_noise;
 };
 
+// The two sets must have run one matrix (scenes, batches, encoders, bits, resolution, spp, seed,
+// variants, access modes, encoder parameters; the device and the measurement settings — reps,
+// warm-up, noise and time targets — may differ), or Error lists what differs, unless
+// allow_different_matrix (then the report says so).
 CompareResult compare_result_sets(const ResultSet& a, const ResultSet& b, const std::vector<std::string>& metrics,
-                                  const std::vector<FailRule>& rules);
+                                  const std::vector<FailRule>& rules, bool allow_different_matrix = false);
+
+// What differs between the matrices of two sets, leaving out the measurement settings; "" if nothing.
+std::string matrix_mismatch(const ResultSet& a, const ResultSet& b);
 
 }  // namespace raysort

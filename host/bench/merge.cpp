@@ -18,19 +18,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// "resolution \"48x27\" vs \"320x180\"; reps 1 vs 3": the keys of two matrix entries that differ.
-std::string matrix_differences(const nlohmann::json& a, const nlohmann::json& b) {
-  std::set<std::string> keys;
-  for (auto& [k, v] : a.items()) keys.insert(k);
-  for (auto& [k, v] : b.items()) keys.insert(k);
-  std::string out;
-  for (const auto& k : keys) {
-    nlohmann::json va = a.value(k, nlohmann::json()), vb = b.value(k, nlohmann::json());
-    if (va != vb) out += fmt::format("{}{} {} vs {}", out.empty() ? "" : "; ", k, va.dump(), vb.dump());
-  }
-  return out;
-}
-
 std::string device_name(const nlohmann::json& meta) {
   const auto& d = meta.value("device", nlohmann::json::object());
   return fmt::format("'{}' (driver {})", d.value("name", "?"), d.value("driver", "?"));
@@ -89,7 +76,7 @@ std::map<unsigned, std::string> check_one_run(const std::vector<Input>& sets, st
     if (a.value("matrix", nlohmann::json()) != b.value("matrix", nlohmann::json()))
       problems.push_back(fmt::format("{} ran another matrix than {} ({}); merge only the shards of one `raysort run` "
                                      "command (the same options, each with its own --shard i/N)",
-                                     in.dir, ref.dir, matrix_differences(b["matrix"], a["matrix"])));
+                                     in.dir, ref.dir, json_differences(b["matrix"], a["matrix"])));
     else if (in.count != ref.count)
       problems.push_back(fmt::format("{} is shard {}/{} but {} is shard {}/{}; merge the shards of one --shard i/N "
                                      "split",
@@ -211,8 +198,12 @@ void write_merged(const std::string& out, const nlohmann::json& meta, const std:
     ResultSet merged = ResultSet::open_for_run(tmp.string(), meta);
     merged.add_all(cells);
     merged.write_plots();
-    if (fs::exists(target)) fs::remove(target);  // an empty folder (checked above)
+    // An empty folder, or (with --force, checked above) a result set being replaced: moved aside
+    // first, so OUT is never half old, half new.
+    const fs::path old = parent / fmt::format(".{}.replaced-{}", target.filename().string(), ::getpid());
+    if (fs::exists(target)) fs::rename(target, old);
     fs::rename(tmp, target);
+    fs::remove_all(old, ec);
   } catch (const fs::filesystem_error& e) {
     fs::remove_all(tmp, ec);
     throw Error(fmt::format("-o {}: cannot write the merged result set ({}); nothing was written", out, e.what()));
@@ -225,13 +216,15 @@ void write_merged(const std::string& out, const nlohmann::json& meta, const std:
 }  // namespace
 
 MergeSummary merge_result_sets(const std::vector<std::string>& inputs, const std::string& out,
-                               const std::string& command) {
+                               const std::string& command, bool force) {
   if (inputs.empty()) throw Error("raysort merge: name the shards' result folders to merge, e.g. shards/* -o merged");
+  check_output_path(out, inputs, force, "-o");
   std::error_code ec;
-  if (fs::exists(out, ec) && !(fs::is_directory(out, ec) && fs::is_empty(out, ec)))
-    throw Error(fmt::format("-o {}: the folder already exists and is not empty; merge into a new folder (merge never "
-                            "overwrites results)",
-                            out));
+  if (force && fs::exists(out, ec) && !(fs::is_directory(out, ec) && fs::is_empty(out, ec)) &&
+      !fs::is_regular_file(fs::path(out) / "meta.json", ec))
+    throw Error(fmt::format("-o {} --force: replaces a result set only, and {} is not one (no meta.json); choose "
+                            "another folder",
+                            out, out));
   std::vector<std::string> problems;
   const std::vector<Input> sets = load_shards(inputs, problems);
   const std::map<unsigned, std::string> shard_dir = check_one_run(sets, problems);

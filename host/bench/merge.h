@@ -6,7 +6,7 @@
 // build (version and commit), and together hold every cell of the plan exactly once. Every
 // problem found is reported, one line each, naming the input folder and the fix; nothing is
 // written then. The output is built in a temporary folder beside OUT and renamed into place, so
-// OUT is either absent or complete; an existing non-empty OUT is never touched.
+// OUT is either absent or complete; an existing non-empty OUT is touched only with --force.
 #include <string>
 #include <vector>
 
@@ -19,8 +19,10 @@ struct MergeSummary {
   unsigned shard_count = 0;      // N of the --shard i/N split
 };
 
-// `command` is recorded in the merged meta.json. Throws Error listing every problem.
+// `command` is recorded in the merged meta.json. OUT is checked first (check_output_path in
+// bench/result_set.h): never an input or inside one; an existing result set is replaced only with
+// `force`. Throws Error listing every problem.
 MergeSummary merge_result_sets(const std::vector<std::string>& inputs, const std::string& out,
-                               const std::string& command);
+                               const std::string& command, bool force = false);
 
 }  // namespace raysort

@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 
 namespace raysort {
 
@@ -18,6 +20,14 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
+// A count (key bits, rays, rounds): a non-negative integer in JSON, never a float cast into one.
+template <class T>
+void count_from(const nlohmann::json& j, const char* key, T& out) {
+  const nlohmann::json& v = j.at(key);
+  if (!v.is_number_unsigned() || v.get<std::uint64_t>() > std::numeric_limits<T>::max())
+    throw std::runtime_error(fmt::format("\"{}\" is {}, not a count", key, v.dump()));
+  out = v.get<T>();
+}
 // A number that may be NaN (no interval): JSON null.
 nlohmann::json number(double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr); }
 double number_from(const nlohmann::json& j) { return j.is_null() ? kNaN : j.get<double>(); }
@@ -28,7 +38,9 @@ nlohmann::json estimate_json(const Estimate& e) {
 Estimate estimate_from(const nlohmann::json& j) {
   // Format version 1 stored a point figure.
   if (j.is_number()) return {j.get<double>(), kNaN, kNaN, 0};
-  return {number_from(j.at("value")), number_from(j.at("lo")), number_from(j.at("hi")), j.at("n").get<std::size_t>()};
+  Estimate e{number_from(j.at("value")), number_from(j.at("lo")), number_from(j.at("hi")), 0};
+  count_from(j, "n", e.n);
+  return e;
 }
 
 void timing_to_json(nlohmann::json& j, const char* name, const Timing& t) {
@@ -44,7 +56,7 @@ void timing_from_json(const nlohmann::json& j, const char* name, Timing& t) {
   t.max_ms = o.at("max").get<double>();
   t.lo_ms = o.contains("lo") ? number_from(o.at("lo")) : kNaN;
   t.hi_ms = o.contains("hi") ? number_from(o.at("hi")) : kNaN;
-  t.n = o.value("n", std::size_t{0});
+  if (o.contains("n")) count_from(o, "n", t.n);
 }
 
 }  // namespace
@@ -97,11 +109,11 @@ void from_json(const nlohmann::json& j, CellRecord& r) {
   j.at("scene").get_to(r.scene);
   j.at("batch").get_to(r.batch);
   j.at("encoder").get_to(r.encoder);
-  j.at("bits").get_to(r.bits);
-  j.at("top_bits").get_to(r.top_bits);
+  count_from(j, "bits", r.bits);
+  count_from(j, "top_bits", r.top_bits);
   j.at("variant").get_to(r.variant);
   j.at("access").get_to(r.access);
-  j.at("rays").get_to(r.rays);
+  count_from(j, "rays", r.rays);
   j.at("status").get_to(r.status);
   j.at("error").get_to(r.error);
   j.at("trace_mrays").get_to(r.trace_mrays);
@@ -111,7 +123,7 @@ void from_json(const nlohmann::json& j, CellRecord& r) {
   if (version >= 2) {
     r.aa = estimate_from(j.at("aa"));
     j.at("same_order_as_nosort").get_to(r.same_order_as_nosort);
-    j.at("rounds").get_to(r.rounds);
+    count_from(j, "rounds", r.rounds);
     j.at("stopped_by").get_to(r.stopped_by);
     r.noise = number_from(j.at("noise"));
     j.at("samples").get_to(r.samples);
@@ -144,41 +156,131 @@ std::string fnv1a_hex(const void* data, std::size_t bytes) {
 }
 
 namespace {
+
 // An empty CSV field for a missing figure (no interval).
 std::string csv_number(double x, int decimals) { return std::isfinite(x) ? fmt::format("{:.{}f}", x, decimals) : ""; }
-std::string csv_estimate(const Estimate& e, int decimals) {
-  return csv_number(e.value, decimals) + "," + csv_number(e.lo, decimals) + "," + csv_number(e.hi, decimals);
+
+using Col = CellColumn;
+using Text = std::function<std::string(const CellRecord&)>;
+using Value = std::function<double(const CellRecord&)>;
+
+Col text(std::string name, Text f, std::vector<std::string> vocabulary = {}) {
+  return {std::move(name), Col::Text, std::move(f), nullptr, std::move(vocabulary)};
 }
-std::string csv_timing(const Timing& t) {
-  return fmt::format("{:.4f},{},{},{:.4f},{:.4f}", t.median_ms, csv_number(t.lo_ms, 4), csv_number(t.hi_ms, 4),
-                     t.min_ms, t.max_ms);
+Col flag(std::string name, bool CellRecord::*member) {
+  return text(std::move(name), [member](const CellRecord& r) { return std::string(r.*member ? "true" : "false"); },
+              {"true", "false"});
 }
+// A number printed with `decimals` (fixed) or, with decimals < 0, as an integer.
+Col numeric(std::string name, Value f, int decimals) {
+  Text csv = [f, decimals](const CellRecord& r) {
+    const double x = f(r);
+    return decimals < 0 ? fmt::format("{}", static_cast<std::uint64_t>(x)) : csv_number(x, decimals);
+  };
+  return {std::move(name), Col::Number, std::move(csv), std::move(f), {}};
+}
+
+void add_timing(std::vector<Col>& cols, const std::string& stage, Timing CellRecord::*t) {
+  cols.push_back(numeric(stage + "_ms", [t](const CellRecord& r) { return (r.*t).median_ms; }, 4));
+  cols.push_back(numeric(stage + "_lo_ms", [t](const CellRecord& r) { return (r.*t).lo_ms; }, 4));
+  cols.push_back(numeric(stage + "_hi_ms", [t](const CellRecord& r) { return (r.*t).hi_ms; }, 4));
+  cols.push_back(numeric(stage + "_min_ms", [t](const CellRecord& r) { return (r.*t).min_ms; }, 4));
+  cols.push_back(numeric(stage + "_max_ms", [t](const CellRecord& r) { return (r.*t).max_ms; }, 4));
+}
+void add_estimate(std::vector<Col>& cols, const std::string& name, Estimate CellRecord::*e, int decimals) {
+  cols.push_back(numeric(name, [e](const CellRecord& r) { return (r.*e).value; }, decimals));
+  cols.push_back(numeric(name + "_lo", [e](const CellRecord& r) { return (r.*e).lo; }, decimals));
+  cols.push_back(numeric(name + "_hi", [e](const CellRecord& r) { return (r.*e).hi; }, decimals));
+}
+
+std::vector<Col> make_columns() {
+  std::vector<Col> c;
+  c.push_back(text("id", [](const CellRecord& r) { return r.id(); }));
+  c.push_back(text("scene", [](const CellRecord& r) { return r.scene; }));
+  c.push_back(text("batch", [](const CellRecord& r) { return r.batch; }));
+  c.push_back(text("encoder", [](const CellRecord& r) { return r.encoder; }));
+  c.push_back(numeric("bits", [](const CellRecord& r) { return r.bits; }, -1));
+  c.push_back(numeric("top_bits", [](const CellRecord& r) { return r.top_bits; }, -1));
+  c.push_back(text("variant", [](const CellRecord& r) { return r.variant; }, {"robust", "fast"}));
+  c.push_back(text("access", [](const CellRecord& r) { return r.access; }, {"gather", "permute"}));
+  c.push_back(numeric("rays", [](const CellRecord& r) { return static_cast<double>(r.rays); }, -1));
+  c.push_back(text("status", [](const CellRecord& r) { return r.status; }, cell_statuses()));
+  add_timing(c, "encode", &CellRecord::encode);
+  add_timing(c, "sort", &CellRecord::sort);
+  add_timing(c, "permute", &CellRecord::permute);
+  add_timing(c, "trace", &CellRecord::trace);
+  add_timing(c, "nosort_trace", &CellRecord::nosort_trace);
+  c.push_back(numeric("trace_mrays", [](const CellRecord& r) { return r.trace_mrays; }, 4));
+  add_estimate(c, "speedup", &CellRecord::speedup, 4);
+  add_estimate(c, "net_speedup", &CellRecord::net_speedup, 4);
+  add_estimate(c, "overhead_pct", &CellRecord::overhead_pct, 3);
+  add_estimate(c, "aa", &CellRecord::aa, 4);
+  c.push_back(flag("same_order_as_nosort", &CellRecord::same_order_as_nosort));
+  c.push_back(numeric("rounds", [](const CellRecord& r) { return r.rounds; }, -1));
+  c.push_back(text("stopped_by", [](const CellRecord& r) { return r.stopped_by; }, {"noise", "time", "rounds", ""}));
+  c.push_back(numeric("noise", [](const CellRecord& r) { return r.noise; }, 5));
+  c.push_back(numeric("anc", [](const CellRecord& r) { return r.anc; }, 4));
+  c.push_back(numeric("simt_lane_efficiency", [](const CellRecord& r) { return r.simt_lane_efficiency; }, 6));
+  c.push_back(numeric("simt_distinct_per_visit", [](const CellRecord& r) { return r.simt_distinct_per_visit; }, 6));
+  c.push_back(numeric("simt_lane_efficiency_ratio", [](const CellRecord& r) { return r.simt_lane_efficiency_ratio; }, 6));
+  c.push_back(
+      numeric("simt_distinct_per_visit_ratio", [](const CellRecord& r) { return r.simt_distinct_per_visit_ratio; }, 6));
+  c.push_back(flag("hits_match_nosort", &CellRecord::hits_match_nosort));
+  c.push_back(flag("order_is_permutation", &CellRecord::order_is_permutation));
+  c.push_back(text("keys_hash", [](const CellRecord& r) { return r.keys_hash; }));
+  c.push_back(text("order_hash", [](const CellRecord& r) { return r.order_hash; }));
+  c.push_back(text("error", [](const CellRecord& r) {  // quoted, without quotes or line breaks inside
+    std::string err = r.error;
+    std::replace(err.begin(), err.end(), '"', '\'');
+    std::replace(err.begin(), err.end(), '\n', ' ');
+    return "\"" + err + "\"";
+  }));
+  return c;
+}
+
 }  // namespace
 
+const std::vector<CellColumn>& cell_columns() {
+  static const std::vector<CellColumn> columns = make_columns();
+  return columns;
+}
+
+const CellColumn* find_cell_column(const std::string& name) {
+  for (const auto& c : cell_columns())
+    if (c.name == name) return &c;
+  return nullptr;
+}
+
 std::string csv_header() {
-  std::string timing_cols;
-  for (const char* t : {"encode", "sort", "permute", "trace", "nosort_trace"})
-    timing_cols += fmt::format("{0}_ms,{0}_lo_ms,{0}_hi_ms,{0}_min_ms,{0}_max_ms,", t);
-  return "id,scene,batch,encoder,bits,top_bits,variant,access,rays,status," + timing_cols +
-         "trace_mrays,speedup,speedup_lo,speedup_hi,net_speedup,net_speedup_lo,net_speedup_hi,"
-         "overhead_pct,overhead_pct_lo,overhead_pct_hi,aa,aa_lo,aa_hi,same_order_as_nosort,rounds,stopped_by,noise,"
-         "anc,simt_lane_efficiency,simt_distinct_per_visit,simt_lane_efficiency_ratio,simt_distinct_per_visit_ratio,"
-         "hits_match_nosort,order_is_permutation,keys_hash,order_hash,error";
+  std::string s;
+  for (const auto& c : cell_columns()) s += (s.empty() ? "" : ",") + c.name;
+  return s;
 }
 
 std::string csv_row(const CellRecord& r) {
-  std::string err = r.error;
-  std::replace(err.begin(), err.end(), '"', '\'');
-  std::replace(err.begin(), err.end(), '\n', ' ');
-  std::string timings;
-  for (const Timing* t : {&r.encode, &r.sort, &r.permute, &r.trace, &r.nosort_trace}) timings += csv_timing(*t) + ",";
-  return fmt::format("{},{},{},{},{},{},{},{},{},{},{}{:.4f},{},{},{},{},{},{},{},{},{:.4f},{:.6f},{:.6f},{:.6f},{:.6f},{},{},{},{},\"{}\"",
-                     r.id(), r.scene, r.batch, r.encoder, r.bits, r.top_bits, r.variant, r.access, r.rays, r.status,
-                     timings, r.trace_mrays, csv_estimate(r.speedup, 4), csv_estimate(r.net_speedup, 4),
-                     csv_estimate(r.overhead_pct, 3), csv_estimate(r.aa, 4), r.same_order_as_nosort, r.rounds,
-                     r.stopped_by, csv_number(r.noise, 5), r.anc, r.simt_lane_efficiency, r.simt_distinct_per_visit,
-                     r.simt_lane_efficiency_ratio, r.simt_distinct_per_visit_ratio, r.hits_match_nosort,
-                     r.order_is_permutation, r.keys_hash, r.order_hash, err);
+  std::string s;
+  for (const auto& c : cell_columns()) {
+    if (&c != &cell_columns().front()) s += ',';
+    s += c.csv(r);
+  }
+  return s;
+}
+
+std::string cell_record_problem(const CellRecord& r) {
+  for (const auto& c : cell_columns()) {
+    if (c.kind == CellColumn::Text && !c.vocabulary.empty() &&
+        std::find(c.vocabulary.begin(), c.vocabulary.end(), c.csv(r)) == c.vocabulary.end()) {
+      std::string known;
+      for (const auto& v : c.vocabulary) known += (known.empty() ? "" : ", ") + (v.empty() ? "\"\"" : v);
+      return fmt::format("{} \"{}\" is not one of {}", c.name, c.csv(r), known);
+    }
+    if (c.kind == CellColumn::Number) {
+      const double x = c.value(r);
+      // No interval (NaN) is a valid state of the _lo/_hi columns, of noise and of a v1 speedup.
+      if (std::isinf(x) || x < 0) return fmt::format("{} is {}; it must be a finite number, 0 or more", c.name, x);
+    }
+  }
+  return "";
 }
 
 }  // namespace raysort

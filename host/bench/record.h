@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -88,7 +89,30 @@ void from_json(const nlohmann::json& j, CellRecord& r);
 // FNV-1a 64 over raw bytes, as 16 hex digits.
 std::string fnv1a_hex(const void* data, std::size_t bytes);
 
-// CSV header and row, in one column order.
+// Why a record read from disk cannot be a cell this raysort wrote, or "" when it can: a status
+// outside the vocabulary (ok, failed, timeout), a negative or non-finite time or count, a trace
+// variant, access mode or stopping reason this raysort does not know.
+std::string cell_record_problem(const CellRecord& r);
+inline const std::vector<std::string>& cell_statuses() {
+  static const std::vector<std::string> s{"ok", "failed", "timeout"};
+  return s;
+}
+
+// The columns of cells.csv, in order: the one list behind the CSV header, its rows and the
+// metrics `raysort compare` tabulates and checks rules on (every column is usable in a rule).
+struct CellColumn {
+  std::string name;
+  enum Kind { Number, Text } kind = Number;
+  std::function<std::string(const CellRecord&)> csv;  // the CSV field
+  std::function<double(const CellRecord&)> value;     // Number columns: the figure (NaN: none)
+  // Text columns whose values form a closed set (status, stopped_by, the true/false flags): a rule
+  // naming another value is refused. Empty: any value.
+  std::vector<std::string> vocabulary;
+};
+const std::vector<CellColumn>& cell_columns();
+const CellColumn* find_cell_column(const std::string& name);
+
+// CSV header and row, in the order of cell_columns().
 std::string csv_header();
 std::string csv_row(const CellRecord& r);
 

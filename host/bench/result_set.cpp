@@ -4,22 +4,24 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <set>
 
 #include "bench/plots.h"
 #include "util/atomic_file.h"
 #include "util/error.h"
+#include "util/text.h"
 
 namespace raysort {
 
 namespace fs = std::filesystem;
-
-namespace {
 
 std::string cell_file_name(const std::string& id) {
   std::string s;
   for (char c : id) s += (c == '/') ? std::string("__") : std::string(1, c);
   return s + ".json";
 }
+
+namespace {
 
 // Reading accepts every version this raysort knows (older sets stay comparable); a run resumes
 // only into a set of the current version (for_run).
@@ -35,21 +37,103 @@ void check_version(const nlohmann::json& meta, const std::string& path, bool for
                             path, v, kOldestReadableFormatVersion, kResultFormatVersion));
 }
 
-void read_cells(const std::string& dir, std::map<std::string, CellRecord>& cells) {
-  fs::path cdir = fs::path(dir) / "cells";
-  if (!fs::exists(cdir)) return;
-  for (const auto& entry : fs::directory_iterator(cdir)) {
-    const auto& p = entry.path();
-    if (p.extension() != ".json") continue;  // leftover *.tmp.<pid> files of a killed run are ignored
-    try {
-      auto j = nlohmann::json::parse(read_file(p.string()));
-      CellRecord r = j.get<CellRecord>();
-      cells[r.id()] = r;
-    } catch (const Error&) {
-      throw;
-    } catch (const std::exception& e) {
-      throw Error(fmt::format("{}: unreadable cell record ({}); delete the file to rerun that cell", p.string(), e.what()));
-    }
+// A leftover of write_file_atomically ("NAME.tmp.<pid>") from a writer that was killed mid-write.
+bool is_temporary_file(const fs::path& p) { return p.filename().string().find(".tmp.") != std::string::npos; }
+
+// meta.json is read by resume, compare, merge and the views: every entry they read must have the
+// type they read it as, or one Error names the entry (not a json exception deep in a reader).
+void check_meta_shape(const nlohmann::json& meta, const std::string& path) {
+  if (!meta.is_object())
+    throw Error(fmt::format("{}: not a result set's meta.json (a JSON object), but a JSON {}; restore the file, or "
+                            "choose another folder",
+                            path, meta.type_name()));
+  enum Kind { Count, Text, Object, List };
+  auto expect = [&](const nlohmann::json& obj, const std::string& where, const char* key, Kind kind) {
+    if (!obj.contains(key)) return;
+    const nlohmann::json& v = obj[key];
+    const bool ok = kind == Count ? v.is_number_unsigned() : kind == Text ? v.is_string() : kind == Object ? v.is_object()
+                                                                                                         : v.is_array();
+    if (!ok)
+      throw Error(fmt::format("{}: \"{}{}\" is a JSON {}, not {}; restore the file (it was edited or damaged)", path,
+                              where, key, v.type_name(),
+                              kind == Count ? "a count" : kind == Text ? "a string" : kind == Object ? "an object" : "a list"));
+  };
+  expect(meta, "", "format_version", Count);
+  expect(meta, "", "matrix", Object);
+  expect(meta, "", "device", Object);
+  expect(meta, "", "shard", Object);
+  expect(meta, "", "absent_cells", List);
+  expect(meta, "", "merged_from", List);
+  expect(meta, "", "resumed", Count);
+  for (const char* key : {"git_commit", "raysort_version", "command", "date", "host_cpu"}) expect(meta, "", key, Text);
+  if (meta.contains("device"))
+    for (const char* key : {"name", "type", "platform", "platform_version", "opencl", "opencl_c", "driver", "slug"})
+      expect(meta["device"], "device.", key, Text);
+  if (meta.contains("shard")) {
+    const nlohmann::json& shard = meta["shard"];
+    for (const char* key : {"index", "count", "cells"}) expect(shard, "shard.", key, Count);
+    expect(shard, "shard.", "plan_hash", Text);
+    expect(shard, "shard.", "plan", Object);
+    if (shard.contains("plan"))
+      for (const auto& [id, index] : shard["plan"].items())
+        if (!index.is_number_unsigned())
+          throw Error(fmt::format("{}: shard.plan[\"{}\"] is not a shard number; restore the file", path, id));
+  }
+  if (meta.contains("absent_cells"))
+    for (const auto& id : meta["absent_cells"])
+      if (!id.is_string()) throw Error(fmt::format("{}: absent_cells holds a {}, not a cell id; restore the file", path, id.type_name()));
+}
+
+// One cell file: its JSON, the record it holds, and that record being the cell its name says,
+// valid, and inside the matrix of its set.
+CellRecord read_cell_file(const fs::path& p, const nlohmann::json& matrix) {
+  const std::string file = p.string();
+  const std::string fix = "delete the file to rerun that cell";
+  std::error_code ec;
+  if (!fs::is_regular_file(p, ec)) throw Error(fmt::format("{}: not a cell record (not a regular file); remove it", file));
+  CellRecord r;
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(read_file(file));
+    r = j.get<CellRecord>();
+  } catch (const Error&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw Error(fmt::format("{}: unreadable cell record ({}); {}", file, e.what(), fix));
+  }
+  const std::string id = r.id();
+  if (j.contains("id") && j["id"] != id)
+    throw Error(fmt::format("{}: its \"id\" is {} but its fields make cell {}; {}", file, j["id"].dump(), id, fix));
+  if (p.filename().string() != cell_file_name(id))
+    throw Error(fmt::format("{} holds cell {}, whose file is {}: a cell file names its cell (an edited or copied "
+                            "record); {}",
+                            file, id, cell_file_name(id), fix));
+  if (std::string problem = cell_record_problem(r); !problem.empty())
+    throw Error(fmt::format("{}: cell {}: {}; {}", file, id, problem, fix));
+  if (std::string outside = cell_outside_matrix(r, matrix); !outside.empty())
+    throw Error(fmt::format("{}: cell {} is outside the matrix of this result set ({}); {}", file, id, outside, fix));
+  return r;
+}
+
+void read_cells(const std::string& dir, const nlohmann::json& meta, std::map<std::string, CellRecord>& cells) {
+  const fs::path cdir = fs::path(dir) / "cells";
+  std::error_code ec;
+  if (!fs::exists(cdir, ec)) return;
+  if (!fs::is_directory(cdir, ec))
+    throw Error(fmt::format("{}: not a folder, so {} is not a result set (its cells live in cells/); restore it, or "
+                            "choose another folder",
+                            cdir.string(), dir));
+  const nlohmann::json matrix = meta.value("matrix", nlohmann::json());
+  std::vector<fs::path> files;
+  for (fs::directory_iterator it(cdir, ec), end; !ec && it != end; it.increment(ec))
+    if (it->path().extension() == ".json") files.push_back(it->path());  // *.tmp.<pid> leftovers are not cells
+  if (ec) throw Error(fmt::format("cannot list {}: {}", cdir.string(), ec.message()));
+  std::sort(files.begin(), files.end());  // the first error found is the same on every machine
+  for (const auto& p : files) {
+    CellRecord r = read_cell_file(p, matrix);
+    const std::string id = r.id();
+    if (!cells.emplace(id, std::move(r)).second)  // unreachable while names are checked; kept as the invariant
+      throw Error(fmt::format("{}: a second file holds cell {}; delete one of them", p.string(), id));
   }
 }
 
@@ -83,28 +167,73 @@ void check_same_shard(const nlohmann::json& old, const nlohmann::json& meta, con
 
 }  // namespace
 
+namespace {
+
+// The entries of a folder that are not a writer's own leftovers (the lock file, temporary files).
+bool has_user_entries(const fs::path& dir) {
+  std::error_code ec;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec))
+    if (it->path().filename() != FolderLock::kFileName && !is_temporary_file(it->path())) return true;
+  return false;
+}
+
+bool has_cell_files(const fs::path& cdir) {
+  std::error_code ec;
+  for (fs::directory_iterator it(cdir, ec), end; !ec && it != end; it.increment(ec))
+    if (it->path().extension() == ".json") return true;
+  return false;
+}
+
+void remove_temporary_files(const fs::path& dir) {
+  std::error_code ec;
+  std::vector<fs::path> leftovers;
+  for (const fs::path& d : {dir, dir / "cells"})
+    for (fs::directory_iterator it(d, ec), end; !ec && it != end; it.increment(ec))
+      if (is_temporary_file(it->path())) leftovers.push_back(it->path());
+  for (const auto& p : leftovers) fs::remove(p, ec);
+}
+
+}  // namespace
+
 ResultSet ResultSet::open_for_run(const std::string& dir, const nlohmann::json& meta) {
   ResultSet rs;
   rs.dir_ = dir;
   rs.meta_ = meta;
-  fs::path meta_path = fs::path(dir) / "meta.json";
+  const fs::path meta_path = fs::path(dir) / "meta.json";
   std::error_code ec;
+  if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
+    throw Error(fmt::format("--out {}: a file, not a folder; choose a new folder for the result set", dir));
+  const bool looks_like_set = fs::exists(meta_path, ec) || fs::exists(fs::path(dir) / "cells", ec) ||
+                              fs::exists(fs::path(dir) / FolderLock::kFileName, ec);
+  if (!looks_like_set && fs::exists(dir, ec) && has_user_entries(dir))
+    throw Error(fmt::format("--out {}: the folder is not empty and is not a result set (no meta.json); choose a new "
+                            "or empty folder (raysort never writes among other files)",
+                            dir));
   fs::create_directories(fs::path(dir) / "cells", ec);
   if (ec) throw Error(fmt::format("cannot create result folder '{}': {}", dir, ec.message()));
-  if (fs::exists(meta_path)) {
+  rs.lock_ = FolderLock::acquire(dir, meta.value("command", "raysort"), "result set");
+  remove_temporary_files(dir);
+  if (!fs::exists(meta_path, ec) && has_cell_files(fs::path(dir) / "cells"))
+    throw Error(fmt::format("--out {}: holds cell records but no meta.json, so what they measured cannot be checked "
+                            "(and a run would measure every cell again over them); restore its meta.json, or choose "
+                            "another folder",
+                            dir));
+  if (fs::exists(meta_path, ec)) {
     nlohmann::json old;
     try {
       old = nlohmann::json::parse(read_file(meta_path.string()));
     } catch (const nlohmann::json::exception& e) {
       throw Error(fmt::format("{}: not valid JSON ({}); choose another --out folder", meta_path.string(), e.what()));
     }
+    check_meta_shape(old, meta_path.string());
     check_version(old, meta_path.string(), true);
     if (old.value("matrix", nlohmann::json()) != meta.value("matrix", nlohmann::json()))
-      throw Error(fmt::format("{} holds results of a different matrix configuration; choose another --out folder "
+      throw Error(fmt::format("{} holds results of a different matrix configuration ({}); choose another --out folder "
                               "(or delete it to start over)",
-                              dir));
+                              dir, json_differences(meta.value("matrix", nlohmann::json::object()),
+                                                    old.value("matrix", nlohmann::json::object()))));
     check_same_shard(old, meta, dir);
-    read_cells(dir, rs.cells_);
+    read_cells(dir, old, rs.cells_);
     // Keep the original meta (first start), but record that the run was resumed.
     rs.meta_ = old;
     rs.meta_["resumed"] = rs.meta_.value("resumed", 0) + 1;
@@ -115,7 +244,8 @@ ResultSet ResultSet::open_for_run(const std::string& dir, const nlohmann::json& 
 
 ResultSet ResultSet::load(const std::string& dir) {
   fs::path meta_path = fs::path(dir) / "meta.json";
-  if (!fs::exists(meta_path)) throw Error(fmt::format("'{}' is not a result set (no meta.json)", dir));
+  std::error_code ec;
+  if (!fs::is_regular_file(meta_path, ec)) throw Error(fmt::format("'{}' is not a result set (no meta.json)", dir));
   ResultSet rs;
   rs.dir_ = dir;
   try {
@@ -123,9 +253,15 @@ ResultSet ResultSet::load(const std::string& dir) {
   } catch (const nlohmann::json::exception& e) {
     throw Error(fmt::format("{}: not valid JSON ({})", meta_path.string(), e.what()));
   }
+  check_meta_shape(rs.meta_, meta_path.string());
   check_version(rs.meta_, meta_path.string(), false);
-  read_cells(dir, rs.cells_);
+  read_cells(dir, rs.meta_, rs.cells_);
   return rs;
+}
+
+void ResultSet::lock_for_writing(const std::string& command) {
+  if (!lock_) lock_ = FolderLock::acquire(dir_, command, "result set");
+  remove_temporary_files(dir_);
 }
 
 const CellRecord* ResultSet::find(const std::string& id) const {
@@ -179,6 +315,79 @@ void ResultSet::write_views() const {
   write_file_atomically((fs::path(dir_) / "meta.json").string(), meta.dump(2) + "\n");
   write_file_atomically((fs::path(dir_) / "cells.csv").string(), csv);
   write_file_atomically((fs::path(dir_) / "tables.md").string(), render_tables(all, meta_));
+}
+
+std::string cell_outside_matrix(const CellRecord& c, const nlohmann::json& m) {
+  if (!m.is_object()) return "";
+  // A list entry (scenes, encoders, bits, ...) or a comma-joined string (variant, access); a set
+  // written before an axis existed has no entry for it, and every value passes.
+  auto listed = [&](const char* key, const nlohmann::json& v) {
+    if (!m.contains(key)) return true;
+    const auto& e = m[key];
+    if (e.is_string()) {
+      const std::vector<std::string> items = split_list(e.get<std::string>());
+      return v.is_string() && std::find(items.begin(), items.end(), v.get<std::string>()) != items.end();
+    }
+    if (!e.is_array()) return true;
+    return std::find(e.begin(), e.end(), v) != e.end();
+  };
+  if (!listed("scenes", c.scene)) return fmt::format("scene '{}' is not one of its scenes", c.scene);
+  if (m.contains("batches") && m["batches"].is_array() && !m["batches"].empty() && !listed("batches", c.batch))
+    return fmt::format("batch '{}' is not one of its batches", c.batch);
+  if (!listed("variant", c.variant)) return fmt::format("trace variant '{}' is not one of its variants", c.variant);
+  if (c.encoder == kBaselineEncoder) {
+    if (c.bits != 0 || c.top_bits != 0 || c.access != "gather")
+      return "a NoSort cell has 0 key bits, no top-k and gather access";
+    return "";
+  }
+  if (!listed("encoders", c.encoder)) return fmt::format("encoder '{}' is not one of its encoders", c.encoder);
+  const bool key_length_scene = m.contains("key_length_scenes") && listed("key_length_scenes", c.scene) &&
+                                m["key_length_scenes"].is_array() && !m["key_length_scenes"].empty();
+  if (!listed("bits", c.bits) && !(key_length_scene && listed("key_length_bits", c.bits)))
+    return fmt::format("{}-bit keys are not among its key lengths for scene '{}'", c.bits, c.scene);
+  if (c.top_bits != 0 && !listed("top_bits", c.top_bits)) return fmt::format("top-{} is not one of its top-k", c.top_bits);
+  if (!listed("access", c.access)) return fmt::format("access mode '{}' is not one of its access modes", c.access);
+  return "";
+}
+
+std::string json_differences(const nlohmann::json& a, const nlohmann::json& b, const std::vector<std::string>& only) {
+  std::set<std::string> keys(only.begin(), only.end());
+  if (only.empty()) {
+    if (a.is_object())
+      for (auto& [k, v] : a.items()) keys.insert(k);
+    if (b.is_object())
+      for (auto& [k, v] : b.items()) keys.insert(k);
+  }
+  std::string out;
+  for (const auto& k : keys) {
+    nlohmann::json va = a.is_object() ? a.value(k, nlohmann::json()) : nlohmann::json();
+    nlohmann::json vb = b.is_object() ? b.value(k, nlohmann::json()) : nlohmann::json();
+    if (va != vb) out += fmt::format("{}{} {} vs {}", out.empty() ? "" : "; ", k, va.dump(), vb.dump());
+  }
+  return out;
+}
+
+void check_output_path(const std::string& out, const std::vector<std::string>& inputs, bool force,
+                       const std::string& option) {
+  if (out.empty()) throw Error(fmt::format("{} '': name the output, e.g. {} merged", option, option));
+  std::error_code ec;
+  const fs::path target = fs::weakly_canonical(fs::absolute(out, ec), ec);
+  auto within = [](const fs::path& inner, const fs::path& outer) {  // inner == outer or below it
+    auto [o, i] = std::mismatch(outer.begin(), outer.end(), inner.begin(), inner.end());
+    return o == outer.end();
+  };
+  for (const auto& in : inputs) {
+    const fs::path input = fs::weakly_canonical(fs::absolute(in, ec), ec);
+    if (within(target, input))
+      throw Error(fmt::format("{} {}: inside the input {}; write the output outside every input folder (an input "
+                              "must stay readable as it was)",
+                              option, out, in));
+    if (within(input, target))
+      throw Error(fmt::format("{} {}: holds the input {}; write the output to a folder of its own", option, out, in));
+  }
+  if (!fs::exists(target, ec) || force) return;
+  if (fs::is_directory(target, ec) && fs::is_empty(target, ec)) return;
+  throw Error(fmt::format("{} {}: already exists; choose a new name, or pass --force to replace it", option, out));
 }
 
 void ResultSet::write_plots() const { raysort::write_plots(cells(), dir_); }

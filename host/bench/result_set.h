@@ -6,10 +6,12 @@
 #include <nlohmann/json.hpp>
 
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "bench/record.h"
+#include "util/folder_lock.h"
 
 namespace raysort {
 
@@ -19,9 +21,16 @@ class ResultSet {
   // its "matrix" entry must equal meta["matrix"] (same configuration), and its "shard" entry
   // (bench/shard.h) name the same shard of the same plan, or an Error says so;
   // its finished cells are kept and reported by has().
+  // A result set has one writer: the set is locked (util/folder_lock.h) while the object lives, and
+  // a second writer fails at once naming the holder; the leftover temporary files of a killed
+  // writer are removed. A folder that is not empty and not a result set (no meta.json), or a set
+  // whose meta.json is missing, is refused before anything is written.
   static ResultSet open_for_run(const std::string& dir, const nlohmann::json& meta);
-  // Reads a finished (or partial) result set. Throws Error for a missing set or another format.
+  // Reads a finished (or partial) result set, lock-free. Throws Error for a missing set, another
+  // format, or a cell file that is not what its name says (validate_cell_file).
   static ResultSet load(const std::string& dir);
+  // Takes the writer's lock of a loaded set (raysort report rewrites its views).
+  void lock_for_writing(const std::string& command);
 
   bool has(const std::string& cell_id) const { return cells_.count(cell_id) > 0; }
   const CellRecord* find(const std::string& cell_id) const;
@@ -42,7 +51,27 @@ class ResultSet {
   std::string dir_;
   nlohmann::json meta_;
   std::map<std::string, CellRecord> cells_;
+  std::shared_ptr<FolderLock> lock_;
 };
+
+// The file name of a cell in DIR/cells ("/" in the id becomes "__").
+std::string cell_file_name(const std::string& cell_id);
+
+// Why a cell cannot belong to the matrix of a meta.json ("encoder 'x' is not one of its
+// encoders"), or "" when it can. Checks the axes only (scenes, batches, encoders, bits, top-k,
+// variants, access modes); `raysort run` also checks its plan.
+std::string cell_outside_matrix(const CellRecord& cell, const nlohmann::json& matrix);
+
+// "resolution \"48x27\" vs \"320x180\"; reps 1 vs 3": the entries of two JSON objects that differ,
+// restricted to `keys` when it is not empty.
+std::string json_differences(const nlohmann::json& a, const nlohmann::json& b,
+                             const std::vector<std::string>& keys = {});
+
+// Checks an output path before anything is written: not empty, not an input folder nor inside one
+// (nor holding one), and not an existing file or non-empty folder unless `force`. `option` names
+// it in the message ("-o", "--out"). Throws Error naming the path and the fix.
+void check_output_path(const std::string& out, const std::vector<std::string>& inputs, bool force,
+                       const std::string& option);
 
 // The paper's tables from a set of cells, as markdown (see tables.cpp).
 std::string render_tables(const std::vector<CellRecord>& cells, const nlohmann::json& meta);

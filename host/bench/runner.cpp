@@ -232,6 +232,18 @@ void check_scenes_before_work(const MatrixSpec& spec, const RunOptions& opts) {
   }
 }
 
+// Every cell the set holds must be one the matrix plans: a cell file of another matrix (copied in,
+// or left from a plan whose scene files changed) would be reported as if this run measured it.
+void check_cells_planned(const ResultSet& results, const std::vector<PlannedCell>& full_plan) {
+  std::set<std::string> planned;
+  for (const auto& c : full_plan) planned.insert(c.id);
+  for (const auto& c : results.cells())
+    if (!planned.count(c.id()))
+      throw Error(fmt::format("{}/cells/{}: cell {} is not a cell this matrix plans (its scene has no such batch, or "
+                              "the file came from another run); delete the file",
+                              results.dir(), cell_file_name(c.id()), c.id()));
+}
+
 }  // namespace
 
 std::string default_result_dir(const MatrixSpec& spec, const std::string& device_slug, const ShardSpec& shard) {
@@ -262,6 +274,7 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
   nlohmann::json meta = run_meta(spec, opts, rt.info());
   if (opts.shard.active()) meta["shard"] = shard_meta(spec, opts.shard, full_plan);
   ResultSet results = ResultSet::open_for_run(summary.out_dir, meta);
+  check_cells_planned(results, full_plan);
   fmt::print(stderr, "raysort run: {}{} on {}; results in {}\n", spec.preset.empty() ? "custom matrix" : spec.preset,
              opts.shard.active() ? fmt::format(", shard {} ({} of {} cells)", opts.shard.str(), plan.size(), full_plan.size())
                                  : "",
@@ -293,9 +306,11 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
   for (auto& scene_cells : runs_of(plan, [](const PlannedCell& c) { return c.scene; })) {  // → scene
     if (g_interrupted) break;
     std::erase_if(scene_cells, [&](const PlannedCell& c) {
-      const bool done = results.has(c.id);
-      summary.cells_skipped += done, progress.done += done;
-      return done;
+      const CellRecord* had = results.find(c.id);
+      const bool keep = had && (had->ok() || opts.no_retry);  // failed and timed-out cells run again
+      summary.cells_skipped += keep, progress.done += keep;
+      summary.cells_retried += had && !keep;
+      return keep;
     });
     if (scene_cells.empty()) continue;
     SceneBench scene(rt, scene_cells.front().scene, spec, opts.scene_root, progress);
@@ -339,6 +354,12 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
   results.write_views();
   results.write_plots();
   summary.interrupted = g_interrupted;
+  const std::set<std::string> absent_ids(absent.begin(), absent.end());
+  for (const auto& c : plan) {
+    const CellRecord* r = results.find(c.id);
+    summary.cells_not_ok += r && !r->ok();
+    summary.cells_missing += !r && !absent_ids.count(c.id);
+  }
   return summary;
 }
 

@@ -17,11 +17,19 @@ struct RunOptions {
   std::string out;         // result folder; empty: results/<device-slug>/<preset>-<matrix hash>
   std::string command;     // the command line, for meta.json
   ShardSpec shard;         // --shard i/N: run only this shard's cells (bench/shard.h)
+  // Resuming: cells already recorded as failed or timeout are measured again unless no_retry.
+  bool no_retry = false;
 };
 
 struct RunSummary {
   std::string out_dir;
-  std::size_t cells_run = 0, cells_skipped = 0, cells_failed = 0;
+  std::size_t cells_run = 0;      // measured by this run (retries included)
+  std::size_t cells_retried = 0;  // of those, cells the set held as failed or timeout
+  std::size_t cells_skipped = 0;  // already in the set and kept (ok, or not ok with no_retry)
+  std::size_t cells_failed = 0;   // measured by this run and not ok
+  // The final state: planned cells (of this shard) the set holds that are not ok, and planned
+  // cells it lacks (an interrupted run; absent batches not counted). 0 and 0: the set is whole.
+  std::size_t cells_not_ok = 0, cells_missing = 0;
   bool interrupted = false;
 };
 

@@ -1,0 +1,360 @@
+// Result sets that never mislead (issue 24): resume retries what is not ok and exits with the
+// state of the whole set; a cell file is the cell its name says, valid and inside the matrix;
+// compare refuses different matrices; outputs never land inside inputs or over files; a result
+// set has one writer (issue 23); every malformed input is one clear error, never an internal one
+// (a seeded property test mutates cell files, meta.json and rules).
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "bench/compare.h"
+#include "bench/result_set.h"
+#include "test_util.h"
+#include "util/atomic_file.h"
+#include "util/error.h"
+#include "util/folder_lock.h"
+
+namespace fs = std::filesystem;
+using namespace raysort;
+using raysort::testing::CliResult;
+using raysort::testing::run_cli;
+using raysort::testing::temp_path;
+
+namespace {
+
+// A small matrix: NoSort, HCC and Origin on cornell's primary rays (3 cells, about a second).
+std::vector<std::string> matrix(std::vector<std::string> extra = {}) {
+  std::vector<std::string> args{"run",        "--scenes", "cornell", "--batches", "primary", "--encoders",
+                                "hcc,origin", "--bits",   "32",      "--resolution", "16x16", "--reps",
+                                "2",          "--warmup", "0",       "--max-time", "0"};
+  args.insert(args.end(), extra.begin(), extra.end());
+  return args;
+}
+
+// A finished result set of matrix(extra), measured once per test process and copied per case.
+std::string finished_set(const std::string& name, std::vector<std::string> extra = {}) {
+  static std::map<std::vector<std::string>, std::string> made;
+  auto it = made.find(extra);
+  if (it == made.end()) {
+    const std::string dir = temp_path("made-" + std::to_string(made.size()));
+    std::vector<std::string> args = matrix(extra);
+    args.insert(args.end(), {"--out", dir});
+    CliResult r = run_cli(args);
+    EXPECT_EQ(r.code, 0) << r.err;
+    it = made.emplace(extra, dir).first;
+  }
+  const std::string copy = temp_path(name);
+  fs::copy(it->second, copy, fs::copy_options::recursive);
+  return copy;
+}
+
+bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+// Exit 1 (an error, not an internal error: that is 2), one line on stderr naming every part.
+void expect_one_line_error(const CliResult& r, const std::vector<std::string>& parts, const std::string& what) {
+  EXPECT_EQ(r.code, 1) << what << ": " << r.err;
+  EXPECT_FALSE(contains(r.err, "internal error")) << what << ": " << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << what << ": not one line:\n" << r.err;
+  for (const auto& p : parts) EXPECT_TRUE(contains(r.err, p)) << what << ": no '" << p << "' in " << r.err;
+}
+
+nlohmann::json read_json(const fs::path& p) { return nlohmann::json::parse(read_file(p.string())); }
+void write_json(const fs::path& p, const nlohmann::json& j) { write_file_atomically(p.string(), j.dump(2)); }
+
+}  // namespace
+
+// Reproduction 1: a resumed run re-runs failed and timed-out cells, counts NoSort, and exits with
+// the state of the whole set.
+TEST(Resume, RetriesCellsThatAreNotOkAndExitsWithTheSetsState) {
+  const std::string dir = temp_path("retry");
+  std::vector<std::string> args = matrix({"--out", dir});
+  std::vector<std::string> timed_out = args;
+  timed_out.insert(timed_out.end(), {"--timeout", "0.000001"});
+  CliResult first = run_cli(timed_out);
+  EXPECT_EQ(first.code, 1) << first.err;
+  for (const auto& c : ResultSet::load(dir).cells()) EXPECT_EQ(c.status, "timeout") << c.id();
+
+  std::vector<std::string> keep = args;
+  keep.push_back("--no-retry");
+  CliResult kept = run_cli(keep);
+  EXPECT_EQ(kept.code, 1) << "the set still holds timed-out cells: " << kept.err;
+  EXPECT_TRUE(contains(kept.out, "0 cells run, 3 already done (skipped)")) << kept.out;  // NoSort counted
+  EXPECT_TRUE(contains(kept.err, "3 cell(s) not ok")) << kept.err;
+
+  CliResult retried = run_cli(args);
+  EXPECT_EQ(retried.code, 0) << retried.err;
+  EXPECT_TRUE(contains(retried.out, "3 cells run (3 of them retries of failed or timed-out cells)")) << retried.out;
+  for (const auto& c : ResultSet::load(dir).cells()) EXPECT_EQ(c.status, "ok") << c.id();
+
+  CliResult again = run_cli(args);
+  EXPECT_EQ(again.code, 0) << again.err;
+  EXPECT_TRUE(contains(again.out, "0 cells run, 3 already done (skipped)")) << again.out;
+}
+
+// Reproduction 2: a cell file whose content names another cell is refused, naming the file.
+TEST(CellFiles, ContentNamingAnotherCellIsRefused) {
+  const std::string dir = finished_set("renamed");
+  const fs::path file = fs::path(dir) / "cells" / "cornell__primary__origin__32.json";
+  nlohmann::json j = read_json(file);
+  j["encoder"] = "hcc";  // the edit of the issue: origin's figures would show under hcc
+  write_json(file, j);
+  std::vector<std::string> args = matrix({"--out", dir});
+  expect_one_line_error(run_cli(args), {file.string(), "cornell/primary/hcc/32", "delete the file"}, "run");
+  j["id"] = "cornell/primary/hcc/32";  // a consistent edit: the name still says origin
+  write_json(file, j);
+  expect_one_line_error(run_cli(args), {file.string(), "holds cell cornell/primary/hcc/32",
+                                        "cornell__primary__hcc__32.json"}, "run");
+  expect_one_line_error(run_cli({"compare", dir, dir}), {file.string()}, "compare");
+}
+
+// A cell outside the matrix (a stray file), a made-up status, a negative time: refused on read.
+TEST(CellFiles, InvalidOrStrayRecordsAreRefusedOnRead) {
+  const std::string base = finished_set("valid");
+  struct Case {
+    std::string name, part;
+    std::function<void(nlohmann::json&)> edit;
+    std::string file = "cornell__primary__hcc__32.json";
+  };
+  const std::vector<Case> cases{
+      {"status", "status \"great\" is not one of ok, failed, timeout", [](auto& j) { j["status"] = "great"; }},
+      {"negative", "trace_ms is -3", [](auto& j) { j["trace_ms"]["median"] = -3.0; }},
+      {"missing-field", "unreadable cell record", [](auto& j) { j.erase("anc"); }},
+      {"variant", "variant \"slow\"", [](auto& j) { j["variant"] = "slow"; j["id"] = "cornell/primary/hcc/32/slow"; },
+       "cornell__primary__hcc__32__slow.json"},
+      {"stray", "encoder 'costa' is not one of its encoders",
+       [](auto& j) { j["encoder"] = "costa"; j["id"] = "cornell/primary/costa/32"; }, "cornell__primary__costa__32.json"},
+      {"bits", "16-bit keys are not among its key lengths",
+       [](auto& j) { j["bits"] = 16; j["id"] = "cornell/primary/hcc/16"; }, "cornell__primary__hcc__16.json"},
+  };
+  for (const auto& c : cases) {
+    const std::string dir = temp_path("invalid-" + c.name);
+    fs::copy(base, dir, fs::copy_options::recursive);
+    nlohmann::json j = read_json(fs::path(dir) / "cells" / "cornell__primary__hcc__32.json");
+    c.edit(j);
+    write_json(fs::path(dir) / "cells" / c.file, j);
+    const std::string file = (fs::path(dir) / "cells" / c.file).string();
+    expect_one_line_error(run_cli({"compare", base, dir}), {file, c.part}, c.name);
+    EXPECT_THROW(ResultSet::load(dir), Error) << c.name;
+  }
+}
+
+// Reproduction 3: compare refuses sets of different matrices unless asked, and names both sides.
+TEST(CompareSets, RefusesDifferentMatricesUnlessAllowed) {
+  const std::string a = finished_set("seed1"), b = finished_set("seed7", {"--seed", "7"}),
+                    c = finished_set("spp", {"--spp", "2"});
+  expect_one_line_error(run_cli({"compare", a, b, "--fail-if", "speedup<-5%"}),
+                        {"ran different matrices", "seed 1 vs 7", "--allow-different-matrix"}, "seed");
+  expect_one_line_error(run_cli({"compare", a, c}), {"spp 1 vs 2"}, "spp");
+  CliResult allowed = run_cli({"compare", a, b, "--allow-different-matrix"});
+  EXPECT_EQ(allowed.code, 0) << allowed.err;
+  EXPECT_TRUE(contains(allowed.out, "The matrices differ")) << allowed.out;
+  EXPECT_TRUE(contains(allowed.out, "seed 1 vs 7")) << allowed.out;
+  // Both sides' device, driver and commit, always.
+  CliResult same = run_cli({"compare", a, finished_set("seed1-again")});
+  EXPECT_EQ(same.code, 0) << same.err;
+  EXPECT_EQ(std::count(same.out.begin(), same.out.begin() + same.out.find("##"), ','), 4) << same.out;
+  EXPECT_TRUE(contains(same.out, "driver ")) << same.out;
+  EXPECT_TRUE(contains(same.out, "raysort commit ")) << same.out;
+  // Another device (the point of a cross-device comparison) and other measurement settings are fine.
+  const std::string other = finished_set("other-device");
+  nlohmann::json meta = read_json(fs::path(other) / "meta.json");
+  meta["device"]["name"] = "NVIDIA GeForce RTX 3060";
+  meta["matrix"]["reps"] = 20;
+  write_json(fs::path(other) / "meta.json", meta);
+  CliResult cross = run_cli({"compare", a, other});
+  EXPECT_EQ(cross.code, 0) << cross.err;
+  EXPECT_TRUE(contains(cross.out, "NVIDIA GeForce RTX 3060")) << cross.out;
+  EXPECT_TRUE(contains(cross.out, "Measurement settings differ")) << cross.out;
+}
+
+// Every column of cells.csv is usable in a rule; text columns take != and == only; a malformed
+// rule is one clear error.
+TEST(CompareSets, EveryColumnIsARuleAndMalformedRulesAreErrors) {
+  for (const auto& column : cell_columns()) {
+    EXPECT_NO_THROW(FailRule::parse(column.name + "!=")) << column.name;
+    if (column.kind == CellColumn::Number) {
+      EXPECT_NO_THROW(FailRule::parse(column.name + "<-5%")) << column.name;
+      EXPECT_NO_THROW(FailRule::parse(column.name + "!=0.5")) << column.name;
+    } else {
+      EXPECT_THROW(FailRule::parse(column.name + "<-5%"), Error) << column.name;
+      EXPECT_NO_THROW(FailRule::parse(column.name + "==" + (column.vocabulary.empty() ? "x" : column.vocabulary[0])))
+          << column.name;
+    }
+  }
+  const std::string a = finished_set("rules-a"), b = finished_set("rules-b");
+  for (const std::string rule : {"anc!=.", "speedup<-.%", "status!=5", "anc==3", "speedup<-5", "speedup!=-1",
+                                 "hits_match_nosort==maybe", "nope!=", "speedup", "<-5%", "status!=ok ok"}) {
+    expect_one_line_error(run_cli({"compare", a, b, "--fail-if", rule}), {"--fail-if '" + rule + "'"}, rule);
+  }
+  // A text rule on B's values: fires on a timed-out cell, not on an ok set.
+  CliResult ok = run_cli({"compare", a, b, "--fail-if", "status!=ok", "--fail-if", "hits_match_nosort!=",
+                          "--fail-if", "trace_min_ms<-50%", "--fail-if", "stopped_by==noise"});
+  EXPECT_EQ(ok.code, 0) << ok.err;
+  nlohmann::json j = read_json(fs::path(b) / "cells" / "cornell__primary__hcc__32.json");
+  j["status"] = "timeout";
+  write_json(fs::path(b) / "cells" / "cornell__primary__hcc__32.json", j);
+  CliResult bad = run_cli({"compare", a, b, "--fail-if", "status!=ok"});
+  EXPECT_EQ(bad.code, 1);
+  EXPECT_TRUE(contains(bad.out, "cornell/primary/hcc/32: status is timeout in B")) << bad.out;
+}
+
+// Reproduction 4: outputs are checked before anything is written.
+TEST(OutputPaths, NeverInsideAnInputNorOverAFileNorAmongOtherFiles) {
+  const std::string a = finished_set("out-a"), b = finished_set("out-b");
+  const std::string meta_before = read_file(b + "/meta.json");
+  expect_one_line_error(run_cli({"compare", a, b, "--out", b + "/meta.json"}), {"inside the input " + b}, "into B");
+  EXPECT_EQ(read_file(b + "/meta.json"), meta_before);
+  const std::string report = temp_path("report.md");
+  std::ofstream(report) << "mine\n";
+  expect_one_line_error(run_cli({"compare", a, b, "--out", report}), {report, "already exists", "--force"}, "over");
+  EXPECT_EQ(read_file(report), "mine\n");
+  EXPECT_EQ(run_cli({"compare", a, b, "--out", report, "--force"}).code, 0);
+  EXPECT_TRUE(contains(read_file(report), "# raysort compare"));
+  expect_one_line_error(run_cli({"merge", a, "-o", a + "/cells/merged.json"}), {"inside the input " + a}, "merge");
+  EXPECT_FALSE(fs::exists(a + "/cells/merged.json"));
+  expect_one_line_error(run_cli({"merge", a, "-o", ""}), {"-o ''"}, "merge -o ''");
+
+  // run --out: a folder of other files, and a set that lost its meta.json.
+  const std::string others = temp_path("others");
+  fs::create_directories(others);
+  std::ofstream(others + "/notes.txt") << "mine\n";
+  std::vector<std::string> args = matrix({"--out", others});
+  expect_one_line_error(run_cli(args), {others, "not empty and is not a result set"}, "run into others");
+  EXPECT_EQ(std::distance(fs::directory_iterator(others), fs::directory_iterator()), 1);
+  const std::string lost = finished_set("lost-meta");
+  fs::remove(lost + "/meta.json");
+  const std::string cells_before = read_file(lost + "/cells/cornell__primary__hcc__32.json");
+  args = matrix({"--out", lost});
+  expect_one_line_error(run_cli(args), {lost, "no meta.json", "restore its meta.json"}, "run without meta");
+  EXPECT_EQ(read_file(lost + "/cells/cornell__primary__hcc__32.json"), cells_before);
+}
+
+// Reproduction 5: broken sets are one-line errors.
+TEST(BrokenSets, AreOneLineErrors) {
+  const std::string a = finished_set("broken-a");
+  const std::string array_meta = finished_set("array-meta");
+  std::ofstream(array_meta + "/meta.json") << "[]\n";
+  expect_one_line_error(run_cli({"compare", a, array_meta}), {array_meta + "/meta.json", "JSON array"}, "meta []");
+  const std::string cells_file = finished_set("cells-file");
+  fs::remove_all(cells_file + "/cells");
+  std::ofstream(cells_file + "/cells") << "";
+  expect_one_line_error(run_cli({"compare", a, cells_file}), {cells_file + "/cells", "not a folder"}, "cells file");
+  const std::string cells_dir = finished_set("cell-folder");
+  fs::create_directories(cells_dir + "/cells/cornell__primary__x__32.json");
+  expect_one_line_error(run_cli({"compare", a, cells_dir}), {"not a regular file"}, "folder as cell");
+}
+
+// Leftover temporary files of a killed writer are removed by the next writer of that folder.
+TEST(Writers, LeftoverTemporaryFilesAreRemoved) {
+  const std::string dir = finished_set("leftovers");
+  std::ofstream(dir + "/cells/cornell__primary__hcc__32.json.tmp.99999") << "{";
+  std::ofstream(dir + "/cells.csv.tmp.99998") << "";
+  EXPECT_EQ(ResultSet::load(dir).cells().size(), 3u);  // readers ignore them
+  EXPECT_EQ(run_cli(matrix({"--out", dir})).code, 0);
+  for (const auto& e : fs::recursive_directory_iterator(dir))
+    EXPECT_FALSE(contains(e.path().filename().string(), ".tmp.")) << e.path();
+}
+
+// Issue 23, item 3: one writer per result set; a second fails at once naming the holder; a killed
+// holder leaves a folder the next run resumes into.
+TEST(Writers, SecondWriterFailsAtOnceAndAKilledHolderReleases) {
+  const std::string dir = finished_set("locked");
+  {
+    auto lock = FolderLock::acquire(dir, "raysort run --test-holder", "result set");
+    const auto start = std::chrono::steady_clock::now();
+    CliResult second = run_cli(matrix({"--out", dir}));
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    expect_one_line_error(second, {dir, "being written by another raysort",
+                                   "pid " + std::to_string(::getpid()) + ": raysort run --test-holder"},
+                          "second writer");
+    EXPECT_LT(s, 5.0) << "the second writer waited";
+    expect_one_line_error(run_cli({"report", dir}), {"being written"}, "report while locked");
+    EXPECT_EQ(run_cli({"compare", dir, dir}).code, 0) << "readers are lock-free";
+  }
+  // A holder killed by SIGKILL: the kernel drops its lock.
+  pid_t pid = fork();
+  if (pid == 0) {
+    auto lock = FolderLock::acquire(dir, "doomed", "result set");
+    ::raise(SIGKILL);
+    _exit(0);
+  }
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFSIGNALED(status));
+  CliResult resumed = run_cli(matrix({"--out", dir}));
+  EXPECT_EQ(resumed.code, 0) << resumed.err;
+  EXPECT_TRUE(contains(resumed.out, "0 cells run, 3 already done")) << resumed.out;
+}
+
+// A property test over the result-set reader: seeded random mutations of a real cell file, of
+// meta.json and of rule strings either read or fail with raysort::Error; nothing else escapes
+// (no json exception, no std::out_of_range, no crash).
+TEST(ReaderProperty, MutationsAreReadOrRefusedWithAnError) {
+  const std::string base = finished_set("property");
+  const nlohmann::json cell = read_json(fs::path(base) / "cells" / "cornell__primary__hcc__32.json");
+  const nlohmann::json meta = read_json(fs::path(base) / "meta.json");
+  std::mt19937_64 rng(24);
+  const std::vector<nlohmann::json> odd{nullptr, -1, -1e300, 1e300, 0, "", "x", "ok", true, nlohmann::json::array(),
+                                        nlohmann::json::object(), 4294967296.0, 0.5, "cornell/primary/hcc/32"};
+  // Replaces, erases or retypes one random value somewhere in j.
+  std::function<void(nlohmann::json&)> mutate = [&](nlohmann::json& j) {
+    if (j.is_object() && !j.empty() && rng() % 4 != 0) {
+      auto it = j.begin();
+      std::advance(it, rng() % j.size());
+      if (rng() % 5 == 0) {
+        j.erase(it.key());
+        return;
+      }
+      mutate(it.value());
+      return;
+    }
+    if (j.is_array() && !j.empty() && rng() % 4 != 0) {
+      mutate(j[rng() % j.size()]);
+      return;
+    }
+    j = odd[rng() % odd.size()];
+  };
+  std::size_t read = 0, refused = 0;
+  const std::string dir = temp_path("property-set");
+  fs::copy(base, dir, fs::copy_options::recursive);
+  const fs::path cell_file = fs::path(dir) / "cells" / "cornell__primary__hcc__32.json";
+  for (int i = 0; i < 3000; ++i) {
+    nlohmann::json c = cell, m = meta;
+    for (int k = 0, n = 1 + static_cast<int>(rng() % 3); k < n; ++k) mutate(i % 3 == 0 ? m : c);
+    std::string text = (i % 3 == 0 ? m : c).dump();
+    if (i % 7 == 0) text = text.substr(0, rng() % (text.size() + 1));  // a torn file
+    write_file_atomically((i % 3 == 0 ? fs::path(dir) / "meta.json" : cell_file).string(), text);
+    if (i % 3 == 0) write_json(cell_file, cell);
+    else write_json(fs::path(dir) / "meta.json", meta);
+    try {
+      ResultSet rs = ResultSet::load(dir);
+      compare_result_sets(ResultSet::load(base), rs, comparable_metrics(), {FailRule::parse("speedup<-5%")});
+      ++read;
+    } catch (const Error&) {
+      ++refused;
+    } catch (const std::exception& e) {
+      ADD_FAILURE() << "mutation " << i << " escaped as " << typeid(e).name() << ": " << e.what() << "\n" << text;
+    }
+  }
+  EXPECT_GT(read, 0u);
+  EXPECT_GT(refused, 0u);
+  // Rule strings from the grammar's pieces.
+  const std::vector<std::string> pieces{"speedup", "status", "anc", "keys_hash", "<-", ">+", "!=", "==", "%", ".",
+                                        "5", "-", "ok", " ", "", "e9", "nan", "hits_match_nosort", "true"};
+  for (int i = 0; i < 3000; ++i) {
+    std::string rule;
+    for (int k = 0, n = 1 + static_cast<int>(rng() % 5); k < n; ++k) rule += pieces[rng() % pieces.size()];
+    try {
+      FailRule::parse(rule);
+    } catch (const Error&) {
+    } catch (const std::exception& e) {
+      ADD_FAILURE() << "rule '" << rule << "' escaped as " << e.what();
+    }
+  }
+}
