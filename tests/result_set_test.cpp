@@ -56,7 +56,7 @@ std::string finished_set(const std::string& name, std::vector<std::string> extra
 
 bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
-// Exit 1 (an error, not an internal error: that is 2), one line on stderr naming every part.
+// Exit 1 (an error; 2 is "does not fit this machine", 3 an internal error), one line on stderr naming every part.
 void expect_one_line_error(const CliResult& r, const std::vector<std::string>& parts, const std::string& what) {
   EXPECT_EQ(r.code, 1) << what << ": " << r.err;
   EXPECT_FALSE(contains(r.err, "internal error")) << what << ": " << r.err;

@@ -8,6 +8,7 @@
 #include <numeric>
 
 #include "app/commands.h"
+#include "render/frame_memory.h"
 #include "app/options.h"
 #include "bench/protocol.h"
 #include "bvh/prepared_scene.h"
@@ -37,6 +38,9 @@ int run_encodebench(const EncodeBenchArgs& args) {
   const Scene& scene = prepared.scene;
   const Scene::Flat& tris = prepared.tris;
   const Bvh& bvh = prepared.bvh;
+  check_frame_memory(estimate_frame_memory(scene), &rt.info(),
+                     fmt::format("scene {} at {}x{}, {} spp", scene.name, scene.camera.width, scene.camera.height,
+                                 scene.effects.samples_per_pixel));
   auto batches = generate_batches(scene, tris, bvh, args.common.raygen_options());
   const ReferencedBatch* rb = nullptr;
   std::string names;

@@ -17,6 +17,7 @@
 #include <optional>
 
 #include "app/commands.h"
+#include "render/frame_memory.h"
 #include "app/options.h"
 #include "bvh/cut.h"
 #include "bvh/prepared_scene.h"
@@ -112,6 +113,8 @@ int run_render(const RenderArgs& args) {
     rt = std::make_unique<Runtime>(select_device(args.common.device));
     fmt::print("device   {} ({})\n", rt->info().name, rt->info().platform_name);
   }
+  check_frame_memory(estimate_frame_memory(scene), rt ? &rt->info() : nullptr,
+                     fmt::format("scene {} at {}x{}, {} spp", scene.name, w, h, spp));
   const RenderedFrame r = render_frame(prepared, args.common.raygen_options(), rt.get());
   fmt::print("frame    {}x{}, {} spp: {} rays in {:.0f} ms ({:.2f} MRays/s incl. shading and compaction)\n", w, h, spp,
              r.rays, r.ms, r.ms > 0 ? static_cast<double>(r.rays) / r.ms / 1e3 : 0.0);

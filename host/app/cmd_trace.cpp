@@ -13,6 +13,7 @@
 #include <optional>
 
 #include "app/commands.h"
+#include "render/frame_memory.h"
 #include "app/options.h"
 #include "bench/protocol.h"
 #include "bvh/prepared_scene.h"
@@ -199,6 +200,8 @@ void print_batch_row(const BatchRun& run, const std::vector<Tracer>& tracers, co
 void trace_scene(Runtime& rt, const std::string& scene_name, const TraceArgs& args, TraceTotals& totals) {
   const PreparedScene p = prepare_scene(scene_name, args.common.scene_options());
   const FrameSize frame = p.frame();
+  check_frame_memory(estimate_frame_memory(p.scene), &rt.info(),
+                     fmt::format("scene {} at {}x{}, {} spp", p.scene.name, frame.width, frame.height, frame.spp));
   fmt::print("\nscene    {}: {} triangles, loaded in {:.0f} ms; {}x{} x {} spp\n", p.scene.name, p.tris.size(), p.load_ms,
              frame.width, frame.height, frame.spp);
   fmt::print("bvh      {} nodes, {} leaves, depth {}, built in {:.0f} ms\n", p.bvh.nodes.size(), p.bvh.leaf_count,

@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include "app/commands.h"
+#include "render/frame_memory.h"
 #include "runtime/runtime.h"
 
 int main(int argc, char** argv) {
@@ -21,12 +22,18 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
+  } catch (const raysort::ResourceError& e) {  // does not fit this machine (render/frame_memory.h)
+    std::fprintf(stderr, "raysort: error: %s\n", e.what());
+    return 2;
   } catch (const raysort::Error& e) {
     std::fprintf(stderr, "raysort: error: %s\n", e.what());
     return 1;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "raysort: internal error: %s\n", e.what());
+  } catch (const std::bad_alloc&) {  // past the estimate of render/frame_memory.h: a safety net
+    std::fprintf(stderr, "raysort: error: out of host memory; lower --resolution or --spp\n");
     return 2;
+  } catch (const std::exception& e) {  // a bug: please report it
+    std::fprintf(stderr, "raysort: internal error: %s\n", e.what());
+    return 3;
   }
   return raysort::command_exit_code();
 }

@@ -17,6 +17,7 @@
 #include <memory>
 #include <set>
 
+#include "render/frame_memory.h"
 #include "bench/cell_measure.h"
 #include "bench/result_set.h"
 #include "bvh/prepared_scene.h"
@@ -232,6 +233,18 @@ void check_scenes_before_work(const MatrixSpec& spec, const RunOptions& opts) {
   }
 }
 
+// Each scene's frame at the matrix's resolution and spp must fit the device and the host (a refusal
+// names the scene, the estimate and the limit; render/frame_memory.h).
+void check_matrix_memory(const MatrixSpec& spec, const std::string& scene_root, const DeviceInfo& device) {
+  for (const auto& scene : spec.scenes) {
+    const SceneFacts f = load_scene_facts(scene, spec, scene_root);
+    check_frame_memory(estimate_frame_memory(spec.frame.width, spec.frame.height, spec.frame.spp,
+                                             f.shadow_rays_per_bounce, f.max_bounces),
+                       &device, fmt::format("scene {} at {}x{}, {} spp", scene, spec.frame.width, spec.frame.height,
+                                            spec.frame.spp));
+  }
+}
+
 // Every cell the set holds must be one the matrix plans: a cell file of another matrix (copied in,
 // or left from a plan whose scene files changed) would be reported as if this run measured it.
 void check_cells_planned(const ResultSet& results, const std::vector<PlannedCell>& full_plan) {
@@ -269,6 +282,7 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
     std::erase_if(plan, [&](const PlannedCell& c) { return c.shard != opts.shard.index; });
 
   Runtime rt(select_device(opts.device));
+  check_matrix_memory(spec, opts.scene_root, rt.info());  // before the result set is written
   RunSummary summary;
   summary.out_dir = opts.out.empty() ? default_result_dir(spec, rt.info().slug(), opts.shard) : opts.out;
   nlohmann::json meta = run_meta(spec, opts, rt.info());

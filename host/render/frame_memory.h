@@ -1,0 +1,58 @@
+#pragma once
+// What a frame's rays cost in memory, estimated before anything is allocated, and the refusal when
+// it does not fit (issue 23): every command that allocates per ray (trace, run, render,
+// encodebench) checks its scenes here first, so a size a user can type ends in one line that names
+// the estimate, the limits and the fix, not in std::bad_alloc or a machine driven into swap.
+//
+// The model is an upper bound from the batches the scene's effects imply (render/batches.h): every
+// batch at its largest (one ray per path; shadow batches shadow_rays_per_bounce per path), host
+// memory for all of them at once (generate_batches keeps every batch with its reference hits), and
+// device memory for the largest one (rays, hits, keys, order, the sort's scratch, permuted rays).
+// The per-ray constants are calibrated on PoCL (peak RSS of `raysort trace`) with a margin;
+// tests/frame_memory_test.cpp checks that the estimate stays above what a run really takes.
+#include <cstdint>
+#include <string>
+
+#include "runtime/runtime.h"
+#include "scene/scene.h"
+
+namespace raysort {
+
+struct FrameMemory {
+  std::uint64_t paths = 0;          // width × height × spp
+  std::uint64_t rays = 0;           // over every batch the frame can produce (upper bound)
+  std::uint64_t largest_batch = 0;  // rays of the largest batch
+  std::uint64_t host_bytes = 0, device_bytes = 0;
+  std::uint64_t largest_buffer_bytes = 0;  // the largest single device allocation
+
+  // Bytes per ray and per path of the model (see the header comment).
+  static constexpr std::uint64_t kHostPerRay = 96;     // ray 32, pixel + sample 8, reference hits 2 × 16, slack
+  static constexpr std::uint64_t kHostPerPath = 64;    // the path tracer's per-path state while generating
+  static constexpr std::uint64_t kDevicePerRay = 160;  // rays 32, hits 16, keys 8, order 4, sort scratch, permuted rays 32
+  static constexpr std::uint64_t kLargestBufferPerRay = 32;  // the ray buffer (RsRay)
+};
+
+// The estimate for a scene as loaded (its camera size, samples per pixel and effects).
+FrameMemory estimate_frame_memory(const Scene& scene);
+FrameMemory estimate_frame_memory(std::uint64_t width, std::uint64_t height, std::uint64_t spp,
+                                  std::uint32_t shadow_rays_per_bounce, std::uint32_t max_bounces);
+
+// Host memory this process may still take: MemAvailable, lowered by a cgroup limit when one is set
+// (a Slurm job's). RAYSORT_TEST_HOST_MEMORY_BYTES overrides it (tests).
+std::uint64_t available_host_memory();
+
+// Thrown when a request does not fit this machine; raysort exits 2 for it (1 for other errors).
+class ResourceError : public Error {
+ public:
+  using Error::Error;
+};
+
+// Throws ResourceError naming `what` ("scene cornell at 20000x20000, 1 spp"), the estimate, the
+// limit it passes (device max allocation, device global memory, host memory; on a CPU device the
+// device's memory is host memory too) and the fix. `device` may be null (the host twin).
+void check_frame_memory(const FrameMemory& m, const DeviceInfo* device, const std::string& what);
+
+// "1.5 GiB"
+std::string format_bytes(std::uint64_t bytes);
+
+}  // namespace raysort

@@ -1,0 +1,136 @@
+// Memory is estimated before work starts (issue 23, item 2): sizes a user can type that do not fit
+// end in one line and exit 2, at once and before allocating; the estimate stays above what a run
+// really takes (so a frame that passes the check does not run the machine out of memory).
+#include <gtest/gtest.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <fstream>
+#include <iostream>
+#include <iterator>
+#include <string>
+#include <vector>
+
+#include "render/frame_memory.h"
+#include "test_util.h"
+
+using namespace raysort;
+
+namespace {
+
+struct Measured {
+  int code = -1;
+  std::string err;
+  double seconds = 0;
+  std::uint64_t peak_rss_bytes = 0;  // of the raysort process (wait4's rusage)
+};
+
+// Runs the raysort binary with `args` (and NAME=VALUE `env`), measuring its wall time and peak RSS.
+Measured run_measured(const std::vector<std::string>& args, const std::vector<std::string>& env = {}) {
+  const std::string err_file = raysort::testing::temp_path("stderr.txt");
+  const auto start = std::chrono::steady_clock::now();
+  pid_t pid = fork();
+  if (pid == 0) {
+    for (const auto& e : env) ::putenv(const_cast<char*>(e.c_str()));
+    std::string bin = RAYSORT_BINARY;
+    std::vector<std::string> copy = args;
+    std::vector<char*> argv{bin.data()};
+    for (auto& a : copy) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    int devnull = ::open("/dev/null", O_WRONLY);
+    int err = ::open(err_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    ::dup2(devnull, 1);
+    ::dup2(err, 2);
+    ::execv(bin.c_str(), argv.data());
+    _exit(127);
+  }
+  int status = 0;
+  struct rusage usage {};
+  ::wait4(pid, &status, 0, &usage);
+  Measured m;
+  m.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  m.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  m.peak_rss_bytes = static_cast<std::uint64_t>(usage.ru_maxrss) * 1024;
+  std::ifstream in(err_file);
+  m.err.assign(std::istreambuf_iterator<char>(in), {});
+  return m;
+}
+
+}  // namespace
+
+TEST(FrameMemory, ModelCountsEveryBatchTheEffectsImply) {
+  // cornell's effects: 1 bounce, 1 shadow ray per bounce: primary, shadow0, bounce1, shadow1.
+  const FrameMemory m = estimate_frame_memory(100, 10, 2, 1, 1);
+  EXPECT_EQ(m.paths, 2000u);
+  EXPECT_EQ(m.rays, 8000u);
+  EXPECT_EQ(m.largest_batch, 2000u);
+  EXPECT_EQ(estimate_frame_memory(100, 10, 2, 4, 1).rays, 2000u + 8000u + 2000u + 8000u);
+  EXPECT_EQ(estimate_frame_memory(100, 10, 2, 0, 3).rays, 4 * 2000u);  // no lights: primary + 3 bounces
+  // Sizes past 64 bits saturate instead of wrapping into a small estimate.
+  const FrameMemory huge = estimate_frame_memory(4000000000u, 4000000000u, 4000000000u, 1, 1);
+  EXPECT_EQ(huge.paths, std::numeric_limits<std::uint64_t>::max());
+  EXPECT_THROW(check_frame_memory(huge, nullptr, "huge"), ResourceError);
+  EXPECT_NO_THROW(check_frame_memory(estimate_frame_memory(16, 16, 1, 1, 1), nullptr, "tiny"));
+}
+
+// The two commands of the issue, and the other commands that allocate per ray: exit 2, one line,
+// under 5 s, before allocating (peak RSS under 500 MB).
+TEST(FrameMemory, OversizedCommandsAreRefusedAtOnce) {
+  const std::string out = raysort::testing::temp_path("oversized");
+  const std::vector<std::vector<std::string>> commands{
+      {"trace", "--scene", "cornell", "--resolution", "20000x20000"},
+      {"run", "--scenes", "cornell", "--encoders", "hcc", "--resolution", "64x64", "--spp", "1000000", "--out", out},
+      {"render", "--scene", "cornell", "--resolution", "20000x20000", "--out", out},
+      {"encodebench", "--scene", "cornell", "--resolution", "20000x20000"},
+      {"trace", "--scene", "cornell", "--resolution", "4000000000x4000000000", "--spp", "4000000000"},
+  };
+  for (const auto& args : commands) {
+    const Measured m = run_measured(args);
+    const std::string cmd = args[0] + " " + args[4];
+    EXPECT_EQ(m.code, 2) << cmd << ": " << m.err;
+    EXPECT_EQ(std::count(m.err.begin(), m.err.end(), '\n'), 1) << cmd << ": " << m.err;
+    for (const char* part : {"scene cornell at ", "needs ", "over ", "lower --resolution or --spp"})
+      EXPECT_NE(m.err.find(part), std::string::npos) << cmd << ": no '" << part << "' in " << m.err;
+    EXPECT_LT(m.seconds, 5.0) << cmd;
+    EXPECT_LT(m.peak_rss_bytes, 500u << 20) << cmd;
+    EXPECT_FALSE(std::filesystem::exists(out)) << cmd << ": wrote " << out;
+  }
+  // The host limit: a frame that fits the device but not the memory left on the host.
+  const Measured host = run_measured({"trace", "--scene", "cornell", "--resolution", "1024x1024"},
+                                     {"RAYSORT_TEST_HOST_MEMORY_BYTES=100000000"});
+  EXPECT_EQ(host.code, 2) << host.err;
+  EXPECT_NE(host.err.find("of host memory (the CPU device's buffers included)"), std::string::npos) << host.err;
+  EXPECT_NE(host.err.find("over the 95.4 MiB available"), std::string::npos) << host.err;
+}
+
+// The estimate is an upper bound of what the commands take: the peak RSS a frame adds over a tiny
+// one stays below the estimated difference (host and, on a CPU device, its buffers).
+TEST(FrameMemory, EstimateBoundsWhatTheCommandsTake) {
+  const std::string out = raysort::testing::temp_path("bound");
+  auto args_at = [&](const std::string& cmd, const std::string& resolution) -> std::vector<std::string> {
+    if (cmd == "run")
+      return {"run", "--scenes", "cornell", "--encoders", "hcc,costa", "--bits", "64", "--access", "gather,permute",
+              "--variant", "both", "--resolution", resolution, "--reps", "1", "--warmup", "0", "--max-time", "0",
+              "--out", out + "-" + resolution};
+    if (cmd == "render") return {"render", "--scene", "cornell", "--resolution", resolution, "--out", out + "-img-" + resolution};
+    return {"trace", "--scene", "cornell", "--variant", "both", "--resolution", resolution, "--reps", "1", "--warmup",
+            "0", "--max-time", "0"};
+  };
+  for (const std::string cmd : {"run", "trace", "render"}) {
+    const Measured small = run_measured(args_at(cmd, "64x64"));
+    const Measured large = run_measured(args_at(cmd, "640x640"));
+    ASSERT_EQ(small.code, 0) << small.err;
+    ASSERT_EQ(large.code, 0) << large.err;
+    const FrameMemory a = estimate_frame_memory(64, 64, 1, 1, 1), b = estimate_frame_memory(640, 640, 1, 1, 1);
+    const std::uint64_t estimated = (b.host_bytes + b.device_bytes) - (a.host_bytes + a.device_bytes);
+    const std::uint64_t taken = large.peak_rss_bytes - small.peak_rss_bytes;
+    std::cout << cmd << " 64x64 -> 640x640: peak RSS grew " << format_bytes(taken) << ", estimated "
+              << format_bytes(estimated) << "\n";
+    EXPECT_LT(taken, estimated) << cmd << ": took " << format_bytes(taken) << ", estimated " << format_bytes(estimated);
+    EXPECT_GT(taken, estimated / 3) << cmd << ": the estimate is far too high to be useful (" << format_bytes(taken)
+                                    << " taken, " << format_bytes(estimated) << " estimated)";
+  }
+}
