@@ -2,15 +2,8 @@
 // end in one line and exit 2, at once and before allocating; the estimate stays above what a run
 // really takes (so a frame that passes the check does not run the machine out of memory).
 #include <gtest/gtest.h>
-#include <sys/resource.h>
-#include <sys/wait.h>
-#include <fcntl.h>
-#include <unistd.h>
 
-#include <chrono>
-#include <fstream>
 #include <iostream>
-#include <iterator>
 #include <string>
 #include <vector>
 
@@ -19,47 +12,8 @@
 
 using namespace raysort;
 
-namespace {
-
-struct Measured {
-  int code = -1;
-  std::string err;
-  double seconds = 0;
-  std::uint64_t peak_rss_bytes = 0;  // of the raysort process (wait4's rusage)
-};
-
-// Runs the raysort binary with `args` (and NAME=VALUE `env`), measuring its wall time and peak RSS.
-Measured run_measured(const std::vector<std::string>& args, const std::vector<std::string>& env = {}) {
-  const std::string err_file = raysort::testing::temp_path("stderr.txt");
-  const auto start = std::chrono::steady_clock::now();
-  pid_t pid = fork();
-  if (pid == 0) {
-    for (const auto& e : env) ::putenv(const_cast<char*>(e.c_str()));
-    std::string bin = RAYSORT_BINARY;
-    std::vector<std::string> copy = args;
-    std::vector<char*> argv{bin.data()};
-    for (auto& a : copy) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    int devnull = ::open("/dev/null", O_WRONLY);
-    int err = ::open(err_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    ::dup2(devnull, 1);
-    ::dup2(err, 2);
-    ::execv(bin.c_str(), argv.data());
-    _exit(127);
-  }
-  int status = 0;
-  struct rusage usage {};
-  ::wait4(pid, &status, 0, &usage);
-  Measured m;
-  m.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  m.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  m.peak_rss_bytes = static_cast<std::uint64_t>(usage.ru_maxrss) * 1024;
-  std::ifstream in(err_file);
-  m.err.assign(std::istreambuf_iterator<char>(in), {});
-  return m;
-}
-
-}  // namespace
+using Measured = raysort::testing::CliResult;
+using raysort::testing::run_cli;
 
 TEST(FrameMemory, ModelCountsEveryBatchTheEffectsImply) {
   // cornell's effects: 1 bounce, 1 shadow ray per bounce: primary, shadow0, bounce1, shadow1.
@@ -88,7 +42,7 @@ TEST(FrameMemory, OversizedCommandsAreRefusedAtOnce) {
       {"trace", "--scene", "cornell", "--resolution", "4000000000x4000000000", "--spp", "4000000000"},
   };
   for (const auto& args : commands) {
-    const Measured m = run_measured(args);
+    const Measured m = run_cli(args);
     const std::string cmd = args[0] + " " + args[4];
     EXPECT_EQ(m.code, 2) << cmd << ": " << m.err;
     EXPECT_EQ(std::count(m.err.begin(), m.err.end(), '\n'), 1) << cmd << ": " << m.err;
@@ -99,7 +53,7 @@ TEST(FrameMemory, OversizedCommandsAreRefusedAtOnce) {
     EXPECT_FALSE(std::filesystem::exists(out)) << cmd << ": wrote " << out;
   }
   // The host limit: a frame that fits the device but not the memory left on the host.
-  const Measured host = run_measured({"trace", "--scene", "cornell", "--resolution", "1024x1024"},
+  const Measured host = run_cli({"trace", "--scene", "cornell", "--resolution", "1024x1024"},
                                      {"RAYSORT_TEST_HOST_MEMORY_BYTES=100000000"});
   EXPECT_EQ(host.code, 2) << host.err;
   EXPECT_NE(host.err.find("of host memory (the CPU device's buffers included)"), std::string::npos) << host.err;
@@ -120,8 +74,8 @@ TEST(FrameMemory, EstimateBoundsWhatTheCommandsTake) {
             "0", "--max-time", "0"};
   };
   for (const std::string cmd : {"run", "trace", "render"}) {
-    const Measured small = run_measured(args_at(cmd, "64x64"));
-    const Measured large = run_measured(args_at(cmd, "640x640"));
+    const Measured small = run_cli(args_at(cmd, "64x64"));
+    const Measured large = run_cli(args_at(cmd, "640x640"));
     ASSERT_EQ(small.code, 0) << small.err;
     ASSERT_EQ(large.code, 0) << large.err;
     const FrameMemory a = estimate_frame_memory(64, 64, 1, 1, 1), b = estimate_frame_memory(640, 640, 1, 1, 1);

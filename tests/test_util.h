@@ -3,9 +3,11 @@
 // that need real scenes (skip with a message when the folder is absent, fail under CI=true).
 #include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -100,16 +102,19 @@ inline std::string temp_path(const std::string& name) {
 struct CliResult {
   int code = -1;
   std::string out, err;
+  double seconds = 0;                // wall time
+  std::uint64_t peak_rss_bytes = 0;  // of the raysort process (wait4's rusage)
 };
 
 // Runs the raysort binary (RAYSORT_BINARY, set by CMake for every test) with `args`, and `env` as
-// NAME=VALUE entries added to its environment, capturing stdout and stderr.
+// NAME=VALUE entries added to its environment, capturing stdout and stderr, its wall time and peak RSS.
 inline CliResult run_cli(const std::vector<std::string>& args, const std::vector<std::string>& env = {}) {
   static int calls = 0;
   const std::string stem = (std::filesystem::temp_directory_path() /
                             ("raysort_test_" + std::to_string(::getpid()) + "_" + std::to_string(++calls)))
                                .string();
   const std::string out_file = stem + ".out", err_file = stem + ".err";
+  const auto start = std::chrono::steady_clock::now();
   pid_t pid = fork();
   if (pid == 0) {
     for (const auto& e : env) ::putenv(const_cast<char*>(e.c_str()));
@@ -126,9 +131,12 @@ inline CliResult run_cli(const std::vector<std::string>& args, const std::vector
     _exit(127);
   }
   int status = 0;
-  ::waitpid(pid, &status, 0);
+  struct rusage usage {};
+  ::wait4(pid, &status, 0, &usage);
   CliResult r;
   r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  r.peak_rss_bytes = static_cast<std::uint64_t>(usage.ru_maxrss) * 1024;
   auto slurp = [](const std::string& f) {
     std::ifstream in(f);
     return std::string(std::istreambuf_iterator<char>(in), {});
