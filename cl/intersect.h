@@ -220,6 +220,51 @@ RS_DEFINE_T_BOUND(rs_robust_t_bound, float)  /* one triangle */
 RS_DEFINE_T_BOUND(rs4_robust_t_bound, rs_f4) /* four, lane by lane (the packet test) */
 #undef RS_DEFINE_T_BOUND
 
+/* The bound above is a worst case; it grows with the vertices' ray-space extent over |det|, so on a
+ * long sliver seen edge-on (a 5 m strip 7 mm tall) it reaches 0.026 for a true t of 0.001 and 13.6
+ * for a true t of 10.45, while the float t is off by 1e-4. Rejecting every hit with t <= bound
+ * (the rule before issue 23) made the robust variant skip real surfaces right in front of the ray;
+ * the exact oracle of `raysort trace --adjudicate` found them. Such a hit is decided again in
+ * double (rs_robust_t_in_double); hits beyond their bound keep the float t, as before. */
+/* A hit closer to the origin than this many float ulps of the coordinates' magnitude counts as the
+ * surface the ray leaves (the origin is rounded onto it): below the exact oracle's tie tolerance
+ * of 64 ulps (host/trace/exact_oracle.h), far above the rounding of a ray leaving a surface. */
+#define RS_SELF_HIT_ULPS 32.0
+
+#if RS_HAS_FP64
+/* The hit's t in double (Möller–Trumbore in world space: differences of floats and their products
+ * are exact or nearly so in double, so t is accurate to about 2^-50 relative) for a triangle whose
+ * watertight test accepted the ray but whose float t lies within its error bound of the origin;
+ * d is the ray's world-space direction (kept out of RsRobustRay: the traversal loops carry that
+ * struct in registers, and this path is rare). Returns 1 and *t_out when
+ * tmin + (self-hit band) < t and the rounded t lies in (tmin, tmax); the inside/outside decision
+ * stays the watertight one. */
+RS_INLINE int rs_robust_t_in_double(const RsRobustRay* r, const float* d, float v0x, float v0y, float v0z, float v1x, float v1y,
+                                    float v1z, float v2x, float v2y, float v2z, float tmax, float* t_out) {
+  const double e1x = (double)v1x - v0x, e1y = (double)v1y - v0y, e1z = (double)v1z - v0z;
+  const double e2x = (double)v2x - v0x, e2y = (double)v2y - v0y, e2z = (double)v2z - v0z;
+  const double dx = d[0], dy = d[1], dz = d[2];
+  const double sx = (double)r->o[0] - v0x, sy = (double)r->o[1] - v0y, sz = (double)r->o[2] - v0z;
+  const double px = dy * e2z - dz * e2y, py = dz * e2x - dx * e2z, pz = dx * e2y - dy * e2x;
+  const double det = e1x * px + e1y * py + e1z * pz;
+  if (det == 0.0) return 0;
+  const double qx = sy * e1z - sz * e1y, qy = sz * e1x - sx * e1z, qz = sx * e1y - sy * e1x;
+  const double t = (e2x * qx + e2y * qy + e2z * qz) / det;
+  /* The self-hit band, in t: RS_SELF_HIT_ULPS ulps of max(|o|, |hit point|), over max |d|. */
+  const double ax = fabs(r->o[0] + t * dx), ay = fabs(r->o[1] + t * dy), az = fabs(r->o[2] + t * dz);
+  const double mag = fmax(fmax(fmax(ax, ay), az), fmax(fmax(fabs((double)r->o[0]), fabs((double)r->o[1])),
+                                                        fabs((double)r->o[2])));
+  const double dmax = fmax(fmax(fabs(dx), fabs(dy)), fabs(dz));
+  const double band = RS_SELF_HIT_ULPS * 5.9604644775390625e-8 * mag / dmax;
+  /* The float t must keep the order the callers rely on (tmin < t < tmax, tmax = the closest hit
+   * so far): rounding must not put it on an end. */
+  const float ft = (float)t;
+  if (!(t > (double)r->tmin + band && ft > r->tmin && ft < tmax)) return 0;
+  *t_out = ft;
+  return 1;
+}
+#endif
+
 /* Watertight ray/triangle test (Woop, Benthin & Wald 2013), two-sided. The vertices are moved to
  * ray space (translate by the origin, permute, shear so the ray runs along +z); the 2-D edge
  * functions U, V, W of the sheared vertices then decide inside/outside. A vertex shared by two
@@ -228,8 +273,8 @@ RS_DEFINE_T_BOUND(rs4_robust_t_bound, rs_f4) /* four, lane by lane (the packet t
  * Accepts when U, V, W do not have mixed signs; det = U + V + W == 0 (ray in the triangle's plane,
  * or a degenerate triangle) never hits. t = T / det is bounded by the triangle's ray-space depth
  * because U, V, W share a sign, so no division can overflow. */
-RS_INLINE int rs_intersect_triangle_robust(const RsRobustRay* r, RS_GLOBAL const RsTriangle* tri, float tmax,
-                                           float* t_out, float* u_out, float* v_out) {
+RS_INLINE int rs_intersect_triangle_robust(const RsRobustRay* r, const float* d, RS_GLOBAL const RsTriangle* tri,
+                                           float tmax, float* t_out, float* u_out, float* v_out) {
   const int kx = r->kx, ky = r->ky, kz = r->kz;
   const float az0 = tri->v0[kz] - r->okz, bz0 = tri->v1[kz] - r->okz, cz0 = tri->v2[kz] - r->okz;
   const float ax = (tri->v0[kx] - r->okx) - r->sx * az0, ay = (tri->v0[ky] - r->oky) - r->sy * az0;
@@ -250,14 +295,22 @@ RS_INLINE int rs_intersect_triangle_robust(const RsRobustRay* r, RS_GLOBAL const
   if (det == 0.0f) return 0;
   const float azt = r->sz * az0, bzt = r->sz * bz0, czt = r->sz * cz0;
   const float t_scaled = u * azt + v * bzt + w * czt;
-  const float t = t_scaled / det;
+  float t = t_scaled / det;
   if (!(t > r->tmin && t < tmax)) return 0;
   {
     const float max_xt = rs_max(rs_max(rs_abs(ax), rs_abs(bx)), rs_abs(cx));
     const float max_yt = rs_max(rs_max(rs_abs(ay), rs_abs(by)), rs_abs(cy));
     const float max_zt = rs_max(rs_max(rs_abs(azt), rs_abs(bzt)), rs_abs(czt));
     const float max_e = rs_max(rs_max(rs_abs(u), rs_abs(v)), rs_abs(w));
-    if (!(t > rs_robust_t_bound(max_xt, max_yt, max_zt, max_e, rs_abs(det)))) return 0;
+    if (!(t > rs_robust_t_bound(max_xt, max_yt, max_zt, max_e, rs_abs(det)))) {
+#if RS_HAS_FP64
+      if (!rs_robust_t_in_double(r, d, tri->v0[0], tri->v0[1], tri->v0[2], tri->v1[0], tri->v1[1], tri->v1[2], tri->v2[0],
+                                 tri->v2[1], tri->v2[2], tmax, &t))
+        return 0;
+#else
+      return 0;
+#endif
+    }
   }
   /* A zero-area triangle can still pass the test above: the shear rounds its collinear vertices
    * apart. Reject it by its world-space cross product, exact in double (differences and products

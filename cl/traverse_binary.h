@@ -49,7 +49,7 @@ RS_INLINE RsHit rs_traverse_variant_recorded(RS_GLOBAL const RsBvhNode* nodes, R
     if (n->count > 0) {
       for (rs_u32 i = n->first; i < n->first + n->count; ++i) {
         float t, u, v;
-        int found = robust ? rs_intersect_triangle_robust(&rr, &tris[i], hit.t, &t, &u, &v)
+        int found = robust ? rs_intersect_triangle_robust(&rr, ray.d, &tris[i], hit.t, &t, &u, &v)
                            : rs_intersect_triangle(r, &tris[i], hit.t, &t, &u, &v);
         if (found) {
           hit.t = t;

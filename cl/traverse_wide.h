@@ -92,7 +92,7 @@ RS_INLINE int rs_packet_intersect(RsTraversalRay r, RS_GLOBAL const RsTriPacket*
 
 /* The watertight test (Woop et al. 2013, as rs_intersect_triangle_robust) on a packet of four
  * triangles. The exact zero-area check is the packet's precomputed nondegenerate mask. */
-RS_INLINE int rs_packet_intersect_robust(const RsRobustRay* r, RS_GLOBAL const RsTriPacket* p, float tmax,
+RS_INLINE int rs_packet_intersect_robust(const RsRobustRay* r, const float* d, RS_GLOBAL const RsTriPacket* p, float tmax,
                                          rs_f4* t_out, rs_f4* u_out, rs_f4* v_out) {
   RS_GLOBAL const rs_f4* p0 = &p->v0x; /* v0x v0y v0z, then v1, then v2 */
   RS_GLOBAL const rs_f4* p1 = &p->v1x;
@@ -138,7 +138,7 @@ RS_INLINE int rs_packet_intersect_robust(const RsRobustRay* r, RS_GLOBAL const R
   if (!bits) return 0;
   const rs_f4 safe_det = rs4_select(det, rs4_splat(1.0f), det == 0.0f);
   const rs_f4 azt = r->sz * az, bzt = r->sz * bz, czt = r->sz * cz;
-  const rs_f4 t = (u * azt + v * bzt + w * czt) / safe_det;
+  rs_f4 t = (u * azt + v * bzt + w * czt) / safe_det;
   bits &= rs4_bits((t > r->tmin) & (t < tmax));
   if (!bits) return 0;
   {
@@ -146,7 +146,28 @@ RS_INLINE int rs_packet_intersect_robust(const RsRobustRay* r, RS_GLOBAL const R
     const rs_f4 max_yt = rs4_max(rs4_max(rs4_abs(ay), rs4_abs(by)), rs4_abs(cy));
     const rs_f4 max_zt = rs4_max(rs4_max(rs4_abs(azt), rs4_abs(bzt)), rs4_abs(czt));
     const rs_f4 max_e = rs4_max(rs4_max(rs4_abs(u), rs4_abs(v)), rs4_abs(w));
-    bits &= rs4_bits(t > rs4_robust_t_bound(max_xt, max_yt, max_zt, max_e, rs4_abs(safe_det)));
+    const int beyond = rs4_bits(t > rs4_robust_t_bound(max_xt, max_yt, max_zt, max_e, rs4_abs(safe_det)));
+#if RS_HAS_FP64
+    /* Lanes whose t is within its error bound of the origin (rare: slivers seen edge-on, where the
+     * bound is far too pessimistic) are decided again in double, lane by lane, as
+     * rs_intersect_triangle_robust does. */
+    const int uncertain = bits & ~beyond;
+    if (uncertain) {
+      float ft[4], f0x[4], f0y[4], f0z[4], f1x[4], f1y[4], f1z[4], f2x[4], f2y[4], f2z[4];
+      rs4_store(t, ft);
+      rs4_store(p->v0x, f0x), rs4_store(p->v0y, f0y), rs4_store(p->v0z, f0z);
+      rs4_store(p->v1x, f1x), rs4_store(p->v1y, f1y), rs4_store(p->v1z, f1z);
+      rs4_store(p->v2x, f2x), rs4_store(p->v2y, f2y), rs4_store(p->v2z, f2z);
+      for (int i = 0; i < 4; ++i) {
+        if (!((uncertain >> i) & 1)) continue;
+        if (!rs_robust_t_in_double(r, d, f0x[i], f0y[i], f0z[i], f1x[i], f1y[i], f1z[i], f2x[i], f2y[i], f2z[i], tmax, &ft[i]))
+          bits &= ~(1 << i);
+      }
+      t = rs4_load(ft);
+    }
+#else
+    bits &= beyond;
+#endif
   }
   *t_out = t;
   *u_out = v / safe_det;
@@ -219,7 +240,7 @@ RS_INLINE RsHit rs_traverse_wide(RS_GLOBAL const RsWideNode* nodes, RS_GLOBAL co
       const rs_u32 first = (ref & ~RS_WIDE_LEAF) >> 2, end = first + (ref & 3u) + 1u;
       for (rs_u32 pi = first; pi < end; ++pi) {
         rs_f4 t4, u4, v4;
-        const int bits = robust ? rs_packet_intersect_robust(&rr, &packets[pi], hit.t, &t4, &u4, &v4)
+        const int bits = robust ? rs_packet_intersect_robust(&rr, ray.d, &packets[pi], hit.t, &t4, &u4, &v4)
                                 : rs_packet_intersect(r, &packets[pi], hit.t, &t4, &u4, &v4);
         if (!bits) continue;
         float ts[4], us[4], vs[4];
@@ -233,6 +254,7 @@ RS_INLINE RsHit rs_traverse_wide(RS_GLOBAL const RsWideNode* nodes, RS_GLOBAL co
             best_t = ts[i];
             best = i;
           }
+        if (best < 0) continue; /* every hit lane rounded onto the closest t so far: nothing nearer */
         hit.t = best_t;
         hit.tri = packets[pi].id[best];
         hit.u = us[best];

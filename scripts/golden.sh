@@ -16,7 +16,7 @@ if [ "$mode" = update ]; then
   rm -rf "$golden"
   "$bin" "${args[@]}" --out "$golden"
   # Keep only what the comparison reads: meta.json and the per-cell records.
-  rm -f "$golden"/*.png "$golden"/cells.csv "$golden"/cells.json
+  rm -f "$golden"/*.png "$golden"/cells.csv "$golden"/cells.json "$golden"/.raysort-lock
   echo "golden set rewritten in $golden"
   exit 0
 fi

@@ -10,6 +10,8 @@ PACKAGES=(
   libtinyobjloader-dev libopenimageio-dev fonts-dejavu-core
   googletest libgtest-dev libbenchmark-dev
   libcli11-dev nlohmann-json3-dev libtomlplusplus-dev libfmt-dev
+  # libgmp-dev: exact rationals for the oracle of `raysort trace --adjudicate`
+  libgmp-dev
   #: optional: Boost.Compute (header-only) is the sortbench's reference GPU-library sort
   libboost-dev
   #: optional: Embree 3, the CPU anchor of `raysort trace --reference embree` (CMake RAYSORT_EMBREE=AUTO

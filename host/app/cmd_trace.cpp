@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <numeric>
 #include <optional>
 
@@ -22,7 +23,9 @@
 #include "embree/embree_reference.h"
 #endif
 #include "render/batches.h"
+#include "trace/adjudicate.h"
 #include "trace/tracer.h"
+#include "util/atomic_file.h"
 #include "util/error.h"
 
 namespace raysort {
@@ -36,6 +39,8 @@ struct TraceArgs {
   std::string variant = "robust";
   std::string layout = "wide";
   std::string reference;  // "" or "embree"
+  bool adjudicate = false;       // judge every ray the answers differ on, exactly (trace/adjudicate.h)
+  std::string disagreements;     // with adjudicate: write those rays to DIR/<scene>.json
 };
 
 // One batch traced by each variant (and Embree), all arms of the same rounds of the measurement
@@ -133,7 +138,29 @@ std::size_t count_triangle_differences(const std::vector<RsHit>& a, const std::v
 struct TraceTotals {
   std::size_t mismatches = 0;           // hits that differ from the host reference
   std::size_t disagreeing_batches = 0;  // batches below the Embree agreement
+  std::size_t robust_wrong = 0;         // robust answers the exact oracle judged wrong
 };
+
+// --adjudicate: the exact verdicts on the rays where the answers differ, one line per batch, and
+// the telling rays kept for --disagreements.
+void adjudicate_batch(const ExactOracle& oracle, const BatchRun& run, const std::vector<Tracer>& tracers,
+                      const RayBatch& b, nlohmann::json& saved, TraceTotals& totals) {
+  std::vector<AnswerSet> answers;
+  for (std::size_t i = 0; i < tracers.size(); ++i) answers.push_back({trace_variant_name(tracers[i].variant()), &run.hits[i]});
+  if (!run.embree_hits.empty()) answers.push_back({"embree", &run.embree_hits});
+  const Adjudication a = adjudicate(oracle, b, answers);
+  std::string line = fmt::format("{:<9} adjudicated {} rays where the answers differ (exact rationals):", "", a.rays.size());
+  for (std::size_t k = 0; k < answers.size(); ++k) {
+    line += fmt::format(" {} {} right / {} tie / {} wrong;", answers[k].name, a.counts[k].right, a.counts[k].tie,
+                        a.counts[k].wrong);
+    if (answers[k].name == "robust") totals.robust_wrong += a.counts[k].wrong;
+  }
+  fmt::print("{}\n", line);
+  for (const auto& w : a.wrong) fmt::print("{:<9} WRONG {}", "", w);
+  std::vector<RsRay> rays;
+  for (std::uint32_t i : a.telling) rays.push_back(b.rays[i]);
+  if (!rays.empty()) saved["batches"].push_back({{"name", b.name}, {"any_hit", b.any_hit()}, {"rays", rays_to_json(rays)}});
+}
 
 #ifdef RAYSORT_HAVE_EMBREE
 // Embree's columns for one batch: its median ms, ours/Embree speed per variant (paired), the lowest
@@ -228,6 +255,11 @@ void trace_scene(Runtime& rt, const std::string& scene_name, const TraceArgs& ar
   }
 #endif
   print_batch_header(tracers, layout, with_embree);
+  std::optional<ExactOracle> oracle;
+  nlohmann::json saved = {{"scene", scene_name}, {"resolution", fmt::format("{}x{}", frame.width, frame.height)},
+                          {"spp", frame.spp}, {"seed", args.common.raygen_options().seed},
+                          {"batches", nlohmann::json::array()}};
+  if (args.adjudicate) oracle.emplace(p.tris, p.bvh);
   // The pipeline of docs/measurement.md, as far as the scene's effects ask.
   for (const ReferencedBatch& rb : generate_batches(p.scene, p.tris, p.bvh, args.common.raygen_options())) {
     const RayBatch& b = rb.batch;
@@ -242,10 +274,17 @@ void trace_scene(Runtime& rt, const std::string& scene_name, const TraceArgs& ar
 #endif
     print_batch_row(run, tracers, b, mismatches, emb_cols);
     for (const auto& note : emb_notes) fmt::print("{}\n", note);
+    if (oracle) adjudicate_batch(*oracle, run, tracers, b, saved, totals);
     std::fflush(stdout);
     totals.mismatches += mismatches;
   }
   fmt::print("rounds   * = stopped by --max-time before every interval was within --max-noise\n");
+  if (oracle && !args.disagreements.empty()) {
+    std::filesystem::create_directories(args.disagreements);
+    const std::string file = (std::filesystem::path(args.disagreements) / (p.scene.name + ".json")).string();
+    write_file_atomically(file, saved.dump(1) + "\n");
+    fmt::print("saved    the adjudicated rays to {}\n", file);
+  }
 }
 
 int run_trace(const TraceArgs& args) {
@@ -260,6 +299,10 @@ int run_trace(const TraceArgs& args) {
   int code = 0;
   if (totals.mismatches > 0) {
     fmt::print(stderr, "raysort: {} hits differ from the host reference\n", totals.mismatches);
+    code = 1;
+  }
+  if (totals.robust_wrong > 0) {
+    fmt::print(stderr, "raysort: the exact oracle judged {} robust answers wrong\n", totals.robust_wrong);
     code = 1;
   }
   if (totals.disagreeing_batches > 0) {
@@ -290,6 +333,13 @@ void register_trace_command(CLI::App& app) {
                   "also trace every batch with this CPU reference, side by side: embree (Embree 3, all host threads; "
                   "needs a build with libembree-dev)")
       ->check(CLI::IsMember({"embree"}));
+  cmd->add_flag("--adjudicate", args->adjudicate,
+                "decide every ray on which the variants (and Embree) disagree with exact rational arithmetic, and "
+                "count each answer right, tie (correct up to float precision) or wrong; exits 1 if a robust answer "
+                "is wrong");
+  cmd->add_option("--disagreements", args->disagreements,
+                  "with --adjudicate: write the telling rays (answers judged differently) to DIR/<scene>.json, a "
+                  "regression file");
   cmd->callback([args] { set_command_exit_code(run_trace(*args)); });
 }
 
