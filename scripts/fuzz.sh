@@ -1,13 +1,15 @@
 #!/usr/bin/env bash
 # make fuzz: builds the libFuzzer targets (fuzz/, CMake option RAYSORT_FUZZ, clang with
 # -fsanitize=fuzzer,address,undefined) in a separate build folder, seeds their corpora from
-# scenes/*.toml and the odd-obj folder, and runs each for FUZZ_SECONDS (default 60).
+# scenes/*.toml, the odd-obj folder, the golden result set and fuzz/corpus (the committed corpus
+# grown by long runs), and runs each for FUZZ_SECONDS (default 60), or FUZZ_RUNS executions.
 # Installs clang from Debian when missing, so the default build and CI stay free of it.
 # A finding is written as crash-*/leak-*/timeout-*/oom-* into the build folder and fails the run.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD="${FUZZ_BUILD:-build-fuzz}"
 SECONDS_EACH="${FUZZ_SECONDS:-60}"
+RUNS="${FUZZ_RUNS:-}"  # executions per target instead of a time budget (e.g. 10000000)
 JOBS="${JOBS:-$(nproc 2>/dev/null || echo 2)}"
 ODD_OBJ="${RAYSORT_SCENE_ROOT:-$(cd .. && pwd)/shared/scenes}/odd-obj"
 
@@ -24,10 +26,11 @@ fi
 
 cmake -S . -B "$BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ -DRAYSORT_FUZZ=ON \
   -DBUILD_TESTING=OFF >/dev/null
-cmake --build "$BUILD" -j "$JOBS" --target obj_fuzzer scene_fuzzer
+cmake --build "$BUILD" -j "$JOBS" --target obj_fuzzer scene_fuzzer result_set_fuzzer
 
 # Seeds: the scene files, and every OBJ of the odd-obj folder under 256 KiB (when it is there).
-mkdir -p "$BUILD/seeds/scene" "$BUILD/seeds/obj" "$BUILD/corpus/scene" "$BUILD/corpus/obj"
+mkdir -p "$BUILD/seeds/scene" "$BUILD/seeds/obj" "$BUILD/seeds/result_set" "$BUILD/corpus/scene" "$BUILD/corpus/obj" \
+  "$BUILD/corpus/result_set"
 cp scenes/*.toml "$BUILD/seeds/scene/"
 if [ -d "$ODD_OBJ" ]; then
   find "$ODD_OBJ" -name '*.obj' -size -256k -exec cp {} "$BUILD/seeds/obj/" \;
@@ -35,12 +38,24 @@ else
   echo "fuzz: $ODD_OBJ not found; OBJ seeds are a generated cube only"
 fi
 printf 'v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\nf -4 -3 -2\n' > "$BUILD/seeds/obj/quad.obj"
+# Result-set seeds: the golden set's cell records (selector byte 0) and meta.json (1), and rules (2).
+for f in tests/golden/quick-tiny/cells/cornell__primary__*.json; do
+  { printf '\000'; cat "$f"; } > "$BUILD/seeds/result_set/cell-$(basename "$f")"
+done
+{ printf '\001'; cat tests/golden/quick-tiny/meta.json; } > "$BUILD/seeds/result_set/meta.json"
+for rule in 'speedup<-5%' 'overhead_pct>+10%' 'anc!=' 'anc!=0.01' 'status!=ok' 'status==timeout' missing; do
+  printf '\002%s' "$rule" > "$BUILD/seeds/result_set/rule-$(printf '%s' "$rule" | tr -c 'a-z0-9' '_')"
+done
 
 status=0
-for target in obj scene; do
-  echo "fuzz: ${target}_fuzzer for ${SECONDS_EACH}s"
-  (cd "$BUILD" && ./${target}_fuzzer -max_total_time="$SECONDS_EACH" -timeout=10 -rss_limit_mb=2048 \
-     -max_len=65536 -print_final_stats=1 "corpus/$target" "seeds/$target" 2>"fuzz-$target.log") || status=1
+for target in obj scene result_set; do
+  budget=(-max_total_time="$SECONDS_EACH")
+  [ -n "$RUNS" ] && budget=(-runs="$RUNS")
+  echo "fuzz: ${target}_fuzzer for ${RUNS:+$RUNS runs}${RUNS:-${SECONDS_EACH}s}"
+  committed="$PWD/fuzz/corpus/$target"
+  (cd "$BUILD" && ./${target}_fuzzer "${budget[@]}" -timeout=10 -rss_limit_mb=2048 \
+     -max_len=65536 -print_final_stats=1 "corpus/$target" "seeds/$target" \
+     $( [ -d "$committed" ] && echo "$committed" ) 2>"fuzz-$target.log") || status=1
   grep -E "^stat::number_of_executed_units|^Done|ERROR|SUMMARY" "$BUILD/fuzz-$target.log" || true
 done
 if [ "$status" -ne 0 ]; then

@@ -228,8 +228,10 @@ void overhead_vs_gain_plots(const std::vector<CellRecord>& cells, const PlotLege
   std::set<std::tuple<std::string, unsigned, std::string, std::string>> facets;  // batch, bits, variant, access
   for (auto& c : cells)
     if (plotted(c) && c.top_bits == 0) facets.insert({c.batch, c.bits, c.variant, c.access});
-  for (auto& [batch, bits, variant, access] : facets) {
-    auto in_facet = [&](const CellRecord& c) {
+  for (const auto& facet : facets) {
+    // Named copies, not structured bindings: clang 14 (the fuzz build) cannot capture those.
+    const auto& [batch, bits, variant, access] = facet;
+    auto in_facet = [&, batch = batch, bits = bits, variant = variant, access = access](const CellRecord& c) {
       return plotted(c) && c.batch == batch && c.bits == bits && c.top_bits == 0 && c.variant == variant &&
              c.access == access;
     };

@@ -84,17 +84,14 @@ void check_meta_shape(const nlohmann::json& meta, const std::string& path) {
       if (!id.is_string()) throw Error(fmt::format("{}: absent_cells holds a {}, not a cell id; restore the file", path, id.type_name()));
 }
 
-// One cell file: its JSON, the record it holds, and that record being the cell its name says,
-// valid, and inside the matrix of its set.
-CellRecord read_cell_file(const fs::path& p, const nlohmann::json& matrix) {
-  const std::string file = p.string();
+}  // namespace
+
+CellRecord parse_cell_record(const std::string& text, const std::string& file, const nlohmann::json& matrix) {
   const std::string fix = "delete the file to rerun that cell";
-  std::error_code ec;
-  if (!fs::is_regular_file(p, ec)) throw Error(fmt::format("{}: not a cell record (not a regular file); remove it", file));
   CellRecord r;
   nlohmann::json j;
   try {
-    j = nlohmann::json::parse(read_file(file));
+    j = nlohmann::json::parse(text);
     r = j.get<CellRecord>();
   } catch (const Error&) {
     throw;
@@ -104,7 +101,7 @@ CellRecord read_cell_file(const fs::path& p, const nlohmann::json& matrix) {
   const std::string id = r.id();
   if (j.contains("id") && j["id"] != id)
     throw Error(fmt::format("{}: its \"id\" is {} but its fields make cell {}; {}", file, j["id"].dump(), id, fix));
-  if (p.filename().string() != cell_file_name(id))
+  if (fs::path(file).filename().string() != cell_file_name(id))
     throw Error(fmt::format("{} holds cell {}, whose file is {}: a cell file names its cell (an edited or copied "
                             "record); {}",
                             file, id, cell_file_name(id), fix));
@@ -113,6 +110,27 @@ CellRecord read_cell_file(const fs::path& p, const nlohmann::json& matrix) {
   if (std::string outside = cell_outside_matrix(r, matrix); !outside.empty())
     throw Error(fmt::format("{}: cell {} is outside the matrix of this result set ({}); {}", file, id, outside, fix));
   return r;
+}
+
+nlohmann::json parse_meta(const std::string& text, const std::string& path) {
+  nlohmann::json meta;
+  try {
+    meta = nlohmann::json::parse(text);
+  } catch (const nlohmann::json::exception& e) {
+    throw Error(fmt::format("{}: not valid JSON ({}); restore the file, or choose another folder", path, e.what()));
+  }
+  check_meta_shape(meta, path);
+  return meta;
+}
+
+namespace {
+
+// One cell file: the record it holds, the cell its name says, valid and inside the set's matrix.
+CellRecord read_cell_file(const fs::path& p, const nlohmann::json& matrix) {
+  std::error_code ec;
+  if (!fs::is_regular_file(p, ec))
+    throw Error(fmt::format("{}: not a cell record (not a regular file); remove it", p.string()));
+  return parse_cell_record(read_file(p.string()), p.string(), matrix);
 }
 
 void read_cells(const std::string& dir, const nlohmann::json& meta, std::map<std::string, CellRecord>& cells) {
@@ -219,13 +237,7 @@ ResultSet ResultSet::open_for_run(const std::string& dir, const nlohmann::json& 
                             "another folder",
                             dir));
   if (fs::exists(meta_path, ec)) {
-    nlohmann::json old;
-    try {
-      old = nlohmann::json::parse(read_file(meta_path.string()));
-    } catch (const nlohmann::json::exception& e) {
-      throw Error(fmt::format("{}: not valid JSON ({}); choose another --out folder", meta_path.string(), e.what()));
-    }
-    check_meta_shape(old, meta_path.string());
+    const nlohmann::json old = parse_meta(read_file(meta_path.string()), meta_path.string());
     check_version(old, meta_path.string(), true);
     if (old.value("matrix", nlohmann::json()) != meta.value("matrix", nlohmann::json()))
       throw Error(fmt::format("{} holds results of a different matrix configuration ({}); choose another --out folder "
@@ -248,12 +260,7 @@ ResultSet ResultSet::load(const std::string& dir) {
   if (!fs::is_regular_file(meta_path, ec)) throw Error(fmt::format("'{}' is not a result set (no meta.json)", dir));
   ResultSet rs;
   rs.dir_ = dir;
-  try {
-    rs.meta_ = nlohmann::json::parse(read_file(meta_path.string()));
-  } catch (const nlohmann::json::exception& e) {
-    throw Error(fmt::format("{}: not valid JSON ({})", meta_path.string(), e.what()));
-  }
-  check_meta_shape(rs.meta_, meta_path.string());
+  rs.meta_ = parse_meta(read_file(meta_path.string()), meta_path.string());
   check_version(rs.meta_, meta_path.string(), false);
   read_cells(dir, rs.meta_, rs.cells_);
   return rs;

@@ -57,6 +57,13 @@ class ResultSet {
 // The file name of a cell in DIR/cells ("/" in the id becomes "__").
 std::string cell_file_name(const std::string& cell_id);
 
+// The readers behind ResultSet::load and open_for_run, on text (the fuzz target calls them):
+// a cell record as read from `file`, checked against its name, the status vocabulary, its figures
+// and `matrix` (meta.json's entry); meta.json's text, checked to be an object whose entries have
+// the types raysort reads. Each throws one Error naming the file and the fix.
+CellRecord parse_cell_record(const std::string& text, const std::string& file, const nlohmann::json& matrix);
+nlohmann::json parse_meta(const std::string& text, const std::string& path);
+
 // Why a cell cannot belong to the matrix of a meta.json ("encoder 'x' is not one of its
 // encoders"), or "" when it can. Checks the axes only (scenes, batches, encoders, bits, top-k,
 // variants, access modes); `raysort run` also checks its plan.
