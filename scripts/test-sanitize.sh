@@ -18,7 +18,7 @@ HOST_TESTS=(bvh_test cut_test metrics_test odd_input_test scene_test shared_math
 start=$(date +%s)
 cmake -S . -B "$BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS="$SAN" \
   -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" >/dev/null
-cmake --build "$BUILD" -j "$JOBS" --target raysort bench_test cli_test "${HOST_TESTS[@]}"
+cmake --build "$BUILD" -j "$JOBS" --target raysort bench_test cli_test adjudicate_test frame_memory_test "${HOST_TESTS[@]}"
 
 export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1:strict_string_checks=1}"
 export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
@@ -30,4 +30,7 @@ echo "test-sanitize: bench_test (device-free tests)"
 "$BUILD/bench_test" --gtest_brief=1 --gtest_filter='ResultSet.*:Compare.*:Matrix.RefusesImpossibleCombinationsBeforeWork'
 echo "test-sanitize: cli_test (refusals)"
 "$BUILD/cli_test" --gtest_brief=1 --gtest_filter='Cli.UnknownNamesListTheValidOnes:Cli.ImpossibleCombinationsRefusedBeforeWork'
+echo "test-sanitize: adjudicate_test and frame_memory_test (the exact oracle, the memory model)"
+"$BUILD/adjudicate_test" --gtest_brief=1 --gtest_filter='ExactOracle.HandMadeTruths:ExactOracle.RaysRoundTripThroughJson'
+"$BUILD/frame_memory_test" --gtest_brief=1 --gtest_filter='FrameMemory.ModelCountsEveryBatchTheEffectsImply'
 echo "test-sanitize: clean in $(( $(date +%s) - start )) s"

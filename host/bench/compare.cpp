@@ -8,7 +8,6 @@
 #include <map>
 #include <optional>
 #include <set>
-#include <regex>
 
 #include "util/error.h"
 
@@ -72,8 +71,15 @@ std::string metric_names() {
 
 // A number as a rule writes it: digits with at most one point ("5", "0.5", ".5", "5."), nothing else.
 std::optional<double> rule_number(const std::string& text) {
-  static const std::regex re(R"(^([0-9]+\.?[0-9]*|\.[0-9]+)$)");
-  if (!std::regex_match(text, re)) return std::nullopt;
+  // Scanned by hand, not with std::regex: libstdc++'s matcher recurses per character and overflows
+  // the stack on long input (found by fuzz/result_set_fuzzer).
+  std::size_t digits = 0, points = 0;
+  for (char c : text) {
+    if (c == '.') ++points;
+    else if (c >= '0' && c <= '9') ++digits;
+    else return std::nullopt;
+  }
+  if (digits == 0 || points > 1) return std::nullopt;
   return std::strtod(text.c_str(), nullptr);
 }
 
@@ -117,11 +123,19 @@ FailRule FailRule::parse(const std::string& text) {
   const std::string grammar =
       "expected METRIC<-X% (relative drop), METRIC>+X% (relative rise), METRIC!= (any change), METRIC!=X (a number: "
       "absolute change; text: B's value is not X), METRIC==X (text: B's value is X) or 'missing'";
-  std::smatch m;
-  static const std::regex re(R"(^([a-z_]+)\s*(<-|>\+|!=|==)\s*(.*?)\s*$)");
-  if (!std::regex_match(text, m, re)) throw Error(fmt::format("--fail-if '{}': {}", text, grammar));
-  r.metric = m[1];
-  const std::string op = m[2], rest = m[3];
+  // METRIC, blanks, one of <- >+ != ==, blanks, the rest (trimmed). Scanned by hand (see rule_number).
+  auto blank = [](char c) { return c == ' ' || c == '\t'; };
+  std::size_t i = 0;
+  while (i < text.size() && ((text[i] >= 'a' && text[i] <= 'z') || text[i] == '_')) ++i;
+  r.metric = text.substr(0, i);
+  while (i < text.size() && blank(text[i])) ++i;
+  const std::string op = text.substr(i, 2);
+  if (r.metric.empty() || (op != "<-" && op != ">+" && op != "!=" && op != "=="))
+    throw Error(fmt::format("--fail-if '{}': {}", text, grammar));
+  std::size_t b = i + 2, e = text.size();
+  while (b < e && blank(text[b])) ++b;
+  while (e > b && blank(text[e - 1])) --e;
+  const std::string rest = text.substr(b, e - b);
   const std::optional<Metric> metric = find_metric(r.metric);
   if (!metric)
     throw Error(fmt::format("--fail-if '{}': unknown metric '{}'; metrics (the columns of cells.csv) are: {}", text,
