@@ -197,6 +197,14 @@ TEST(OddObj, BadFaceIndicesRefused) {
   EXPECT_EQ(load_or_error(dir / "ok.obj"), 1u);
 }
 
+// A coordinate std::from_chars reads as 0 but tinyobjloader as NaN (found by fuzz/obj_fuzzer): the
+// loaded value is checked, so no non-finite vertex gets into a mesh.
+TEST(OddObj, CoordinateTheReaderTakesForNaNRefused) {
+  fs::path dir = temp_dir("reader-nan");
+  write_file(dir / "zero-exp.obj", "v 0 0 0\nv 1 0 0\nv 0.e0418548 0.961535 0.096869\nf 1 2 3\n");
+  expect_error(dir / "zero-exp.obj", "zero-exp.obj: vertex 3 has a coordinate the OBJ reader (tinyobjloader) reads as non-finite");
+}
+
 // A 1 GB file that is a single line: refused after reading its first MiB, in well under a second,
 // without reading the gigabyte into memory. The file is sparse (a real face line, then a hole).
 TEST(OddObj, GigabyteLineRefusedQuickly) {

@@ -197,8 +197,17 @@ Mesh parse_obj(const std::string& text, const std::string& path, const std::stri
   mesh.name = std::filesystem::path(path).stem().string();
   mesh.source = "obj:" + path;
   mesh.positions.resize(nverts);
-  for (std::size_t i = 0; i < nverts; ++i)
+  for (std::size_t i = 0; i < nverts; ++i) {
     mesh.positions[i] = {attrib.vertices[3 * i], attrib.vertices[3 * i + 1], attrib.vertices[3 * i + 2]};
+    // tinyobjloader's own number reader can disagree with the check above: it reads "0.e0418548"
+    // (zero, to std::from_chars) as NaN. Its values are the ones loaded, so they are checked too
+    // (found by fuzz/obj_fuzzer).
+    for (int k = 0; k < 3; ++k)
+      if (!std::isfinite(mesh.positions[i][k]))
+        throw Error(fmt::format("{}: vertex {} has a coordinate the OBJ reader (tinyobjloader) reads as non-finite "
+                                "(NaN or Inf), e.g. a huge exponent; fix the file",
+                                path, i + 1));
+  }
 
   auto material_base = static_cast<std::int32_t>(materials.size());
   for (const auto& m : obj_materials) {
