@@ -65,6 +65,8 @@ TEST(Cli, ImpossibleCombinationsRefusedBeforeWork) {
   expect_refused({"run", "--scenes", "cornell", "--top-bits", "40", "--bits", "32"}, {"--top-bits 40"});
   expect_refused({"run", "--scenes", "cornell", "--reps", "0"}, {"--reps"});
   expect_refused({"run", "--scenes", "cornell", "--timeout", "-1"}, {"--timeout -1"});
+  expect_refused({"trace", "--scene", "cornell", "--adjudicate"}, {"--adjudicate judges", "--variant both"});
+  expect_refused({"trace", "--scene", "cornell", "--disagreements", "x"}, {"--disagreements DIR goes with --adjudicate"});
   // A broken OBJ given by path is read before the run starts, not after the first scenes ran.
   fs::path bad = raysort::testing::temp_path("nan.obj");
   std::ofstream(bad) << "v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n";

@@ -292,6 +292,10 @@ int run_trace(const TraceArgs& args) {
   if (args.reference == "embree") throw Error("this build has no Embree: install libembree-dev and reconfigure");
 #endif
   parse_trace_variants(args.variant);  // a bad --variant is refused before any work
+  if (args.adjudicate && parse_trace_variants(args.variant).size() < 2 && args.reference.empty())
+    throw Error("--adjudicate judges the rays on which answers differ: give two, with --variant both and/or "
+                "--reference embree");
+  if (!args.disagreements.empty() && !args.adjudicate) throw Error("--disagreements DIR goes with --adjudicate");
   Runtime rt(select_device(args.common.device));
   fmt::print("device   {} ({}, {})\n", rt.info().name, rt.info().platform_name, rt.info().driver_version);
   TraceTotals totals;
