@@ -1,4 +1,4 @@
-/* raysort — encode kernels: the sort keys of every encoder of DESIGN.md section 3, one kernel per
+/* raysort — encode kernels: the sort keys of every encoder of docs/design.md, "Encoders", one kernel per
  * family (spatial codes, box-set codes, two-level cut code, prefix path code, no key).
  *
  * Conventions shared with trace.cl: the ray of work-item i is rays[order[i]]; the global size is

@@ -1,5 +1,5 @@
 /* raysort — atan2 and acos from + − × ÷ and sqrt only, shared by the encode kernels and their host
- * twin (DESIGN.md section 4: OpenCL's and libm's atan2/acos may differ by ulps, which would move a
+ * twin (docs/design.md, "Determinism": OpenCL's and libm's atan2/acos may differ by ulps, which would move a
  * ray across a direction cell boundary on one side only).
  *
  * Both are evaluated in single precision in a fixed order; FP contraction is off on both sides

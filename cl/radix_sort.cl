@@ -27,7 +27,7 @@
  * The host (host/sort/radix_sort.cpp) picks RS_RADIX_BITS, RS_WG and the tile size from the
  * device's type, local memory and maximum work-group size. OpenCL C 1.2, no sub-groups, every
  * barrier in uniform control flow, global sizes padded to a multiple of the local size
- * (DESIGN.md section 6).
+ * (docs/design.md, "Device facts").
  *
  * Build options (all required): RS_KEY_BITS (32 or 64), RS_RADIX_BITS, RS_WG, RS_MAX_ITEMS
  * (keys per work-item staged in local memory when RS_WG > 1), RS_SCAN_WG.

@@ -6,7 +6,7 @@
  *
  * Compaction is deterministic and stable (the order of valid slots is kept): count valid slots per
  * block of RS_COMPACT_BLOCK, scan the block counts in one work-item, then give each valid slot its
- * destination by walking each block in order. No atomics, no barriers (PoCL 3.1, DESIGN.md 6).
+ * destination by walking each block in order. No atomics, no barriers (PoCL 3.1, docs/design.md, "Device facts").
  * Every kernel guards on its count: global sizes are padded to the local size.
  */
 #include "shade.h"

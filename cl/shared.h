@@ -53,7 +53,7 @@ RS_INLINE float rs_int_as_float(rs_i32 i) { return std::bit_cast<float>(i); }
 #endif
 
 /* "Infinite" ray length. A finite value on purpose: kernels must not rely on inf arithmetic,
- * which -cl-fast-relaxed-math (finite-math-only) leaves undefined (DESIGN.md section 6). */
+ * which -cl-fast-relaxed-math (finite-math-only) leaves undefined (docs/design.md, "Device facts"). */
 #define RS_T_FAR 3.0e38f
 #define RS_NO_HIT 0xFFFFFFFFu
 /* ---------------------------------------------------------------------------------------------

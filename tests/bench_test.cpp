@@ -216,6 +216,20 @@ TEST(ResultSet, ReadsFormatVersionOne) {
   EXPECT_THROW(ResultSet::open_for_run(dir, meta_for("quick")), Error);
 }
 
+// Counts read from a cell file are counts: a float format version or key length is refused, never
+// cast to an integer (undefined for 7.8e50; found by fuzz/result_set_fuzzer). test-sanitize runs
+// this under UBSan.
+TEST(ResultSet, FloatCountsAreRefusedNotCast) {
+  std::string dir = temp_dir("float-counts");
+  fs::create_directories(dir + "/cells");
+  write_file_atomically(dir + "/meta.json", R"({"format_version": 2, "matrix": {"preset": "quick"}})");
+  for (const char* field : {R"("format_version": 7.77778e+50, "bits": 32)", R"("format_version": 1, "bits": 1e300)",
+                            R"("format_version": 1, "bits": 32.5)", R"("format_version": -1, "bits": 32)"}) {
+    write_file_atomically(dir + "/cells/s__bounce1__hcc__32.json", std::string("{") + field + R"(, "id": "s/bounce1/hcc/32", "scene": "s", "batch": "bounce1", "encoder": "hcc", "top_bits": 0})");
+    EXPECT_THROW(ResultSet::load(dir), Error) << field;
+  }
+}
+
 TEST(Matrix, RefusesImpossibleCombinationsBeforeWork) {
   // The command line's text is refused where it is parsed, naming the value and the valid ones.
   EXPECT_THROW(parse_encoders({"no-such-encoder"}), Error);

@@ -1,6 +1,6 @@
 #pragma once
 // Ordering-quality metrics of a sorted batch: ANC (the paper's Table 7) and the SIMT model of
-// DESIGN.md section 3, which shows what a 32-wide GPU would gain even when the run is on a CPU.
+// docs/design.md, "Metrics", which shows what a 32-wide GPU would gain even when the run is on a CPU.
 #include <cstdint>
 #include <span>
 #include <vector>

@@ -102,7 +102,9 @@ void to_json(nlohmann::json& j, const CellRecord& r) {
 }
 
 void from_json(const nlohmann::json& j, CellRecord& r) {
-  int version = j.value("format_version", 0);
+  // Read as a count, never as a float cast to int (fuzz/result_set_fuzzer: 7.8e50 was undefined).
+  std::uint64_t version = 0;
+  if (j.contains("format_version")) count_from(j, "format_version", version);
   if (version < kOldestReadableFormatVersion || version > kResultFormatVersion)
     throw std::runtime_error(fmt::format("cell record has format version {}, this raysort reads versions {} to {}",
                                          version, kOldestReadableFormatVersion, kResultFormatVersion));

@@ -26,7 +26,8 @@ namespace {
 // Reading accepts every version this raysort knows (older sets stay comparable); a run resumes
 // only into a set of the current version (for_run).
 void check_version(const nlohmann::json& meta, const std::string& path, bool for_run) {
-  int v = meta.value("format_version", 0);
+  // check_meta_shape has made it a count when present.
+  const std::uint64_t v = meta.contains("format_version") ? meta["format_version"].get<std::uint64_t>() : 0;
   if (for_run && v != kResultFormatVersion)
     throw Error(fmt::format("{}: result format version {} but this raysort writes version {}; "
                             "run into a new --out folder, or resume with the raysort that wrote it",

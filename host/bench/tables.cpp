@@ -317,7 +317,7 @@ std::string deterministic_sections(const TableContext& t) {
   }
   md += fmt::format(
       "\n## SIMT model, {}-bit keys: lane efficiency (ratio vs NoSort) / distinct nodes per visit (ratio vs NoSort)\n\n"
-      "Device-independent: what a 32-wide GPU warp would see in this trace order (DESIGN.md §3).\n\n",
+      "Device-independent: what a 32-wide GPU warp would see in this trace order (docs/design.md, \"Metrics\").\n\n",
       t.overview_bits);
   cols.clear();
   for (auto& s : t.scenes)

@@ -1,5 +1,5 @@
 #pragma once
-// Ray sort keys: every encoder of DESIGN.md section 3, on the device (cl/encode.cl) and on the host
+// Ray sort keys: every encoder of docs/design.md, "Encoders", on the device (cl/encode.cl) and on the host
 // (a bit-exact twin running the same key code, cl/keys*.h). Layouts: docs/encoders.md.
 //
 //   EncodeScene   per-scene inputs of the keys: the scene box frame, HAD, cuts, grid cells

@@ -1,5 +1,5 @@
 #pragma once
-// The batches a scene's effects imply (DESIGN.md section 1), captured from one frame of the host
+// The batches a scene's effects imply (docs/design.md, "Data flow"), captured from one frame of the host
 // twin of the wavefront path tracer (render/pathtrace.h): primary, then for each bounce depth k the
 // shadow rays of its diffuse hits (when the scene has sphere lights and asks for shadow rays) and
 // the next bounce (while k < max_bounces). Empty batches are left out. Hits come from the host

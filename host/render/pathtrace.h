@@ -1,5 +1,5 @@
 #pragma once
-// The wavefront path tracer (DESIGN.md section 1; Laine et al. 2013, the pipeline of Xiang et al.
+// The wavefront path tracer (docs/design.md, "Data flow"; Laine et al. 2013, the pipeline of Xiang et al.
 // section 6.1): generate -> trace -> shade -> compact -> trace shadows -> accumulate -> next bounce,
 // one kernel per stage in cl/shade.cl, with a host twin running the same shade.h arithmetic.
 // A frame runs only the stages the scene's effects imply (describe_frame lists them), and every

@@ -280,7 +280,7 @@ Runtime::Runtime(DeviceInfo info) : info_(std::move(info)) {
 
 std::string Runtime::build_options(const std::string& extra) const {
   std::string opts = "-cl-std=CL1.2";
-  // Correctly rounded divide and sqrt: the kernels must give the host twin's bits (DESIGN.md 4).
+  // Correctly rounded divide and sqrt: the kernels must give the host twin's bits (docs/design.md, "Determinism").
   if (info_.correctly_rounded_divide_sqrt) opts += " -cl-fp32-correctly-rounded-divide-sqrt";
   if (!extra.empty()) opts += " " + extra;
   // Options for every kernel build, e.g. -DRS_PORTABLE_MASK_BITS on an x86 OpenCL compiler that

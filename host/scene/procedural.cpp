@@ -1,4 +1,4 @@
-// Procedural mesh generators (DESIGN.md section 5): rooms, terrain, dense objects and small
+// Procedural mesh generators (docs/design.md, "Scenes"): rooms, terrain, dense objects and small
 // props, each a pure function of its parameters and seed (noise.h has the RNG and noise).
 #include "scene/procedural.h"
 

@@ -1,6 +1,6 @@
 #pragma once
 // Procedural mesh generators: deterministic functions of their parameters and seed, so the
-// embedded scenes (DESIGN.md section 5) need no files and are identical on every machine.
+// embedded scenes (docs/design.md, "Scenes") need no files and are identical on every machine.
 #include <cstdint>
 #include <map>
 #include <string>

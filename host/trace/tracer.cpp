@@ -61,7 +61,7 @@ Tracer::Tracer(Runtime& rt, const Bvh& bvh, TraceVariant variant, TraceLayout la
     any_ = cl::Kernel(program, ("trace_any" + suffix).c_str());
     counted_ = cl::Kernel(program, ("trace_closest_counted" + suffix).c_str());
   });
-  // PoCL: the work-group is a loop over work-items and its size barely matters (DESIGN.md 6);
+  // PoCL: the work-group is a loop over work-items and its size barely matters (docs/design.md, "Device facts");
   // GPUs want a few warps per group. 64 suits both and stays within every device's limit.
   local_ = std::min<std::size_t>(64, rt.info().max_work_group_size);
 }
