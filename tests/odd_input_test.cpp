@@ -205,6 +205,15 @@ TEST(OddObj, CoordinateTheReaderTakesForNaNRefused) {
   expect_error(dir / "zero-exp.obj", "zero-exp.obj: vertex 3 has a coordinate the OBJ reader (tinyobjloader) reads as non-finite");
 }
 
+// Vertex-weight (`vw`) lines are not read: raysort uses no skin weights, and tinyobjloader's reader
+// of them converts an infinite joint id to int, undefined (found by fuzz/obj_fuzzer; test-sanitize
+// runs this under UBSan).
+TEST(OddObj, VertexWeightLinesAreNotRead) {
+  fs::path dir = temp_dir("vw");
+  write_file(dir / "weights.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvw 1e999 0.5\n  vw\t-0.08 0.9\nf 1 2 3\n");
+  EXPECT_EQ(load_or_error(dir / "weights.obj"), 1u);
+}
+
 // A 1 GB file that is a single line: refused after reading its first MiB, in well under a second,
 // without reading the gigabyte into memory. The file is sparse (a real face line, then a hole).
 TEST(OddObj, GigabyteLineRefusedQuickly) {

@@ -159,6 +159,26 @@ std::size_t check_vertex_lines(const std::string& text, const std::string& path)
   return vertex;
 }
 
+// The text tinyobjloader gets: `vw` (vertex weight) lines commented out. raysort uses no skin
+// weights, and tinyobjloader's reader of them converts an infinite joint id to int, which is
+// undefined (found by fuzz/obj_fuzzer). Every line keeps its place, so line numbers still hold.
+std::string without_vertex_weights(const std::string& text) {
+  std::string out;
+  std::size_t pos = 0;
+  while (pos < text.size()) {
+    std::size_t p = pos;
+    while (p < text.size() && (text[p] == ' ' || text[p] == '\t')) ++p;
+    if (p + 2 < text.size() && text[p] == 'v' && text[p + 1] == 'w' && (text[p + 2] == ' ' || text[p + 2] == '\t')) {
+      if (out.empty()) out = text;
+      out[p] = '#';
+    }
+    const std::size_t end = text.find('\n', pos);
+    if (end == std::string::npos) break;
+    pos = end + 1;
+  }
+  return out.empty() ? text : out;
+}
+
 }  // namespace
 
 Mesh load_obj(const std::string& path, std::vector<Material>& materials) {
@@ -176,7 +196,7 @@ Mesh parse_obj(const std::string& text, const std::string& path, const std::stri
   std::vector<tinyobj::shape_t> shapes;
   std::vector<tinyobj::material_t> obj_materials;
   std::string warn, err;
-  std::istringstream stream(text);
+  std::istringstream stream(without_vertex_weights(text));
   tinyobj::MaterialFileReader mtl_reader(mtl_dir + "/");
   bool ok = tinyobj::LoadObj(&attrib, &shapes, &obj_materials, &warn, &err, &stream, &mtl_reader,
                              /*triangulate=*/false);
