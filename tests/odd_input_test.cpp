@@ -212,6 +212,10 @@ TEST(OddObj, VertexWeightLinesAreNotRead) {
   fs::path dir = temp_dir("vw");
   write_file(dir / "weights.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvw 1e999 0.5\n  vw\t-0.08 0.9\nf 1 2 3\n");
   EXPECT_EQ(load_or_error(dir / "weights.obj"), 1u);
+  // A line break tinyobjloader sees and raysort's line checks do not (\r alone) must not hide a vw
+  // line from the filter (the second finding; UBSan under test-sanitize).
+  write_file(dir / "cr.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n# weights\rvw 7875557555 0.5\nf 1 2 3\n");
+  EXPECT_EQ(load_or_error(dir / "cr.obj"), 1u);
 }
 
 // A 1 GB file that is a single line: refused after reading its first MiB, in well under a second,

@@ -172,7 +172,8 @@ std::string without_vertex_weights(const std::string& text) {
       if (out.empty()) out = text;
       out[p] = '#';
     }
-    const std::size_t end = text.find('\n', pos);
+    // tinyobjloader ends a line at \n, \r or \r\n (a second fuzz finding: lines split by \r alone).
+    const std::size_t end = text.find_first_of("\r\n", pos);
     if (end == std::string::npos) break;
     pos = end + 1;
   }
