@@ -47,6 +47,13 @@ for rule in 'speedup<-5%' 'overhead_pct>+10%' 'anc!=' 'anc!=0.01' 'status!=ok' '
   printf '\002%s' "$rule" > "$BUILD/seeds/result_set/rule-$(printf '%s' "$rule" | tr -c 'a-z0-9' '_')"
 done
 
+# Corpora grown by long runs (minimized with -merge=1), committed as one tarball per target.
+for grown in fuzz/corpus/*-grown.tar.gz; do
+  [ -e "$grown" ] || continue
+  target="$(basename "$grown" -grown.tar.gz)"
+  tar xzf "$grown" -C "$BUILD/seeds/$target"
+done
+
 status=0
 for target in obj scene result_set; do
   budget=(-max_total_time="$SECONDS_EACH")
