@@ -8,12 +8,12 @@
 #include <numeric>
 
 #include "app/commands.h"
-#include "render/frame_memory.h"
 #include "app/options.h"
 #include "bench/protocol.h"
 #include "bvh/prepared_scene.h"
 #include "encode/encode.h"
 #include "render/batches.h"
+#include "render/frame_memory.h"
 #include "scene/load.h"
 #include "trace/tracer.h"
 #include "util/error.h"

@@ -17,11 +17,11 @@
 #include <optional>
 
 #include "app/commands.h"
-#include "render/frame_memory.h"
 #include "app/options.h"
 #include "bvh/cut.h"
 #include "bvh/prepared_scene.h"
 #include "encode/encode.h"
+#include "render/frame_memory.h"
 #include "render/preview.h"
 #include "util/error.h"
 #include "util/image.h"

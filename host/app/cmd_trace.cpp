@@ -14,10 +14,10 @@
 #include <optional>
 
 #include "app/commands.h"
-#include "render/frame_memory.h"
 #include "app/options.h"
 #include "bench/protocol.h"
 #include "bvh/prepared_scene.h"
+#include "render/frame_memory.h"
 #include "runtime/runtime.h"
 #ifdef RAYSORT_HAVE_EMBREE
 #include "embree/embree_reference.h"

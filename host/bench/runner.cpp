@@ -17,12 +17,12 @@
 #include <memory>
 #include <set>
 
-#include "render/frame_memory.h"
 #include "bench/cell_measure.h"
 #include "bench/result_set.h"
 #include "bvh/prepared_scene.h"
-#include "runtime/runtime.h"
 #include "render/batches.h"
+#include "render/frame_memory.h"
+#include "runtime/runtime.h"
 #include "scene/load.h"
 #include "util/error.h"
 
@@ -233,16 +233,28 @@ void check_scenes_before_work(const MatrixSpec& spec, const RunOptions& opts) {
   }
 }
 
+// Each scene's facts (size, effects), loaded once: the plan and the memory check both read them.
+std::map<std::string, SceneFacts> scene_facts(const MatrixSpec& spec, const std::string& scene_root) {
+  std::map<std::string, SceneFacts> facts;
+  for (const auto& scene : spec.scenes)
+    if (!facts.count(scene)) facts.emplace(scene, load_scene_facts(scene, spec, scene_root));
+  return facts;
+}
+
+std::vector<PlannedCell> plan_from(const MatrixSpec& spec, const std::map<std::string, SceneFacts>& facts,
+                                   unsigned count) {
+  return plan_shards(matrix_cells(spec, [&](const std::string& scene) { return facts.at(scene); }), count);
+}
+
 // Each scene's frame at the matrix's resolution and spp must fit the device and the host (a refusal
 // names the scene, the estimate and the limit; render/frame_memory.h).
-void check_matrix_memory(const MatrixSpec& spec, const std::string& scene_root, const DeviceInfo& device) {
-  for (const auto& scene : spec.scenes) {
-    const SceneFacts f = load_scene_facts(scene, spec, scene_root);
+void check_matrix_memory(const MatrixSpec& spec, const std::map<std::string, SceneFacts>& facts,
+                         const DeviceInfo& device) {
+  for (const auto& [scene, f] : facts)
     check_frame_memory(estimate_frame_memory(spec.frame.width, spec.frame.height, spec.frame.spp,
                                              f.shadow_rays_per_bounce, f.max_bounces),
                        &device, fmt::format("scene {} at {}x{}, {} spp", scene, spec.frame.width, spec.frame.height,
                                             spec.frame.spp));
-  }
 }
 
 // Every cell the set holds must be one the matrix plans: a cell file of another matrix (copied in,
@@ -267,8 +279,7 @@ std::string default_result_dir(const MatrixSpec& spec, const std::string& device
 }
 
 std::vector<PlannedCell> plan_matrix_shards(const MatrixSpec& spec, const std::string& scene_root, unsigned count) {
-  return plan_shards(matrix_cells(spec, [&](const std::string& scene) { return load_scene_facts(scene, spec, scene_root); }),
-                     count);
+  return plan_from(spec, scene_facts(spec, scene_root), count);
 }
 
 RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
@@ -276,13 +287,14 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
   check_scenes_before_work(spec, opts);
 
   // Plan: every cell of the matrix in visiting order; a shard keeps its own (bench/shard.h).
-  std::vector<PlannedCell> plan = plan_matrix_shards(spec, opts.scene_root, opts.shard.active() ? opts.shard.count : 1);
+  const std::map<std::string, SceneFacts> facts = scene_facts(spec, opts.scene_root);
+  std::vector<PlannedCell> plan = plan_from(spec, facts, opts.shard.active() ? opts.shard.count : 1);
   const std::vector<PlannedCell> full_plan = plan;
   if (opts.shard.active())
     std::erase_if(plan, [&](const PlannedCell& c) { return c.shard != opts.shard.index; });
 
   Runtime rt(select_device(opts.device));
-  check_matrix_memory(spec, opts.scene_root, rt.info());  // before the result set is written
+  check_matrix_memory(spec, facts, rt.info());  // before the result set is written
   RunSummary summary;
   summary.out_dir = opts.out.empty() ? default_result_dir(spec, rt.info().slug(), opts.shard) : opts.out;
   nlohmann::json meta = run_meta(spec, opts, rt.info());

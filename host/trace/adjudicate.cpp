@@ -34,10 +34,12 @@ Adjudication adjudicate(const ExactOracle& oracle, const RayBatch& batch, const 
     out.rays.push_back(static_cast<std::uint32_t>(i));
     const ExactTruth truth = oracle.truth(batch.rays[i], any_hit);
     bool differ = false;
+    Verdict first = Verdict::Right;
     for (std::size_t a = 0; a < answers.size(); ++a) {
       const RsHit& h = (*answers[a].hits)[i];
       const Verdict v = ExactOracle::judge(truth, h);
-      differ = differ || v != ExactOracle::judge(truth, (*answers[0].hits)[i]);
+      if (a == 0) first = v;
+      differ = differ || v != first;
       out.counts[a].add(v);
       if (v == Verdict::Wrong && out.wrong.size() < kWrongShown)
         out.wrong.push_back(fmt::format("{} ray {} ({}): {} answered {}; exactly:\n{}", batch.name, i,

@@ -110,6 +110,7 @@ ExactTruth ExactOracle::truth(const RsRay& ray, bool any_hit) const {
   double scale = std::max(max_abs(o), 1e-30);
   const double slack = 1e-4 * (scale + 1.0) / std::max(dlen, 1e-300);
 
+  const Q3 qo = to_q3(o), qd = to_q3(d);  // the ray as rationals, once
   std::vector<Candidate> found;
   std::vector<std::uint32_t> stack{0};
   while (!stack.empty() && !bvh_.nodes.empty()) {
@@ -138,7 +139,7 @@ ExactTruth ExactOracle::truth(const RsRay& ray, bool any_hit) const {
       }
       // Exactly: det, u·det, v·det, t·det as rationals of the float inputs.
       ++exact_tests_;
-      const Q3 qo = to_q3(o), qd = to_q3(d), qv0 = to_q3(v0), qe1 = sub(to_q3(v1), qv0), qe2 = sub(to_q3(v2), qv0);
+      const Q3 qv0 = to_q3(v0), qe1 = sub(to_q3(v1), qv0), qe2 = sub(to_q3(v2), qv0);
       const Q3 qs = sub(qo, qv0), qp = cross(qd, qe2), qq = cross(qs, qe1);
       const mpq_class D = dot(qe1, qp);
       if (sgn(D) == 0) continue;  // in the plane, or a zero-area triangle: no area to hit
