@@ -182,9 +182,14 @@ RS_INLINE int rs_packet_intersect_robust(const RsRobustRay* r, const float* d, R
  * rays skip the ordering (children in lane order): measured side by side on sibenik's bounce-1
  * shadow rays, 1.13-1.15x faster; primary shadow rays within 2-4 %.
  * *node_visits, when not null, counts the wide nodes and leaves visited (cost heatmaps).
+ * trail, when not null, receives every step's reference in visit order (a wide node's index, or a
+ * leaf's RS_WIDE_LEAF reference: one id space, since inner indices never carry that bit), up to
+ * trail_cap entries; *trail_len gets the full step count. This is the SIMT model's trail on the
+ * layout the kernels walk (host/bench/metrics.cpp; kernels pass null and the recording compiles away).
  * Stack bound: RS_WIDE_STACK_SIZE (bvh_layout.h). */
-RS_INLINE RsHit rs_traverse_wide(RS_GLOBAL const RsWideNode* nodes, RS_GLOBAL const RsTriPacket* packets, RsRay ray,
-                                 int robust, int any_hit, rs_u32* node_visits) {
+RS_INLINE RsHit rs_traverse_wide_recorded(RS_GLOBAL const RsWideNode* nodes, RS_GLOBAL const RsTriPacket* packets,
+                                          RsRay ray, int robust, int any_hit, rs_u32* node_visits, rs_u32* trail,
+                                          rs_u32 trail_cap, rs_u32* trail_len) {
   RsTraversalRay r = rs_prepare_ray(ray);
   RsRobustRay rr = rs_prepare_robust_ray(ray);
   RsHit hit = rs_miss(ray.tmax);
@@ -195,6 +200,7 @@ RS_INLINE RsHit rs_traverse_wide(RS_GLOBAL const RsWideNode* nodes, RS_GLOBAL co
   rs_u32 ref = 0; /* the root is always an inner node */
   int live = !robust || rr.valid;
   while (live) {
+    if (trail && visits < trail_cap) trail[visits] = ref;
     ++visits;
     if (!(ref & RS_WIDE_LEAF)) {
       RS_GLOBAL const RsWideNode* n = &nodes[ref];
@@ -278,7 +284,14 @@ RS_INLINE RsHit rs_traverse_wide(RS_GLOBAL const RsWideNode* nodes, RS_GLOBAL co
     }
   }
   if (node_visits) *node_visits = visits;
+  if (trail_len) *trail_len = visits;
   return hit;
+}
+
+/* Without a trail: what the trace kernels call. */
+RS_INLINE RsHit rs_traverse_wide(RS_GLOBAL const RsWideNode* nodes, RS_GLOBAL const RsTriPacket* packets, RsRay ray,
+                                 int robust, int any_hit, rs_u32* node_visits) {
+  return rs_traverse_wide_recorded(nodes, packets, ray, robust, any_hit, node_visits, 0, 0, 0);
 }
 
 #endif /* RAYSORT_TRAVERSE_WIDE_H */

@@ -11,11 +11,13 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <thread>
 
 #include "bench/compare.h"
 #include "bench/result_set.h"
 #include "bench/runner.h"
+#include "render/batches.h"
 #include "test_util.h"
 #include "util/atomic_file.h"
 
@@ -192,6 +194,31 @@ TEST(Compare, RelativeRulesFireOnlyOnSignificantChanges) {
   EXPECT_TRUE(compare_result_sets(a, b, {}, {FailRule::parse("anc!=")}).violations.empty());
 }
 
+// NoSort's ANC is null (no keys): null in both sets is no change, null in one set only is one, for
+// the exact rule and the absolute one; and a set written before the fix (NoSort ANC 0) reads as null.
+TEST(Compare, NullFiguresAreEqualOnlyToNull) {
+  std::string da = temp_dir("cna"), db = temp_dir("cnb");
+  {
+    auto a = ResultSet::open_for_run(da, meta_for("quick"));
+    a.add(cell("nosort", 0, 10.0, NAN));
+    a.add(cell("hcc", 32, 10.0, NAN));
+    auto b = ResultSet::open_for_run(db, meta_for("quick"));
+    b.add(cell("nosort", 0, 11.0, NAN));
+    b.add(cell("hcc", 32, 10.0, 2.5));
+  }
+  auto a = ResultSet::load(da), b = ResultSet::load(db);
+  EXPECT_TRUE(std::isnan(a.find("s/bounce1/nosort/0")->anc));
+  for (const char* rule : {"anc!=", "anc!=0.5"}) {
+    const auto v = compare_result_sets(a, b, {}, {FailRule::parse(rule)}).violations;
+    ASSERT_EQ(v.size(), 1u) << rule;
+    EXPECT_NE(v[0].find("s/bounce1/hcc/32"), std::string::npos) << v[0];
+  }
+  nlohmann::json old_nosort = cell("nosort", 0, 10.0, 0.0);
+  EXPECT_EQ(old_nosort.at("anc"), 0.0);
+  EXPECT_TRUE(std::isnan(nlohmann::json::parse(old_nosort.dump()).get<CellRecord>().anc));  // as read from a file
+  EXPECT_TRUE(nlohmann::json(cell("nosort", 0, 10.0, NAN)).at("anc").is_null());
+}
+
 // Result sets of format version 1 (point figures) stay readable, so older sets can be compared.
 TEST(ResultSet, ReadsFormatVersionOne) {
   std::string dir = temp_dir("v1");
@@ -294,7 +321,9 @@ TEST(Matrix, EndToEndAndResume) {
     EXPECT_TRUE(c.order_is_permutation) << c.id();
     EXPECT_EQ(c.rounds, 1u) << c.id();  // --reps 1 and no time to sample more
     EXPECT_EQ(c.samples.at("nosort").size(), 1u) << c.id();
-    if (c.encoder != kBaselineEncoder) {
+    if (c.encoder == kBaselineEncoder) {
+      EXPECT_TRUE(std::isnan(c.anc)) << c.id() << ": NoSort has no keys, its ANC is null";
+    } else {
       EXPECT_GE(c.anc, 1.0) << c.id();
       EXPECT_LE(c.anc, 32.0) << c.id();
       EXPECT_GT(c.trace_mrays, 0.0) << c.id();
@@ -374,6 +403,121 @@ TEST(Matrix, IdenticalOrderIsNeverReportedAsASpeedup) {
   EXPECT_NE(tables.find("(= NoSort)"), std::string::npos);
   EXPECT_NE(tables.find("A/A calibration"), std::string::npos);
   EXPECT_TRUE(nlohmann::json::parse(read_file(opts.out + "/meta.json")).contains("noise"));
+}
+
+// The baseline-order axis (render/batches.h): one run holds pixel and shuffled cells, each against
+// its own NoSort; the shuffled NoSort traces the same rays (same hits, scattered back) in another
+// order, which the SIMT model sees as less coherent; the tables set them side by side.
+TEST(Matrix, BaselineOrderIsAnAxis) {
+  MatrixSpec spec;
+  spec.scenes = {"detail-room"};
+  spec.batches = {"primary", "bounce1"};
+  spec.encoders = {Encoder::HCC};
+  spec.frame = {64, 36, 1};
+  spec.baselines = parse_baseline_orders("all");
+  spec.reps = 1, spec.warmup = 0, spec.max_time_s = 0;
+  RunOptions opts;
+  opts.out = temp_dir("baselines");
+  RunSummary s = run_matrix(spec, opts);
+  EXPECT_EQ(s.cells_failed, 0u);
+  EXPECT_EQ(s.cells_run, 2u * 2u * 2u);  // 2 batches x 2 baselines x (NoSort + HCC)
+  auto rs = ResultSet::load(opts.out);
+  for (const std::string batch : {"primary", "bounce1"}) {
+    const CellRecord* pixel = rs.find("detail-room/" + batch + "/nosort/0");
+    const CellRecord* shuffled = rs.find("detail-room/" + batch + "/nosort/0/shuffled");
+    ASSERT_TRUE(pixel && shuffled) << batch;
+    EXPECT_EQ(shuffled->baseline, "shuffled");
+    EXPECT_EQ(pixel->rays, shuffled->rays);
+    EXPECT_NE(pixel->keys_hash + pixel->order_hash, "");
+    EXPECT_LT(shuffled->simt_lane_efficiency, pixel->simt_lane_efficiency) << batch;
+    EXPECT_GT(shuffled->simt_distinct_per_visit, pixel->simt_distinct_per_visit) << batch;
+    const CellRecord* hcc = rs.find("detail-room/" + batch + "/hcc/32/shuffled");
+    ASSERT_NE(hcc, nullptr);
+    EXPECT_TRUE(hcc->hits_match_nosort);
+    // The same rays in another generation order: other key and order fingerprints; and sorting a
+    // shuffle recovers coherence the shuffle took away.
+    const CellRecord* hcc_pixel = rs.find("detail-room/" + batch + "/hcc/32");
+    ASSERT_NE(hcc_pixel, nullptr);
+    EXPECT_NE(hcc->keys_hash, hcc_pixel->keys_hash);
+    EXPECT_GT(hcc->simt_lane_efficiency_ratio, 1.0) << batch;
+    EXPECT_LT(hcc->simt_distinct_per_visit_ratio, 1.0) << batch;
+  }
+  const std::string tables = read_file(opts.out + "/tables.md");
+  EXPECT_NE(tables.find("## Baseline order: pixel against shuffled"), std::string::npos);
+  const auto meta = nlohmann::json::parse(read_file(opts.out + "/meta.json"));
+  EXPECT_EQ(meta["matrix"]["baseline"], "pixel,shuffled");
+  EXPECT_TRUE(meta["baseline"].contains("shuffled"));
+}
+
+// The permutation of a shuffled baseline is drawn by a fixed rule: a permutation, the same on every
+// call (and machine: std::mt19937_64's sequence is fixed by the standard, and the bounded draw is
+// not a library distribution), different per batch name and seed; the batch's rays, pixels and
+// reference hits move together.
+TEST(Baseline, ShuffledOrderIsAFixedPermutation) {
+  const auto p = baseline_permutation(1000, "bounce1", 1);
+  std::vector<std::uint32_t> sorted = p;
+  std::sort(sorted.begin(), sorted.end());
+  for (std::uint32_t i = 0; i < 1000; ++i) ASSERT_EQ(sorted[i], i);
+  EXPECT_EQ(p, baseline_permutation(1000, "bounce1", 1));
+  EXPECT_NE(p, baseline_permutation(1000, "bounce2", 1));
+  EXPECT_NE(p, baseline_permutation(1000, "bounce1", 2));
+  // Pinned: a change to the rule changes every shuffled result set, so it must be deliberate.
+  EXPECT_EQ((std::vector<std::uint32_t>(p.begin(), p.begin() + 4)), (std::vector<std::uint32_t>{493, 356, 949, 50}));
+  ReferencedBatch b;
+  b.batch.name = "bounce1";
+  for (std::uint32_t i = 0; i < 100; ++i) {
+    RsRay r{};
+    r.o[0] = static_cast<float>(i);
+    b.batch.rays.push_back(r);
+    b.batch.pixel.push_back(i);
+    b.batch.sample.push_back(0);
+    RsHit h{};
+    h.tri = i;
+    b.reference_hits.push_back(h);
+  }
+  const ReferencedBatch same = in_baseline_order(b, BaselineOrder::Pixel, 1);
+  EXPECT_EQ(same.batch.pixel, b.batch.pixel);
+  const ReferencedBatch s = in_baseline_order(b, BaselineOrder::Shuffled, 1);
+  const auto q = baseline_permutation(100, "bounce1", 1);
+  for (std::size_t i = 0; i < 100; ++i) {
+    EXPECT_EQ(s.batch.pixel[i], q[i]);
+    EXPECT_EQ(s.batch.rays[i].o[0], static_cast<float>(q[i]));
+    EXPECT_EQ(s.reference_hits[i].tri, q[i]);
+  }
+  EXPECT_THROW(parse_baseline_orders("pixel,random"), Error);
+  EXPECT_EQ(parse_baseline_orders("shuffled,pixel,shuffled").size(), 2u);
+}
+
+// --layout binary: the trace kernel and the SIMT model walk the binary tree, every cell and meta.json
+// say so, the hits still match, and the model differs from the wide tree's (fewer, wider steps there).
+TEST(Matrix, LayoutIsRecordedAndModelled) {
+  MatrixSpec spec;
+  spec.scenes = {"multi-instance"};
+  spec.batches = {"bounce1"};
+  spec.encoders = {Encoder::HCC};
+  spec.frame = {64, 36, 1};
+  spec.reps = 1, spec.warmup = 0, spec.max_time_s = 0;
+  std::map<std::string, ResultSet> sets;
+  for (TraceLayout layout : {TraceLayout::Wide, TraceLayout::Binary}) {
+    spec.layout = layout;
+    RunOptions opts;
+    opts.out = temp_dir(std::string("layout-") + trace_layout_name(layout));
+    ASSERT_EQ(run_matrix(spec, opts).cells_failed, 0u);
+    const auto meta = nlohmann::json::parse(read_file(opts.out + "/meta.json"));
+    EXPECT_EQ(meta["bvh"]["layout"], trace_layout_name(layout));
+    EXPECT_EQ(meta["bvh"]["width"], layout == TraceLayout::Wide ? 4 : 2);
+    EXPECT_EQ(meta["bvh"]["max_leaf_size"], BvhBuildOptions{}.max_leaf_size);
+    sets.emplace(trace_layout_name(layout), ResultSet::load(opts.out));
+    for (const auto& c : sets.at(trace_layout_name(layout)).cells()) {
+      EXPECT_EQ(c.layout, trace_layout_name(layout)) << c.id();
+      EXPECT_TRUE(c.ok() && (c.encoder == kBaselineEncoder || c.hits_match_nosort)) << c.id() << " " << c.error;
+    }
+  }
+  const CellRecord* wide = sets.at("wide").find("multi-instance/bounce1/nosort/0");
+  const CellRecord* binary = sets.at("binary").find("multi-instance/bounce1/nosort/0");
+  ASSERT_TRUE(wide && binary);
+  EXPECT_NE(wide->simt_lane_efficiency, binary->simt_lane_efficiency);
+  EXPECT_NE(wide->simt_distinct_per_visit, binary->simt_distinct_per_visit);
 }
 
 // SIGKILL at several points, rerun after each: the final set equals an uninterrupted run's, each

@@ -82,11 +82,23 @@ TEST(SimtModel, TracedModelMatchesTrailsAndOrderMatters) {
   std::vector<std::uint32_t> sorted(rays.size());
   std::iota(sorted.begin(), sorted.end(), 0u);
   std::stable_sort(sorted.begin(), sorted.end(), [&](auto a, auto b) { return rays[a].o[0] < rays[b].o[0]; });
-  auto interleaved_model = simt_model(bvh, rays, nullptr, false);
-  auto sorted_model = simt_model(bvh, rays, sorted.data(), false);
-  EXPECT_LT(sorted_model.distinct_nodes_per_visit, interleaved_model.distinct_nodes_per_visit);
-  EXPECT_EQ(sorted_model.total_steps, interleaved_model.total_steps);  // same rays, same work
-  EXPECT_GT(sorted_model.total_steps, 0u);
+  for (TraceLayout layout : {TraceLayout::Wide, TraceLayout::Binary}) {
+    SCOPED_TRACE(trace_layout_name(layout));
+    auto interleaved_model = simt_model(bvh, rays, nullptr, false, TraceVariant::Fast, layout);
+    auto sorted_model = simt_model(bvh, rays, sorted.data(), false, TraceVariant::Fast, layout);
+    EXPECT_LT(sorted_model.distinct_nodes_per_visit, interleaved_model.distinct_nodes_per_visit);
+    EXPECT_EQ(sorted_model.total_steps, interleaved_model.total_steps);  // same rays, same work
+    EXPECT_GT(sorted_model.total_steps, 0u);
+  }
+  // The wide model walks what the kernels walk: its steps are the wide traversal's node and leaf
+  // visits (the kernels' cost counter), ray by ray, and fewer than the binary tree's.
+  std::vector<std::uint32_t> visits;
+  (void)trace_reference(bvh, rays, nullptr, false, &visits, TraceVariant::Fast, TraceLayout::Wide);
+  const std::uint64_t wide_visits = std::accumulate(visits.begin(), visits.end(), std::uint64_t{0});
+  const SimtModel wide = simt_model(bvh, rays, nullptr, false, TraceVariant::Fast, TraceLayout::Wide);
+  const SimtModel binary = simt_model(bvh, rays, nullptr, false, TraceVariant::Fast, TraceLayout::Binary);
+  EXPECT_EQ(wide.total_steps, wide_visits);
+  EXPECT_LT(wide.total_steps, binary.total_steps);
 }
 
 }  // namespace raysort

@@ -17,7 +17,7 @@ struct RunArgs {
   std::vector<std::string> scenes, batches, encoders;
   std::vector<unsigned> bits, top_bits;
   CommonOptions common;  // --device, --scene-root, --resolution, --spp, --seed
-  std::string variant, access;
+  std::string variant, access, baseline, layout;
   unsigned reps = 0, warmup = 0;
   double max_noise_pct = 0, max_time_s = 0;
   bool warmup_set = false;
@@ -56,6 +56,8 @@ MatrixSpec matrix_from(const RunArgs& a, const CLI::App& cmd) {
   if (cmd.count("--seed")) spec.seed = a.common.seed;
   if (!a.variant.empty()) spec.variants = parse_trace_variants(a.variant);
   if (!a.access.empty()) spec.accesses = parse_ray_accesses(a.access);
+  if (!a.baseline.empty()) spec.baselines = parse_baseline_orders(a.baseline);
+  if (!a.layout.empty()) spec.layout = parse_trace_layout(a.layout);
   if (cmd.count("--reps")) spec.reps = a.reps;
   if (a.warmup_set) spec.warmup = a.warmup;
   if (cmd.count("--max-noise")) spec.max_noise = a.max_noise_pct / 100.0;
@@ -92,6 +94,13 @@ void register_run_command(CLI::App& app) {
                   "rays into sorted order first, timed as a stage), or all");
   cmd->add_option("--variant", a->variant,
                   "trace variants, comma-separated: robust (watertight, default), fast (Moller-Trumbore), or both");
+  cmd->add_option("--baseline", a->baseline,
+                  "NoSort's order, the baseline every speedup and SIMT-model ratio is against, comma-separated: pixel "
+                  "(generation order, default) or shuffled (a fixed-seed permutation, as a path tracer compacting with "
+                  "atomics produces), or all; shuffled cells end their id in /shuffled");
+  cmd->add_option("--layout", a->layout,
+                  "BVH the trace kernels and the SIMT model walk: wide (4-wide, default) or binary; recorded in every "
+                  "cell and in meta.json");
   cmd->add_option("--lambda", a->lambda, "HAD lambda (paper Eq. 1; default 0.125)");
   cmd->add_option("--twopoint-length", a->twopoint, "TwoPoint ray length as a fraction of the largest extent (0.25)");
   cmd->add_option("--direction-bits", a->direction_bits, "HCC_DIR direction bits");

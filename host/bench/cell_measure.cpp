@@ -56,7 +56,7 @@ BatchBench::BatchBench(const Stages& stages, const Bvh& bvh, const RayBatch& bat
   } catch (const Error& err) {
     setup_error_ = err.what();
   }
-  nosort_simt_ = simt_model(bvh_, batch_.rays, nullptr, batch_.any_hit(), s_.tracer.variant());
+  nosort_simt_ = simt_model(bvh_, batch_.rays, nullptr, batch_.any_hit(), s_.tracer.variant(), s_.tracer.layout());
 }
 
 cl::Event BatchBench::trace(const cl::Buffer& rays, const cl::Buffer& order, const cl::Buffer& hits) {
@@ -174,7 +174,8 @@ BatchBench::SortedOrder BatchBench::check_order(const cl::Buffer& keys, unsigned
   if (top > 0)
     for (auto& k : sorted_keys) k >>= (bits - top);
   so.anc = average_number_of_codes(sorted_keys);
-  if (so.permutation) so.simt = simt_model(bvh_, batch_.rays, so.order.data(), batch_.any_hit(), s_.tracer.variant());
+  if (so.permutation) so.simt = simt_model(bvh_, batch_.rays, so.order.data(), batch_.any_hit(), s_.tracer.variant(),
+                                         s_.tracer.layout());
   return so;
 }
 

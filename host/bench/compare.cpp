@@ -215,8 +215,12 @@ void check_rules(const std::vector<FailRule>& rules, const CellsById& ma, CellsB
         bool bad = false;   // the rule, on the intervals where both have one
         bool point = false;  // the same rule on the points alone
         switch (rule.kind) {
-          case FailRule::AnyChange: bad = va != vb; break;
-          case FailRule::AbsoluteChange: bad = std::abs(vb - va) > rule.threshold; break;
+          // A figure that is null in both sets (NoSort's ANC: no keys) has not changed; null in one
+          // set only has.
+          case FailRule::AnyChange: bad = std::isnan(va) != std::isnan(vb) || (!std::isnan(va) && va != vb); break;
+          case FailRule::AbsoluteChange:
+            bad = std::isnan(va) != std::isnan(vb) || std::abs(vb - va) > rule.threshold;
+            break;
           case FailRule::RelativeDrop:
             point = va > 0 && (vb - va) / va < -rule.threshold;
             // Even B's highest plausible value is more than the threshold below A's lowest.

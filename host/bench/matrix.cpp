@@ -48,6 +48,8 @@ nlohmann::json MatrixSpec::to_json() const {
           {"seed", seed},
           {"variant", joined(variants, trace_variant_name)},
           {"access", joined(accesses, ray_access_name)},
+          {"baseline", joined(baselines, baseline_order_name)},
+          {"layout", trace_layout_name(layout)},
           {"twopoint_length_fraction", params.twopoint_length_fraction},
           {"had_lambda", params.had_lambda},
           {"direction_bits", params.direction_bits}};
@@ -120,6 +122,7 @@ void validate_matrix(const MatrixSpec& spec) {
     throw Error(fmt::format("--max-time {}: must be a number of seconds, 0 or more", spec.max_time_s));
   if (spec.accesses.empty()) throw Error("--access: name at least one access mode (gather, permute)");
   if (spec.variants.empty()) throw Error("--variant: name at least one trace variant (robust, fast)");
+  if (spec.baselines.empty()) throw Error("--baseline: name at least one baseline order (pixel, shuffled)");
   if (!(spec.cell_timeout_s >= 0) || !std::isfinite(spec.cell_timeout_s))
     throw Error(fmt::format("--timeout {}: must be a number of seconds, 0 (none) or more", spec.cell_timeout_s));
   std::regex batch_re("^(primary|shadow[0-9]+|bounce[1-9][0-9]*)$");

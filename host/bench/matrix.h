@@ -1,9 +1,10 @@
 #pragma once
 // The scenario matrix: axes (scenes × batches × encoders × key bits × trace variants × access
-// modes, plus top-k sorting), the run settings, and named presets. The axes are typed: the command
-// line is parsed once, at its boundary, by each axis's own parser (parse_encoders in encode/,
-// parse_trace_variants in trace/, parse_ray_accesses in sort/permute.h, parse_resolution in
-// scene/), and everything after it reads values, not text. Every axis is narrowed on the
+// modes × baseline orders, plus top-k sorting), the run settings, and named presets. The axes are
+// typed: the command line is parsed once, at its boundary, by each axis's own parser
+// (parse_encoders in encode/, parse_trace_variants in trace/, parse_ray_accesses in
+// sort/permute.h, parse_baseline_orders in render/batches.h, parse_resolution in scene/), and
+// everything after it reads values, not text. Every axis is narrowed on the
 // command line with one syntax: a comma-separated list, or "all".
 #include <nlohmann/json.hpp>
 
@@ -12,6 +13,7 @@
 
 #include "bench/protocol.h"
 #include "encode/encode.h"
+#include "render/batches.h"
 #include "scene/load.h"
 #include "sort/permute.h"
 #include "trace/tracer.h"
@@ -32,6 +34,10 @@ struct MatrixSpec {
   unsigned seed = 1;
   std::vector<TraceVariant> variants{TraceVariant::Robust};  // the first is the tables' main one
   std::vector<RayAccess> accesses{RayAccess::Gather};        // the first is the tables' main one
+  std::vector<BaselineOrder> baselines{BaselineOrder::Pixel};  // NoSort's order; the first is the tables' main one
+  // The BVH layout the trace kernels and the SIMT model walk: one per run (it is how the device
+  // traces, not a property of a cell); every cell records it.
+  TraceLayout layout = TraceLayout::Wide;
   EncoderParams params;
 
   // The measurement protocol of every cell (bench/protocol.h): warm-up rounds, the fewest timed

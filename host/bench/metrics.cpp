@@ -74,31 +74,42 @@ SimtModel simt_model_from_trails(const std::vector<std::vector<std::uint32_t>>& 
 }
 
 SimtModel simt_model(const Bvh& bvh, const std::vector<RsRay>& rays, const std::uint32_t* order, bool any_hit,
-                     TraceVariant variant) {
+                     TraceVariant variant, TraceLayout layout) {
   const int robust = variant == TraceVariant::Robust ? 1 : 0;
+  const int any = any_hit ? 1 : 0;
+  WideBvh scratch;
+  const bool wide_layout = layout == TraceLayout::Wide;
+  const WideBvh& wide = wide_layout ? wide_of(bvh, scratch) : scratch;
   const std::size_t n = rays.size();
   const std::size_t warps = (n + kWarpSize - 1) / kWarpSize;
   const unsigned threads = std::max(1u, std::min(16u, std::thread::hardware_concurrency()));
+  // Trails are recorded into a fixed buffer per lane. A step visits a node or a leaf at most once,
+  // so a trail is shorter than the node count plus the leaf count (a wide node has at most four
+  // leaf children); longer trails could only be truncated in the union, never in the step count.
+  const std::size_t most_steps = wide_layout ? wide.nodes.size() * 5 : bvh.nodes.size();
+  const rs_u32 cap = static_cast<rs_u32>(std::min<std::size_t>(most_steps, 1u << 16));
   std::vector<WarpTally> partial(threads);
   auto work = [&](unsigned tid) {
-    // Trails are recorded into a fixed buffer per lane; a trail longer than the cap (it cannot
-    // be: steps <= nodes) would only be truncated in the union, never in the step count.
-    const rs_u32 cap = static_cast<rs_u32>(std::min<std::size_t>(bvh.nodes.size(), 1u << 16));
     std::vector<std::vector<std::uint32_t>> lane_trails(kWarpSize, std::vector<std::uint32_t>(cap));
     std::vector<const std::vector<std::uint32_t>*> lanes;
-    std::vector<std::uint32_t> scratch;
+    std::vector<std::uint32_t> scratch_ids;
     std::vector<std::vector<std::uint32_t>> trimmed(kWarpSize);
     for (std::size_t w = tid; w < warps; w += threads) {
       lanes.clear();
       for (std::size_t l = 0; l < kWarpSize && w * kWarpSize + l < n; ++l) {
-        std::size_t i = w * kWarpSize + l;
+        const std::size_t i = w * kWarpSize + l;
+        const RsRay& ray = rays[order ? order[i] : i];
         rs_u32 len = 0;
-        rs_traverse_variant_recorded(bvh.nodes.data(), bvh.triangles.data(), rays[order ? order[i] : i], robust,
-                                     any_hit ? 1 : 0, nullptr, lane_trails[l].data(), cap, &len);
+        if (wide_layout)
+          rs_traverse_wide_recorded(wide.nodes.data(), wide.packets.data(), ray, robust, any, nullptr,
+                                    lane_trails[l].data(), cap, &len);
+        else
+          rs_traverse_variant_recorded(bvh.nodes.data(), bvh.triangles.data(), ray, robust, any, nullptr,
+                                       lane_trails[l].data(), cap, &len);
         trimmed[l].assign(lane_trails[l].begin(), lane_trails[l].begin() + std::min(len, cap));
         lanes.push_back(&trimmed[l]);
       }
-      tally_warp(lanes, scratch, partial[tid]);
+      tally_warp(lanes, scratch_ids, partial[tid]);
     }
   };
   std::vector<std::thread> pool;

@@ -31,9 +31,12 @@ struct SimtModel {
 // The model from per-ray traversal trails (node ids in visit order), rays in trace order.
 SimtModel simt_model_from_trails(const std::vector<std::vector<std::uint32_t>>& trails);
 
-// Traces rays[order[i]] with the host reference (cl/traverse_binary.h) recording every ray's trail,
-// warp by warp on host threads, and returns the model. order null = identity.
+// Traces rays[order[i]] with the host twin of the traversal the kernels run on `layout`
+// (cl/traverse_wide.h on the 4-wide tree, the default; cl/traverse_binary.h on the binary one),
+// recording every ray's trail, warp by warp on host threads, and returns the model. A step is one
+// node the loop fetches: on the wide tree a wide node (four child boxes) or a leaf (its packets),
+// on the binary tree a node (two child boxes) or a leaf. order null = identity.
 SimtModel simt_model(const Bvh& bvh, const std::vector<RsRay>& rays, const std::uint32_t* order, bool any_hit,
-                     TraceVariant variant = TraceVariant::Fast);
+                     TraceVariant variant = TraceVariant::Fast, TraceLayout layout = TraceLayout::Wide);
 
 }  // namespace raysort

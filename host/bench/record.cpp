@@ -13,6 +13,7 @@ std::string CellRecord::id() const {
   if (top_bits) s += fmt::format("/top{}", top_bits);
   if (variant != "robust") s += "/" + variant;
   if (access != "gather") s += "/" + access;
+  if (baseline != "pixel") s += "/" + baseline;
   return s;
 }
 
@@ -71,6 +72,8 @@ void to_json(nlohmann::json& j, const CellRecord& r) {
                      {"top_bits", r.top_bits},
                      {"variant", r.variant},
                      {"access", r.access},
+                     {"baseline", r.baseline},
+                     {"layout", r.layout},
                      {"rays", r.rays},
                      {"status", r.status},
                      {"error", r.error},
@@ -84,7 +87,7 @@ void to_json(nlohmann::json& j, const CellRecord& r) {
                      {"stopped_by", r.stopped_by},
                      {"noise", number(r.noise)},
                      {"samples", r.samples},
-                     {"anc", r.anc},
+                     {"anc", number(r.anc)},
                      {"simt_lane_efficiency", r.simt_lane_efficiency},
                      {"simt_distinct_per_visit", r.simt_distinct_per_visit},
                      {"simt_lane_efficiency_ratio", r.simt_lane_efficiency_ratio},
@@ -115,6 +118,10 @@ void from_json(const nlohmann::json& j, CellRecord& r) {
   count_from(j, "top_bits", r.top_bits);
   j.at("variant").get_to(r.variant);
   j.at("access").get_to(r.access);
+  if (version >= 3) {
+    j.at("baseline").get_to(r.baseline);
+    j.at("layout").get_to(r.layout);
+  }
   count_from(j, "rays", r.rays);
   j.at("status").get_to(r.status);
   j.at("error").get_to(r.error);
@@ -130,7 +137,8 @@ void from_json(const nlohmann::json& j, CellRecord& r) {
     r.noise = number_from(j.at("noise"));
     j.at("samples").get_to(r.samples);
   }
-  j.at("anc").get_to(r.anc);
+  r.anc = number_from(j.at("anc"));
+  if (r.encoder == kBaselineEncoder && r.anc == 0.0) r.anc = kNaN;  // older sets stored 0: NoSort has no keys
   j.at("simt_lane_efficiency").get_to(r.simt_lane_efficiency);
   j.at("simt_distinct_per_visit").get_to(r.simt_distinct_per_visit);
   j.at("simt_lane_efficiency_ratio").get_to(r.simt_lane_efficiency_ratio);
@@ -205,6 +213,8 @@ std::vector<Col> make_columns() {
   c.push_back(numeric("top_bits", [](const CellRecord& r) { return r.top_bits; }, -1));
   c.push_back(text("variant", [](const CellRecord& r) { return r.variant; }, {"robust", "fast"}));
   c.push_back(text("access", [](const CellRecord& r) { return r.access; }, {"gather", "permute"}));
+  c.push_back(text("baseline", [](const CellRecord& r) { return r.baseline; }, {"pixel", "shuffled"}));
+  c.push_back(text("layout", [](const CellRecord& r) { return r.layout; }, {"wide", "binary"}));
   c.push_back(numeric("rays", [](const CellRecord& r) { return static_cast<double>(r.rays); }, -1));
   c.push_back(text("status", [](const CellRecord& r) { return r.status; }, cell_statuses()));
   add_timing(c, "encode", &CellRecord::encode);

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -18,7 +19,11 @@ namespace raysort {
 //   2: paired measurement (bench/protocol.h): speedups with 95 % intervals, the A/A check, the
 //      stopping rule's outcome and the raw per-round samples. Version 1 records are still read
 //      (their figures have no intervals).
-constexpr int kResultFormatVersion = 2;
+//   3: each cell records its baseline order (pixel, shuffled: an axis, in the id when shuffled)
+//      and the BVH layout its trace and SIMT model walk (wide, binary); NoSort's ANC is null.
+//      Version 1-2 records read as pixel and wide, but their SIMT model walked the binary tree
+//      while their trace walked the wide one (docs/design.md, "SIMT model").
+constexpr int kResultFormatVersion = 3;
 constexpr int kOldestReadableFormatVersion = 1;
 
 // The encoder name of the baseline cells (rays traced in generation order): encoder_name(NoSort).
@@ -31,6 +36,8 @@ struct CellRecord {
   unsigned top_bits = 0;   // sort by the highest top_bits only (0: all bits)
   std::string variant = "robust";  // trace variant ("robust" default, "fast")
   std::string access = "gather";   // rays read through the order (gather) or permuted first
+  std::string baseline = "pixel";  // NoSort's order, the one the sort starts from (render/batches.h)
+  std::string layout = "wide";     // the BVH the trace kernel and the SIMT model walk
   std::uint64_t rays = 0;
 
   // Outcome.
@@ -62,7 +69,10 @@ struct CellRecord {
   // Raw samples, one per round: "nosort", "aa", "encode", "sort", "permute", "trace" (ms).
   Series samples;
 
-  double anc = 0.0;  // distinct keys per 32 consecutive sorted rays; NoSort: 0 (no keys)
+  // Distinct keys per 32 consecutive sorted rays. NaN (JSON null, an empty CSV field) for NoSort,
+  // which has no keys, and for a cell that failed before its order was checked. (Sets written
+  // before this was fixed stored 0 for NoSort; they are read as null.)
+  double anc = std::numeric_limits<double>::quiet_NaN();
   double simt_lane_efficiency = 0.0;
   double simt_distinct_per_visit = 0.0;
   double simt_lane_efficiency_ratio = 0.0;      // vs NoSort on the same batch
@@ -79,7 +89,7 @@ struct CellRecord {
   std::string keys_hash;   // FNV-1a 64 of the key array (generation order), hex
   std::string order_hash;  // FNV-1a 64 of the sorted order, hex
 
-  std::string id() const;  // "scene/batch/encoder/bits[/topK][/variant][/access]"
+  std::string id() const;  // "scene/batch/encoder/bits[/topK][/variant][/access][/baseline]"
   bool ok() const { return status == "ok"; }
 };
 

@@ -71,6 +71,19 @@ std::string utc_now() {
   return buf;
 }
 
+// The tree every cell traced and modelled: how it was built and the layout the kernels walk.
+nlohmann::json bvh_meta(TraceLayout layout) {
+  const BvhBuildOptions build;  // prepare_scene builds with the defaults
+  return {{"layout", trace_layout_name(layout)},
+          {"width", layout == TraceLayout::Wide ? 4 : 2},
+          {"builder", "binned SAH (Wald 2007), object median past the depth bound"},
+          {"bins", build.bins},
+          {"max_leaf_size", build.max_leaf_size},
+          {"traversal_cost", build.traversal_cost},
+          {"intersection_cost", build.intersection_cost},
+          {"simt_model", "walks the same layout as the trace kernel (bench/metrics.h)"}};
+}
+
 nlohmann::json run_meta(const MatrixSpec& spec, const RunOptions& opts, const DeviceInfo& dev) {
   return {
       {"format_version", kResultFormatVersion},
@@ -100,6 +113,12 @@ nlohmann::json run_meta(const MatrixSpec& spec, const RunOptions& opts, const De
       {"command", opts.command},
       {"date", utc_now()},
       {"seeds", {{"rays", spec.seed}}},
+      {"bvh", bvh_meta(spec.layout)},
+      {"baseline",
+       {{"orders", spec.to_json().at("baseline")},
+        {"pixel", "generation order: pixel-major, terminated paths compacted out in order"},
+        {"shuffled", "Fisher-Yates over the generation order; j = (mt19937_64() * (i + 1)) >> 64, the engine seeded "
+                     "with FNV-1a(batch name) ^ seed * 0x9e3779b97f4a7c15 (render/batches.h)"}}},
   };
 }
 
@@ -140,10 +159,10 @@ std::string progress_text(const CellRecord& c) {
                      c.access == "permute" ? fmt::format(" + permute {:.2f}", c.permute.median_ms) : "", c.anc, rounds);
 }
 
-CellRecord cell_of(const PlannedCell& p) {
+CellRecord cell_of(const PlannedCell& p, TraceLayout layout) {
   CellRecord c;
   c.scene = p.scene, c.batch = p.batch, c.encoder = p.encoder, c.bits = p.bits, c.top_bits = p.top_bits;
-  c.variant = p.variant, c.access = p.access;
+  c.variant = p.variant, c.access = p.access, c.baseline = p.baseline, c.layout = trace_layout_name(layout);
   return c;
 }
 
@@ -164,37 +183,48 @@ std::vector<std::vector<PlannedCell>> runs_of(const std::vector<PlannedCell>& ce
 struct SceneBench {
   PreparedScene prepared;
   const Bvh& bvh = prepared.bvh;
-  std::vector<ReferencedBatch> batches;
+  const MatrixSpec& spec;
+  std::vector<ReferencedBatch> batches;  // in generation (pixel) order
+  std::map<std::string, ReferencedBatch> shuffled;  // by batch name, made when first asked
   std::map<std::string, std::unique_ptr<Tracer>> tracers;  // by variant name
   std::unique_ptr<DeviceEncoder> encoder;
-  std::map<std::string, std::vector<RsHit>> robust_references;  // by batch, traced when first asked
+  std::map<std::pair<const ReferencedBatch*, std::string>, std::vector<RsHit>> references;  // by batch, variant
 
-  SceneBench(Runtime& rt, const std::string& name, const MatrixSpec& spec, const std::string& scene_root,
+  SceneBench(Runtime& rt, const std::string& name, const MatrixSpec& matrix, const std::string& scene_root,
              Progress& progress)
-      : prepared(prepare_scene(name, SceneOptions{scene_root, spec.frame})) {
+      : prepared(prepare_scene(name, SceneOptions{scene_root, matrix.frame})), spec(matrix) {
     progress.line(fmt::format("{}: {} triangles, BVH {:.0f} ms; generating batches", name, prepared.tris.size(),
                               bvh.build_ms));
     RayGenOptions gen;
     gen.seed = spec.seed;
     batches = generate_batches(prepared.scene, prepared.tris, bvh, gen);
-    for (TraceVariant v : spec.variants) tracers[trace_variant_name(v)] = std::make_unique<Tracer>(rt, bvh, v);
+    for (TraceVariant v : spec.variants)
+      tracers[trace_variant_name(v)] = std::make_unique<Tracer>(rt, bvh, v, spec.layout);
     encoder = std::make_unique<DeviceEncoder>(rt, bvh, prepared.scene.bounds(), spec.params);
     encoder->warm_up();
   }
-  const ReferencedBatch* batch(const std::string& name) const {
-    for (const auto& b : batches)
-      if (b.batch.name == name) return &b;
+  // The batch in a baseline order (render/batches.h), or null when the frame has no such batch.
+  const ReferencedBatch* batch(const std::string& name, const std::string& baseline) {
+    for (const auto& b : batches) {
+      if (b.batch.name != name) continue;
+      if (baseline == baseline_order_name(BaselineOrder::Pixel)) return &b;
+      auto it = shuffled.find(name);
+      if (it == shuffled.end())
+        it = shuffled.emplace(name, in_baseline_order(b, BaselineOrder::Shuffled, spec.seed)).first;
+      return &it->second;
+    }
     return nullptr;
   }
-  // The host reference of a variant. The batch's own is the fast one (render/batches.h); the
-  // robust one is traced when a robust cell first needs it.
+  // The host reference of a variant on the run's layout. The batch's own is the fast one on the
+  // wide tree (render/batches.h); any other is traced when a cell first needs it (on the binary
+  // tree, of two equally near triangles the other may win).
   const std::vector<RsHit>& reference(const ReferencedBatch& b, const std::string& variant) {
-    if (variant == "fast") return b.reference_hits;
-    auto it = robust_references.find(b.batch.name);
-    if (it == robust_references.end())
-      it = robust_references
-               .emplace(b.batch.name, trace_reference(bvh, b.batch.rays, nullptr, b.batch.any_hit(), nullptr,
-                                                      TraceVariant::Robust))
+    if (variant == "fast" && spec.layout == TraceLayout::Wide) return b.reference_hits;
+    auto it = references.find({&b, variant});
+    if (it == references.end())
+      it = references
+               .emplace(std::pair{&b, variant}, trace_reference(bvh, b.batch.rays, nullptr, b.batch.any_hit(), nullptr,
+                                                                parse_trace_variant(variant), spec.layout))
                .first;
     return it->second;
   }
@@ -340,10 +370,11 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
     });
     if (scene_cells.empty()) continue;
     SceneBench scene(rt, scene_cells.front().scene, spec, opts.scene_root, progress);
-    for (const auto& batch_cells : runs_of(scene_cells, [](const PlannedCell& c) { return c.batch + "/" + c.variant; })) {
+    for (const auto& batch_cells :
+         runs_of(scene_cells, [](const PlannedCell& c) { return c.batch + "/" + c.variant + "/" + c.baseline; })) {
       if (g_interrupted) break;
       const PlannedCell& first = batch_cells.front();
-      const ReferencedBatch* rb = scene.batch(first.batch);
+      const ReferencedBatch* rb = scene.batch(first.batch, first.baseline);
       if (!rb) {  // every ray of an earlier bounce missed, or a requested batch the effects do not imply
         fmt::print(stderr, "note: scene {} has no batch {} (its effects do not imply it, or it is empty); skipped\n",
                    first.scene, first.batch);
@@ -358,7 +389,7 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
            })) {
         if (g_interrupted) break;
         std::vector<CellRecord> cells;
-        for (const auto& p : group) cells.push_back(cell_of(p));
+        for (const auto& p : group) cells.push_back(cell_of(p, spec.layout));
         if (group.front().encoder == kBaselineEncoder) {
           CellRecord c = bench.measure_nosort(cells.front(), spec.protocol(cells.front().id()));
           c.leaks_per_million = scene.leaks_per_million(*rb, first.variant, both_variants);

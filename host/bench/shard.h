@@ -46,6 +46,7 @@ struct PlannedCell {
   unsigned shard = 0;  // 1..N once planned
   std::string encoder, access;
   unsigned bits = 0, top_bits = 0;
+  std::string baseline = "pixel";
 };
 
 // Every cell the matrix can produce, in the order `raysort run` visits them. A requested batch the

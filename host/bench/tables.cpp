@@ -40,16 +40,17 @@ std::string first_of(const nlohmann::json& meta, const char* key, const std::str
   return v.substr(0, v.find(','));
 }
 
-// Which cells a table shows: the main trace variant and access mode unless it says otherwise.
+// Which cells a table shows: the main trace variant, access mode and baseline order unless it says
+// otherwise.
 struct View {
-  std::string variant = "robust", access = "gather";
+  std::string variant = "robust", access = "gather", baseline = "pixel";
 };
 
 const CellRecord* find(const std::vector<CellRecord>& cells, const View& view, const std::string& scene,
                        const std::string& batch, const std::string& encoder, unsigned bits) {
   for (auto& c : cells)
     if (c.scene == scene && c.batch == batch && c.encoder == encoder && c.top_bits == 0 && c.variant == view.variant &&
-        (c.encoder == kBaselineEncoder || (c.bits == bits && c.access == view.access)))
+        c.baseline == view.baseline && (c.encoder == kBaselineEncoder || (c.bits == bits && c.access == view.access)))
       return &c;
   return nullptr;
 }
@@ -127,7 +128,7 @@ struct TableContext {
 
   TableContext(const std::vector<CellRecord>& all, const nlohmann::json& meta) : cells(all) {
     main_view = {first_of(meta, "variant", cells.empty() ? "robust" : cells.front().variant),
-                 first_of(meta, "access", "gather")};
+                 first_of(meta, "access", "gather"), first_of(meta, "baseline", "pixel")};
     scenes = ordered(cells, meta, "scenes", &CellRecord::scene);
     batches = ordered(cells, meta, "batches", &CellRecord::batch);
     encoders = ordered(cells, meta, "encoders", &CellRecord::encoder);
@@ -157,11 +158,12 @@ std::string introduction(const nlohmann::json& meta) {
                       meta["device"].value("driver", "?"));
   if (meta.contains("matrix")) {
     const auto& m = meta["matrix"];
-    md += fmt::format("Resolution {}, {} spp; trace variant {}, access {}. Protocol: {} warm-up round(s), at least {} "
+    md += fmt::format("Resolution {}, {} spp; trace variant {}, access {}, baseline order {}, {} BVH. Protocol: {} warm-up round(s), at least {} "
                       "timed rounds per cell, then until the speedup interval is within ±{:.1f} % or {} s of "
                       "sampling.\n\n",
                       m.value("resolution", "?"), m.value("spp", 0), m.value("variant", "robust"),
-                      m.value("access", "gather"), m.value("warmup", 0), m.value("reps", 0),
+                      m.value("access", "gather"), m.value("baseline", "pixel"), m.value("layout", "wide"),
+                      m.value("warmup", 0), m.value("reps", 0),
                       100.0 * m.value("max_noise", 0.0), m.value("max_time_s", 0.0));
   }
   md += "Times are medians of OpenCL profiling events over the rounds of the measurement protocol "
@@ -179,7 +181,7 @@ std::string introduction(const nlohmann::json& meta) {
 std::string trace_speed_sections(const TableContext& t) {
   std::string md;
   for (auto& access : t.accesses) {
-    const View view{t.main_view.variant, access};
+    const View view{t.main_view.variant, access, t.main_view.baseline};
     for (auto& batch : t.batches) {
       md += fmt::format("## Trace speed, {} rays, {}-bit keys, access {}: MRays/s (speedup [95 % interval])\n\n", batch,
                         t.overview_bits, access);
@@ -213,7 +215,7 @@ std::string trace_speed_sections(const TableContext& t) {
 std::string overhead_sections(const TableContext& t) {
   std::string md;
   for (auto& access : t.accesses) {
-    const View view{t.main_view.variant, access};
+    const View view{t.main_view.variant, access, t.main_view.baseline};
     for (auto& batch : t.batches) {
       md += fmt::format("## Overhead, {} rays, {}-bit keys, access {}: encode + sort{} ms (% of trace) → net speedup "
                         "[95 % interval]\n\n",
@@ -249,7 +251,7 @@ std::string gather_permute_section(const TableContext& t) {
       "| scene | batch | encoder | speedup gather | speedup permute | permute ms (% of trace) | net gather | net "
       "permute |\n|---|---|---|---:|---:|---:|---:|---:|\n",
       t.overview_bits);
-  const View g{t.main_view.variant, "gather"}, p{t.main_view.variant, "permute"};
+  const View g{t.main_view.variant, "gather", t.main_view.baseline}, p{t.main_view.variant, "permute", t.main_view.baseline};
   for (auto& s : t.scenes)
     for (auto& batch : t.batches)
       for (auto& e : t.encoders) {
@@ -367,13 +369,13 @@ std::string variants_section(const TableContext& t) {
   const std::string access = t.main_view.access;
   for (auto& s : t.scenes)
     for (auto& batch : t.batches) {
-      auto* f = t.at({"fast", access}, s, batch, kBaselineEncoder, 0);
-      auto* r = t.at({"robust", access}, s, batch, kBaselineEncoder, 0);
+      auto* f = t.at({"fast", access, t.main_view.baseline}, s, batch, kBaselineEncoder, 0);
+      auto* r = t.at({"robust", access, t.main_view.baseline}, s, batch, kBaselineEncoder, 0);
       if (!f || !r || !f->ok() || !r->ok()) continue;
       auto best = [&](const std::string& v) {
         const CellRecord* b = nullptr;
         for (auto& e : t.encoders)
-          if (auto* c = t.at({v, access}, s, batch, e, t.overview_bits);
+          if (auto* c = t.at({v, access, t.main_view.baseline}, s, batch, e, t.overview_bits);
               c && c->ok() && e != kBaselineEncoder && !c->same_order_as_nosort)
             if (!b || c->speedup.value > b->speedup.value) b = c;
         return b ? fmt::format("{} {}", b->encoder, speedup_text(*b, false)) : std::string("–");
@@ -383,6 +385,49 @@ std::string variants_section(const TableContext& t) {
                         r->leaks_per_million, best("fast"), best("robust"));
     }
   return md + "\n";
+}
+
+// Pixel against shuffled baseline order (render/batches.h): the same rays, NoSort in generation
+// order or in a fixed-seed shuffle (as atomic compaction leaves them). The baseline decides how much
+// coherence an ordering can recover: every ratio here is against its own baseline.
+std::string baselines_section(const TableContext& t) {
+  std::set<std::string> baselines;
+  for (auto& c : t.cells) baselines.insert(c.baseline);
+  if (!baselines.count("pixel") || !baselines.count("shuffled")) return "";
+  const View pv{t.main_view.variant, t.main_view.access, "pixel"}, sv{t.main_view.variant, t.main_view.access, "shuffled"};
+  std::string md = fmt::format(
+      "## Baseline order: pixel against shuffled, {}-bit keys, access {}\n\n"
+      "Each cell against its own NoSort: the rays in generation (pixel) order, or shuffled by a fixed-seed "
+      "permutation as a path tracer that compacts with atomics leaves them. Per encoder: speedup [95 % interval] "
+      "and the SIMT model's lane-efficiency ratio (higher is better) · distinct-nodes-per-visit ratio (lower is "
+      "better), against pixel | against shuffled. The NoSort row gives each baseline's MRays/s and its absolute "
+      "lane efficiency · distinct nodes per visit; the two NoSort traces ran in different rounds.\n\n",
+      t.overview_bits, t.main_view.access);
+  auto model = [](const CellRecord* c, bool ratios) {
+    if (!c || !c->ok()) return std::string("–");
+    return ratios ? fmt::format("{:.2f} · {:.2f}", c->simt_lane_efficiency_ratio, c->simt_distinct_per_visit_ratio)
+                  : fmt::format("{:.3f} · {:.3f}", c->simt_lane_efficiency, c->simt_distinct_per_visit);
+  };
+  for (auto& s : t.scenes)
+    for (auto& batch : t.batches) {
+      const CellRecord* pn = t.at(pv, s, batch, kBaselineEncoder, 0);
+      const CellRecord* sn = t.at(sv, s, batch, kBaselineEncoder, 0);
+      if (!pn || !sn) continue;
+      md += fmt::format("### {} {}\n\n| encoder | speedup vs pixel | model vs pixel | speedup vs shuffled | model vs "
+                        "shuffled |\n|---|---:|---:|---:|---:|\n",
+                        s, batch);
+      md += fmt::format("| nosort | {:.2f} MRays/s | {} | {:.2f} MRays/s | {} |\n", pn->trace_mrays, model(pn, false),
+                        sn->trace_mrays, model(sn, false));
+      for (auto& e : t.encoders) {
+        if (e == kBaselineEncoder) continue;
+        const CellRecord* pc = t.at(pv, s, batch, e, t.overview_bits);
+        const CellRecord* sc = t.at(sv, s, batch, e, t.overview_bits);
+        auto speed = [](const CellRecord* c) { return c && c->ok() ? speedup_text(*c, false) : std::string("–"); };
+        md += fmt::format("| {} | {} | {} | {} | {} |\n", e, speed(pc), model(pc, true), speed(sc), model(sc, true));
+      }
+      md += "\n";
+    }
+  return md;
 }
 
 std::string failed_section(const std::vector<CellRecord>& cells) {
@@ -401,7 +446,7 @@ std::string render_tables(const std::vector<CellRecord>& cells, const nlohmann::
   const TableContext t(cells, meta);
   return introduction(meta) + noise_section(cells) + trace_speed_sections(t) + overhead_sections(t) +
          gather_permute_section(t) + key_length_sections(t) + deterministic_sections(t) + top_k_section(t) +
-         variants_section(t) + failed_section(cells);
+         variants_section(t) + baselines_section(t) + failed_section(cells);
 }
 
 }  // namespace raysort

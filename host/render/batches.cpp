@@ -1,8 +1,63 @@
 #include "render/batches.h"
 
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <numeric>
+#include <random>
+
 #include "render/pathtrace.h"
+#include "util/error.h"
+#include "util/text.h"
 
 namespace raysort {
+
+const char* baseline_order_name(BaselineOrder b) { return b == BaselineOrder::Shuffled ? "shuffled" : "pixel"; }
+
+std::vector<BaselineOrder> parse_baseline_orders(const std::string& list) {
+  if (list == "all") return {BaselineOrder::Pixel, BaselineOrder::Shuffled};
+  std::vector<BaselineOrder> out;
+  for (const auto& name : split_list(list)) {
+    if (name != "pixel" && name != "shuffled")
+      throw Error(fmt::format("--baseline '{}': the baseline orders are pixel and shuffled (or all)", name));
+    const BaselineOrder b = name == "pixel" ? BaselineOrder::Pixel : BaselineOrder::Shuffled;
+    if (std::find(out.begin(), out.end(), b) == out.end()) out.push_back(b);
+  }
+  if (out.empty()) throw Error("--baseline: name at least one baseline order (pixel, shuffled)");
+  return out;
+}
+
+std::vector<std::uint32_t> baseline_permutation(std::size_t n, const std::string& batch_name, std::uint32_t seed) {
+  std::vector<std::uint32_t> p(n);
+  std::iota(p.begin(), p.end(), 0u);
+  // FNV-1a of the batch name, so each batch of a frame gets its own permutation.
+  std::uint64_t h = 0xcbf29ce484222325ull;
+  for (unsigned char c : batch_name) h = (h ^ c) * 0x100000001b3ull;
+  std::mt19937_64 rng(h ^ (std::uint64_t{seed} * 0x9e3779b97f4a7c15ull));
+  for (std::size_t i = n; i > 1; --i) {
+    // j uniform in [0, i - 1] (std::uniform_int_distribution differs between standard libraries).
+    const auto j = static_cast<std::size_t>((static_cast<unsigned __int128>(rng()) * i) >> 64);
+    std::swap(p[i - 1], p[j]);
+  }
+  return p;
+}
+
+ReferencedBatch in_baseline_order(const ReferencedBatch& b, BaselineOrder order, std::uint32_t seed) {
+  if (order == BaselineOrder::Pixel) return b;
+  const std::vector<std::uint32_t> p = baseline_permutation(b.batch.size(), b.batch.name, seed);
+  ReferencedBatch out;
+  out.batch.name = b.batch.name, out.batch.kind = b.batch.kind, out.batch.bounce = b.batch.bounce;
+  auto move_all = [&](const auto& from, auto& to) {
+    if (from.empty()) return;
+    to.resize(from.size());
+    for (std::size_t i = 0; i < p.size(); ++i) to[i] = from[p[i]];
+  };
+  move_all(b.batch.rays, out.batch.rays);
+  move_all(b.batch.pixel, out.batch.pixel);
+  move_all(b.batch.sample, out.batch.sample);
+  move_all(b.reference_hits, out.reference_hits);
+  return out;
+}
 
 std::vector<ReferencedBatch> generate_batches(const Scene& scene, const Scene::Flat& tris, const Bvh& bvh,
                                               const RayGenOptions& opts) {
