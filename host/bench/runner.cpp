@@ -299,6 +299,26 @@ void check_cells_planned(const ResultSet& results, const std::vector<PlannedCell
                               results.dir(), cell_file_name(c.id()), c.id()));
 }
 
+// After the loop: a shard's absent cells (for raysort merge), the views and plots, and the counts
+// of planned cells that are not ok or not there.
+void finish_run(ResultSet& results, const std::vector<PlannedCell>& plan, const std::vector<std::string>& absent,
+                const RunOptions& opts, RunSummary& summary) {
+  if (!absent.empty() && opts.shard.active()) {
+    // raysort merge counts these as accounted for (no shard can produce them).
+    std::set<std::string> all(absent.begin(), absent.end());
+    for (const auto& id : results.meta().value("absent_cells", std::vector<std::string>{})) all.insert(id);
+    results.set_meta("absent_cells", std::vector<std::string>(all.begin(), all.end()));
+  }
+  results.write_views();
+  results.write_plots();
+  const std::set<std::string> absent_ids(absent.begin(), absent.end());
+  for (const auto& c : plan) {
+    const CellRecord* r = results.find(c.id);
+    summary.cells_not_ok += r && !r->ok();
+    summary.cells_missing += !r && !absent_ids.count(c.id);
+  }
+}
+
 }  // namespace
 
 std::string default_result_dir(const MatrixSpec& spec, const std::string& device_slug, const ShardSpec& shard) {
@@ -402,21 +422,8 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
     }
   }
 
-  if (!absent.empty() && opts.shard.active()) {
-    // raysort merge counts these as accounted for (no shard can produce them).
-    std::set<std::string> all(absent.begin(), absent.end());
-    for (const auto& id : results.meta().value("absent_cells", std::vector<std::string>{})) all.insert(id);
-    results.set_meta("absent_cells", std::vector<std::string>(all.begin(), all.end()));
-  }
-  results.write_views();
-  results.write_plots();
+  finish_run(results, plan, absent, opts, summary);
   summary.interrupted = g_interrupted;
-  const std::set<std::string> absent_ids(absent.begin(), absent.end());
-  for (const auto& c : plan) {
-    const CellRecord* r = results.find(c.id);
-    summary.cells_not_ok += r && !r->ok();
-    summary.cells_missing += !r && !absent_ids.count(c.id);
-  }
   return summary;
 }
 
