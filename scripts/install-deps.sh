@@ -12,6 +12,8 @@ PACKAGES=(
   libcli11-dev nlohmann-json3-dev libtomlplusplus-dev libfmt-dev
   # libgmp-dev: exact rationals for the oracle of `raysort trace --adjudicate`
   libgmp-dev
+  # libssl-dev: libcrypto's SHA-256, to check real scene files against scenes/sources.toml
+  libssl-dev
   #: optional: Boost.Compute (header-only) is the sortbench's reference GPU-library sort
   libboost-dev
   #: optional: Embree 3, the CPU anchor of `raysort trace --reference embree` (CMake RAYSORT_EMBREE=AUTO

@@ -112,3 +112,50 @@ TEST(Cli, CellOverTimeoutRecordedAsTimeout) {
   EXPECT_NE(r.err.find("TIMEOUT"), std::string::npos) << r.err;
   fs::remove_all(out);
 }
+
+// `raysort scenes` checks real scene files against scenes/sources.toml: a scene root holding only
+// the Cornell box files lists them as present and every other file as missing, exits 0 (the
+// listing is informational), and a copy with one byte changed is listed as different.
+TEST(CliScenes, ListsPresentMissingAndDifferentFiles) {
+  RAYSORT_REQUIRE_REAL_SCENES();
+  const fs::path real = raysort::testing::real_scene_root();
+  const fs::path root = temp_dir("scene-root");
+  fs::create_directories(root / "cornell_box");
+  for (const char* f : {"cornell_box/CornellBox-Original.obj", "cornell_box/CornellBox-Original.mtl"})
+    fs::copy_file(real / f, root / f);
+  auto line_of = [](const std::string& out, const std::string& path) {
+    std::size_t at = out.find(" " + path + " ");
+    if (at == std::string::npos) return std::string();
+    std::size_t begin = out.rfind('\n', at) + 1;
+    return out.substr(begin, out.find('\n', at) - begin);
+  };
+
+  CliResult r = run_cli({"scenes", "--scene-root", root.string()});
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(line_of(r.out, "cornell_box/CornellBox-Original.obj").find("present "), std::string::npos) << r.out;
+  EXPECT_NE(line_of(r.out, "cornell_box/CornellBox-Original.obj").find("public domain"), std::string::npos) << r.out;
+  EXPECT_NE(line_of(r.out, "cornell_box/CornellBox-Original.mtl").find("present "), std::string::npos) << r.out;
+  for (const char* f : {"dragon/dragon_100k.obj", "sibenik/sibenik_75k_geom.obj", "breakfast_room/breakfast_room.mtl"})
+    EXPECT_NE(line_of(r.out, f).find("missing "), std::string::npos) << f << "\n" << r.out;
+  EXPECT_NE(r.out.find("scene files: 2 present, 15 missing, 0 different"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("Real scenes: how to obtain them"), std::string::npos) << r.out;
+  EXPECT_EQ(run_cli({"scenes", "--scene-root", root.string(), "--verify"}).code, 1);
+
+  {  // One byte changed: different, with both checksums' first 12 hex digits.
+    std::fstream f(root / "cornell_box/CornellBox-Original.obj", std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(0);
+    f.put('X');
+  }
+  r = run_cli({"scenes", "--scene-root", root.string()});
+  EXPECT_EQ(r.code, 0) << r.err;
+  const std::string line = line_of(r.out, "cornell_box/CornellBox-Original.obj");
+  EXPECT_NE(line.find("different "), std::string::npos) << r.out;
+  EXPECT_NE(line.find("expected cc69982c8793, found "), std::string::npos) << line;
+  EXPECT_NE(r.out.find("not comparable"), std::string::npos) << r.out;
+  EXPECT_NE(line_of(r.out, "cornell_box/CornellBox-Original.mtl").find("present "), std::string::npos) << r.out;
+
+  // The exit status is documented in the help text.
+  CliResult help = run_cli({"scenes", "--help"});
+  EXPECT_NE(help.out.find("Exit status"), std::string::npos) << help.out;
+  EXPECT_NE(help.out.find("--verify"), std::string::npos) << help.out;
+}

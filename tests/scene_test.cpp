@@ -10,6 +10,7 @@
 
 #include "scene/load.h"
 #include "scene/procedural.h"
+#include "scene/provenance.h"
 #include "util/error.h"
 #include "test_util.h"
 
@@ -427,4 +428,170 @@ TEST(SceneEffects, InvalidDeclarationsNameFileLineAndKey) {
     EXPECT_NE(msg.find(c.key), std::string::npos) << c.key << ": " << msg;
   }
   EXPECT_NE(parse_error(cases[0].text).find("white"), std::string::npos);  // the known materials
+}
+
+// --- Scene provenance (scenes/sources.toml, scene/provenance.h) ----------------------------------------
+
+namespace {
+
+// write_file, creating the folders on the way.
+void write_file_in(const fs::path& p, const std::string& text) {
+  fs::create_directories(p.parent_path());
+  write_file(p, text);
+}
+
+// The message of the Error that parsing catalogue text throws ("" when it does not throw).
+std::string catalogue_error(const std::string& text) {
+  try {
+    parse_scene_catalogue(text, "cat.toml");
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+const std::string kSha = std::string(64, 'a');
+const std::string kEntry = "[\"d/x.obj\"]\nsha256 = \"" + kSha + "\"\nbytes = 10\ntriangles = 2\n" +
+                           "source = { origin = \"github.com/o/r\", path = \"x.obj\", commit = \"" + std::string(40, 'b') +
+                           "\" }\nlicence = \"CC0 1.0\"\nconversion = \"none\"\n";
+
+}  // namespace
+
+TEST(SceneProvenance, CatalogueCoversEveryObjOfEveryEmbeddedScene) {
+  // Adding a scene without the provenance of its files fails here.
+  std::size_t objs = 0;
+  for (const auto& l : list_scenes())
+    for (const auto& obj : l.obj_files) {
+      ++objs;
+      const CatalogueEntry* e = find_catalogued(obj);
+      ASSERT_NE(e, nullptr) << l.name << " uses " << obj << ", which has no entry in scenes/sources.toml";
+      EXPECT_TRUE(e->material_of.empty()) << obj << " is catalogued as a material file";
+      EXPECT_GT(e->triangles, 0u) << obj;
+      EXPECT_FALSE(e->source.origin.empty()) << obj;
+      EXPECT_FALSE(e->conversion.empty()) << obj;
+      // A Creative Commons BY licence requires the credit to be recorded.
+      if (e->licence.find("CC-BY") != std::string::npos) {
+        EXPECT_FALSE(e->credit.empty()) << obj;
+      }
+    }
+  EXPECT_GE(objs, 12u);
+  // Material files are checked with their OBJ.
+  EXPECT_EQ(files_with_materials({"cornell_box/CornellBox-Original.obj", "gems/diamond.obj"}),
+            (std::vector<std::string>{"cornell_box/CornellBox-Original.obj", "cornell_box/CornellBox-Original.mtl",
+                                      "gems/diamond.obj"}));
+}
+
+TEST(SceneProvenance, CatalogueIsNoScene) {
+  for (const auto& l : list_scenes()) EXPECT_NE(l.name, "sources");
+  try {
+    check_scene_reference("sources");
+    FAIL() << "'sources' was taken for a scene";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("unknown scene 'sources'"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SceneProvenance, BadCatalogueNamesFileLineAndFix) {
+  EXPECT_EQ(catalogue_error(kEntry), "");
+  auto has = [](const std::string& msg, const std::string& part) {
+    EXPECT_NE(msg.find(part), std::string::npos) << "no '" << part << "' in: " << msg;
+  };
+  std::string short_sha = replace(kEntry, kSha, "abc");
+  has(catalogue_error(short_sha), "cat.toml:2: '\"d/x.obj\".sha256' must be 64 lowercase hex digits");
+  has(catalogue_error(kEntry + "colour = \"red\"\n"), "unknown key '\"d/x.obj\".colour'");
+  has(catalogue_error(replace(kEntry, "licence = \"CC0 1.0\"\n", "")), "missing the required key 'licence'");
+  has(catalogue_error(replace(kEntry, "commit = \"" + std::string(40, 'b') + "\"", "version = \"1\", commit = \"" +
+                                                                                    std::string(40, 'b') + "\"")),
+      "exactly one of 'commit'");
+  has(catalogue_error(replace(kEntry, "d/x.obj", "../x.obj")), "must be a path relative to the scene root");
+  has(catalogue_error(kEntry + "mtl = \"d/x.mtl\"\n"), "\"d/x.obj\" has mtl = \"d/x.mtl\", which has no entry; add");
+  has(catalogue_error(kEntry + "mtl = \"d/x.mtl\"\n[\"d/x.mtl\"]\nsha256 = \"" + kSha +
+                      "\"\nbytes = 3\nmaterial_of = \"d/y.obj\"\n" + replace(kEntry, "d/x.obj", "d/y.obj")),
+      "\"d/x.mtl\" has material_of = \"d/y.obj\", but that entry does not name it back; set mtl = \"d/x.mtl\" there");
+  EXPECT_EQ(catalogue_error(kEntry + "mtl = \"d/x.mtl\"\n[\"d/x.mtl\"]\nsha256 = \"" + kSha +
+                            "\"\nbytes = 3\nmaterial_of = \"d/x.obj\"\n"),
+            "");
+}
+
+TEST(SceneProvenance, Sha256OfFiles) {
+  const fs::path dir = raysort::testing::temp_path("sha256");
+  write_file_in(dir / "abc", "abc");
+  write_file_in(dir / "empty", "");
+  write_file_in(dir / "million", std::string(1'000'000, 'a'));  // several read chunks
+  EXPECT_EQ(sha256_file((dir / "abc").string()), "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+  EXPECT_EQ(sha256_file((dir / "empty").string()), "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
+  EXPECT_EQ(sha256_file((dir / "million").string()), "cdc76e5c9914fb9281a1c7e284d73e67f1809a48a497200e046d39ccc7112cd0");
+  try {
+    sha256_file((dir / "absent").string());
+    FAIL() << "no Error for a missing file";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find((dir / "absent").string()), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(sha256_file(dir.string()), Error);  // a directory
+}
+
+TEST(SceneProvenance, ChecksumsUnderASceneRootRecordStatus) {
+  const fs::path root = raysort::testing::temp_path("prov-root");
+  write_file_in(root / "gems/diamond.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");  // not the catalogued bytes
+  const std::string found = sha256_file((root / "gems/diamond.obj").string());
+  FileCheck c = check_scene_file("gems/diamond.obj", root.string());
+  EXPECT_EQ(c.status, FileStatus::Different);
+  EXPECT_EQ(describe_check(c), "different: expected bc3379788dcc, found " + found.substr(0, 12));
+  EXPECT_EQ(describe_check(check_scene_file("gems/emerald.obj", root.string())), "missing");
+
+  // An embedded scene (its OBJs and catalogued .mtl), a procedural one (no files), a .toml path, a bare .obj.
+  write_file_in(root / "mine.toml", replace(kValid, "generator = \"plane\"\n[mesh.params]\nsize_x = 4.0\nsize_z = 4.0\n",
+                                         "obj = \"gems/diamond.obj\"\n"));
+  const std::string bare = (root / "gems/diamond.obj").string();
+  nlohmann::json j = scene_file_checksums({"multi-instance-real", "cornell", (root / "mine.toml").string(), bare},
+                                          root.string());
+  ASSERT_EQ(j.size(), 6u) << j.dump(1);
+  EXPECT_EQ(j["gems/diamond.obj"], (nlohmann::json{{"sha256", found}, {"status", "different"}}));
+  for (const char* f : {"cornell_box/CornellBox-Original.obj", "cornell_box/CornellBox-Original.mtl",
+                        "dragon/dragon_100k.obj", "gems/emerald.obj"})
+    EXPECT_EQ(j[f], (nlohmann::json{{"status", "missing"}})) << f;
+  EXPECT_EQ(j[bare], (nlohmann::json{{"sha256", found}, {"status", "uncatalogued"}}));
+  EXPECT_THROW(scene_file_checksums({"nope"}, root.string()), Error);
+}
+
+TEST(SceneProvenance, RealFilesMatchTheCatalogue) {
+  RAYSORT_REQUIRE_REAL_SCENES();
+  const std::string root = raysort::testing::real_scene_root();
+  for (const auto& e : scene_catalogue()) {
+    FileCheck c = check_scene_file(e.path, root);
+    EXPECT_EQ(c.status, FileStatus::Present) << e.path << ": " << describe_check(c);
+    EXPECT_EQ(fs::file_size(fs::path(root) / e.path), e.bytes) << e.path;
+  }
+  nlohmann::json j = scene_file_checksums({"sibenik", "breakfast_room"}, root);
+  EXPECT_EQ(j["sibenik/sibenik_75k_geom.obj"]["status"], "present");
+  EXPECT_EQ(j["breakfast_room/breakfast_room.mtl"]["sha256"], find_catalogued("breakfast_room/breakfast_room.mtl")->sha256);
+}
+
+TEST(SceneProvenance, FileDifferencesBetweenResultSets) {
+  const std::string h1 = std::string(64, '1'), h2 = std::string(64, '2');
+  nlohmann::json a = {{"scene_files", {{"s/a.obj", {{"sha256", h1}, {"status", "present"}}},
+                                       {"s/b.obj", {{"sha256", h1}, {"status", "present"}}},
+                                       {"s/c.obj", {{"status", "missing"}}}}}};
+  EXPECT_TRUE(scene_file_differences(a, a).empty());
+  nlohmann::json b = a;
+  b["scene_files"]["s/a.obj"] = {{"sha256", h2}, {"status", "different"}};
+  b["scene_files"].erase("s/b.obj");
+  b["scene_files"]["s/d.obj"] = {{"sha256", h2}, {"status", "uncatalogued"}};
+  b["scene_files"]["s/c.obj"] = {{"sha256", h1}, {"status", "present"}};
+  EXPECT_EQ(scene_file_differences(a, b),
+            (std::vector<std::string>{
+                "s/a.obj: sha256 111111111111 in A, 222222222222 in B; results on these files are not comparable",
+                "s/b.obj: recorded in A only (sha256 111111111111)",
+                "s/c.obj: sha256 missing in A, 111111111111 in B; results on these files are not comparable",
+                "s/d.obj: recorded in B only (sha256 222222222222)"}));
+  // Result sets from before scene_files was recorded, and malformed entries: lines, no throw.
+  EXPECT_TRUE(scene_file_differences(nlohmann::json::object(), nlohmann::json::object()).empty());
+  auto older = scene_file_differences(a, nlohmann::json::object());
+  ASSERT_EQ(older.size(), 1u);
+  EXPECT_NE(older[0].find("result set B records no scene file checksums"), std::string::npos) << older[0];
+  nlohmann::json bad = {{"scene_files", {{"s/a.obj", 3}, {"s/b.obj", {{"sha256", 7}}}}}};
+  std::vector<std::string> lines;
+  EXPECT_NO_THROW(lines = scene_file_differences(a, bad));
+  EXPECT_EQ(lines.size(), 3u);
+  EXPECT_NO_THROW(scene_file_differences(nlohmann::json::array(), "text"));
 }

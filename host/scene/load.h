@@ -2,7 +2,9 @@
 // Finding and loading scenes: by name (an embedded scenes/*.toml or a file in the scene
 // directory), by path to a .toml file, or by path to a bare .obj (framed by a default camera
 // and lit by a sky light), so a user can try any mesh at once.
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "scene/scene.h"
@@ -37,6 +39,10 @@ std::string resolve_scene_root(const SceneOptions& opts);
 // for an unknown name.
 Scene load_scene(const std::string& name_or_path, const SceneOptions& opts = {});
 
+// The text of the embedded scene file of that name (scenes/<name>.toml), if there is one. Paths
+// (a '/', a .toml or .obj ending) and the catalogue scenes/sources.toml are no scene names.
+std::optional<std::string_view> find_embedded_scene(const std::string& name);
+
 // The lookup part of load_scene without loading: throws the same Error for an unknown name, a
 // missing file or a directory (so a command can refuse it before any work starts).
 void check_scene_reference(const std::string& name_or_path);
@@ -65,5 +71,10 @@ struct SceneListing {
 };
 // Every scene `load_scene` knows by name: the embedded scenes/*.toml.
 std::vector<SceneListing> list_scenes();
+
+// The OBJ files a scene file names (its [[mesh]] obj values, as written: relative to the scene root
+// unless absolute), for an embedded scene name or a .toml path; empty for a bare .obj path (which
+// is its own file). Throws Error as check_scene_reference does, or for a .toml that is not TOML.
+std::vector<std::string> scene_file_obj_files(const std::string& name_or_path);
 
 }  // namespace raysort

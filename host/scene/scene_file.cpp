@@ -15,6 +15,7 @@
 #include "scene/load.h"
 #include "scene/noise.h"
 #include "scene/procedural.h"
+#include "scene/provenance.h"
 #include "scene/toml_reader.h"
 #include "util/embedded.h"
 #include "util/error.h"
@@ -37,6 +38,17 @@ std::string read_text_file(const std::string& path) {
 
 bool ends_with(const std::string& s, std::string_view suffix) {
   return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+// The obj values of a scene file's [[mesh]] tables, as written (a lenient read: the scene builder
+// reports malformed tables when the scene is loaded).
+std::vector<std::string> obj_values(const toml::table& root) {
+  std::vector<std::string> out;
+  if (auto meshes = root["mesh"].as_array())
+    for (const auto& m : *meshes)
+      if (auto t = m.as_table())
+        if (auto obj = (*t)["obj"].value<std::string>()) out.push_back(*obj);
+  return out;
 }
 
 Camera read_camera(const TomlTable& t) {
@@ -375,7 +387,9 @@ std::vector<std::string> embedded_scene_names() {
   std::vector<std::string> names;
   for (const auto& f : embedded_files()) {
     std::string p(f.path);
-    if (p.rfind("scenes/", 0) == 0 && ends_with(p, ".toml")) names.push_back(fs::path(p).stem().string());
+    // scenes/sources.toml, the catalogue of scene files (scene/provenance.h), is no scene.
+    if (p.rfind("scenes/", 0) == 0 && ends_with(p, ".toml") && p != kSceneCatalogue)
+      names.push_back(fs::path(p).stem().string());
   }
   std::sort(names.begin(), names.end());
   return names;
@@ -437,10 +451,15 @@ Scene parse_scene_toml(const std::string& text, const std::string& origin, const
   return s;
 }
 
+std::optional<std::string_view> find_embedded_scene(const std::string& name) {
+  if (name.find('/') != std::string::npos || ends_with(name, ".toml") || ends_with(name, ".obj")) return std::nullopt;
+  const std::string path = "scenes/" + name + ".toml";
+  if (path == kSceneCatalogue) return std::nullopt;
+  return find_embedded(path);
+}
+
 void check_scene_reference(const std::string& name_or_path) {
-  if (name_or_path.find('/') == std::string::npos && !ends_with(name_or_path, ".toml") &&
-      !ends_with(name_or_path, ".obj") && find_embedded("scenes/" + name_or_path + ".toml"))
-    return;
+  if (find_embedded_scene(name_or_path)) return;
   std::error_code ec;
   if (fs::is_directory(name_or_path, ec))
     throw Error(fmt::format("scene '{}' is a directory; give a scene name, or the path of a .toml or .obj file",
@@ -460,12 +479,8 @@ void check_scene_reference(const std::string& name_or_path) {
 
 Scene load_scene(const std::string& name_or_path, const SceneOptions& opts) {
   check_scene_reference(name_or_path);
-  std::string embedded_path = "scenes/" + name_or_path + ".toml";
-  if (name_or_path.find('/') == std::string::npos && !ends_with(name_or_path, ".toml") &&
-      !ends_with(name_or_path, ".obj")) {
-    if (auto text = find_embedded(embedded_path))
-      return parse_scene_toml(std::string(*text), "embedded:" + embedded_path, opts);
-  }
+  if (auto text = find_embedded_scene(name_or_path))
+    return parse_scene_toml(std::string(*text), "embedded:scenes/" + name_or_path + ".toml", opts);
   if (ends_with(name_or_path, ".toml")) return parse_scene_toml(read_text_file(name_or_path), name_or_path, opts);
   Scene s = load_bare_obj(name_or_path);
   apply_frame_size(s, opts.frame);
@@ -483,16 +498,19 @@ std::vector<SceneListing> list_scenes() {
     auto text = find_embedded(path);
     toml::table root = parse_toml_text(std::string(*text), l.file);
     if (auto d = root["description"].value<std::string>()) l.description = *d;
-    if (auto meshes = root["mesh"].as_array())
-      for (const auto& m : *meshes)
-        if (auto t = m.as_table())
-          if (auto obj = (*t)["obj"].value<std::string>()) {
-            l.needs_scene_root = true;
-            l.obj_files.push_back(*obj);
-          }
+    l.obj_files = obj_values(root);
+    l.needs_scene_root = !l.obj_files.empty();
     out.push_back(std::move(l));
   }
   return out;
+}
+
+std::vector<std::string> scene_file_obj_files(const std::string& name_or_path) {
+  check_scene_reference(name_or_path);
+  if (auto text = find_embedded_scene(name_or_path))
+    return obj_values(parse_toml_text(std::string(*text), "embedded:scenes/" + name_or_path + ".toml"));
+  if (ends_with(name_or_path, ".toml")) return obj_values(parse_toml_text(read_text_file(name_or_path), name_or_path));
+  return {};
 }
 
 }  // namespace raysort
