@@ -18,6 +18,7 @@
 #include "bench/result_set.h"
 #include "bench/runner.h"
 #include "render/batches.h"
+#include "scene/provenance.h"
 #include "test_util.h"
 #include "util/atomic_file.h"
 
@@ -518,6 +519,42 @@ TEST(Matrix, LayoutIsRecordedAndModelled) {
   ASSERT_TRUE(wide && binary);
   EXPECT_NE(wide->simt_lane_efficiency, binary->simt_lane_efficiency);
   EXPECT_NE(wide->simt_distinct_per_visit, binary->simt_distinct_per_visit);
+}
+
+// A run records the SHA-256 of every scene file it traced (meta.json "scene_files"); a resume on a
+// changed file is refused, and compare says when two sets traced different files.
+TEST(Matrix, SceneFileChecksumsAreRecordedAndCompared) {
+  const std::string dir = temp_dir("scene-files");
+  const std::string obj = dir + "/quad.obj";
+  auto write_obj = [&](const std::string& z) {
+    std::ofstream(obj) << "v 0 0 " << z << "\nv 1 0 " << z << "\nv 1 1 " << z << "\nv 0 1 " << z << "\nf 1 2 3 4\n";
+  };
+  write_obj("0");
+  MatrixSpec spec;
+  spec.scenes = {obj};
+  spec.batches = {"primary"};
+  spec.encoders = {Encoder::HCC};
+  spec.frame = {16, 9, 1};
+  spec.reps = 1, spec.warmup = 0, spec.max_time_s = 0;
+  RunOptions a, b;
+  a.out = dir + "/a", b.out = dir + "/b";
+  ASSERT_EQ(run_matrix(spec, a).cells_failed, 0u);
+  const auto meta = nlohmann::json::parse(read_file(a.out + "/meta.json"));
+  ASSERT_TRUE(meta["scene_files"].contains(obj)) << meta["scene_files"].dump();
+  EXPECT_EQ(meta["scene_files"][obj]["sha256"], sha256_file(obj));
+  EXPECT_EQ(meta["scene_files"][obj]["status"], "uncatalogued");
+  write_obj("1");  // one byte changed
+  try {
+    run_matrix(spec, a);
+    ADD_FAILURE() << "resumed on a changed scene file";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("other scene files"), std::string::npos) << e.what();
+  }
+  ASSERT_EQ(run_matrix(spec, b).cells_failed, 0u);
+  const CompareResult r = compare_result_sets(ResultSet::load(a.out), ResultSet::load(b.out), {"keys_hash"}, {});
+  ASSERT_EQ(r.scene_files.size(), 1u);
+  EXPECT_NE(r.scene_files[0].find(obj), std::string::npos) << r.scene_files[0];
+  EXPECT_NE(r.report.find("traced different scene files"), std::string::npos);
 }
 
 // SIGKILL at several points, rerun after each: the final set equals an uninterrupted run's, each

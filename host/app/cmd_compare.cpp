@@ -44,6 +44,8 @@ void register_compare_command(CLI::App& app) {
     CompareResult res = compare_result_sets(ra, rb, a->metrics, rules, a->allow_different_matrix);
     fmt::print("{}", res.report);
     if (!a->out.empty()) write_file_atomically(a->out, res.report);
+    for (const auto& line : res.scene_files)
+      fmt::print(stderr, "raysort compare: the sets traced different scene files: {}\n", line);
     if (!res.within_noise.empty())
       fmt::print(stderr, "raysort compare: {} change(s) past a --fail-if threshold on the points stayed within the "
                          "noise (not past it between the 95 % intervals' nearest ends), not counted as regressions\n",

@@ -9,6 +9,7 @@
 #include <optional>
 #include <set>
 
+#include "scene/provenance.h"
 #include "util/error.h"
 
 namespace raysort {
@@ -287,6 +288,13 @@ CompareResult compare_result_sets(const ResultSet& a, const ResultSet& b, const 
                                        {protocol_keys().begin(), protocol_keys().end()});
       !p.empty())
     md += fmt::format("Measurement settings differ (the intervals' widths may too): {}\n\n", p);
+  out.scene_files = scene_file_differences(a.meta(), b.meta());
+  if (!out.scene_files.empty()) {
+    md += "**The sets traced different scene files** (meta.json \"scene_files\", SHA-256): their figures on these "
+          "scenes are not comparable.\n\n";
+    for (const auto& line : out.scene_files) md += "- " + line + "\n";
+    md += "\n";
+  }
 
   for (auto& metric : metrics) {
     const std::optional<Metric> found = find_metric(metric);

@@ -42,6 +42,9 @@ struct CompareResult {
   std::vector<std::string> violations; // one line per rule broken
   // Point changes past a relative rule's threshold whose intervals overlap: not fired.
   std::vector<std::string> within_noise;
+  // The scene files the two sets traced, where their checksums differ (meta.json "scene_files",
+  // scene/provenance.h): results on different files are not comparable, whatever the rules say.
+  std::vector<std::string> scene_files;
 };
 
 // The two sets must have run one matrix (scenes, batches, encoders, bits, resolution, spp, seed,

@@ -7,6 +7,7 @@
 #include <set>
 
 #include "bench/plots.h"
+#include "scene/provenance.h"
 #include "util/atomic_file.h"
 #include "util/error.h"
 #include "util/text.h"
@@ -246,6 +247,13 @@ ResultSet ResultSet::open_for_run(const std::string& dir, const nlohmann::json& 
                               dir, json_differences(meta.value("matrix", nlohmann::json::object()),
                                                     old.value("matrix", nlohmann::json::object()))));
     check_same_shard(old, meta, dir);
+    // A scene file changed since the set was started: resumed cells would trace another file.
+    if (old.contains("scene_files") && meta.contains("scene_files"))
+      if (const auto diff = scene_file_differences(old, meta); !diff.empty())
+        throw Error(fmt::format("{} was started on other scene files ({}); its cells and new ones would not be "
+                                "comparable (A: when it was started, B: now); restore the files, or choose another --out "
+                                "folder",
+                                dir, diff.front()));
     read_cells(dir, old, rs.cells_);
     // Keep the original meta (first start), but record that the run was resumed.
     rs.meta_ = old;

@@ -24,6 +24,7 @@
 #include "render/frame_memory.h"
 #include "runtime/runtime.h"
 #include "scene/load.h"
+#include "scene/provenance.h"
 #include "util/error.h"
 
 namespace raysort {
@@ -349,6 +350,8 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
   summary.out_dir = opts.out.empty() ? default_result_dir(spec, rt.info().slug(), opts.shard) : opts.out;
   nlohmann::json meta = run_meta(spec, opts, rt.info());
   if (opts.shard.active()) meta["shard"] = shard_meta(spec, opts.shard, full_plan);
+  // What files the scenes were made from (scene/provenance.h): compare says when two sets differ.
+  meta["scene_files"] = scene_file_checksums(spec.scenes, resolve_scene_root(SceneOptions{opts.scene_root, {}}));
   ResultSet results = ResultSet::open_for_run(summary.out_dir, meta);
   check_cells_planned(results, full_plan);
   fmt::print(stderr, "raysort run: {}{} on {}; results in {}\n", spec.preset.empty() ? "custom matrix" : spec.preset,
