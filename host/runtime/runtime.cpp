@@ -228,12 +228,17 @@ DeviceInfo select_device(std::string spec) {
     for (auto& d : devices) s += fmt::format("\n  [{}] {} / {} ({})", d.index, d.platform_name, d.name, d.type);
     return s;
   };
+  // The first device of `type` ("" for any), real hardware before simulators and single-threaded ones.
+  auto first_of = [&](const std::string& type) -> const DeviceInfo* {
+    for (bool preferred : {true, false})
+      for (auto& d : devices)
+        if (d.is_preferred() == preferred && (type.empty() || d.type == type)) return &d;
+    return nullptr;
+  };
   if (spec.empty()) {
-    for (auto& d : devices)
-      if (d.type == "GPU") return d;
-    for (auto& d : devices)
-      if (d.type == "CPU") return d;
-    return devices.front();
+    for (const DeviceInfo* d : {first_of("GPU"), first_of("CPU")})
+      if (d && d->is_preferred()) return *d;
+    return *first_of("");
   }
   std::string ls = lower(spec);
   if (std::all_of(spec.begin(), spec.end(), [](char c) { return std::isdigit(static_cast<unsigned char>(c)); })) {
@@ -242,8 +247,7 @@ DeviceInfo select_device(std::string spec) {
     throw Error(fmt::format("--device {}: no device with that index; devices are:{}", spec, listing()));
   }
   if (ls == "gpu" || ls == "cpu") {
-    for (auto& d : devices)
-      if (lower(d.type) == ls) return d;
+    if (const DeviceInfo* d = first_of(ls == "gpu" ? "GPU" : "CPU")) return *d;
     throw Error(fmt::format("--device {}: no {} device; devices are:{}", spec, ls, listing()));
   }
   for (auto& d : devices)
