@@ -12,8 +12,9 @@ PACKAGES=(
   libcli11-dev nlohmann-json3-dev libtomlplusplus-dev libfmt-dev
   # libgmp-dev: exact rationals for the oracle of `raysort trace --adjudicate`
   libgmp-dev
+  # oclgrind: a second OpenCL implementation with race and memory checks (scripts/oclgrind-check.sh);
   # clang-15, libclc-15: the NVIDIA (nvptx64-nvidia-nvcl) build of every kernel (scripts/nvptx-build.sh)
-  clang-15 libclc-15
+  oclgrind clang-15 libclc-15
   #: optional: Boost.Compute (header-only) is the sortbench's reference GPU-library sort
   libboost-dev
   #: optional: Embree 3, the CPU anchor of `raysort trace --reference embree` (CMake RAYSORT_EMBREE=AUTO

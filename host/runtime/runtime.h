@@ -113,6 +113,11 @@ class Runtime {
   cl::Buffer buffer(const std::string& name, std::size_t bytes, cl_mem_flags flags = CL_MEM_READ_WRITE,
                     const void* host_data = nullptr);
 
+  // Sets the first `bytes` of b to zero (enqueued, not waited for). A fill, except on a simulator:
+  // Oclgrind 21.10's uninitialised-value check does not see clEnqueueFillBuffer and would report
+  // every later read, so there the zeros are written from the host.
+  void zero(const std::string& name, const cl::Buffer& b, std::size_t bytes);
+
   template <class T>
   cl::Buffer upload(const std::string& name, const std::vector<T>& v, cl_mem_flags flags = CL_MEM_READ_ONLY) {
     return buffer(name, std::max<std::size_t>(1, v.size()) * sizeof(T), flags | (v.empty() ? 0 : CL_MEM_COPY_HOST_PTR),
