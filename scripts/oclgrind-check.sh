@@ -4,8 +4,9 @@
 # API and uninitialised-value checks on (out-of-bounds accesses and barrier divergence are always
 # checked):
 #   trace        both variants (robust, fast), both layouts (wide, binary), closest and any hit
-#   encodebench  every encoder at 16, 32 and 64 bits (the *_k32 and *_k64 kernels)
-#   render       generate, shade, the counted closest hit, accumulate, compaction
+#   encodebench  every encoder at 16, 32 and 64 bits (the *_k32 and *_k64 kernels; not HCC_DIR's
+#                two-pass encode_direction_* / encode_box_set_or_*, used only with --direction-bits > 1)
+#   render       generate, shade, the (fast, wide) counted closest hit, accumulate, compaction
 #   sortcheck    the radix sort in the shape Oclgrind gets (the GPU shape: local-memory tiles),
 #                a small GPU shape whose tiles are 256 keys, and the CPU shape, at
 #                N = 1, 255, 256, 257, 4097 and 32/64-bit keys, against the host twin
