@@ -43,7 +43,7 @@
 /* rays[index], read as floats at a signed 32-bit offset: PoCL's vectoriser then gathers each field
  * with vgatherdps on eight 32-bit offsets instead of vgatherqps on eight 64-bit addresses (a
  * zero-extended index). The host keeps batches below 2^28 rays, so the offset fits. */
-inline RsRay rs_load_ray(__global const RsRay* rays, uint index) {
+static inline RsRay rs_load_ray(__global const RsRay* rays, uint index) {
   __global const float* f = (__global const float*)rays;
   const int at = (int)(index * 8u);
   RsRay r;

@@ -34,11 +34,16 @@ RS_INLINE RsHit rs_miss(float tmax) {
 }
 
 /* 1/d with zero components mapped to a huge finite reciprocal of the same sign, so no inf or
- * NaN ever enters the slab test (the kernels must not depend on inf arithmetic). */
+ * NaN ever enters the slab test (the kernels must not depend on inf arithmetic).
+ * Below tiny (zeros and denormals) the divisor is ±tiny with d's sign bit, so −0 gives −tiny.
+ * The sign bit is moved with integer operations, not with a select between −tiny and tiny: LLVM
+ * folds such a select into llvm.copysign.f32, which Oclgrind's interpreter cannot run
+ * ("Undefined external function"). Same bits as the select for every d, NaN included. */
 RS_INLINE float rs_safe_rcp(float d) {
   const float tiny = 1e-30f;
   float ad = rs_abs(d);
-  float sd = ad < tiny ? (d < 0.0f || (d == 0.0f && rs_float_as_int(d) < 0) ? -tiny : tiny) : d;
+  const rs_i32 sign = rs_float_as_int(d) & (rs_i32)0x80000000u;
+  float sd = ad < tiny ? rs_int_as_float(rs_float_as_int(tiny) | sign) : d;
   return 1.0f / sd;
 }
 

@@ -37,8 +37,14 @@
 #define RS_LOCAL __local
 #define RS_U64(x) ((ulong)(x))
 #define RS_CONSTANT __constant
-/* Key code is inlined into the kernels, so PoCL sees one straight-line work-item body. */
-#define RS_KEY_INLINE inline __attribute__((always_inline))
+/* Key code is inlined into the kernels, so PoCL sees one straight-line work-item body. The host
+ * passes RS_NO_FORCED_INLINE for Oclgrind (host/runtime/runtime.cpp): LLVM's always-inliner emits
+ * llvm.experimental.noalias.scope.decl even at -O0, which Oclgrind 21.10 cannot interpret. */
+#ifdef RS_NO_FORCED_INLINE
+#define RS_KEY_INLINE static inline
+#else
+#define RS_KEY_INLINE static inline __attribute__((always_inline))
+#endif
 RS_KEY_INLINE rs_u32 rs_clz64(rs_u64 x) { return (rs_u32)clz(x); }
 #else
 #define RS_LOCAL

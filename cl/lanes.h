@@ -113,16 +113,10 @@ RS_INLINE rs_f16 rs16_max(rs_f16 a, rs_f16 b) { return select(b, a, a > b); }
 /* Eight-lane forms for a half-full group (device only, keys_cut.h rs_cut_bits). */
 RS_INLINE float8 rs8_min(float8 a, float8 b) { return select(b, a, a < b); }
 RS_INLINE float8 rs8_max(float8 a, float8 b) { return select(b, a, a > b); }
-/* The OR of the eight lanes. */
-RS_INLINE int rs8_or_lanes(int8 m) {
-  int4 h = m.lo | m.hi;
-  int2 q = h.lo | h.hi;
-  return q.s0 | q.s1;
-}
 /* The lanes of a sixteen- or eight-lane -1/0 mask as bits, lane i -> bit i (the cut-box tests,
  * keys_cut.h rs_cut_bits). On AVX-512 devices (PoCL on such CPUs) the compare's mask register is
- * the answer (kmovd, RS_MASK16_BITS = 1); elsewhere the lanes are ANDed with their bits and ORed,
- * a fold of the lanes per group (on PoCL 1.2-1.6x slower box-set keys).
+ * the answer (kmovd, RS_MASK16_BITS = 1); elsewhere the lanes are ANDed with their bits and ORed
+ * (on PoCL 1.2-1.6x slower box-set keys).
  * ClRuntime.MaskBitsFormsAgree checks them on the device. */
 #if defined(__AVX512F__) && defined(__AVX512DQ__) && !defined(RS_PORTABLE_MASK_BITS)
 #define RS_MASK16_BITS 1
@@ -130,8 +124,18 @@ RS_INLINE uint rs16_mask_bits(int16 m) { return (uint)__builtin_ia32_cvtd2mask51
 RS_INLINE uint rs8_mask_bits(int8 m) { return (uint)__builtin_ia32_movmskps256(as_float8(m)); }
 #else
 #define RS_MASK16_BITS 0
-RS_INLINE uint rs8_mask_bits(int8 m) { return (uint)rs8_or_lanes(m & (int8)(1, 2, 4, 8, 16, 32, 64, 128)); }
-RS_INLINE uint rs16_mask_bits(int16 m) { return rs8_mask_bits(m.lo) | (rs8_mask_bits(m.hi) << 8); }
+/* The lanes are ORed one by one, not folded by halves (.lo | .hi): the same bits, but Oclgrind's
+ * uninitialised-value check reports the fold of a cut-box mask as uninitialised (a false positive
+ * that would hide real findings). GPUs run both forms as the same scalar operations. */
+RS_INLINE uint rs8_mask_bits(int8 m) {
+  const int8 b = m & (int8)(1, 2, 4, 8, 16, 32, 64, 128);
+  return (uint)(b.s0 | b.s1 | b.s2 | b.s3 | b.s4 | b.s5 | b.s6 | b.s7);
+}
+RS_INLINE uint rs16_mask_bits(int16 m) {
+  const int16 b = m & (int16)(1, 2, 4, 8, 16, 32, 64, 128, 256, 512, 1024, 2048, 4096, 8192, 16384, 32768);
+  return (uint)(b.s0 | b.s1 | b.s2 | b.s3 | b.s4 | b.s5 | b.s6 | b.s7 | b.s8 | b.s9 | b.sa | b.sb | b.sc | b.sd |
+                b.se | b.sf);
+}
 #endif
 #else
 typedef struct alignas(64) rs_f16 {

@@ -43,16 +43,16 @@ typedef uint rs_key;
 
 /* The digit of pass p covers key bits [shift, shift + width) with width = RS_RADIX_BITS except
  * in the last pass, which stops at hi_bit (a 10-bit top-k sort by 8-bit digits: 8 + 2 bits). */
-inline uint rs_mask(uint shift, uint hi_bit) {
+static inline uint rs_mask(uint shift, uint hi_bit) {
   uint width = min((uint)RS_RADIX_BITS, hi_bit - shift);
   return (1u << width) - 1u;
 }
-inline uint rs_digit(rs_key key, uint shift, uint mask) { return (uint)(key >> shift) & mask; }
+static inline uint rs_digit(rs_key key, uint shift, uint mask) { return (uint)(key >> shift) & mask; }
 
 /* Per-tile counts of one digit, bits [shift, shift + width): counts[digit * tiles + tile]. A tile
  * is items * RS_WG keys. With bounds != 0 (the first read of a sort) the kernel also writes the
  * OR and the AND of the tile's keys to bounds[2 * tile], bounds[2 * tile + 1]. */
-inline void rs_count_tile(__global const rs_key* restrict keys, uint n, uint items, uint shift, uint hi_bit,
+static inline void rs_count_tile(__global const rs_key* restrict keys, uint n, uint items, uint shift, uint hi_bit,
                           __global uint* restrict counts, __global rs_key* restrict bounds, const bool with_bounds,
                           __local uint* hist, __local rs_key* red_any, __local rs_key* red_all) {
   const uint lid = get_local_id(0);
@@ -277,7 +277,7 @@ __kernel void rs_scatter(__global const rs_key* restrict keys_in, __global const
  * ...)) that runs. With an odd number of passes the result is in keys_b/values_b, else in a. */
 #define RS_MAX_PASSES ((RS_KEY_BITS + RS_RADIX_BITS - 1) / RS_RADIX_BITS)
 /* One stable pass of a bucket, src -> dst, from the positions in `position`. */
-inline void rs_bucket_pass(__global const rs_key* restrict src_k, __global const uint* restrict src_v,
+static inline void rs_bucket_pass(__global const rs_key* restrict src_k, __global const uint* restrict src_v,
                            __global rs_key* restrict dst_k, __global uint* restrict dst_v, uint begin, uint end,
                            uint shift, uint mask, __local uint* restrict position) {
   for (uint i = begin; i < end; ++i) {
@@ -289,7 +289,7 @@ inline void rs_bucket_pass(__global const rs_key* restrict src_k, __global const
 }
 
 /* Histograms of passes [j0, j1) over [begin, end) of keys, turned into their start positions. */
-inline void rs_bucket_hist(__global const rs_key* restrict keys, uint begin, uint end, uint j0, uint j1,
+static inline void rs_bucket_hist(__global const rs_key* restrict keys, uint begin, uint end, uint j0, uint j1,
                            const uint* shifts, const uint* masks, __local uint* restrict hist) {
   for (uint j = j0 * RS_RADIX; j < j1 * RS_RADIX; ++j) hist[j] = 0;
   for (uint i = begin; i < end; ++i) {
@@ -307,7 +307,7 @@ inline void rs_bucket_hist(__global const rs_key* restrict keys, uint begin, uin
 }
 
 /* Passes [j0, j1) of [begin, end), LSD order; pass j reads a when j is even, b when odd. */
-inline void rs_bucket_lsd(__global rs_key* keys_a, __global uint* values_a, __global rs_key* keys_b,
+static inline void rs_bucket_lsd(__global rs_key* keys_a, __global uint* values_a, __global rs_key* keys_b,
                           __global uint* values_b, uint begin, uint end, uint j0, uint j1, const uint* shifts,
                           const uint* masks, __local uint* hist) {
   rs_bucket_hist((j0 & 1u) ? keys_b : keys_a, begin, end, j0, j1, shifts, masks, hist);

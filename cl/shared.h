@@ -16,7 +16,11 @@
 #ifdef __OPENCL_VERSION__
 #pragma OPENCL FP_CONTRACT OFF
 #define RS_GLOBAL __global
-#define RS_INLINE inline
+/* static: OpenCL C has C99 inline semantics, where a plain `inline` function is only an inline
+ * definition. A call the compiler does not inline (clang for NVPTX keeps the robust traversal out
+ * of line) then refers to an external definition that no kernel file provides, which the PTX link
+ * leaves undefined. `static inline` (OpenCL C 1.2) emits a local copy whenever one is needed. */
+#define RS_INLINE static inline
 /* Fully unrolls the short fixed loop that follows (per-axis loops in the traversal). */
 #define RS_UNROLL _Pragma("unroll")
 typedef uint rs_u32;

@@ -14,6 +14,9 @@ PACKAGES=(
   libgmp-dev
   # libssl-dev: libcrypto's SHA-256, to check real scene files against scenes/sources.toml
   libssl-dev
+  # oclgrind: a second OpenCL implementation with race and memory checks (scripts/oclgrind-check.sh);
+  # clang-15, libclc-15: the NVIDIA (nvptx64-nvidia-nvcl) build of every kernel (scripts/nvptx-build.sh)
+  oclgrind clang-15 libclc-15
   #: optional: Boost.Compute (header-only) is the sortbench's reference GPU-library sort
   libboost-dev
   #: optional: Embree 3, the CPU anchor of `raysort trace --reference embree` (CMake RAYSORT_EMBREE=AUTO

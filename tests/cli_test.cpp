@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -53,6 +54,39 @@ TEST(Cli, UnknownNamesListTheValidOnes) {
   expect_refused({"run", "--scenes", "/nonexistent/x.obj"}, {"OBJ file not found: /nonexistent/x.obj"});
   expect_refused({"run", "--scenes", "/tmp"}, {"'/tmp' is a directory"});
   expect_refused({"trace", "--scene", "nope"}, {"unknown scene 'nope'", "cornell"});
+}
+
+// With PoCL's single-threaded `basic` device listed first, and Oclgrind registered (when installed),
+// the default is still PoCL's pthread device, and the others are marked (issue 19, item 5).
+TEST(Cli, DefaultDeviceIsNeverTheSimulatorOrPoclBasic) {
+  std::vector<std::string> env = {"POCL_DEVICES=basic pthread", "RAYSORT_DEVICE="};
+  const fs::path oclgrind = "/usr/lib/oclgrind/liboclgrind-rt-icd.so";
+  const bool with_oclgrind = fs::exists(oclgrind);
+  if (with_oclgrind) {
+    const fs::path vendors = raysort::testing::temp_path("icd-vendors");
+    fs::create_directories(vendors);
+    if (fs::is_directory("/etc/OpenCL/vendors"))
+      for (const auto& e : fs::directory_iterator("/etc/OpenCL/vendors"))
+        if (e.path().extension() == ".icd") fs::copy_file(e.path(), vendors / e.path().filename());
+    std::ofstream(vendors / "oclgrind.icd") << oclgrind.string() << "\n";
+    env.push_back("OCL_ICD_VENDORS=" + vendors.string());
+  }
+  CliResult r = run_cli({"devices"}, env);
+  ASSERT_EQ(r.code, 0) << r.err;
+  auto default_line = [&] {  // the line marked "(default)"
+    std::istringstream in(r.out);
+    for (std::string line; std::getline(in, line);)
+      if (line.find("(default)") != std::string::npos) return line;
+    return std::string();
+  };
+  if (r.out.find("basic-") == std::string::npos) {
+    GTEST_SKIP() << "PoCL lists no basic device here:\n" << r.out;
+  }
+  EXPECT_NE(default_line().find("pthread-"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("(single-threaded: one core, never the default)"), std::string::npos) << r.out;
+  if (with_oclgrind) {
+    EXPECT_NE(r.out.find("(simulator:"), std::string::npos) << r.out;
+  }
 }
 
 TEST(Cli, ImpossibleCombinationsRefusedBeforeWork) {

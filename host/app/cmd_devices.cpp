@@ -19,7 +19,10 @@ void register_devices_command(CLI::App& app) {
     for (auto& d : devices) {
       fmt::print("[{}] {}{}\n", d.index, d.name, d.index == def.index ? "   (default)" : "");
       fmt::print("    platform        {} ({})\n", d.platform_name, d.platform_version);
-      fmt::print("    type            {}\n", d.type);
+      fmt::print("    type            {}{}\n", d.type,
+                 d.is_simulator()           ? "   (simulator: checks every access, for correctness only, never the default)"
+                 : d.is_single_threaded()   ? "   (single-threaded: one core, never the default)"
+                                            : "");
       fmt::print("    OpenCL          {} / {}\n", d.version, d.opencl_c_version);
       fmt::print("    driver          {}\n", d.driver_version);
       fmt::print("    compute units   {}\n", d.compute_units);

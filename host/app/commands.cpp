@@ -14,6 +14,7 @@ void register_commands(CLI::App& app) {
   register_scenes_command(app);
   register_trace_command(app);
   register_sortbench_command(app);
+  register_sortcheck_command(app);
   register_render_command(app);
   register_encode_command(app);
   register_run_command(app);

@@ -10,6 +10,7 @@ void register_devices_command(CLI::App& app);
 void register_scenes_command(CLI::App& app);
 void register_trace_command(CLI::App& app);
 void register_sortbench_command(CLI::App& app);
+void register_sortcheck_command(CLI::App& app);
 void register_render_command(CLI::App& app);
 void register_encode_command(CLI::App& app);
 void register_run_command(CLI::App& app);

@@ -268,10 +268,8 @@ Frame DevicePathTracer::trace_frame(const FrameOptions& opts) {
              shadow_batch = buf("shadow rays", ns * sizeof(RsRay)),
              shadow_batch_states = buf("shadow ray states", ns * sizeof(RsPathState)),
              shadow_hits = buf("shadow hits", ns * sizeof(RsHit));
-  cl_call("clearing the radiance", [&] {
-    rt_.queue().enqueueFillBuffer(radiance, 0.0f, 0, std::max<std::size_t>(16, 3 * n0 * sizeof(float)));
-    rt_.queue().enqueueFillBuffer(path_visits, 0u, 0, std::max<std::size_t>(16, n0 * 4));
-  });
+  rt_.zero("radiance", radiance, std::max<std::size_t>(16, 3 * n0 * sizeof(float)));
+  rt_.zero("path visits", path_visits, std::max<std::size_t>(16, n0 * 4));
 
   // A batch for the sink, read back from the device (only when someone listens).
   auto emit = [&](BatchKind kind, std::uint32_t bounce, std::size_t n, const cl::Buffer& r, const cl::Buffer& s,

@@ -228,12 +228,17 @@ DeviceInfo select_device(std::string spec) {
     for (auto& d : devices) s += fmt::format("\n  [{}] {} / {} ({})", d.index, d.platform_name, d.name, d.type);
     return s;
   };
+  // The first device of `type` ("" for any), real hardware before simulators and single-threaded ones.
+  auto first_of = [&](const std::string& type) -> const DeviceInfo* {
+    for (bool preferred : {true, false})
+      for (auto& d : devices)
+        if (d.is_preferred() == preferred && (type.empty() || d.type == type)) return &d;
+    return nullptr;
+  };
   if (spec.empty()) {
-    for (auto& d : devices)
-      if (d.type == "GPU") return d;
-    for (auto& d : devices)
-      if (d.type == "CPU") return d;
-    return devices.front();
+    for (const DeviceInfo* d : {first_of("GPU"), first_of("CPU")})
+      if (d && d->is_preferred()) return *d;
+    return *first_of("");
   }
   std::string ls = lower(spec);
   if (std::all_of(spec.begin(), spec.end(), [](char c) { return std::isdigit(static_cast<unsigned char>(c)); })) {
@@ -242,8 +247,7 @@ DeviceInfo select_device(std::string spec) {
     throw Error(fmt::format("--device {}: no device with that index; devices are:{}", spec, listing()));
   }
   if (ls == "gpu" || ls == "cpu") {
-    for (auto& d : devices)
-      if (lower(d.type) == ls) return d;
+    if (const DeviceInfo* d = first_of(ls == "gpu" ? "GPU" : "CPU")) return *d;
     throw Error(fmt::format("--device {}: no {} device; devices are:{}", spec, ls, listing()));
   }
   for (auto& d : devices)
@@ -282,6 +286,12 @@ std::string Runtime::build_options(const std::string& extra) const {
   std::string opts = "-cl-std=CL1.2";
   // Correctly rounded divide and sqrt: the kernels must give the host twin's bits (docs/design.md, "Determinism").
   if (info_.correctly_rounded_divide_sqrt) opts += " -cl-fp32-correctly-rounded-divide-sqrt";
+  // Oclgrind 21.10 interprets LLVM 14 IR but lacks intrinsics that LLVM 14's inliner emits
+  // (llvm.experimental.noalias.scope.decl when it inlines a function returning a struct): at -O2,
+  // or with the encoders' forced inlining (cl/keys.h), it cannot create the kernels. Unoptimised,
+  // un-inlined IR has none of them, and its diagnostics name source lines. The arithmetic is the
+  // same (FP_CONTRACT OFF either way), so are the bits.
+  if (info_.is_simulator()) opts += " -cl-opt-disable -DRS_NO_FORCED_INLINE";
   if (!extra.empty()) opts += " " + extra;
   // Options for every kernel build, e.g. -DRS_PORTABLE_MASK_BITS on an x86 OpenCL compiler that
   // lacks the target builtins cl/lanes.h uses there (docs/trace.md).
@@ -330,6 +340,17 @@ cl::Program Runtime::build_source(const std::string& source, const std::string& 
   }
   programs_.emplace(std::move(key), program);
   return program;
+}
+
+void Runtime::zero(const std::string& name, const cl::Buffer& b, std::size_t bytes) {
+  cl_call("clearing '" + name + "'", [&] {
+    if (!info_.is_simulator()) {
+      queue_.enqueueFillBuffer(b, cl_uchar(0), 0, bytes);
+      return;
+    }
+    const std::vector<unsigned char> zeros(bytes, 0);
+    queue_.enqueueWriteBuffer(b, CL_TRUE, 0, bytes, zeros.data());  // blocking: zeros is local
+  });
 }
 
 namespace {

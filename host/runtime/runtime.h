@@ -55,6 +55,13 @@ struct DeviceInfo {
   std::size_t max_work_group_size = 0;
   bool correctly_rounded_divide_sqrt = false;
   bool is_pocl() const { return platform_name.find("Portable Computing Language") != std::string::npos; }
+  // Oclgrind: an interpreter that checks every memory access, for correctness, never for speed.
+  // Its device type includes GPU and CPU, so it must be kept out of the default choice by name.
+  bool is_simulator() const { return platform_name.find("Oclgrind") != std::string::npos; }
+  // PoCL's `basic` device runs one work-item at a time on one core (its `pthread` device uses all).
+  bool is_single_threaded() const { return is_simulator() || (is_pocl() && name.rfind("basic", 0) == 0); }
+  // Real hardware at full speed: what the default and the "gpu" / "cpu" specs choose first.
+  bool is_preferred() const { return !is_single_threaded(); }
   // A short name for result folders: "pocl-cpu-amd-epyc-...".
   std::string slug() const;
 };
@@ -63,8 +70,10 @@ struct DeviceInfo {
 std::vector<DeviceInfo> list_devices();
 
 // The device named by spec: an index, "cpu", "gpu", or a case-insensitive substring of the device
-// or platform name. An empty spec reads RAYSORT_DEVICE, and without it picks the first GPU, else
-// the first CPU. Throws an Error listing the devices when nothing matches.
+// or platform name ("oclgrind", "basic", "pthread"). An empty spec reads RAYSORT_DEVICE, and without
+// it picks the first GPU, else the first CPU, skipping simulators (Oclgrind) and single-threaded
+// devices (PoCL basic) while any other device exists; "gpu" and "cpu" skip them the same way.
+// Throws an Error listing the devices when nothing matches.
 DeviceInfo select_device(std::string spec);
 
 // Reads kernels from DIR instead of the embedded copies (kernel development: --kernels DIR).
@@ -103,6 +112,11 @@ class Runtime {
   // A device buffer; the error for an allocation that fails names `name`, its size and the device.
   cl::Buffer buffer(const std::string& name, std::size_t bytes, cl_mem_flags flags = CL_MEM_READ_WRITE,
                     const void* host_data = nullptr);
+
+  // Sets the first `bytes` of b to zero (enqueued, not waited for). A fill, except on a simulator:
+  // Oclgrind 21.10's uninitialised-value check does not see clEnqueueFillBuffer and would report
+  // every later read, so there the zeros are written from the host.
+  void zero(const std::string& name, const cl::Buffer& b, std::size_t bytes);
 
   template <class T>
   cl::Buffer upload(const std::string& name, const std::vector<T>& v, cl_mem_flags flags = CL_MEM_READ_ONLY) {

@@ -1,0 +1,125 @@
+#!/usr/bin/env bash
+# Every kernel on Oclgrind, an independent OpenCL 1.2 implementation that interprets the kernels and
+# checks each memory access (issue 19, items 1-2). Runs, on tiny inputs, with Oclgrind's data-race,
+# API and uninitialised-value checks on (out-of-bounds accesses and barrier divergence are always
+# checked):
+#   trace        both variants (robust, fast), both layouts (wide, binary), closest and any hit
+#   encodebench  every encoder at 16, 32 and 64 bits (the *_k32 and *_k64 kernels; not HCC_DIR's
+#                two-pass encode_direction_* / encode_box_set_or_*, used only with --direction-bits > 1)
+#   render       generate, shade, the (fast, wide) counted closest hit, accumulate, compaction
+#   sortcheck    the radix sort in the shape Oclgrind gets (the GPU shape: local-memory tiles),
+#                a small GPU shape whose tiles are 256 keys, and the CPU shape, at
+#                N = 1, 255, 256, 257, 4097 and 32/64-bit keys, against the host twin
+# Every run must exit 0 (its results equal the host twins) and Oclgrind must report nothing.
+#
+# Oclgrind is registered for these runs only: OCL_ICD_VENDORS points the ICD loader at a temporary
+# folder with the system's .icd files plus one for Oclgrind; /etc/OpenCL/vendors is not touched.
+# It also checks that the default device (`raysort devices`) is not the simulator.
+#
+# usage: scripts/oclgrind-check.sh [RAYSORT_BINARY]     (default: build/raysort)
+# KERNELS=DIR checks the kernels in DIR/cl instead of the binary's embedded copies (raysort --kernels).
+# Exit 77 (ctest: skipped) when Oclgrind is not installed, except under CI=true (exit 1).
+# JOBS (default 2) runs as many cases at once; sortcheck runs one size per process (see docs/trace.md,
+# "Oclgrind": its uninitialised-value check misreports buffers created after others were released).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+RAYSORT="$(realpath "${1:-build/raysort}")"
+JOBS="${JOBS:-2}"
+
+icd_lib=""
+for f in "${OCLGRIND_ICD_LIB:-}" /usr/lib/oclgrind/liboclgrind-rt-icd.so \
+         /usr/lib/x86_64-linux-gnu/oclgrind/liboclgrind-rt-icd.so /usr/local/lib/liboclgrind-rt-icd.so; do
+  if [ -n "$f" ] && [ -f "$f" ]; then icd_lib="$f"; break; fi
+done
+if [ -z "$icd_lib" ]; then
+  msg="oclgrind-check: Oclgrind is not installed (Debian: oclgrind, scripts/install-deps.sh)"
+  if [ "${CI:-}" = "true" ]; then echo "$msg" >&2; exit 1; fi
+  echo "SKIPPED: $msg"
+  exit 77
+fi
+
+work="$(mktemp -d)"
+trap 'rm -rf "$work"' EXIT
+mkdir -p "$work/vendors" "$work/logs"
+cp /etc/OpenCL/vendors/*.icd "$work/vendors/" 2>/dev/null || true
+echo "$icd_lib" >"$work/vendors/oclgrind.icd"
+export OCL_ICD_VENDORS="$work/vendors"
+export RAYSORT_SCENE_ROOT="${RAYSORT_SCENE_ROOT:-$(cd .. && pwd)/shared/scenes}"
+
+# Item 5: with Oclgrind registered, the default device is still real hardware.
+"$RAYSORT" devices >"$work/devices.txt"
+if ! grep -q "Oclgrind" "$work/devices.txt"; then
+  echo "oclgrind-check: Oclgrind registered but not listed by raysort devices:" >&2
+  cat "$work/devices.txt" >&2
+  exit 1
+fi
+if grep "(default)" "$work/devices.txt" | grep -q "Oclgrind"; then
+  echo "oclgrind-check: the simulator is the default device" >&2
+  exit 1
+fi
+
+export OCLGRIND_DATA_RACES=1 OCLGRIND_CHECK_API=1 OCLGRIND_UNINITIALIZED=1
+DEV=(--device oclgrind)
+GLOBAL=()
+if [ -n "${KERNELS:-}" ]; then GLOBAL=(--kernels "$(realpath "$KERNELS")"); fi
+PROTO=(--reps 1 --warmup 0 --max-time 0)
+cases=(
+  "trace-wide|trace ${DEV[*]} --scene cornell --resolution 16x9 ${PROTO[*]} --variant both --layout wide"
+  "trace-binary|trace ${DEV[*]} --scene cornell --resolution 16x9 ${PROTO[*]} --variant both --layout binary"
+  "encode-all|encodebench ${DEV[*]} --scene cornell --resolution 16x9 ${PROTO[*]} --bits 16,32,64"
+  "render|render ${DEV[*]} --scene cornell --resolution 16x9 --spp 1 --out $work/render"
+)
+# Sort shapes: Oclgrind's own (its device type includes GPU: local-memory tiles of 128 x 8 keys),
+# a small GPU shape (32 x 8 = 256-key tiles: 255, 256, 257 sit on a tile boundary) and the CPU
+# shape (one work-item per tile, 8-bit digits, 4096-key tiles: 4097 is two tiles).
+shapes=("gpu|" "gpu-wg32|--work-group 32 --scan-work-group 32" "cpu|--work-group 1 --scan-work-group 1 --radix-bits 8")
+for s in "${shapes[@]}"; do
+  IFS='|' read -r shape opts <<<"$s"
+  for bits in 32 64; do
+    for n in 1 255 256 257 4097; do
+      cases+=("sort-$shape-k$bits-n$n|sortcheck ${DEV[*]} --sizes $n --bits $bits $opts")
+    done
+  done
+done
+
+# One case: its exit status and Oclgrind's diagnostics (every kernel-level report names the kernel
+# on a "Kernel:" line; API errors and fatal errors have their own headers).
+run_case() {
+  local name="$1" args="$2" log="$work/logs/$1.log" t0 rc=0
+  t0=$(date +%s%N)
+  # shellcheck disable=SC2086  # args is a word list
+  timeout 600 "$RAYSORT" "${GLOBAL[@]}" $args >"$log" 2>&1 || rc=$?
+  local ms=$((($(date +%s%N) - t0) / 1000000))
+  local reports
+  reports=$(grep -c -E "^[[:space:]]+Kernel: |Oclgrind - |OCLGRIND FATAL|^Oclgrind: " "$log" || true)
+  local verdict="clean"
+  if [ "$rc" -ne 0 ] || [ "$reports" -ne 0 ]; then verdict="FAILED (exit $rc, $reports Oclgrind reports)"; fi
+  printf '%s|%d.%d|%s\n' "$name" $((ms / 1000)) $((ms % 1000 / 100)) "$verdict" >"$work/logs/$name.result"
+}
+
+running=0
+for c in "${cases[@]}"; do
+  IFS='|' read -r name args <<<"$c"
+  run_case "$name" "$args" &
+  running=$((running + 1))
+  if [ "$running" -ge "$JOBS" ]; then wait -n; running=$((running - 1)); fi
+done
+wait
+
+fail=0
+printf '| case | seconds | Oclgrind checks |\n|---|---:|---|\n'
+for c in "${cases[@]}"; do
+  name="${c%%|*}"
+  IFS='|' read -r _ secs verdict <"$work/logs/$name.result"
+  printf '| %s | %s | %s |\n' "$name" "$secs" "$verdict"
+  if [ "$verdict" != "clean" ]; then
+    fail=1
+    echo "---- $name: first lines of its log" >&2
+    grep -m1 -B2 -A8 -E "^[[:space:]]+Kernel: |Oclgrind - |OCLGRIND FATAL|error" "$work/logs/$name.log" >&2 || tail -20 "$work/logs/$name.log" >&2
+  fi
+done
+if [ "$fail" -ne 0 ]; then
+  echo "oclgrind-check: FAILED" >&2
+  exit 1
+fi
+echo "oclgrind-check: every case ran on Oclgrind with its checks clean"
