@@ -589,6 +589,9 @@ TEST(SceneProvenance, FileDifferencesBetweenResultSets) {
   auto older = scene_file_differences(a, nlohmann::json::object());
   ASSERT_EQ(older.size(), 1u);
   EXPECT_NE(older[0].find("result set B records no scene file checksums"), std::string::npos) << older[0];
+  // A set of procedural scenes only records no files: an older set cannot differ from it.
+  EXPECT_TRUE(scene_file_differences(nlohmann::json{{"scene_files", nlohmann::json::object()}}, nlohmann::json::object())
+                  .empty());
   nlohmann::json bad = {{"scene_files", {{"s/a.obj", 3}, {"s/b.obj", {{"sha256", 7}}}}}};
   std::vector<std::string> lines;
   EXPECT_NO_THROW(lines = scene_file_differences(a, bad));

@@ -268,6 +268,8 @@ std::vector<std::string> scene_file_differences(const nlohmann::json& meta_a, co
   const nlohmann::json* a = recorded_files(meta_a);
   const nlohmann::json* b = recorded_files(meta_b);
   if (!a && !b) return {};
+  // One set recorded no files at all (procedural scenes only): nothing the other could differ in.
+  if ((!a && b->empty()) || (!b && a->empty())) return {};
   if (!a || !b)
     return {fmt::format("result set {} records no scene file checksums (made before raysort recorded them), so "
                         "whether both ran on the same scene files cannot be told",
