@@ -8,8 +8,9 @@
 namespace raysort {
 namespace {
 
-// A tiny GPU: `sms` SMs, an L1 of 4 lines and an L2 of 8 lines (both fully associative: one set),
-// 128-byte lines, so that a few wide nodes (128 bytes each, one line) fill them.
+// A tiny GPU: `sms` SMs, an L1 of 4 lines (fully associative) and an L2 of 8 lines' worth of
+// 32-byte sectors (4 sets of 8), 128-byte lines, so that a few wide nodes (128 bytes each, one
+// line, four sectors) fill them.
 GpuProfile tiny_gpu(unsigned sms) {
   return parse_gpu_profile(fmt::format(R"(name = "tiny"
 sms = {}
@@ -19,6 +20,7 @@ l1_ways = 4
 l2_bytes = 1024
 l2_ways = 8
 line_bytes = 128
+sector_bytes = 32
 dram_gbps = 1.0
 l2_gbps = 2.0
 clock_ghz = 1.0
@@ -67,7 +69,7 @@ TEST(GpuModel, WarpFetchingOneLineMakesOneRequestPerStep) {
   EXPECT_EQ(c.requests, 3u);  // 32 lanes on one line: one coalesced request per step
   EXPECT_EQ(c.l1_misses, 1u);
   EXPECT_EQ(c.l1_hits, 2u);
-  EXPECT_EQ(c.l2_misses, 1u);
+  EXPECT_EQ(c.l2_misses, 4u);  // the line's four sectors
   EXPECT_EQ(c.dram_bytes, 128u);
 }
 
@@ -119,13 +121,13 @@ TEST(GpuModel, WarmL2ServesAnotherSmsMisses) {
   warm.replay_wave(first);
   warm.replay_wave(second);
   EXPECT_EQ(warm.counts().l1_misses, 8u);
-  EXPECT_EQ(warm.counts().l2_misses, 4u);
-  EXPECT_EQ(warm.counts().l2_hits, 4u);
+  EXPECT_EQ(warm.counts().l2_misses, 16u);  // sectors
+  EXPECT_EQ(warm.counts().l2_hits, 16u);
   // Cold: SM 1 alone, every line from DRAM.
   GpuReplay cold(p, map);
   cold.replay_wave(second);
   EXPECT_EQ(cold.counts().l2_hits, 0u);
-  EXPECT_EQ(cold.counts().l2_misses, 4u);
+  EXPECT_EQ(cold.counts().l2_misses, 16u);
   EXPECT_EQ(cold.counts().dram_bytes, 4u * 128u);
 }
 
@@ -135,7 +137,7 @@ TEST(GpuModel, LeafStepsReadTheirPacketsAndRayLoadsCoalesce) {
   wide.packets.resize(8);
   const GpuAddressMap map(wide, 64);
   std::vector<std::uint64_t> lines;
-  map.step_lines(RS_WIDE_LEAF | (0u << 2) | 1u, 128, lines);  // packets 0-1: bytes 8192-8575
+  map.step_blocks(RS_WIDE_LEAF | (0u << 2) | 1u, 128, lines);  // packets 0-1: bytes 8192-8575
   EXPECT_EQ(lines, (std::vector<std::uint64_t>{64, 65, 66}));
   GpuReplay replay(p, map);
   WarpTrails w = warp_of({0});
@@ -150,7 +152,7 @@ TEST(GpuModel, PredictedTimeIsTheSlowerOfIssueAndMemory) {
   GpuCounts c;
   c.warps = c.replayed_warps = 1;
   c.warp_steps = 100;  // 1000 cycles = 1 us
-  c.l1_misses = 10, c.l2_misses = 10, c.dram_bytes = 1280;  // 1.28 us + 0.64 us
+  c.l1_misses = 10, c.l2_misses = 40, c.dram_bytes = 1280;  // 1.28 us + 40 sectors through L2: 0.64 us
   const GpuTime t = gpu_model_time(c, p);
   EXPECT_NEAR(t.issue_s, 1e-6, 1e-12);
   EXPECT_NEAR(t.memory_s, 1.92e-6, 1e-12);

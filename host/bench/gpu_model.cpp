@@ -21,8 +21,8 @@ constexpr std::uint64_t kEmptyLine = std::numeric_limits<std::uint64_t>::max();
 
 std::uint64_t align_up(std::uint64_t x, std::uint64_t a) { return (x + a - 1) / a * a; }
 
-// Appends the lines of the byte range [addr, addr + bytes).
-void range_lines(std::uint64_t addr, std::uint64_t bytes, unsigned line, std::vector<std::uint64_t>& out) {
+// Appends the blocks (lines or sectors) of the byte range [addr, addr + bytes).
+void range_blocks(std::uint64_t addr, std::uint64_t bytes, unsigned line, std::vector<std::uint64_t>& out) {
   for (std::uint64_t l = addr / line; l <= (addr + bytes - 1) / line; ++l) out.push_back(l);
 }
 
@@ -32,7 +32,7 @@ GpuProfile parse_gpu_profile(const std::string& text, const std::string& origin)
   const toml::table root = parse_toml_text(text, origin);
   TomlTable t(origin, root, "",
               {"name", "description", "sms", "resident_warps_per_sm", "l1_bytes", "l1_ways", "l2_bytes", "l2_ways",
-               "line_bytes", "dram_gbps", "l2_gbps", "clock_ghz", "step_cycles"});
+               "line_bytes", "sector_bytes", "dram_gbps", "l2_gbps", "clock_ghz", "step_cycles"});
   GpuProfile p;
   p.origin = origin;
   p.name = t.string("name");
@@ -41,6 +41,7 @@ GpuProfile parse_gpu_profile(const std::string& text, const std::string& origin)
   p.sms = static_cast<unsigned>(t.integer("sms", 0, 1, 4096));
   p.resident_warps_per_sm = static_cast<unsigned>(t.integer("resident_warps_per_sm", 0, 1, 256));
   p.line_bytes = static_cast<unsigned>(t.integer("line_bytes", 0, 16, 4096));
+  p.sector_bytes = static_cast<unsigned>(t.integer("sector_bytes", p.line_bytes, 4, p.line_bytes));
   p.l1_ways = static_cast<unsigned>(t.integer("l1_ways", 0, 1, 64));
   p.l2_ways = static_cast<unsigned>(t.integer("l2_ways", 0, 1, 64));
   p.l1_bytes = t.integer("l1_bytes", 0, p.line_bytes * p.l1_ways, kBig);
@@ -50,6 +51,7 @@ GpuProfile parse_gpu_profile(const std::string& text, const std::string& origin)
   p.clock_ghz = t.number("clock_ghz");
   p.step_cycles = t.number("step_cycles");
   if (p.line_bytes & (p.line_bytes - 1)) t.fail("line_bytes", "must be a power of two");
+  if (p.line_bytes % p.sector_bytes) t.fail("sector_bytes", "must divide line_bytes");
   for (auto [key, v] : {std::pair<const char*, double>{"dram_gbps", p.dram_gbps}, {"l2_gbps", p.l2_gbps},
                         {"clock_ghz", p.clock_ghz}, {"step_cycles", p.step_cycles}})
     if (!(v > 0)) t.fail(key, "must be a positive number");
@@ -101,7 +103,7 @@ GpuTime gpu_model_time(const GpuCounts& c, const GpuProfile& p) {
   // A sampled replay stands for all warps in proportion (docs/gpu-model.md, "Cost").
   const double scale = static_cast<double>(c.warps) / static_cast<double>(c.replayed_warps);
   t.issue_s = static_cast<double>(c.warp_steps) * scale * p.step_cycles / (p.sms * p.clock_ghz * 1e9);
-  const double l2_bytes = static_cast<double>(c.l1_misses) * p.line_bytes;
+  const double l2_bytes = static_cast<double>(c.l2_hits + c.l2_misses) * p.sector_bytes;
   t.memory_s = scale * (static_cast<double>(c.dram_bytes) / (p.dram_gbps * 1e9) + l2_bytes / (p.l2_gbps * 1e9));
   t.total_s = std::max(t.issue_s, t.memory_s);
   return t;
@@ -119,59 +121,67 @@ GpuAddressMap::GpuAddressMap(const Bvh& binary, std::size_t rays) : binary_(bina
   ray_base_ = prim_base_ + align_up(binary.triangles.size() * sizeof(RsTriangle), 4096);
 }
 
-void GpuAddressMap::step_lines(std::uint32_t ref, unsigned line, std::vector<std::uint64_t>& out) const {
+void GpuAddressMap::step_blocks(std::uint32_t ref, unsigned line, std::vector<std::uint64_t>& out) const {
   if (!binary_) {
-    if (!(ref & RS_WIDE_LEAF)) return range_lines(node_base_ + std::uint64_t{ref} * sizeof(RsWideNode), sizeof(RsWideNode), line, out);
+    if (!(ref & RS_WIDE_LEAF)) return range_blocks(node_base_ + std::uint64_t{ref} * sizeof(RsWideNode), sizeof(RsWideNode), line, out);
     // An any-hit ray may stop before the leaf's last packet; the model reads them all.
     const std::uint64_t first = (ref & ~RS_WIDE_LEAF) >> 2, count = (ref & 3u) + 1u;
-    return range_lines(prim_base_ + first * sizeof(RsTriPacket), count * sizeof(RsTriPacket), line, out);
+    return range_blocks(prim_base_ + first * sizeof(RsTriPacket), count * sizeof(RsTriPacket), line, out);
   }
   const RsBvhNode& n = binary_[ref];
-  range_lines(node_base_ + std::uint64_t{ref} * sizeof(RsBvhNode), sizeof(RsBvhNode), line, out);
+  range_blocks(node_base_ + std::uint64_t{ref} * sizeof(RsBvhNode), sizeof(RsBvhNode), line, out);
   if (n.count == 0)
-    range_lines(node_base_ + std::uint64_t{n.first} * sizeof(RsBvhNode), 2 * sizeof(RsBvhNode), line, out);
+    range_blocks(node_base_ + std::uint64_t{n.first} * sizeof(RsBvhNode), 2 * sizeof(RsBvhNode), line, out);
   else
-    range_lines(prim_base_ + std::uint64_t{n.first} * sizeof(RsTriangle), std::uint64_t{n.count} * sizeof(RsTriangle),
+    range_blocks(prim_base_ + std::uint64_t{n.first} * sizeof(RsTriangle), std::uint64_t{n.count} * sizeof(RsTriangle),
                 line, out);
 }
 
-void GpuAddressMap::ray_lines(std::uint32_t ray, unsigned line, std::vector<std::uint64_t>& out) const {
-  range_lines(ray_base_ + std::uint64_t{ray} * sizeof(RsRay), sizeof(RsRay), line, out);
+void GpuAddressMap::ray_blocks(std::uint32_t ray, unsigned line, std::vector<std::uint64_t>& out) const {
+  range_blocks(ray_base_ + std::uint64_t{ray} * sizeof(RsRay), sizeof(RsRay), line, out);
 }
 
 GpuReplay::GpuReplay(const GpuProfile& profile, const GpuAddressMap& map)
     : profile_(profile),
       map_(map),
       l1_(profile.sms, LruCache(profile.l1_bytes, profile.line_bytes, profile.l1_ways)),
-      l2_(profile.l2_bytes, profile.line_bytes, profile.l2_ways) {}
+      l2_(profile.l2_bytes, profile.sector_bytes, profile.l2_ways) {}
 
 void GpuReplay::warp_step(unsigned sm, const WarpTrails& warp, std::size_t step) {
-  lines_.clear();
+  sectors_.clear();
   std::uint64_t active = 0;
+  const unsigned sector = profile_.sector_bytes, per_line = profile_.line_bytes / sector;
   for (std::size_t l = 0; l < warp.lanes.size(); ++l) {
-    if (step == 0 && l < warp.rays.size()) map_.ray_lines(warp.rays[l], profile_.line_bytes, lines_);
+    if (step == 0 && l < warp.rays.size()) map_.ray_blocks(warp.rays[l], sector, sectors_);
     if (step >= warp.lanes[l].size()) continue;
     ++active;
-    map_.step_lines(warp.lanes[l][step], profile_.line_bytes, lines_);
+    map_.step_blocks(warp.lanes[l][step], sector, sectors_);
   }
-  // Lanes of one load instruction that read the same line are served by one request (coalescing).
-  std::sort(lines_.begin(), lines_.end());
-  lines_.erase(std::unique(lines_.begin(), lines_.end()), lines_.end());
+  // Lanes of one load instruction that read the same line are served by one request (coalescing);
+  // an L1 miss fetches from L2 only the sectors of that line the lanes read (as NVIDIA's L1/L2 do).
+  std::sort(sectors_.begin(), sectors_.end());
+  sectors_.erase(std::unique(sectors_.begin(), sectors_.end()), sectors_.end());
   ++counts_.warp_steps;
   counts_.idle_lanes += warp.lanes.size() - active;
-  counts_.requests += lines_.size();
-  for (std::uint64_t line : lines_) {
+  for (std::size_t i = 0; i < sectors_.size();) {
+    const std::uint64_t line = sectors_[i] / per_line;
+    std::size_t end = i;
+    while (end < sectors_.size() && sectors_[end] / per_line == line) ++end;
+    ++counts_.requests;
     if (l1_[sm].access(line)) {
       ++counts_.l1_hits;
-      continue;
-    }
-    ++counts_.l1_misses;
-    if (l2_.access(line)) {
-      ++counts_.l2_hits;
     } else {
-      ++counts_.l2_misses;
-      counts_.dram_bytes += profile_.line_bytes;
+      ++counts_.l1_misses;
+      for (std::size_t k = i; k < end; ++k) {
+        if (l2_.access(sectors_[k])) {
+          ++counts_.l2_hits;
+        } else {
+          ++counts_.l2_misses;
+          counts_.dram_bytes += sector;
+        }
+      }
     }
+    i = end;
   }
 }
 

@@ -21,6 +21,7 @@ struct GpuProfile {
   unsigned resident_warps_per_sm = 0;  // modelled occupancy: the warps interleaved on one SM
   std::uint64_t l1_bytes = 0, l2_bytes = 0;
   unsigned l1_ways = 0, l2_ways = 0, line_bytes = 0;
+  unsigned sector_bytes = 0;  // the L2's and DRAM's unit: a line's sectors are filled one by one
   double dram_gbps = 0, l2_gbps = 0, clock_ghz = 0;
   double step_cycles = 0;  // SM cycles per issued warp step (the fitted constant)
 };
@@ -31,7 +32,8 @@ GpuProfile parse_gpu_profile(const std::string& text, const std::string& origin)
 GpuProfile load_gpu_profile(const std::string& name_or_path);
 std::vector<std::string> gpu_profile_names();
 
-// A set-associative cache with LRU replacement over line indices (address / line size).
+// A set-associative cache with LRU replacement over line indices (address / line size; the L2
+// model passes sector indices: its unit is the sector).
 class LruCache {
  public:
   LruCache(std::uint64_t bytes, unsigned line_bytes, unsigned ways);
@@ -46,16 +48,17 @@ struct GpuCounts {
   std::uint64_t warp_steps = 0;  // issued warp steps (Σ over warps of its longest trail)
   std::uint64_t idle_lanes = 0;  // lane-steps issued without work (lanes whose trail has ended)
   std::uint64_t requests = 0;    // distinct lines a warp step reads (coalesced), = L1 accesses
-  std::uint64_t l1_hits = 0, l1_misses = 0, l2_hits = 0, l2_misses = 0;
-  std::uint64_t dram_bytes = 0;  // l2_misses × line size
+  std::uint64_t l1_hits = 0, l1_misses = 0;  // lines
+  std::uint64_t l2_hits = 0, l2_misses = 0;  // sectors: those of an L1-missed line the lanes read
+  std::uint64_t dram_bytes = 0;  // l2_misses × sector size
   std::uint64_t warps = 0, replayed_warps = 0;  // all warps; those replayed (sampling)
 };
 
 struct GpuTime {
   double issue_s = 0, memory_s = 0, total_s = 0;
 };
-// issue = warp_steps · step_cycles / (sms · clock); memory = dram_bytes / dram_bw + L1-miss bytes /
-// l2_bw; total = max(issue, memory). Counts of a sampled replay are scaled by warps / replayed.
+// issue = warp_steps · step_cycles / (sms · clock); memory = dram_bytes / dram_bw + L2 sector
+// accesses · sector / l2_bw; total = max(issue, memory). Counts of a sampled replay are scaled by warps / replayed.
 GpuTime gpu_model_time(const GpuCounts& c, const GpuProfile& p);
 
 // Where the kernel's buffers lie: nodes, then leaf primitives, then rays, each 4 KB aligned.
@@ -66,10 +69,10 @@ class GpuAddressMap {
  public:
   GpuAddressMap(const WideBvh& wide, std::size_t rays);
   GpuAddressMap(const Bvh& binary, std::size_t rays);
-  // Appends the lines (indices) step reference `ref` reads.
-  void step_lines(std::uint32_t ref, unsigned line_bytes, std::vector<std::uint64_t>& out) const;
-  // Appends the lines the load of ray `ray` reads.
-  void ray_lines(std::uint32_t ray, unsigned line_bytes, std::vector<std::uint64_t>& out) const;
+  // Appends the blocks (address / block_bytes: lines or sectors) step reference `ref` reads.
+  void step_blocks(std::uint32_t ref, unsigned block_bytes, std::vector<std::uint64_t>& out) const;
+  // Appends the blocks the load of ray `ray` reads.
+  void ray_blocks(std::uint32_t ray, unsigned block_bytes, std::vector<std::uint64_t>& out) const;
 
  private:
   const RsBvhNode* binary_ = nullptr;  // null on the wide layout
@@ -100,7 +103,7 @@ class GpuReplay {
   std::vector<LruCache> l1_;
   LruCache l2_;
   GpuCounts counts_;
-  std::vector<std::uint64_t> lines_;
+  std::vector<std::uint64_t> sectors_;
 };
 
 }  // namespace raysort
