@@ -20,6 +20,7 @@ import sys
 import tomllib
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+COMBINE = "sum"  # bench/gpu_model.cpp's issue + memory; --combine max shows the roofline alternative
 GRID = [round(2 ** (i / 8), 4) for i in range(0, 8 * 11)]  # 1 .. ~1900 cycles per step
 
 
@@ -38,7 +39,7 @@ def model_time(r, p, k):
     issue = float(r["gpu_warp_steps"]) * k / (p["sms"] * p["clock_ghz"] * 1e9)
     l2_sectors = float(r["gpu_l2_hits"]) + float(r["gpu_l2_misses"])
     memory = float(r["gpu_dram_bytes"]) / (p["dram_gbps"] * 1e9) + l2_sectors * p["sector_bytes"] / (p["l2_gbps"] * 1e9)
-    return scale * max(issue, memory)
+    return scale * (max(issue, memory) if COMBINE == "max" else issue + memory)
 
 
 def pearson(x, y):
@@ -150,6 +151,9 @@ def table_report(title, rows, prof):
              stats_row("SIMT lane-efficiency ratio, leave-one-scene-out linear calibration", loso_pred["lane_cal"], truth),
              stats_row("SIMT 1 / distinct-nodes ratio, leave-one-scene-out linear calibration", loso_pred["dist_cal"], truth),
              stats_row("PoCL gather speedup (this machine's CPU)", [pocl(r) for r in rows], truth),
+             "", "Leave-one-scene-out, per held-out scene: MAE " + ", ".join(
+                 f"{s} {mae([q for q, r in zip(loso_pred['model'], rows) if r['scene'] == s], [r['paper'] for r in rows if r['scene'] == s]):.3f}"
+                 for s in sorted(ks)),
              "", "Leave-one-scene-out step_cycles per held-out scene: " +
              ", ".join(f"{s} {k:g}" for s, k in ks.items()), ""]
     return lines, loso_pred["model"], k_all
@@ -187,7 +191,11 @@ def main():
     ap.add_argument("--out", required=True)
     ap.add_argument("--profile", default=os.path.join(ROOT, "gpu/profiles/rtx3060.toml"))
     ap.add_argument("--paper", default=os.path.join(ROOT, "results/gpu-model/paper_tables.csv"))
+    ap.add_argument("--combine", choices=("max", "sum"), default="sum",
+                    help="issue and memory time: sum (the model's, default) or max (a roofline, a sensitivity check)")
     a = ap.parse_args()
+    global COMBINE
+    COMBINE = a.combine
     with open(a.profile, "rb") as f:
         prof = tomllib.load(f)
     with open(a.paper, newline="") as f:
@@ -219,11 +227,11 @@ def main():
         series.append((f"Table {table}", colour, [(r["paper"], q) for r, q in zip(rows, pred)]))
         for r, q in zip(rows, pred):
             per_cell.append([table, r["scene"], r["encoder"], r["bits"], r["paper"], round(q, 4),
-                             r["cell"]["gpu_model_speedup"], r["cell"]["simt_lane_efficiency_ratio"],
+                             round(predict([r], prof, prof["step_cycles"])[0], 4), r["cell"]["simt_lane_efficiency_ratio"],
                              r["cell"]["simt_distinct_per_visit_ratio"], r["cell"]["speedup"]])
     with open(os.path.join(a.out, "cells.csv"), "w", newline="") as f:
         w = csv.writer(f)
-        w.writerow(["table", "scene", "encoder", "bits", "paper_speedup", "predicted_loso", "gpu_model_speedup",
+        w.writerow(["table", "scene", "encoder", "bits", "paper_speedup", "predicted_loso", "predicted_profile",
                     "simt_lane_efficiency_ratio", "simt_distinct_per_visit_ratio", "pocl_gather_speedup"])
         w.writerows(per_cell)
     svg_scatter(os.path.join(a.out, "scatter.svg"), series)

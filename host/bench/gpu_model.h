@@ -2,7 +2,7 @@
 // A GPU cost model on top of the SIMT model (issue 20, docs/gpu-model.md): the traversal trails of
 // each warp are replayed step by step through a per-SM L1 and a shared L2 (set-associative, LRU)
 // over the byte addresses of the BVH layout the kernel reads, and the counts give a predicted
-// trace time: max(issue time, memory time). Deterministic: integers from the host traversal twins.
+// trace time: issue time + memory time. Deterministic: integers from the host traversal twins.
 #include <cstdint>
 #include <span>
 #include <string>
@@ -58,7 +58,7 @@ struct GpuTime {
   double issue_s = 0, memory_s = 0, total_s = 0;
 };
 // issue = warp_steps · step_cycles / (sms · clock); memory = dram_bytes / dram_bw + L2 sector
-// accesses · sector / l2_bw; total = max(issue, memory). Counts of a sampled replay are scaled by warps / replayed.
+// accesses · sector / l2_bw; total = issue + memory. Counts of a sampled replay are scaled by warps / replayed.
 GpuTime gpu_model_time(const GpuCounts& c, const GpuProfile& p);
 
 // Where the kernel's buffers lie: nodes, then leaf primitives, then rays, each 4 KB aligned.
