@@ -152,14 +152,18 @@ GpuReplay::GpuReplay(const GpuProfile& profile, const GpuAddressMap& map)
 
 void GpuReplay::warp_step(unsigned sm, const WarpTrails& warp, std::size_t step) {
   sectors_.clear();
-  std::uint64_t active = 0;
+  refs_.clear();
   const unsigned sector = profile_.sector_bytes, per_line = profile_.line_bytes / sector;
   for (std::size_t l = 0; l < warp.lanes.size(); ++l) {
     if (step == 0 && l < warp.rays.size()) map_.ray_blocks(warp.rays[l], sector, sectors_);
-    if (step >= warp.lanes[l].size()) continue;
-    ++active;
-    map_.step_blocks(warp.lanes[l][step], sector, sectors_);
+    if (step < warp.lanes[l].size()) refs_.push_back(warp.lanes[l][step]);
   }
+  const std::uint64_t active = refs_.size();
+  // Lanes of a coherent warp share most references: expanding each distinct one once keeps the
+  // sector list short (the replay's cost is mostly this list; docs/gpu-model.md, "Cost").
+  std::sort(refs_.begin(), refs_.end());
+  refs_.erase(std::unique(refs_.begin(), refs_.end()), refs_.end());
+  for (std::uint32_t ref : refs_) map_.step_blocks(ref, sector, sectors_);
   // Lanes of one load instruction that read the same line are served by one request (coalescing);
   // an L1 miss fetches from L2 only the sectors of that line the lanes read (as NVIDIA's L1/L2 do).
   std::sort(sectors_.begin(), sectors_.end());

@@ -104,6 +104,7 @@ class GpuReplay {
   LruCache l2_;
   GpuCounts counts_;
   std::vector<std::uint64_t> sectors_;
+  std::vector<std::uint32_t> refs_;
 };
 
 }  // namespace raysort
