@@ -51,6 +51,7 @@ TEST(Cli, UnknownNamesListTheValidOnes) {
   expect_refused({"run", "--scenes", "nope"}, {"unknown scene 'nope'", "cornell", "landscape"});
   expect_refused({"run", "--scenes", "cornell", "--batches", "nope"}, {"unknown batch 'nope'", "primary", "shadow<k>"});
   expect_refused({"run", "--preset", "nope"}, {"unknown preset 'nope'", "quick", "paper"});
+  expect_refused({"run", "--scenes", "cornell", "--gpu-model", "nope"}, {"unknown GPU profile 'nope'", "rtx3060", "h100"});
   expect_refused({"run", "--scenes", "/nonexistent/x.obj"}, {"OBJ file not found: /nonexistent/x.obj"});
   expect_refused({"run", "--scenes", "/tmp"}, {"'/tmp' is a directory"});
   expect_refused({"trace", "--scene", "nope"}, {"unknown scene 'nope'", "cornell"});

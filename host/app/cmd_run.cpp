@@ -3,6 +3,7 @@
 
 #include "app/commands.h"
 #include "app/options.h"
+#include "bench/gpu_model.h"
 #include "bench/result_set.h"
 #include "bench/runner.h"
 #include "bench/shard.h"
@@ -17,7 +18,7 @@ struct RunArgs {
   std::vector<std::string> scenes, batches, encoders;
   std::vector<unsigned> bits, top_bits;
   CommonOptions common;  // --device, --scene-root, --resolution, --spp, --seed
-  std::string variant, access, baseline, layout;
+  std::string variant, access, baseline, layout, gpu_model;
   unsigned reps = 0, warmup = 0;
   double max_noise_pct = 0, max_time_s = 0;
   bool warmup_set = false;
@@ -58,6 +59,10 @@ MatrixSpec matrix_from(const RunArgs& a, const CLI::App& cmd) {
   if (!a.access.empty()) spec.accesses = parse_ray_accesses(a.access);
   if (!a.baseline.empty()) spec.baselines = parse_baseline_orders(a.baseline);
   if (!a.layout.empty()) spec.layout = parse_trace_layout(a.layout);
+  if (!a.gpu_model.empty()) {
+    (void)load_gpu_profile(a.gpu_model);  // an unknown name or a bad file fails here, before any cell
+    spec.gpu_model = a.gpu_model;
+  }
   if (cmd.count("--reps")) spec.reps = a.reps;
   if (a.warmup_set) spec.warmup = a.warmup;
   if (cmd.count("--max-noise")) spec.max_noise = a.max_noise_pct / 100.0;
@@ -101,6 +106,10 @@ void register_run_command(CLI::App& app) {
   cmd->add_option("--layout", a->layout,
                   "BVH the trace kernels and the SIMT model walk: wide (4-wide, default) or binary; recorded in every "
                   "cell and in meta.json");
+  cmd->add_option("--gpu-model", a->gpu_model,
+                  "also replay every cell's traversal through a GPU's caches and predict its speedup (docs/gpu-model.md): "
+                  "a profile in gpu/profiles/ (rtx3060, h100, h200) or a .toml path; off by default (it adds the replay's "
+                  "time to each cell's SIMT model)");
   cmd->add_option("--lambda", a->lambda, "HAD lambda (paper Eq. 1; default 0.125)");
   cmd->add_option("--twopoint-length", a->twopoint, "TwoPoint ray length as a fraction of the largest extent (0.25)");
   cmd->add_option("--direction-bits", a->direction_bits, "HCC_DIR direction bits");

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <limits>
 #include <numeric>
 
 namespace raysort {
@@ -14,6 +15,20 @@ std::vector<std::uint32_t> identity_order(std::uint32_t n) {
   std::vector<std::uint32_t> order(n);
   std::iota(order.begin(), order.end(), 0u);
   return order;
+}
+
+// The GPU cost model's figures of a cell (bench/gpu_model.h): its counts, predicted time and the
+// predicted speedup over the NoSort order of the same batch.
+CellRecord::GpuModelFigures gpu_figures(const GpuProfile& p, const GpuCounts& cell, const GpuCounts& nosort) {
+  CellRecord::GpuModelFigures g;
+  g.profile = p.name;
+  g.time_us = gpu_model_time(cell, p).total_s * 1e6;
+  const double base_us = gpu_model_time(nosort, p).total_s * 1e6;
+  g.speedup = g.time_us > 0 ? base_us / g.time_us : std::numeric_limits<double>::quiet_NaN();
+  g.warp_steps = cell.warp_steps, g.idle_lanes = cell.idle_lanes, g.l1_hits = cell.l1_hits;
+  g.l1_misses = cell.l1_misses, g.l2_hits = cell.l2_hits, g.l2_misses = cell.l2_misses;
+  g.dram_bytes = cell.dram_bytes, g.warps = cell.warps, g.replayed_warps = cell.replayed_warps;
+  return g;
 }
 
 Estimate scaled(Estimate e, double factor) {
@@ -56,7 +71,8 @@ BatchBench::BatchBench(const Stages& stages, const Bvh& bvh, const RayBatch& bat
   } catch (const Error& err) {
     setup_error_ = err.what();
   }
-  nosort_simt_ = simt_model(bvh_, batch_.rays, nullptr, batch_.any_hit(), s_.tracer.variant(), s_.tracer.layout());
+  nosort_simt_ = simt_model(bvh_, batch_.rays, nullptr, batch_.any_hit(), s_.tracer.variant(), s_.tracer.layout(),
+                            s_.gpu, &nosort_gpu_);
 }
 
 cl::Event BatchBench::trace(const cl::Buffer& rays, const cl::Buffer& order, const cl::Buffer& hits) {
@@ -93,6 +109,7 @@ CellRecord BatchBench::measure_nosort(CellRecord c, const ProtocolSettings& sett
   c.simt_lane_efficiency = nosort_simt_.lane_efficiency;
   c.simt_distinct_per_visit = nosort_simt_.distinct_nodes_per_visit;
   c.simt_lane_efficiency_ratio = c.simt_distinct_per_visit_ratio = 1.0;
+  if (s_.gpu) c.gpu = gpu_figures(*s_.gpu, nosort_gpu_, nosort_gpu_);
   c.hits_match_nosort = setup_error_.empty();
   if (!setup_error_.empty()) {
     c.status = "failed";
@@ -175,7 +192,7 @@ BatchBench::SortedOrder BatchBench::check_order(const cl::Buffer& keys, unsigned
     for (auto& k : sorted_keys) k >>= (bits - top);
   so.anc = average_number_of_codes(sorted_keys);
   if (so.permutation) so.simt = simt_model(bvh_, batch_.rays, so.order.data(), batch_.any_hit(), s_.tracer.variant(),
-                                         s_.tracer.layout());
+                                         s_.tracer.layout(), s_.gpu, &so.gpu);
   return so;
 }
 
@@ -212,6 +229,7 @@ void BatchBench::fill_sorted_cell(CellRecord& c, const Outcome& o, const SortedO
   c.simt_distinct_per_visit_ratio = nosort_simt_.distinct_nodes_per_visit > 0
                                         ? so.simt.distinct_nodes_per_visit / nosort_simt_.distinct_nodes_per_visit
                                         : 0;
+  if (s_.gpu && so.permutation) c.gpu = gpu_figures(*s_.gpu, so.gpu, nosort_gpu_);
 }
 
 std::vector<CellRecord> BatchBench::measure_sorted(std::vector<CellRecord> cells, Encoder encoder,

@@ -40,6 +40,7 @@ class BatchBench {
     RadixSort& sorter;
     RayPermuter& permuter;
     Tracer& tracer;
+    const GpuProfile* gpu = nullptr;  // the GPU cost model's profile; null: off
   };
   // Uploads the batch, traces it once in generation order (untimed) and checks those hits against
   // `reference` (the host traversal of the same variant). A device fault or a mismatch does not
@@ -75,6 +76,7 @@ class BatchBench {
     bool permutation = false, identity = false;
     double anc = 0.0;
     SimtModel simt;
+    GpuCounts gpu;
   };
   SortedOrder check_order(const cl::Buffer& keys, unsigned bits, unsigned top);
   // The figures of a checked cell from its rounds.
@@ -88,6 +90,7 @@ class BatchBench {
   cl::Buffer rays_, identity_, values_, keys32_, keys64_, nosort_hits_, gather_hits_, permute_hits_, permuted_;
   std::vector<RsHit> nosort_hits_host_;
   SimtModel nosort_simt_;
+  GpuCounts nosort_gpu_;
 };
 
 }  // namespace raysort

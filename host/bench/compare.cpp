@@ -127,7 +127,12 @@ FailRule FailRule::parse(const std::string& text) {
   // METRIC, blanks, one of <- >+ != ==, blanks, the rest (trimmed). Scanned by hand (see rule_number).
   auto blank = [](char c) { return c == ' ' || c == '\t'; };
   std::size_t i = 0;
-  while (i < text.size() && ((text[i] >= 'a' && text[i] <= 'z') || text[i] == '_')) ++i;
+  // Digits after the first character: the GPU model's columns (gpu_l1_hits, gpu_l2_misses).
+  auto name_char = [&](std::size_t k) {
+    const char c = text[k];
+    return (c >= 'a' && c <= 'z') || c == '_' || (k > 0 && c >= '0' && c <= '9');
+  };
+  while (i < text.size() && name_char(i)) ++i;
   r.metric = text.substr(0, i);
   while (i < text.size() && blank(text[i])) ++i;
   const std::string op = text.substr(i, 2);

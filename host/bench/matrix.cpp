@@ -27,7 +27,7 @@ std::string joined(const std::vector<T>& items, Name name) {
 
 nlohmann::json MatrixSpec::to_json() const {
   // The spelling of format version 2's meta.json: a set resumes only under an equal entry.
-  return {{"preset", preset},
+  nlohmann::json j = {{"preset", preset},
           {"scenes", scenes},
           {"batches", batches},
           {"encoders", [&] {
@@ -53,6 +53,9 @@ nlohmann::json MatrixSpec::to_json() const {
           {"twopoint_length_fraction", params.twopoint_length_fraction},
           {"had_lambda", params.had_lambda},
           {"direction_bits", params.direction_bits}};
+  // Only when on, so a set without the model keeps the entry it was written with (and resumes).
+  if (!gpu_model.empty()) j["gpu_model"] = gpu_model;
+  return j;
 }
 
 ProtocolSettings MatrixSpec::protocol(const std::string& cell_id) const {

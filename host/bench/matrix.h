@@ -38,6 +38,9 @@ struct MatrixSpec {
   // The BVH layout the trace kernels and the SIMT model walk: one per run (it is how the device
   // traces, not a property of a cell); every cell records it.
   TraceLayout layout = TraceLayout::Wide;
+  // The GPU cost model's profile (bench/gpu_model.h: a name in gpu/profiles/ or a .toml path);
+  // empty: the model is off.
+  std::string gpu_model;
   EncoderParams params;
 
   // The measurement protocol of every cell (bench/protocol.h): warm-up rounds, the fewest timed

@@ -1,6 +1,7 @@
 #include "bench/metrics.h"
 
 #include <algorithm>
+#include <optional>
 #include <thread>
 
 #include "traverse_binary.h"
@@ -73,10 +74,58 @@ SimtModel simt_model_from_trails(const std::vector<std::vector<std::uint32_t>>& 
   return finish(t);
 }
 
+namespace {
+
+// Records the trails of warps [first, first + slots.size()) (rays in trace order) into `slots`,
+// warp by warp on host threads, and adds their SIMT tallies to `partial` (one per thread).
+struct TrailRecorder {
+  const Bvh& bvh;
+  const WideBvh& wide;
+  const std::vector<RsRay>& rays;
+  const std::uint32_t* order;
+  int robust, any;
+  bool wide_layout;
+  rs_u32 cap;
+
+  void record(std::size_t first_warp, std::span<WarpTrails> slots, std::vector<WarpTally>& partial) const {
+    const auto threads = static_cast<unsigned>(partial.size());
+    auto work = [&](unsigned tid) {
+      std::vector<std::uint32_t> buffer(cap), scratch_ids;
+      std::vector<const std::vector<std::uint32_t>*> lanes;
+      for (std::size_t k = tid; k < slots.size(); k += threads) {
+        WarpTrails& w = slots[k];
+        const std::size_t first_ray = (first_warp + k) * kWarpSize;
+        // Resized, not cleared: the lanes keep their capacity from wave to wave.
+        w.lanes.resize(std::min(kWarpSize, rays.size() - first_ray));
+        w.rays.clear();
+        lanes.clear();
+        for (std::size_t l = 0; l < w.lanes.size(); ++l) {
+          const std::size_t i = first_ray + l;
+          const std::uint32_t ray_index = order ? order[i] : static_cast<std::uint32_t>(i);
+          rs_u32 len = 0;
+          if (wide_layout)
+            rs_traverse_wide_recorded(wide.nodes.data(), wide.packets.data(), rays[ray_index], robust, any, nullptr,
+                                      buffer.data(), cap, &len);
+          else
+            rs_traverse_variant_recorded(bvh.nodes.data(), bvh.triangles.data(), rays[ray_index], robust, any, nullptr,
+                                         buffer.data(), cap, &len);
+          w.lanes[l].assign(buffer.begin(), buffer.begin() + std::min(len, cap));
+          w.rays.push_back(ray_index);
+        }
+        for (const auto& lane : w.lanes) lanes.push_back(&lane);
+        tally_warp(lanes, scratch_ids, partial[tid]);
+      }
+    };
+    std::vector<std::thread> pool;
+    for (unsigned t = 0; t < threads; ++t) pool.emplace_back(work, t);
+    for (auto& th : pool) th.join();
+  }
+};
+
+}  // namespace
+
 SimtModel simt_model(const Bvh& bvh, const std::vector<RsRay>& rays, const std::uint32_t* order, bool any_hit,
-                     TraceVariant variant, TraceLayout layout) {
-  const int robust = variant == TraceVariant::Robust ? 1 : 0;
-  const int any = any_hit ? 1 : 0;
+                     TraceVariant variant, TraceLayout layout, const GpuProfile* gpu, GpuCounts* gpu_counts) {
   WideBvh scratch;
   const bool wide_layout = layout == TraceLayout::Wide;
   const WideBvh& wide = wide_layout ? wide_of(bvh, scratch) : scratch;
@@ -88,35 +137,30 @@ SimtModel simt_model(const Bvh& bvh, const std::vector<RsRay>& rays, const std::
   // leaf children); longer trails could only be truncated in the union, never in the step count.
   const std::size_t most_steps = wide_layout ? wide.nodes.size() * 5 : bvh.nodes.size();
   const rs_u32 cap = static_cast<rs_u32>(std::min<std::size_t>(most_steps, 1u << 16));
+  const TrailRecorder recorder{bvh, wide, rays, order, variant == TraceVariant::Robust ? 1 : 0, any_hit ? 1 : 0,
+                               wide_layout, cap};
+  std::optional<GpuAddressMap> map;
+  std::optional<GpuReplay> replay;
+  if (gpu) {
+    map = wide_layout ? GpuAddressMap(wide, n) : GpuAddressMap(bvh, n);
+    replay.emplace(*gpu, *map);
+  }
+  // Warps are recorded a wave at a time (the GPU model's resident set), so the trails of only one
+  // wave are held; the SIMT tallies are integer sums, the same in any grouping.
+  const std::size_t wave = replay ? replay->wave_warps() : std::size_t{4096};
+  std::vector<WarpTrails> slots(std::min(wave, warps));
   std::vector<WarpTally> partial(threads);
-  auto work = [&](unsigned tid) {
-    std::vector<std::vector<std::uint32_t>> lane_trails(kWarpSize, std::vector<std::uint32_t>(cap));
-    std::vector<const std::vector<std::uint32_t>*> lanes;
-    std::vector<std::uint32_t> scratch_ids;
-    std::vector<std::vector<std::uint32_t>> trimmed(kWarpSize);
-    for (std::size_t w = tid; w < warps; w += threads) {
-      lanes.clear();
-      for (std::size_t l = 0; l < kWarpSize && w * kWarpSize + l < n; ++l) {
-        const std::size_t i = w * kWarpSize + l;
-        const RsRay& ray = rays[order ? order[i] : i];
-        rs_u32 len = 0;
-        if (wide_layout)
-          rs_traverse_wide_recorded(wide.nodes.data(), wide.packets.data(), ray, robust, any, nullptr,
-                                    lane_trails[l].data(), cap, &len);
-        else
-          rs_traverse_variant_recorded(bvh.nodes.data(), bvh.triangles.data(), ray, robust, any, nullptr,
-                                       lane_trails[l].data(), cap, &len);
-        trimmed[l].assign(lane_trails[l].begin(), lane_trails[l].begin() + std::min(len, cap));
-        lanes.push_back(&trimmed[l]);
-      }
-      tally_warp(lanes, scratch_ids, partial[tid]);
-    }
-  };
-  std::vector<std::thread> pool;
-  for (unsigned t = 0; t < threads; ++t) pool.emplace_back(work, t);
-  for (auto& th : pool) th.join();
+  for (std::size_t w0 = 0; w0 < warps; w0 += wave) {
+    std::span<WarpTrails> now(slots.data(), std::min(wave, warps - w0));
+    recorder.record(w0, now, partial);
+    if (replay) replay->replay_wave(now);
+  }
   WarpTally total;
   for (auto& p : partial) total.add(p);
+  if (replay && gpu_counts) {
+    *gpu_counts = replay->counts();
+    gpu_counts->warps = warps;
+  }
   return finish(total);
 }
 

@@ -5,6 +5,7 @@
 #include <span>
 #include <vector>
 
+#include "bench/gpu_model.h"
 #include "bvh/bvh.h"
 #include "trace/tracer.h"
 #include "shared.h"
@@ -36,7 +37,10 @@ SimtModel simt_model_from_trails(const std::vector<std::vector<std::uint32_t>>& 
 // recording every ray's trail, warp by warp on host threads, and returns the model. A step is one
 // node the loop fetches: on the wide tree a wide node (four child boxes) or a leaf (its packets),
 // on the binary tree a node (two child boxes) or a leaf. order null = identity.
+// With a GPU profile, the same trails are also replayed through its caches (bench/gpu_model.h)
+// and *gpu_counts receives the counts; the SIMT figures do not depend on it.
 SimtModel simt_model(const Bvh& bvh, const std::vector<RsRay>& rays, const std::uint32_t* order, bool any_hit,
-                     TraceVariant variant = TraceVariant::Fast, TraceLayout layout = TraceLayout::Wide);
+                     TraceVariant variant = TraceVariant::Fast, TraceLayout layout = TraceLayout::Wide,
+                     const GpuProfile* gpu = nullptr, GpuCounts* gpu_counts = nullptr);
 
 }  // namespace raysort

@@ -60,6 +60,24 @@ void timing_from_json(const nlohmann::json& j, const char* name, Timing& t) {
   if (o.contains("n")) count_from(o, "n", t.n);
 }
 
+// The GPU model's figures: one object, present only when the model ran.
+nlohmann::json gpu_model_json(const CellRecord::GpuModelFigures& g) {
+  return {{"profile", g.profile},       {"time_us", number(g.time_us)},   {"speedup", number(g.speedup)},
+          {"warp_steps", g.warp_steps}, {"idle_lanes", g.idle_lanes},     {"l1_hits", g.l1_hits},
+          {"l1_misses", g.l1_misses},   {"l2_hits", g.l2_hits},           {"l2_misses", g.l2_misses},
+          {"dram_bytes", g.dram_bytes}, {"warps", g.warps},               {"replayed_warps", g.replayed_warps}};
+}
+void gpu_model_from_json(const nlohmann::json& j, CellRecord::GpuModelFigures& g) {
+  j.at("profile").get_to(g.profile);
+  g.time_us = number_from(j.at("time_us"));
+  g.speedup = number_from(j.at("speedup"));
+  for (auto [key, field] : {std::pair<const char*, std::uint64_t*>{"warp_steps", &g.warp_steps},
+                            {"idle_lanes", &g.idle_lanes}, {"l1_hits", &g.l1_hits}, {"l1_misses", &g.l1_misses},
+                            {"l2_hits", &g.l2_hits}, {"l2_misses", &g.l2_misses}, {"dram_bytes", &g.dram_bytes},
+                            {"warps", &g.warps}, {"replayed_warps", &g.replayed_warps}})
+    count_from(j, key, *field);
+}
+
 }  // namespace
 
 void to_json(nlohmann::json& j, const CellRecord& r) {
@@ -97,6 +115,7 @@ void to_json(nlohmann::json& j, const CellRecord& r) {
                      {"keys_hash", r.keys_hash},
                      {"order_hash", r.order_hash},
                      {"leaks_per_million", r.leaks_per_million}};
+  if (!r.gpu.profile.empty()) j["gpu_model"] = gpu_model_json(r.gpu);
   timing_to_json(j, "encode", r.encode);
   timing_to_json(j, "sort", r.sort);
   timing_to_json(j, "permute", r.permute);
@@ -148,6 +167,7 @@ void from_json(const nlohmann::json& j, CellRecord& r) {
   j.at("keys_hash").get_to(r.keys_hash);
   j.at("order_hash").get_to(r.order_hash);
   r.leaks_per_million = j.value("leaks_per_million", -1.0);  // added within format version 1
+  if (j.contains("gpu_model")) gpu_model_from_json(j.at("gpu_model"), r.gpu);  // added within format version 3
   timing_from_json(j, "encode", r.encode);
   timing_from_json(j, "sort", r.sort);
   timing_from_json(j, "permute", r.permute);
@@ -203,6 +223,28 @@ void add_estimate(std::vector<Col>& cols, const std::string& name, Estimate Cell
   cols.push_back(numeric(name + "_hi", [e](const CellRecord& r) { return (r.*e).hi; }, decimals));
 }
 
+// The GPU model's columns (empty fields when the model was off).
+void add_gpu_model_columns(std::vector<Col>& c) {
+  c.push_back(text("gpu_model", [](const CellRecord& r) { return r.gpu.profile; }));
+  c.push_back(numeric("gpu_model_speedup", [](const CellRecord& r) { return r.gpu.speedup; }, 4));
+  c.push_back(numeric("gpu_model_time_us", [](const CellRecord& r) { return r.gpu.time_us; }, 3));
+  using Count = std::uint64_t CellRecord::GpuModelFigures::*;
+  for (auto [name, field] : {std::pair<const char*, Count>{"gpu_warp_steps", &CellRecord::GpuModelFigures::warp_steps},
+                             {"gpu_idle_lanes", &CellRecord::GpuModelFigures::idle_lanes},
+                             {"gpu_l1_hits", &CellRecord::GpuModelFigures::l1_hits},
+                             {"gpu_l1_misses", &CellRecord::GpuModelFigures::l1_misses},
+                             {"gpu_l2_hits", &CellRecord::GpuModelFigures::l2_hits},
+                             {"gpu_l2_misses", &CellRecord::GpuModelFigures::l2_misses},
+                             {"gpu_dram_bytes", &CellRecord::GpuModelFigures::dram_bytes},
+                             {"gpu_replayed_warps", &CellRecord::GpuModelFigures::replayed_warps}})
+    c.push_back(numeric(
+        name,
+        [field](const CellRecord& r) {
+          return r.gpu.profile.empty() ? std::numeric_limits<double>::quiet_NaN() : static_cast<double>(r.gpu.*field);
+        },
+        0));
+}
+
 std::vector<Col> make_columns() {
   std::vector<Col> c;
   c.push_back(text("id", [](const CellRecord& r) { return r.id(); }));
@@ -237,6 +279,7 @@ std::vector<Col> make_columns() {
   c.push_back(numeric("simt_lane_efficiency_ratio", [](const CellRecord& r) { return r.simt_lane_efficiency_ratio; }, 6));
   c.push_back(
       numeric("simt_distinct_per_visit_ratio", [](const CellRecord& r) { return r.simt_distinct_per_visit_ratio; }, 6));
+  add_gpu_model_columns(c);
   c.push_back(flag("hits_match_nosort", &CellRecord::hits_match_nosort));
   c.push_back(flag("order_is_permutation", &CellRecord::order_is_permutation));
   c.push_back(text("keys_hash", [](const CellRecord& r) { return r.keys_hash; }));

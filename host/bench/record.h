@@ -78,6 +78,17 @@ struct CellRecord {
   double simt_lane_efficiency_ratio = 0.0;      // vs NoSort on the same batch
   double simt_distinct_per_visit_ratio = 0.0;   // vs NoSort (lower is better)
 
+  // The GPU cost model (bench/gpu_model.h, docs/gpu-model.md; `run --gpu-model NAME`): the
+  // profile's name ("" when the model was off: then every figure below is absent), the replay's
+  // counts and the predicted trace time and speedup over NoSort on the same batch. Deterministic.
+  struct GpuModelFigures {
+    std::string profile;
+    double time_us = std::numeric_limits<double>::quiet_NaN();
+    double speedup = std::numeric_limits<double>::quiet_NaN();
+    std::uint64_t warp_steps = 0, idle_lanes = 0, l1_hits = 0, l1_misses = 0, l2_hits = 0, l2_misses = 0;
+    std::uint64_t dram_bytes = 0, warps = 0, replayed_warps = 0;
+  } gpu;
+
   // NoSort cells of a run with both trace variants: rays this variant misses that the other one
   // hits, per million rays (for the fast variant: its leaks through shared edges and vertices).
   // -1 when not measured.

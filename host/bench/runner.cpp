@@ -15,6 +15,7 @@
 #include <fstream>
 #include <map>
 #include <memory>
+#include <optional>
 #include <set>
 
 #include "bench/cell_measure.h"
@@ -369,6 +370,9 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
   RayPermuter permuter(rt);
   permuter.warm_up();
   const bool both_variants = spec.variants.size() > 1;
+  // The GPU cost model (run --gpu-model): one profile for every cell.
+  const std::optional<GpuProfile> gpu =
+      spec.gpu_model.empty() ? std::nullopt : std::optional<GpuProfile>(load_gpu_profile(spec.gpu_model));
   std::vector<std::string> absent;  // planned cells whose batch turned out empty
 
   auto record = [&](const CellRecord& c) {
@@ -405,8 +409,8 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
         progress.total -= batch_cells.size();
         continue;
       }
-      BatchBench bench({rt, *scene.encoder, sorter, permuter, *scene.tracers.at(first.variant)}, scene.bvh, rb->batch,
-                       scene.reference(*rb, first.variant));
+      BatchBench bench({rt, *scene.encoder, sorter, permuter, *scene.tracers.at(first.variant), gpu ? &*gpu : nullptr},
+                       scene.bvh, rb->batch, scene.reference(*rb, first.variant));
       for (const auto& group : runs_of(batch_cells, [](const PlannedCell& c) {  // → cell
              return fmt::format("{}/{}/{}", c.encoder, c.bits, c.top_bits);
            })) {

@@ -1,6 +1,6 @@
 #pragma once
-// Files compiled into the binary at build time (cmake/embed.cmake): the OpenCL sources in cl/
-// and the scene files in scenes/, so `raysort` runs from any directory.
+// Files compiled into the binary at build time (cmake/embed.cmake): the OpenCL sources in cl/,
+// the scene files in scenes/ and the GPU profiles in gpu/profiles/, so `raysort` runs from any directory.
 #include <optional>
 #include <string>
 #include <string_view>

@@ -1,0 +1,110 @@
+#pragma once
+// A GPU cost model on top of the SIMT model (issue 20, docs/gpu-model.md): the traversal trails of
+// each warp are replayed step by step through a per-SM L1 and a shared L2 (set-associative, LRU)
+// over the byte addresses of the BVH layout the kernel reads, and the counts give a predicted
+// trace time: issue time + memory time. Deterministic: integers from the host traversal twins.
+#include <cstdint>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "bvh/bvh.h"
+#include "shared.h"
+
+namespace raysort {
+
+// One GPU, read from gpu/profiles/<name>.toml (embedded in the binary) or a .toml path.
+struct GpuProfile {
+  std::string name, description, origin;
+  unsigned sms = 0;
+  unsigned resident_warps_per_sm = 0;  // modelled occupancy: the warps interleaved on one SM
+  std::uint64_t l1_bytes = 0, l2_bytes = 0;
+  unsigned l1_ways = 0, l2_ways = 0, line_bytes = 0;
+  unsigned sector_bytes = 0;  // the L2's and DRAM's unit: a line's sectors are filled one by one
+  double dram_gbps = 0, l2_gbps = 0, clock_ghz = 0;
+  double step_cycles = 0;  // SM cycles per issued warp step (the fitted constant)
+};
+
+GpuProfile parse_gpu_profile(const std::string& text, const std::string& origin);
+// "rtx3060" (embedded gpu/profiles/rtx3060.toml) or a path ending in .toml. Throws Error listing
+// the embedded profiles for an unknown name.
+GpuProfile load_gpu_profile(const std::string& name_or_path);
+std::vector<std::string> gpu_profile_names();
+
+// A set-associative cache with LRU replacement over line indices (address / line size; the L2
+// model passes sector indices: its unit is the sector).
+class LruCache {
+ public:
+  LruCache(std::uint64_t bytes, unsigned line_bytes, unsigned ways);
+  bool access(std::uint64_t line);  // true on a hit; a miss allocates the line
+ private:
+  unsigned ways_;
+  std::uint64_t sets_;
+  std::vector<std::uint64_t> tags_;  // sets_ × ways_, most recently used first
+};
+
+struct GpuCounts {
+  std::uint64_t warp_steps = 0;  // issued warp steps (Σ over warps of its longest trail)
+  std::uint64_t idle_lanes = 0;  // lane-steps issued without work (lanes whose trail has ended)
+  std::uint64_t requests = 0;    // distinct lines a warp step reads (coalesced), = L1 accesses
+  std::uint64_t l1_hits = 0, l1_misses = 0;  // lines
+  std::uint64_t l2_hits = 0, l2_misses = 0;  // sectors: those of an L1-missed line the lanes read
+  std::uint64_t dram_bytes = 0;  // l2_misses × sector size
+  std::uint64_t warps = 0, replayed_warps = 0;  // all warps; those replayed (sampling)
+};
+
+struct GpuTime {
+  double issue_s = 0, memory_s = 0, total_s = 0;
+};
+// issue = warp_steps · step_cycles / (sms · clock); memory = dram_bytes / dram_bw + L2 sector
+// accesses · sector / l2_bw; total = issue + memory. Counts of a sampled replay are scaled by warps / replayed.
+GpuTime gpu_model_time(const GpuCounts& c, const GpuProfile& p);
+
+// Where the kernel's buffers lie: nodes, then leaf primitives, then rays, each 4 KB aligned.
+// Wide layout: a step on a wide node reads its 128 bytes; on a leaf, its packets (192 bytes each).
+// Binary layout: a step on node k reads node k (32 bytes) and, if inner, its two children (the
+// boxes it tests), if a leaf, its triangles (48 bytes each).
+class GpuAddressMap {
+ public:
+  GpuAddressMap(const WideBvh& wide, std::size_t rays);
+  GpuAddressMap(const Bvh& binary, std::size_t rays);
+  // Appends the blocks (address / block_bytes: lines or sectors) step reference `ref` reads.
+  void step_blocks(std::uint32_t ref, unsigned block_bytes, std::vector<std::uint64_t>& out) const;
+  // Appends the blocks the load of ray `ray` reads.
+  void ray_blocks(std::uint32_t ray, unsigned block_bytes, std::vector<std::uint64_t>& out) const;
+
+ private:
+  const RsBvhNode* binary_ = nullptr;  // null on the wide layout
+  std::uint64_t node_base_ = 0, prim_base_ = 0, ray_base_ = 0;
+};
+
+// The lanes of one warp: each lane's trail and the ray it loads (rays[order[i]]).
+struct WarpTrails {
+  std::vector<std::vector<std::uint32_t>> lanes;
+  std::vector<std::uint32_t> rays;
+};
+
+// Replays waves of resident warps. Scheduling simplification (docs/gpu-model.md): warps are taken
+// in trace order, sms · resident_warps_per_sm at a time (a wave); warp k of a wave runs on SM
+// k mod sms; within a wave all warps advance one step per round, SM by SM, warp by warp, and the
+// next wave starts when the whole wave has finished. Caches start cold and persist across waves.
+class GpuReplay {
+ public:
+  GpuReplay(const GpuProfile& profile, const GpuAddressMap& map);
+  std::size_t wave_warps() const { return static_cast<std::size_t>(profile_.sms) * profile_.resident_warps_per_sm; }
+  void replay_wave(std::span<const WarpTrails> warps);
+  const GpuCounts& counts() const { return counts_; }
+
+ private:
+  void warp_step(unsigned sm, const WarpTrails& warp, std::size_t step);
+  GpuProfile profile_;
+  const GpuAddressMap& map_;
+  std::vector<LruCache> l1_;
+  LruCache l2_;
+  GpuCounts counts_;
+  std::vector<std::uint64_t> sectors_;
+  std::vector<std::uint32_t> refs_;
+};
+
+}  // namespace raysort

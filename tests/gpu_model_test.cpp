@@ -1,0 +1,165 @@
+// The GPU cost model's cache replay (bench/gpu_model.h) on hand-built trails.
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include "bench/gpu_model.h"
+#include "bvh_layout.h"
+
+namespace raysort {
+namespace {
+
+// A tiny GPU: `sms` SMs, an L1 of 4 lines (fully associative) and an L2 of 8 lines' worth of
+// 32-byte sectors (4 sets of 8), 128-byte lines, so that a few wide nodes (128 bytes each, one
+// line, four sectors) fill them.
+GpuProfile tiny_gpu(unsigned sms) {
+  return parse_gpu_profile(fmt::format(R"(name = "tiny"
+sms = {}
+resident_warps_per_sm = 1
+l1_bytes = 512
+l1_ways = 4
+l2_bytes = 1024
+l2_ways = 8
+line_bytes = 128
+sector_bytes = 32
+dram_gbps = 1.0
+l2_gbps = 2.0
+clock_ghz = 1.0
+step_cycles = 10.0
+)",
+                                       sms),
+                           "test");
+}
+
+// 64 wide nodes, no packets: node k is line k.
+WideBvh nodes_only() {
+  WideBvh w;
+  w.nodes.resize(64);
+  return w;
+}
+
+// A warp whose 32 lanes follow the same trail (no ray loads, to count node lines only).
+WarpTrails warp_of(std::vector<std::uint32_t> trail, std::size_t lanes = 32) {
+  WarpTrails w;
+  w.lanes.assign(lanes, trail);
+  return w;
+}
+
+TEST(GpuModel, EmbeddedProfilesParse) {
+  for (const char* name : {"rtx3060", "h100", "h200"}) {
+    const GpuProfile p = load_gpu_profile(name);
+    EXPECT_EQ(p.name, name);
+    EXPECT_GT(p.sms, 0u);
+    EXPECT_EQ(p.line_bytes, 128u);
+    EXPECT_GT(p.l2_bytes, p.l1_bytes);
+  }
+  EXPECT_EQ(load_gpu_profile("rtx3060").sms, 28u);
+  EXPECT_THROW(load_gpu_profile("no-such-gpu"), std::exception);
+}
+
+TEST(GpuModel, WarpFetchingOneLineMakesOneRequestPerStep) {
+  const GpuProfile p = tiny_gpu(1);
+  const WideBvh wide = nodes_only();
+  const GpuAddressMap map(wide, 0);
+  GpuReplay replay(p, map);
+  const std::vector<WarpTrails> wave{warp_of({0, 0, 0})};  // three steps on node 0
+  replay.replay_wave(wave);
+  const GpuCounts& c = replay.counts();
+  EXPECT_EQ(c.warp_steps, 3u);
+  EXPECT_EQ(c.idle_lanes, 0u);
+  EXPECT_EQ(c.requests, 3u);  // 32 lanes on one line: one coalesced request per step
+  EXPECT_EQ(c.l1_misses, 1u);
+  EXPECT_EQ(c.l1_hits, 2u);
+  EXPECT_EQ(c.l2_misses, 4u);  // the line's four sectors
+  EXPECT_EQ(c.dram_bytes, 128u);
+}
+
+TEST(GpuModel, IdleLanesAreCountedPerStep) {
+  const GpuProfile p = tiny_gpu(1);
+  const WideBvh wide = nodes_only();
+  const GpuAddressMap map(wide, 0);
+  GpuReplay replay(p, map);
+  std::vector<WarpTrails> wave{warp_of({0}, 31)};
+  wave[0].lanes.push_back({0, 1, 2, 3});  // one long lane: 4 steps, 31 lanes idle in the last 3
+  replay.replay_wave(wave);
+  EXPECT_EQ(replay.counts().warp_steps, 4u);
+  EXPECT_EQ(replay.counts().idle_lanes, 3u * 31u);
+}
+
+TEST(GpuModel, ThrashingWarpMissesEveryTime) {
+  const GpuProfile p = tiny_gpu(1);
+  const WideBvh wide = nodes_only();
+  const GpuAddressMap map(wide, 0);
+  GpuReplay replay(p, map);
+  // Cycling over 16 lines with LRU caches of 4 and 8 lines: each line is evicted before its reuse.
+  std::vector<std::uint32_t> trail;
+  for (int round = 0; round < 3; ++round)
+    for (std::uint32_t k = 0; k < 16; ++k) trail.push_back(k);
+  const std::vector<WarpTrails> wave{warp_of(trail)};
+  replay.replay_wave(wave);
+  const GpuCounts& c = replay.counts();
+  EXPECT_EQ(c.requests, 48u);
+  EXPECT_EQ(c.l1_hits, 0u);
+  EXPECT_EQ(c.l2_hits, 0u);
+  EXPECT_EQ(c.dram_bytes, 48u * 128u);
+  // Cycling over 3 lines instead: all but the first touches hit in L1.
+  GpuReplay fits(p, map);
+  const std::vector<WarpTrails> small{warp_of({0, 1, 2, 0, 1, 2, 0, 1, 2})};
+  fits.replay_wave(small);
+  EXPECT_EQ(fits.counts().l1_misses, 3u);
+  EXPECT_EQ(fits.counts().l1_hits, 6u);
+}
+
+TEST(GpuModel, WarmL2ServesAnotherSmsMisses) {
+  const GpuProfile p = tiny_gpu(2);
+  const WideBvh wide = nodes_only();
+  const GpuAddressMap map(wide, 0);
+  const WarpTrails reader = warp_of({0, 1, 2, 3});
+  // Warm: SM 0 reads lines 0-3 in the first wave; in the second, SM 1 reads them again: its own L1
+  // is cold, the shared L2 is warm.
+  GpuReplay warm(p, map);
+  const std::vector<WarpTrails> first{reader}, second{warp_of({}), reader};
+  warm.replay_wave(first);
+  warm.replay_wave(second);
+  EXPECT_EQ(warm.counts().l1_misses, 8u);
+  EXPECT_EQ(warm.counts().l2_misses, 16u);  // sectors
+  EXPECT_EQ(warm.counts().l2_hits, 16u);
+  // Cold: SM 1 alone, every line from DRAM.
+  GpuReplay cold(p, map);
+  cold.replay_wave(second);
+  EXPECT_EQ(cold.counts().l2_hits, 0u);
+  EXPECT_EQ(cold.counts().l2_misses, 16u);
+  EXPECT_EQ(cold.counts().dram_bytes, 4u * 128u);
+}
+
+TEST(GpuModel, LeafStepsReadTheirPacketsAndRayLoadsCoalesce) {
+  const GpuProfile p = tiny_gpu(1);
+  WideBvh wide = nodes_only();  // nodes: 64 x 128 bytes = 8 KB, so packets start at 8192
+  wide.packets.resize(8);
+  const GpuAddressMap map(wide, 64);
+  std::vector<std::uint64_t> lines;
+  map.step_blocks(RS_WIDE_LEAF | (0u << 2) | 1u, 128, lines);  // packets 0-1: bytes 8192-8575
+  EXPECT_EQ(lines, (std::vector<std::uint64_t>{64, 65, 66}));
+  GpuReplay replay(p, map);
+  WarpTrails w = warp_of({0});
+  for (std::uint32_t i = 0; i < 32; ++i) w.rays.push_back(i);  // consecutive rays: few lines
+  replay.replay_wave(std::vector<WarpTrails>{w});
+  const std::uint64_t ray_lines = (32 * sizeof(RsRay) + 127) / 128;
+  EXPECT_EQ(replay.counts().requests, 1u + ray_lines);
+}
+
+TEST(GpuModel, PredictedTimeIsIssuePlusMemory) {
+  const GpuProfile p = tiny_gpu(1);  // 1 SM at 1 GHz, 10 cycles a step; 1 GB/s DRAM, 2 GB/s L2
+  GpuCounts c;
+  c.warps = c.replayed_warps = 1;
+  c.warp_steps = 100;  // 1000 cycles = 1 us
+  c.l1_misses = 10, c.l2_misses = 40, c.dram_bytes = 1280;  // 1.28 us + 40 sectors through L2: 0.64 us
+  const GpuTime t = gpu_model_time(c, p);
+  EXPECT_NEAR(t.issue_s, 1e-6, 1e-12);
+  EXPECT_NEAR(t.memory_s, 1.92e-6, 1e-12);
+  EXPECT_NEAR(t.total_s, 2.92e-6, 1e-12);
+  c.warps = 4;  // a quarter of the warps replayed: the time stands for all of them
+  EXPECT_NEAR(gpu_model_time(c, p).total_s, 4 * 2.92e-6, 1e-12);
+}
+
+}  // namespace
+}  // namespace raysort
