@@ -4,8 +4,8 @@
 # API and uninitialised-value checks on (out-of-bounds accesses and barrier divergence are always
 # checked):
 #   trace        both variants (robust, fast), both layouts (wide, binary), closest and any hit
-#   encodebench  every encoder at 16, 32 and 64 bits (the *_k32 and *_k64 kernels; not HCC_DIR's
-#                two-pass encode_direction_* / encode_box_set_or_*, used only with --direction-bits > 1)
+#   encodebench  every encoder at 16, 32 and 64 bits (the *_k32 and *_k64 kernels), and HCC_DIR with 2
+#                direction bits (its two-pass encode_direction_* / encode_box_set_or_* kernels)
 #   render       generate, shade, the (fast, wide) counted closest hit, accumulate, compaction
 #   sortcheck    the radix sort in the shape Oclgrind gets (the GPU shape: local-memory tiles),
 #                a small GPU shape whose tiles are 256 keys, and the CPU shape, at
@@ -67,6 +67,7 @@ cases=(
   "trace-wide|trace ${DEV[*]} --scene cornell --resolution 16x9 ${PROTO[*]} --variant both --layout wide"
   "trace-binary|trace ${DEV[*]} --scene cornell --resolution 16x9 ${PROTO[*]} --variant both --layout binary"
   "encode-all|encodebench ${DEV[*]} --scene cornell --resolution 16x9 ${PROTO[*]} --bits 16,32,64"
+  "encode-hcc-dir|encodebench ${DEV[*]} --scene cornell --resolution 16x9 ${PROTO[*]} --bits 16,32,64 --encoders hcc-dir --direction-bits 2"
   "render|render ${DEV[*]} --scene cornell --resolution 16x9 --spp 1 --out $work/render"
 )
 # Sort shapes: Oclgrind's own (its device type includes GPU: local-memory tiles of 128 x 8 keys),

@@ -29,6 +29,7 @@ struct EncodeBenchArgs {
   std::vector<unsigned> bits{16, 32, 64};
   ProtocolOptions protocol;
   bool verify = true;
+  int direction_bits = -1;  // HCC_DIR's direction bits; -1: the default (EncoderParams)
   CommonOptions common;
 };
 
@@ -57,7 +58,9 @@ int run_encodebench(const EncodeBenchArgs& args) {
   fmt::print("scene    {}: {} triangles; batch {}: {} rays\n", scene.name, tris.size(), batch.name, batch.size());
   fmt::print("timing   each encode paired with a trace of the same batch in the same rounds (docs/measurement.md): "
              "ms = median [95 % interval], % trace = paired estimate of encode / trace per round\n\n");
-  DeviceEncoder enc(rt, bvh, bvh.bounds());
+  EncoderParams params;
+  if (args.direction_bits >= 0) params.direction_bits = static_cast<unsigned>(args.direction_bits);
+  DeviceEncoder enc(rt, bvh, bvh.bounds(), params);
   Tracer tracer(rt, bvh);
   enc.warm_up();
   std::vector<std::uint32_t> identity(n);
@@ -138,6 +141,8 @@ void register_encode_command(CLI::App& app) {
   cmd->add_option("--batch", args->batch, "batch name: primary, shadow<k>, bounce<k>")->capture_default_str();
   cmd->add_option("--encoders", args->encoders, "comma-separated encoders (default: all)")->delimiter(',');
   cmd->add_option("--bits", args->bits, "comma-separated key lengths")->delimiter(',')->capture_default_str();
+  cmd->add_option("--direction-bits", args->direction_bits,
+                  "HCC_DIR direction bits (more than 1 runs its two-pass kernels, as `run --direction-bits` does)");
   add_protocol_options(*cmd, args->protocol);
   cmd->add_flag("!--no-verify", args->verify, "skip the comparison with the host twin");
   add_common_options(*cmd, args->common);
