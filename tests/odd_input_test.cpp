@@ -218,6 +218,20 @@ TEST(OddObj, VertexWeightLinesAreNotRead) {
   EXPECT_EQ(load_or_error(dir / "cr.obj"), 1u);
 }
 
+// Subdivision tag (`t`) lines are not read either: tinyobjloader sizes a tag's value arrays from the
+// counts in the line (up to its cap) and copies every tag into every later group, so a 62 KB file of
+// tag and group lines took 2.5 GB (fuzz/obj_fuzzer out-of-memory; the input is kept as
+// fuzz/corpus/obj/regression-oom-tags.obj, which `make fuzz` replays under its 2 GB limit: that is
+// the memory check). Here: a file with tags, indented tags and a bare `t` still loads its face.
+TEST(OddObj, TagLinesAreNotRead) {
+  fs::path dir = temp_dir("tags");
+  std::string text = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+  for (int i = 0; i < 20; ++i) text += "t crease 0/0/100000\n\tt x 2/1/0 1 2 0.5\ng group" + std::to_string(i) + "\n";
+  text += "f 1 2 3\nt\n";
+  write_file(dir / "tags.obj", text);
+  EXPECT_EQ(load_or_error(dir / "tags.obj"), 1u);
+}
+
 // A 1 GB file that is a single line: refused after reading its first MiB, in well under a second,
 // without reading the gigabyte into memory. The file is sparse (a real face line, then a hole).
 TEST(OddObj, GigabyteLineRefusedQuickly) {

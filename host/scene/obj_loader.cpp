@@ -159,16 +159,24 @@ std::size_t check_vertex_lines(const std::string& text, const std::string& path)
   return vertex;
 }
 
-// The text tinyobjloader gets: `vw` (vertex weight) lines commented out. raysort uses no skin
-// weights, and tinyobjloader's reader of them converts an infinite joint id to int, which is
-// undefined (found by fuzz/obj_fuzzer). Every line keeps its place, so line numbers still hold.
-std::string without_vertex_weights(const std::string& text) {
+// The text tinyobjloader gets: `vw` (vertex weight) and `t` (subdivision tag) lines commented out.
+// raysort uses neither, and tinyobjloader's readers of both are unsafe on hostile input (found by
+// fuzz/obj_fuzzer): `vw` converts an infinite joint id to int (undefined), and `t` sizes its value
+// arrays from counts written in the line, so a 62 KB file of tag lines took 2.5 GB. Every line keeps
+// its place, so line numbers still hold.
+bool is_ignored_statement(const std::string& text, std::size_t p) {
+  auto blank = [&](std::size_t i) { return i < text.size() && (text[i] == ' ' || text[i] == '\t'); };
+  return (text[p] == 'v' && p + 1 < text.size() && text[p + 1] == 'w' && blank(p + 2)) ||
+         (text[p] == 't' && blank(p + 1));
+}
+
+std::string without_ignored_statements(const std::string& text) {
   std::string out;
   std::size_t pos = 0;
   while (pos < text.size()) {
     std::size_t p = pos;
     while (p < text.size() && (text[p] == ' ' || text[p] == '\t')) ++p;
-    if (p + 2 < text.size() && text[p] == 'v' && text[p + 1] == 'w' && (text[p + 2] == ' ' || text[p + 2] == '\t')) {
+    if (p < text.size() && is_ignored_statement(text, p)) {
       if (out.empty()) out = text;
       out[p] = '#';
     }
@@ -197,7 +205,7 @@ Mesh parse_obj(const std::string& text, const std::string& path, const std::stri
   std::vector<tinyobj::shape_t> shapes;
   std::vector<tinyobj::material_t> obj_materials;
   std::string warn, err;
-  std::istringstream stream(without_vertex_weights(text));
+  std::istringstream stream(without_ignored_statements(text));
   tinyobj::MaterialFileReader mtl_reader(mtl_dir + "/");
   bool ok = tinyobj::LoadObj(&attrib, &shapes, &obj_materials, &warn, &err, &stream, &mtl_reader,
                              /*triangulate=*/false);
