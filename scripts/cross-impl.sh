@@ -12,20 +12,10 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 RAYSORT="$(realpath "${1:-build/raysort}")"
 
-icd_lib="${OCLGRIND_ICD_LIB:-/usr/lib/oclgrind/liboclgrind-rt-icd.so}"
-if [ ! -f "$icd_lib" ]; then
-  msg="cross-impl: Oclgrind is not installed (Debian: oclgrind, scripts/install-deps.sh)"
-  if [ "${CI:-}" = "true" ]; then echo "$msg" >&2; exit 1; fi
-  echo "SKIPPED: $msg"
-  exit 77
-fi
-work="$(mktemp -d)"
-trap 'rm -rf "$work"' EXIT
-mkdir -p "$work/vendors"
-cp /etc/OpenCL/vendors/*.icd "$work/vendors/" 2>/dev/null || true
-echo "$icd_lib" >"$work/vendors/oclgrind.icd"
-# Oclgrind registered for these runs only; PoCL asked to list its basic device too.
-export OCL_ICD_VENDORS="$work/vendors" POCL_DEVICES="basic pthread"
+source scripts/oclgrind-env.sh  # (the working folder is the repository root)
+oclgrind_register cross-impl
+# PoCL asked to list its basic device too.
+export POCL_DEVICES="basic pthread"
 unset RAYSORT_DEVICE
 
 args=(run --scenes cornell --batches primary,shadow0 --encoders origin,hcc,mlhcc,ppc --bits 16,32

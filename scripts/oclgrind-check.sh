@@ -26,24 +26,9 @@ cd "$(dirname "$0")/.."
 RAYSORT="$(realpath "${1:-build/raysort}")"
 JOBS="${JOBS:-2}"
 
-icd_lib=""
-for f in "${OCLGRIND_ICD_LIB:-}" /usr/lib/oclgrind/liboclgrind-rt-icd.so \
-         /usr/lib/x86_64-linux-gnu/oclgrind/liboclgrind-rt-icd.so /usr/local/lib/liboclgrind-rt-icd.so; do
-  if [ -n "$f" ] && [ -f "$f" ]; then icd_lib="$f"; break; fi
-done
-if [ -z "$icd_lib" ]; then
-  msg="oclgrind-check: Oclgrind is not installed (Debian: oclgrind, scripts/install-deps.sh)"
-  if [ "${CI:-}" = "true" ]; then echo "$msg" >&2; exit 1; fi
-  echo "SKIPPED: $msg"
-  exit 77
-fi
-
-work="$(mktemp -d)"
-trap 'rm -rf "$work"' EXIT
-mkdir -p "$work/vendors" "$work/logs"
-cp /etc/OpenCL/vendors/*.icd "$work/vendors/" 2>/dev/null || true
-echo "$icd_lib" >"$work/vendors/oclgrind.icd"
-export OCL_ICD_VENDORS="$work/vendors"
+source scripts/oclgrind-env.sh  # (the working folder is the repository root)
+oclgrind_register oclgrind-check
+mkdir -p "$work/logs"
 export RAYSORT_SCENE_ROOT="${RAYSORT_SCENE_ROOT:-$(cd .. && pwd)/shared/scenes}"
 
 # Item 5: with Oclgrind registered, the default device is still real hardware.
