@@ -17,7 +17,10 @@
 #include "bench/compare.h"
 #include "bench/result_set.h"
 #include "bench/runner.h"
+#include "bench/shard.h"
+#include "bvh/prepared_scene.h"
 #include "render/batches.h"
+#include "render/frame_memory.h"
 #include "scene/provenance.h"
 #include "test_util.h"
 #include "util/atomic_file.h"
@@ -293,6 +296,58 @@ TEST(Matrix, RefusesImpossibleCombinationsBeforeWork) {
   EXPECT_THROW(matrix_preset("nope"), Error);
   EXPECT_NO_THROW(validate_matrix(matrix_preset("quick")));
   EXPECT_NO_THROW(validate_matrix(matrix_preset("paper")));
+}
+
+// Issue 22: the paper preset samples as the paper did (§5: "two shadow rays per bounce and eight
+// samples per pixel") at 1920×1080. The batch sizes it implies for one of its scenes, exactly, and
+// the same overrides on a frame small enough to generate here.
+TEST(MatrixPreset, PaperSamplesAsThePaper) {
+  const MatrixSpec paper = matrix_preset("paper");
+  EXPECT_EQ(paper.frame.width, 1920u);
+  EXPECT_EQ(paper.frame.height, 1080u);
+  EXPECT_EQ(paper.frame.spp, 8u);
+  EXPECT_EQ(paper.frame.shadow_rays, 2u);
+  EXPECT_EQ(paper.to_json().at("shadow_rays"), 2);
+  const SceneFacts f = load_scene_facts("detail-room", paper, "");
+  EXPECT_EQ(f.rays_per_batch, 16'588'800u);  // 1920 × 1080 × 8 paths: bounce1 at most
+  EXPECT_EQ(f.shadow_rays_per_bounce, 2u);   // the scene file says 1
+  const FrameMemory m = estimate_frame_memory(1920, 1080, 8, f.shadow_rays_per_bounce, f.max_bounces);
+  EXPECT_EQ(m.paths, 16'588'800u);
+  EXPECT_EQ(m.largest_batch, 33'177'600u);   // shadow0: two per path
+  EXPECT_NO_THROW(check_frame_memory(m, nullptr, "paper preset")) << "the paper preset must fit this machine";
+
+  // paper-1spp: the same matrix at 1 spp and the scenes' own shadow rays (no override recorded).
+  const MatrixSpec one = matrix_preset("paper-1spp");
+  EXPECT_EQ(one.scenes, paper.scenes);
+  EXPECT_EQ(one.batches, paper.batches);
+  EXPECT_EQ(one.frame.spp, 1u);
+  EXPECT_EQ(one.frame.shadow_rays, 0u);
+  EXPECT_FALSE(one.to_json().contains("shadow_rays"));
+  EXPECT_EQ(load_scene_facts("detail-room", one, "").shadow_rays_per_bounce, 1u);
+  EXPECT_EQ(load_scene_facts("detail-room", one, "").rays_per_batch, 2'073'600u);
+
+  // Generated: 8 samples per pixel make 8 primary rays per pixel, and 2 shadow rays per bounce
+  // give each diffuse hit two candidate shadow rays (those toward a light below the surface are
+  // dropped), so shadow0 grows toward twice its 1-ray size and never past 2 per primary hit.
+  auto batches_at = [](std::uint32_t shadow_rays) {
+    const PreparedScene p = prepare_scene("detail-room", SceneOptions{"", FrameSize{16, 9, 8, shadow_rays, 0}});
+    std::map<std::string, std::size_t> sizes;
+    for (const auto& b : generate_batches(p.scene, p.tris, p.bvh, RayGenOptions{})) sizes[b.batch.name] = b.batch.size();
+    return sizes;
+  };
+  auto one_ray = batches_at(1), two_rays = batches_at(2);
+  EXPECT_EQ(two_rays.at("primary"), 16u * 9u * 8u);
+  EXPECT_EQ(one_ray.at("primary"), two_rays.at("primary"));
+  EXPECT_EQ(one_ray.at("bounce1"), two_rays.at("bounce1"));
+  EXPECT_GT(two_rays.at("shadow0"), one_ray.at("shadow0") * 3 / 2);
+  EXPECT_LE(two_rays.at("shadow0"), 2 * two_rays.at("primary"));
+
+  // Every preset is a valid matrix; paper-bounces reaches bounce 5, paper-hcc-dir runs HCC at 31 bits.
+  for (const auto& name : preset_names()) EXPECT_NO_THROW(validate_matrix(matrix_preset(name))) << name;
+  const MatrixSpec bounces = matrix_preset("paper-bounces");
+  EXPECT_EQ(bounces.frame.bounces, 5u);
+  EXPECT_EQ(load_scene_facts("detail-room", bounces, "").max_bounces, 5u);
+  EXPECT_EQ(matrix_preset("paper-hcc-dir").bits_for("sibenik"), (std::vector<unsigned>{31, 32}));
 }
 
 // A small matrix end to end (the full quick preset runs in the golden test, scripts/golden.sh):

@@ -298,6 +298,67 @@ TEST(SceneLookup, EveryListedSceneParses) {
   }
 }
 
+// A scene file may extend another: it takes the base's tables and replaces those it gives whole.
+TEST(SceneToml, ExtendsTakesTheBaseAndReplacesWholeTables) {
+  const Scene base = load_scene("cornell");
+  const Scene narrow = parse_scene_toml("extends = \"cornell\"\n[camera]\nposition = [0.0, 1.0, 3.0]\n"
+                                        "look_at = [0.0, 1.0, 0.0]\nfov_y = 10.0\n",
+                                        "narrow.toml", {});
+  EXPECT_EQ(narrow.triangle_count(), base.triangle_count());
+  EXPECT_EQ(narrow.sphere_lights.size(), base.sphere_lights.size());
+  EXPECT_EQ(narrow.effects.max_bounces, base.effects.max_bounces);
+  EXPECT_FLOAT_EQ(narrow.camera.fov_y_deg, 10.0f);
+  EXPECT_NE(narrow.camera.fov_y_deg, base.camera.fov_y_deg);
+  EXPECT_EQ(narrow.camera.width, 1920u);  // [camera] is replaced whole: its resolution falls back to the default
+
+  // A file extending a file: relative to the extending file's folder; a cycle and an unknown base are refused.
+  const fs::path dir = fs::temp_directory_path() / "raysort_extends_test";
+  fs::create_directories(dir);
+  std::ofstream(dir / "a.toml") << "extends = \"b.toml\"\n";
+  std::ofstream(dir / "b.toml") << "extends = \"a.toml\"\n";
+  std::ofstream(dir / "c.toml") << "extends = \"cornell\"\ndescription = \"c\"\n";
+  std::ofstream(dir / "d.toml") << "extends = \"c.toml\"\n";
+  EXPECT_EQ(load_scene((dir / "d.toml").string()).description, "c");
+  std::string msg;
+  try { load_scene((dir / "a.toml").string()); } catch (const Error& e) { msg = e.what(); }
+  EXPECT_NE(msg.find("chain of more than 8"), std::string::npos) << msg;
+  msg.clear();
+  try { parse_scene_toml("extends = \"no_such_scene\"\n", "x.toml", {}); } catch (const Error& e) { msg = e.what(); }
+  EXPECT_NE(msg.find("x.toml: extends = \"no_such_scene\": no scene of that name"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("cornell"), std::string::npos) << msg;
+  msg.clear();
+  try { parse_scene_toml("extends = 3\n", "y.toml", {}); } catch (const Error& e) { msg = e.what(); }
+  EXPECT_NE(msg.find("y.toml: 'extends' must be a scene name"), std::string::npos) << msg;
+  fs::remove_all(dir);
+}
+
+// The sampling overrides (--spp, --shadow-rays, --bounces) replace the scene's effects; 0 keeps them.
+TEST(SceneToml, SamplingOverridesReplaceTheEffects) {
+  SceneOptions o;
+  o.frame = {0, 0, 8, 2, 4};
+  Scene s = parse_scene_toml(kValid, "ok.toml", o);
+  EXPECT_EQ(s.effects.samples_per_pixel, 8u);
+  EXPECT_EQ(s.effects.shadow_rays_per_bounce, 2u);
+  EXPECT_EQ(s.effects.max_bounces, 4u);
+  EXPECT_EQ(s.camera.width, 1920u);
+  Scene kept = parse_scene_toml(kValid, "ok.toml", {});
+  EXPECT_EQ(kept.effects.shadow_rays_per_bounce, 1u);
+  EXPECT_EQ(kept.effects.max_bounces, 1u);
+}
+
+// The limited-viewport scenes (paper Table 4) are their base scenes with only the camera changed.
+TEST(SceneReal, LimitedViewportsExtendTheirScenes) {
+  RAYSORT_REQUIRE_REAL_SCENES();
+  for (const std::string base : {"sibenik", "breakfast_room", "grey_white_room", "japanese_classroom", "wooden_staircase"}) {
+    const Scene full = load_scene(base), limited = load_scene(base + "_limited");
+    EXPECT_EQ(limited.triangle_count(), full.triangle_count()) << base;
+    EXPECT_EQ(limited.sphere_lights.size(), full.sphere_lights.size()) << base;
+    EXPECT_EQ(limited.materials.size(), full.materials.size()) << base;
+    EXPECT_LT(limited.camera.fov_y_deg, full.camera.fov_y_deg / 2) << base;
+    EXPECT_EQ(scene_file_obj_files(base + "_limited"), scene_file_obj_files(base)) << base;
+  }
+}
+
 // Real scenes from the scene root: skipped when it is absent, except on CI where they must be there.
 TEST(SceneReal, SibenikAndBreakfastRoomLoad) {
   SceneOptions o;

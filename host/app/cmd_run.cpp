@@ -54,6 +54,8 @@ MatrixSpec matrix_from(const RunArgs& a, const CLI::App& cmd) {
   const FrameSize frame = a.common.frame();
   if (frame.width) spec.frame.width = frame.width, spec.frame.height = frame.height;
   if (cmd.count("--spp")) spec.frame.spp = a.common.spp;  // given values are taken as given (0 is refused)
+  if (frame.shadow_rays) spec.frame.shadow_rays = frame.shadow_rays;
+  if (frame.bounces) spec.frame.bounces = frame.bounces;
   if (cmd.count("--seed")) spec.seed = a.common.seed;
   if (!a.variant.empty()) spec.variants = parse_trace_variants(a.variant);
   if (!a.access.empty()) spec.accesses = parse_ray_accesses(a.access);
@@ -78,7 +80,9 @@ MatrixSpec matrix_from(const RunArgs& a, const CLI::App& cmd) {
 void register_run_command(CLI::App& app) {
   auto a = std::make_shared<RunArgs>();
   auto* cmd = app.add_subcommand("run", "run a scenario matrix (encoders x key bits x scenes x batches) into a result set");
-  cmd->add_option("--preset", a->preset, "quick (what `make bench` runs) or paper (the paper's setup)");
+  cmd->add_option("--preset", a->preset,
+                  "quick (what `make bench` runs), paper (the paper's setup: 8 spp, 2 shadow rays per bounce), "
+                  "paper-1spp, paper-viewport, paper-hcc-dir or paper-bounces (docs/paper.md)");
   add_scene_list_option(*cmd, a->scenes, "scenes (names, .toml or .obj paths, comma-separated)");
   cmd->add_option("--batches", a->batches, "batches: primary, shadow<k>, bounce<k>, or all")->delimiter(',');
   cmd->add_option("--encoders", a->encoders, "encoders, or all")->delimiter(',');

@@ -9,6 +9,8 @@ namespace raysort {
 FrameSize CommonOptions::frame() const {
   FrameSize f = resolution.empty() ? FrameSize{} : parse_resolution(resolution);
   f.spp = spp;
+  f.shadow_rays = shadow_rays;
+  f.bounces = bounces;
   return f;
 }
 
@@ -29,6 +31,12 @@ void add_scene_options(CLI::App& cmd, CommonOptions& o) {
   cmd.add_option("--scene-root", o.scene_root, "folder the scene files' OBJ paths are relative to (env RAYSORT_SCENE_ROOT)");
   cmd.add_option("--resolution", o.resolution, "image size WxH (default: the scene's)");
   cmd.add_option("--spp", o.spp, "samples per pixel (default: the scene's)");
+  cmd.add_option("--shadow-rays", o.shadow_rays,
+                 "shadow rays per bounce toward the sphere lights (default: the scene's; the paper used 2; 1 to 64)")
+      ->check(CLI::Range(1u, 64u));
+  cmd.add_option("--bounces", o.bounces,
+                 "diffuse bounces after the primary hit, i.e. the deepest bounce<k> batch (default: the scene's; 1 to 64)")
+      ->check(CLI::Range(1u, 64u));
   cmd.add_option("--seed", o.seed, "seed of the counter-based ray generator")->capture_default_str();
 }
 

@@ -19,6 +19,8 @@ struct CommonOptions {
   std::string scene_root;   // --scene-root; empty: RAYSORT_SCENE_ROOT, else ../shared/scenes
   std::string resolution;   // --resolution WxH; empty: the scene's
   std::uint32_t spp = 0;    // --spp; 0: the scene's
+  std::uint32_t shadow_rays = 0;  // --shadow-rays per bounce; 0: the scene's
+  std::uint32_t bounces = 0;      // --bounces; 0: the scene's
   std::uint32_t seed = 1;   // --seed of the ray generator
   // The frame overrides (0: the scene's own); parses --resolution (throws Error on bad text).
   FrameSize frame() const;
@@ -26,7 +28,7 @@ struct CommonOptions {
   RayGenOptions raygen_options() const;
 };
 
-// --scene-root, --resolution, --spp, --seed.
+// --scene-root, --resolution, --spp, --shadow-rays, --bounces, --seed.
 void add_scene_options(CLI::App& cmd, CommonOptions& o);
 // --device.
 void add_device_option(CLI::App& cmd, CommonOptions& o);

@@ -1,6 +1,7 @@
 #include "bench/matrix.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <cmath>
@@ -55,6 +56,9 @@ nlohmann::json MatrixSpec::to_json() const {
           {"direction_bits", params.direction_bits}};
   // Only when on, so a set without the model keeps the entry it was written with (and resumes).
   if (!gpu_model.empty()) j["gpu_model"] = gpu_model;
+  // Likewise the sampling overrides: a set that keeps the scenes' own shadow rays and depth has no entry.
+  if (frame.shadow_rays) j["shadow_rays"] = frame.shadow_rays;
+  if (frame.bounces) j["bounces"] = frame.bounces;
   return j;
 }
 
@@ -78,7 +82,22 @@ std::vector<unsigned> MatrixSpec::bits_for(const std::string& scene) const {
   return out;
 }
 
-std::vector<std::string> preset_names() { return {"quick", "paper"}; }
+std::vector<std::string> preset_names() {
+  return {"quick", "paper", "paper-1spp", "paper-viewport", "paper-hcc-dir", "paper-bounces"};
+}
+
+namespace {
+
+// The paper's sampling (§5: "two shadow rays per bounce and eight samples per pixel") at its
+// resolution: 16.6 M paths, so 16.6 M rays per bounce batch and 33.2 M per shadow batch at most.
+constexpr FrameSize kPaperFrame{1920, 1080, 8, 2};
+
+// The real scenes standing for the paper's (docs/paper.md, "Scenes"), then procedural ones.
+const std::vector<std::string> kPaperScenes{"sibenik",   "breakfast_room", "grey_white_room", "sponza_dabrovic",
+                                            "jacksboro_terrain", "multi-instance-real", "detail-room",
+                                            "landscape", "multi-instance"};
+
+}  // namespace
 
 MatrixSpec matrix_preset(const std::string& name) {
   MatrixSpec m;
@@ -95,20 +114,51 @@ MatrixSpec matrix_preset(const std::string& name) {
     m.max_time_s = 0.3;
     return m;
   }
-  if (name == "paper") {
-    // The paper's setup (§5-6): 1920×1080, secondary (bounce1) and primary shadow (shadow0) rays,
-    // 32-bit keys for the overview tables, 16/32/64 on sibenik for the key-length tables,
-    // λ = 0.125, TwoPoint length 0.25 of the largest extent.
-    m.scenes = {"sibenik",        "breakfast_room", "grey_white_room", "sponza_dabrovic", "jacksboro_terrain",
-                "multi-instance-real", "detail-room", "landscape",      "multi-instance"};
+  if (name == "paper" || name == "paper-1spp") {
+    // The paper's Tables 2, 3, 5, 6 and 7 (§5-6): secondary (bounce1) and primary shadow (shadow0)
+    // rays, 32-bit keys for the overview tables, 16/32/64 on sibenik for the key-length tables,
+    // λ = 0.125, TwoPoint length 0.25 of the largest extent. "paper" samples as the paper did;
+    // "paper-1spp" is the same matrix at 1 spp with the scenes' own one shadow ray per bounce
+    // (an eighth of the rays: the set committed before the paper's sampling was supported).
+    m.scenes = kPaperScenes;
     m.batches = {"bounce1", "shadow0"};
     m.bits = {32};
     m.key_length_scenes = {"sibenik"};
     m.key_length_bits = {16, 64};
-    m.frame = {1920, 1080, 1};
+    m.frame = name == "paper" ? kPaperFrame : FrameSize{1920, 1080, 1};
     return m;
   }
-  throw Error(fmt::format("unknown preset '{}'; presets are: quick, paper", name));
+  if (name == "paper-viewport") {
+    // Table 4: secondary rays in a limited viewport (a narrow view of a detail: primary rays hit a
+    // small area, then scatter into the whole scene), one per real interior.
+    m.scenes = {"breakfast_room_limited", "grey_white_room_limited", "sibenik_limited",
+                "japanese_classroom_limited", "wooden_staircase_limited"};
+    m.batches = {"bounce1"};
+    m.frame = kPaperFrame;
+    return m;
+  }
+  if (name == "paper-hcc-dir") {
+    // Appendix Table 8: HCC against HCC_DIR (31 cut bits + 1 direction bit) and HCC with 31 bits,
+    // secondary rays, on the scenes standing for the paper's five.
+    m.scenes = {"breakfast_room", "grey_white_room", "sibenik", "sponza_dabrovic", "landscape"};
+    m.batches = {"bounce1"};
+    m.encoders = {Encoder::HCC, Encoder::HCC_DIR};
+    m.bits = {32};
+    m.key_length_scenes = m.scenes;
+    m.key_length_bits = {31};
+    m.frame = kPaperFrame;
+    return m;
+  }
+  if (name == "paper-bounces") {
+    // Appendix "Reflection ray trace performance": Breakfast, bounce 1 to 5 (Russian roulette from
+    // depth 3 thins the deeper batches, as in the paper).
+    m.scenes = {"breakfast_room"};
+    m.batches = {"bounce1", "bounce2", "bounce3", "bounce4", "bounce5"};
+    m.frame = kPaperFrame;
+    m.frame.bounces = 5;
+    return m;
+  }
+  throw Error(fmt::format("unknown preset '{}'; presets are: {}", name, fmt::join(preset_names(), ", ")));
 }
 
 void validate_matrix(const MatrixSpec& spec) {

@@ -30,7 +30,7 @@ struct MatrixSpec {
   std::vector<std::string> key_length_scenes;
   std::vector<unsigned> key_length_bits;
   std::vector<unsigned> top_bits;     // extra top-k sorted cells at the largest key length (0: none)
-  FrameSize frame{1920, 1080, 1};     // resolution and samples per pixel of every scene
+  FrameSize frame{1920, 1080, 1};     // resolution, spp and (non-zero) shadow-ray / depth overrides of every scene
   unsigned seed = 1;
   std::vector<TraceVariant> variants{TraceVariant::Robust};  // the first is the tables' main one
   std::vector<RayAccess> accesses{RayAccess::Gather};        // the first is the tables' main one
@@ -60,8 +60,11 @@ struct MatrixSpec {
   std::vector<unsigned> bits_for(const std::string& scene) const;
 };
 
-// "quick" (what `make bench` runs: procedural scenes, reduced resolution, a few minutes on 2 cores)
-// or "paper" (the paper's setup). Throws Error listing the presets for another name.
+// "quick" (what `make bench` runs: procedural scenes, reduced resolution, a few minutes on 2 cores),
+// "paper" (Tables 2, 3, 5-7 at the paper's sampling: 1920×1080, 8 spp, 2 shadow rays per bounce),
+// "paper-1spp" (the same at 1 spp, 1 shadow ray), "paper-viewport" (Table 4), "paper-hcc-dir"
+// (appendix Table 8) or "paper-bounces" (appendix, bounces 1-5 in Breakfast); docs/paper.md maps
+// every table of the paper to its preset or command. Throws Error listing the presets for another name.
 MatrixSpec matrix_preset(const std::string& name);
 std::vector<std::string> preset_names();
 

@@ -285,8 +285,9 @@ void check_matrix_memory(const MatrixSpec& spec, const std::map<std::string, Sce
   for (const auto& [scene, f] : facts)
     check_frame_memory(estimate_frame_memory(spec.frame.width, spec.frame.height, spec.frame.spp,
                                              f.shadow_rays_per_bounce, f.max_bounces),
-                       &device, fmt::format("scene {} at {}x{}, {} spp", scene, spec.frame.width, spec.frame.height,
-                                            spec.frame.spp));
+                       &device, fmt::format("scene {} at {}x{}, {} spp, {} shadow ray(s) per bounce, {} bounce(s)", scene,
+                                            spec.frame.width, spec.frame.height, spec.frame.spp,
+                                            f.shadow_rays_per_bounce, f.max_bounces));
 }
 
 // Every cell the set holds must be one the matrix plans: a cell file of another matrix (copied in,

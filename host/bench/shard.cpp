@@ -36,7 +36,8 @@ std::string ShardSpec::str() const { return fmt::format("{}/{}", index, count); 
 SceneFacts load_scene_facts(const std::string& scene, const MatrixSpec& spec, const std::string& scene_root) {
   SceneOptions opts;
   opts.scene_root = scene_root;
-  opts.frame = {1, 1, 1};  // the camera's resolution does not change the geometry or effects
+  // The camera's resolution does not change the geometry or effects; the sampling overrides do.
+  opts.frame = {1, 1, 1, spec.frame.shadow_rays, spec.frame.bounces};
   Scene s = load_scene(scene, opts);
   SceneFacts f;
   f.triangles = s.triangle_count();

@@ -11,24 +11,28 @@
 
 namespace raysort {
 
-// The size of a frame and its samples per pixel. As an override (SceneOptions::frame), 0 keeps
-// the scene's own value.
+// The size of a frame and how it is sampled: samples per pixel, next-event-estimation (shadow) rays
+// per bounce and path depth. As an override (SceneOptions::frame), 0 keeps the scene's own value;
+// the paper's setting (§5: "two shadow rays per bounce and eight samples per pixel") is
+// {1920, 1080, 8, 2}.
 struct FrameSize {
   std::uint32_t width = 0, height = 0, spp = 0;
+  std::uint32_t shadow_rays = 0;  // shadow rays per bounce toward the sphere lights (Effects::shadow_rays_per_bounce)
+  std::uint32_t bounces = 0;      // diffuse bounces after the primary hit (Effects::max_bounces)
 };
 
 // "1920x1080" -> {1920, 1080, 0}. Throws Error naming the text and the expected form.
 FrameSize parse_resolution(const std::string& text);
 
-// Applies the non-zero fields of `frame` to the scene's camera and samples per pixel: the one
-// place a command's --resolution and --spp take effect (load_scene calls it).
+// Applies the non-zero fields of `frame` to the scene's camera and effects: the one place a
+// command's --resolution, --spp, --shadow-rays and --bounces take effect (load_scene calls it).
 void apply_frame_size(Scene& scene, const FrameSize& frame);
 
 struct SceneOptions {
   // Root for OBJ paths in scene files. Empty: env RAYSORT_SCENE_ROOT, else the compiled-in
   // default (../shared/scenes beside the source tree).
   std::string scene_root;
-  FrameSize frame;  // overrides of the scene's resolution / spp (0: the scene's own)
+  FrameSize frame;  // overrides of the scene's resolution / sampling (0: the scene's own)
 };
 
 // The scene root in effect for these options (see SceneOptions::scene_root).

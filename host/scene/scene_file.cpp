@@ -51,6 +51,49 @@ std::vector<std::string> obj_values(const toml::table& root) {
   return out;
 }
 
+// `extends = "sibenik"`: a scene file may start from another scene (an embedded name, or a .toml
+// path relative to the extending file) and give only what differs; each top-level key it gives
+// ([camera], [effects], the [[mesh]] list, description ...) replaces the base's whole. The
+// geometry and lights of a scene are then written once, and a variant (a limited viewport)
+// states its camera and nothing else. Chains are followed up to 8 deep.
+std::vector<std::string> embedded_scene_names();
+
+toml::table resolve_extends(toml::table root, const std::string& origin, int depth = 0) {
+  const toml::node* ext = root.get("extends");
+  if (!ext) return root;
+  const auto name = ext->value<std::string>();
+  if (!name || name->empty())
+    throw Error(fmt::format("{}: 'extends' must be a scene name or a .toml path, e.g. extends = \"sibenik\"", origin));
+  if (depth >= 8)
+    throw Error(fmt::format("{}: extends = \"{}\": chain of more than 8 scene files (a cycle?); extend a scene that "
+                            "does not extend this one", origin, *name));
+  std::string text, base_origin;
+  if (auto embedded = find_embedded_scene(*name)) {
+    text = std::string(*embedded);
+    base_origin = "embedded:scenes/" + *name + ".toml";
+  } else if (ends_with(*name, ".toml")) {
+    fs::path p(*name);
+    if (p.is_relative() && origin.rfind("embedded:", 0) != 0) p = fs::path(origin).parent_path() / p;
+    base_origin = p.string();
+    std::error_code ec;
+    if (!fs::is_regular_file(p, ec))
+      throw Error(fmt::format("{}: extends = \"{}\": scene file not found: {}", origin, *name, base_origin));
+    text = read_text_file(base_origin);
+  } else {
+    throw Error(fmt::format("{}: extends = \"{}\": no scene of that name; name an embedded scene ({}) or a .toml path",
+                            origin, *name, fmt::join(embedded_scene_names(), ", ")));
+  }
+  toml::table merged = resolve_extends(parse_toml_text(text, base_origin), base_origin, depth + 1);
+  for (auto&& [key, value] : root)
+    if (key.str() != "extends") merged.insert_or_assign(key.str(), value);
+  return merged;
+}
+
+// A scene file's text as one table, its `extends` resolved.
+toml::table read_scene_table(const std::string& text, const std::string& origin) {
+  return resolve_extends(parse_toml_text(text, origin), origin);
+}
+
 Camera read_camera(const TomlTable& t) {
   Camera c;
   c.position = t.vec3("position");
@@ -442,10 +485,12 @@ void apply_frame_size(Scene& scene, const FrameSize& frame) {
   if (frame.width) scene.camera.width = frame.width;
   if (frame.height) scene.camera.height = frame.height;
   if (frame.spp) scene.effects.samples_per_pixel = frame.spp;
+  if (frame.shadow_rays) scene.effects.shadow_rays_per_bounce = frame.shadow_rays;
+  if (frame.bounces) scene.effects.max_bounces = frame.bounces;
 }
 
 Scene parse_scene_toml(const std::string& text, const std::string& origin, const SceneOptions& opts) {
-  toml::table root = parse_toml_text(text, origin);
+  toml::table root = read_scene_table(text, origin);
   Scene s = SceneBuilder(origin, opts).build(root);
   apply_frame_size(s, opts.frame);
   return s;
@@ -496,7 +541,7 @@ std::vector<SceneListing> list_scenes() {
     l.file = "embedded:" + path;
     l.needs_scene_root = false;
     auto text = find_embedded(path);
-    toml::table root = parse_toml_text(std::string(*text), l.file);
+    toml::table root = read_scene_table(std::string(*text), l.file);
     if (auto d = root["description"].value<std::string>()) l.description = *d;
     l.obj_files = obj_values(root);
     l.needs_scene_root = !l.obj_files.empty();
@@ -508,8 +553,8 @@ std::vector<SceneListing> list_scenes() {
 std::vector<std::string> scene_file_obj_files(const std::string& name_or_path) {
   check_scene_reference(name_or_path);
   if (auto text = find_embedded_scene(name_or_path))
-    return obj_values(parse_toml_text(std::string(*text), "embedded:scenes/" + name_or_path + ".toml"));
-  if (ends_with(name_or_path, ".toml")) return obj_values(parse_toml_text(read_text_file(name_or_path), name_or_path));
+    return obj_values(read_scene_table(std::string(*text), "embedded:scenes/" + name_or_path + ".toml"));
+  if (ends_with(name_or_path, ".toml")) return obj_values(read_scene_table(read_text_file(name_or_path), name_or_path));
   return {};
 }
 
