@@ -298,6 +298,40 @@ TEST(Matrix, RefusesImpossibleCombinationsBeforeWork) {
   EXPECT_NO_THROW(validate_matrix(matrix_preset("paper")));
 }
 
+// Issue 22: the appendix tables. HCC against HCC_DIR and HCC one bit shorter (Table 8), and the
+// subsequent-bounce table, each with the best SIMT lane-efficiency ratio in bold; neither appears
+// in a set without its cells.
+TEST(Tables, HccDirAndSubsequentBounceTables) {
+  auto with = [](CellRecord c, const std::string& batch, double lanes) {
+    c.batch = batch, c.simt_lane_efficiency_ratio = lanes;
+    return c;
+  };
+  CellRecord nosort = cell(kBaselineEncoder, 0, 10.0, NAN);
+  std::vector<CellRecord> cells{with(nosort, "bounce1", 1.0),          with(cell("hcc", 32, 13.0, 2.0), "bounce1", 1.31),
+                                with(cell("hcc-dir", 32, 12.0, 2.0), "bounce1", 1.22),
+                                with(cell("hcc", 31, 12.5, 2.0), "bounce1", 1.27)};
+  const std::string no_bounces = render_tables(cells, meta_for("paper-hcc-dir"));
+  EXPECT_NE(no_bounces.find("## HCC with direction information (paper appendix Table 8), bounce1 rays"), std::string::npos)
+      << no_bounces;
+  EXPECT_NE(no_bounces.find("| scene | HCC 32b | HCC_DIR 32b | HCC 31b |"), std::string::npos) << no_bounces;
+  EXPECT_NE(no_bounces.find("| s | 13.00 (1.300 · **1.31**) | 12.00 (1.200 · 1.22) | 12.50 (1.250 · 1.27) |"),
+            std::string::npos) << no_bounces;
+  EXPECT_EQ(no_bounces.find("Subsequent bounces"), std::string::npos);
+
+  std::vector<CellRecord> deep{with(nosort, "bounce1", 1.0), with(nosort, "bounce2", 1.0),
+                               with(cell("hcc", 32, 13.0, 2.0), "bounce1", 1.31),
+                               with(cell("hcc", 32, 11.0, 2.0), "bounce2", 1.08),
+                               with(cell("ppc", 32, 12.0, 2.0), "bounce1", 1.25),
+                               with(cell("ppc", 32, 12.0, 2.0), "bounce2", 1.12)};
+  deep[1].rays = 60;
+  const std::string md = render_tables(deep, meta_for("paper-bounces"));
+  EXPECT_NE(md.find("## Subsequent bounces, s, 32-bit keys, access gather"), std::string::npos) << md;
+  EXPECT_NE(md.find("| rays | 100 | 60 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| hcc | 1.300 · **1.31** | 1.100 · 1.08 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| ppc | 1.200 · 1.25 | 1.200 · **1.12** |"), std::string::npos) << md;
+  EXPECT_EQ(md.find("HCC with direction information"), std::string::npos);
+}
+
 // Issue 22: the paper preset samples as the paper did (§5: "two shadow rays per bounce and eight
 // samples per pixel") at 1920×1080. The batch sizes it implies for one of its scenes, exactly, and
 // the same overrides on a frame small enough to generate here.

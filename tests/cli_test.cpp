@@ -148,6 +148,24 @@ TEST(Cli, CellOverTimeoutRecordedAsTimeout) {
   fs::remove_all(out);
 }
 
+// `raysort scenes --lights`: the paper's Table 1 from the scene files, lights with the same
+// radius and power grouped into one row ("3-12"), the radius in percent of the largest extent.
+TEST(CliScenes, LightsPrintThePapersTable1) {
+  CliResult r = run_cli({"scenes", "--lights", "--scenes", "cornell,landscape"});
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("| scene | light index | relative radius | power | sky |"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("| cornell | 0 | 2.50 % | 40 | no |"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("| landscape | 0 | 3.00 % | 100000 | yes |"), std::string::npos) << r.out;
+  expect_refused({"scenes", "--scenes", "cornell"}, {"--scenes applies to --lights only"});
+}
+
+TEST(CliScenes, LightsGroupSibeniksThirteenLightsAsThePaperDoes) {
+  RAYSORT_REQUIRE_REAL_SCENES();
+  CliResult r = run_cli({"scenes", "--lights", "--scenes", "sibenik"});
+  EXPECT_NE(r.out.find("| sibenik | 0 | 7.50 % | 2000 | no |\n|  | 1-2 | 2.50 % | 300 |  |\n|  | 3-12 | 0.50 % | 20 |  |"),
+            std::string::npos) << r.out;
+}
+
 // `raysort scenes` checks real scene files against scenes/sources.toml: a scene root holding only
 // the Cornell box files lists them as present and every other file as missing, exits 0 (the
 // listing is informational), and a copy with one byte changed is listed as different.

@@ -1,7 +1,8 @@
 // raysort scenes: every scene known by name, loaded once each, with its size and lights, and each
 // real scene file checked against its checksum in scenes/sources.toml (scene/provenance.h); or, with
 // --describe NAME, the stages and ray batches that one scene's effects imply, with the ray count of
-// each batch at the scene's resolution (one frame of the host twin of the path tracer).
+// each batch at the scene's resolution (one frame of the host twin of the path tracer); or, with
+// --lights, the paper's Table 1 (light index and relative radius per scene) from the scene files.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -25,7 +26,37 @@ struct ScenesArgs {
   CommonOptions common;
   std::string describe;  // scene name or path; empty: list every scene
   bool verify = false;   // exit 1 when a real scene file is missing or different
+  bool lights = false;   // print the light setup (paper Table 1) of `scenes`
+  std::vector<std::string> scenes;
 };
+
+// The paper's Table 1 from the scene files: per scene, its sphere lights grouped into runs of equal
+// relative radius ("1-2  1.60 %"), the radius as a percentage of the scene's largest extent (as the
+// paper gives it), and whether a sky lights it too. Markdown, so it goes into results as printed.
+int print_light_table(const ScenesArgs& args) {
+  const std::vector<std::string> names = args.scenes.empty()
+      ? std::vector<std::string>{"breakfast_room", "grey_white_room", "sibenik", "sponza_dabrovic",
+                                 "jacksboro_terrain", "multi-instance-real", "landscape"}
+      : args.scenes;
+  fmt::print("| scene | light index | relative radius | power | sky |\n|---|---|---:|---:|---|\n");
+  for (const auto& name : names) {
+    const Scene s = load_scene(name, args.common.scene_options());
+    const auto& lights = s.sphere_lights;
+    const char* sky = s.sky.enabled ? "yes" : "no";
+    if (lights.empty()) fmt::print("| {} | – | – | – | {} |\n", name, sky);
+    for (std::size_t i = 0; i < lights.size();) {
+      std::size_t j = i;
+      while (j + 1 < lights.size() && lights[j + 1].radius_relative == lights[i].radius_relative &&
+             lights[j + 1].power == lights[i].power)
+        ++j;
+      const std::string index = i == j ? fmt::format("{}", i) : fmt::format("{}-{}", i, j);
+      fmt::print("| {} | {} | {:.2f} % | {:g} | {} |\n", i == 0 ? name : "", index,
+                 100.0 * lights[i].radius_relative, lights[i].power, i == 0 ? sky : "");
+      i = j + 1;
+    }
+  }
+  return 0;
+}
 
 int describe_scene(const ScenesArgs& args) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -187,6 +218,10 @@ void register_scenes_command(CLI::App& app) {
   cmd->add_option("--describe", args->describe,
                   "scene name, .toml or .obj path: print the stages and ray batches its effects imply, with the ray "
                   "count of each (one frame traced on the host; --resolution, --spp, --seed apply to it)");
+  cmd->add_flag("--lights", args->lights,
+                "print the light setup of the scenes named by --scenes (default: the paper preset's real scenes and "
+                "landscape) as the paper's Table 1: light index, radius relative to the largest extent, power, sky");
+  add_scene_list_option(*cmd, args->scenes, "scenes for --lights (names, .toml or .obj paths, comma-separated)");
   cmd->add_flag("--verify", args->verify,
                 "exit 1 when a real scene file is missing or differs from its checksum in scenes/sources.toml");
   cmd->footer(
@@ -199,6 +234,11 @@ void register_scenes_command(CLI::App& app) {
       set_command_exit_code(describe_scene(*args));
       return;
     }
+    if (args->lights) {
+      set_command_exit_code(print_light_table(*args));
+      return;
+    }
+    if (!args->scenes.empty()) throw Error("--scenes applies to --lights only (--describe takes one scene)");
     if (!args->common.resolution.empty() || args->common.spp)
       throw Error("--resolution and --spp apply to --describe NAME only");
     set_command_exit_code(list_all_scenes(*args));

@@ -3,7 +3,8 @@
 //   trace speed with the speedup and its 95 % interval (Tables 2-4), per access mode;
 //   overhead: encode/sort[/permute] ms, share of trace time and net speedup (Table 5);
 //   gather against permute; key length: speed and ANC against key bits (Tables 6-7); the SIMT
-//   model; robust against fast; failed cells.
+//   model (a column's best lane-efficiency ratio in bold); HCC with direction bits (appendix Table
+//   8); subsequent bounces (appendix); robust against fast; failed cells.
 // Marks: **bold** is a column's best speedup only when its interval does not overlap the second
 // best's; *italic* is a speedup whose interval contains 1; "= NoSort" is an order equal to the
 // generation order (no speedup is reported for it).
@@ -95,6 +96,24 @@ const CellRecord* significant_best(const std::vector<const CellRecord*>& column)
   return ranked[0];
 }
 
+// The encoder cell with the highest SIMT lane-efficiency ratio (deterministic: no interval to
+// overlap), or nullptr when no encoder cell has one.
+const CellRecord* best_lane_efficiency(const std::vector<const CellRecord*>& column) {
+  const CellRecord* best = nullptr;
+  for (const CellRecord* c : column)
+    if (c && c->ok() && c->encoder != kBaselineEncoder &&
+        (!best || c->simt_lane_efficiency_ratio > best->simt_lane_efficiency_ratio))
+      best = c;
+  return best;
+}
+
+// "1.23 · 1.15": the speedup (as speedup_text prints it, without marks) and the SIMT lane-efficiency
+// ratio, bold when `best`.
+std::string speed_and_lanes(const CellRecord& c, bool best) {
+  const std::string lanes = fmt::format("{:.2f}", c.simt_lane_efficiency_ratio);
+  return fmt::format("{} · {}", speedup_text(c, false), best ? "**" + lanes + "**" : lanes);
+}
+
 std::string noise_section(const std::vector<CellRecord>& cells) {
   const NoiseSummary n = summarize_noise(cells);
   std::string md = "## Noise floor\n\n";
@@ -158,10 +177,13 @@ std::string introduction(const nlohmann::json& meta) {
                       meta["device"].value("driver", "?"));
   if (meta.contains("matrix")) {
     const auto& m = meta["matrix"];
-    md += fmt::format("Resolution {}, {} spp; trace variant {}, access {}, baseline order {}, {} BVH. Protocol: {} warm-up round(s), at least {} "
+    std::string sampling;
+    if (m.contains("shadow_rays")) sampling += fmt::format(", {} shadow rays per bounce", m["shadow_rays"].get<unsigned>());
+    if (m.contains("bounces")) sampling += fmt::format(", {} bounces", m["bounces"].get<unsigned>());
+    md += fmt::format("Resolution {}, {} spp{}; trace variant {}, access {}, baseline order {}, {} BVH. Protocol: {} warm-up round(s), at least {} "
                       "timed rounds per cell, then until the speedup interval is within ±{:.1f} % or {} s of "
                       "sampling.\n\n",
-                      m.value("resolution", "?"), m.value("spp", 0), m.value("variant", "robust"),
+                      m.value("resolution", "?"), m.value("spp", 0), sampling, m.value("variant", "robust"),
                       m.value("access", "gather"), m.value("baseline", "pixel"), m.value("layout", "wide"),
                       m.value("warmup", 0), m.value("reps", 0),
                       100.0 * m.value("max_noise", 0.0), m.value("max_time_s", 0.0));
@@ -325,15 +347,27 @@ std::string deterministic_sections(const TableContext& t) {
   for (auto& s : t.scenes)
     for (auto& batch : t.batches) cols.push_back(s + " " + batch);
   md += header("encoder", cols);
+  // Deterministic, so a column's best needs no interval: the highest lane-efficiency ratio is bold.
+  std::map<std::pair<std::string, std::string>, const CellRecord*> best;
+  for (auto& s : t.scenes)
+    for (auto& batch : t.batches) {
+      std::vector<const CellRecord*> column;
+      for (auto& e : t.encoders) column.push_back(t.at(t.main_view, s, batch, e, t.overview_bits));
+      best[{s, batch}] = best_lane_efficiency(column);
+    }
   for (auto& e : t.encoders) {
     md += fmt::format("| {} |", e);
     for (auto& s : t.scenes)
       for (auto& batch : t.batches) {
         auto* c = t.at(t.main_view, s, batch, e, t.overview_bits);
-        md += c && c->ok() ? fmt::format(" {:.3f} ({:.2f}) / {:.3f} ({:.2f}) |", c->simt_lane_efficiency,
-                                         c->simt_lane_efficiency_ratio, c->simt_distinct_per_visit,
-                                         c->simt_distinct_per_visit_ratio)
-                           : " – |";
+        if (!c || !c->ok()) {
+          md += " – |";
+          continue;
+        }
+        const std::string ratio = fmt::format("{:.2f}", c->simt_lane_efficiency_ratio);
+        md += fmt::format(" {:.3f} ({}) / {:.3f} ({:.2f}) |", c->simt_lane_efficiency,
+                          c == best[{s, batch}] ? "**" + ratio + "**" : ratio, c->simt_distinct_per_visit,
+                          c->simt_distinct_per_visit_ratio);
       }
     md += "\n";
   }
@@ -430,6 +464,81 @@ std::string baselines_section(const TableContext& t) {
   return md;
 }
 
+// HCC with direction information (paper appendix, Table 8): per scene, HCC at the overview key
+// length, HCC_DIR at the same length (its cut has one bit per direction bit fewer), and HCC with
+// one bit fewer. Shown when the set has HCC_DIR and HCC at both lengths.
+std::string hcc_dir_section(const TableContext& t) {
+  const unsigned b = t.overview_bits;
+  if (b < 2 || std::find(t.bits.begin(), t.bits.end(), b - 1) == t.bits.end()) return "";
+  if (std::find(t.encoders.begin(), t.encoders.end(), "hcc-dir") == t.encoders.end()) return "";
+  std::string md;
+  for (auto& access : t.accesses) {
+    const View view{t.main_view.variant, access, t.main_view.baseline};
+    for (auto& batch : t.batches) {
+      std::string rows;
+      for (auto& s : t.scenes) {
+        const std::vector<const CellRecord*> row{t.at(view, s, batch, "hcc", b), t.at(view, s, batch, "hcc-dir", b),
+                                                 t.at(view, s, batch, "hcc", b - 1)};
+        if (std::any_of(row.begin(), row.end(), [](const CellRecord* c) { return !c || !c->ok(); })) continue;
+        const CellRecord* best = best_lane_efficiency(row);
+        rows += fmt::format("| {} |", s);
+        for (const CellRecord* c : row) rows += fmt::format(" {:.2f} ({}) |", c->trace_mrays, speed_and_lanes(*c, c == best));
+        rows += "\n";
+      }
+      if (rows.empty()) continue;
+      md += fmt::format("## HCC with direction information (paper appendix Table 8), {} rays, access {}: MRays/s "
+                        "(speedup · SIMT lane-efficiency ratio)\n\n",
+                        batch, access);
+      md += header("scene", {fmt::format("HCC {}b", b), fmt::format("HCC_DIR {}b", b), fmt::format("HCC {}b", b - 1)});
+      md += rows + "\nBold: the row's highest lane-efficiency ratio.\n\n";
+    }
+  }
+  return md;
+}
+
+// Subsequent bounces (paper appendix, "Reflection ray trace performance"): per scene, each
+// encoder's speedup and SIMT lane-efficiency ratio at bounce 1, 2, 3 ..., under the ray count of
+// each bounce. Shown when the set has two or more bounce batches.
+std::string bounces_section(const TableContext& t) {
+  std::vector<std::string> bounces;
+  for (auto& batch : t.batches)
+    if (batch.rfind("bounce", 0) == 0) bounces.push_back(batch);
+  if (bounces.size() < 2) return "";
+  std::string md;
+  for (auto& access : t.accesses) {
+    const View view{t.main_view.variant, access, t.main_view.baseline};
+    for (auto& s : t.scenes) {
+      md += fmt::format("## Subsequent bounces, {}, {}-bit keys, access {}: speedup · SIMT lane-efficiency ratio "
+                        "(paper appendix)\n\n",
+                        s, t.overview_bits, access);
+      md += header("encoder", bounces);
+      md += "| rays |";
+      for (auto& batch : bounces) {
+        auto* n = t.at(view, s, batch, kBaselineEncoder, 0);
+        md += n ? fmt::format(" {} |", n->rays) : " – |";
+      }
+      md += "\n";
+      std::map<std::string, const CellRecord*> best;
+      for (auto& batch : bounces) {
+        std::vector<const CellRecord*> column;
+        for (auto& e : t.encoders) column.push_back(t.at(view, s, batch, e, t.overview_bits));
+        best[batch] = best_lane_efficiency(column);
+      }
+      for (auto& e : t.encoders) {
+        if (e == kBaselineEncoder) continue;
+        md += fmt::format("| {} |", e);
+        for (auto& batch : bounces) {
+          auto* c = t.at(view, s, batch, e, t.overview_bits);
+          md += !c ? " – |" : !c->ok() ? " failed |" : fmt::format(" {} |", speed_and_lanes(*c, c == best[batch]));
+        }
+        md += "\n";
+      }
+      md += "\nBold: the column's highest lane-efficiency ratio.\n\n";
+    }
+  }
+  return md;
+}
+
 std::string failed_section(const std::vector<CellRecord>& cells) {
   std::vector<const CellRecord*> failed;
   for (auto& c : cells)
@@ -445,8 +554,8 @@ std::string failed_section(const std::vector<CellRecord>& cells) {
 std::string render_tables(const std::vector<CellRecord>& cells, const nlohmann::json& meta) {
   const TableContext t(cells, meta);
   return introduction(meta) + noise_section(cells) + trace_speed_sections(t) + overhead_sections(t) +
-         gather_permute_section(t) + key_length_sections(t) + deterministic_sections(t) + top_k_section(t) +
-         variants_section(t) + baselines_section(t) + failed_section(cells);
+         gather_permute_section(t) + key_length_sections(t) + deterministic_sections(t) + hcc_dir_section(t) +
+         bounces_section(t) + top_k_section(t) + variants_section(t) + baselines_section(t) + failed_section(cells);
 }
 
 }  // namespace raysort
