@@ -18,6 +18,7 @@
 #include "bench/result_set.h"
 #include "bench/runner.h"
 #include "bench/shard.h"
+#include "bench/sweep.h"
 #include "bvh/prepared_scene.h"
 #include "render/batches.h"
 #include "render/frame_memory.h"
@@ -330,6 +331,46 @@ TEST(Tables, HccDirAndSubsequentBounceTables) {
   EXPECT_NE(md.find("| hcc | 1.300 · **1.31** | 1.100 · 1.08 |"), std::string::npos) << md;
   EXPECT_NE(md.find("| ppc | 1.200 · 1.25 | 1.200 · **1.12** |"), std::string::npos) << md;
   EXPECT_EQ(md.find("HCC with direction information"), std::string::npos);
+}
+
+// Issue 22: a hyperparameter sweep is read from sets that differ in one encoder parameter only,
+// laid out one column per value (ascending) with the row's best lane-efficiency ratio in bold.
+TEST(Sweep, SetsDifferingInOneParameterSideBySide) {
+  auto make_set = [](const std::string& name, nlohmann::json matrix, double lanes) {
+    const std::string dir = temp_dir(name);
+    nlohmann::json meta = meta_for("paper-1spp");
+    for (auto& [k, v] : matrix.items()) meta["matrix"][k] = v;
+    auto rs = ResultSet::open_for_run(dir, meta);
+    CellRecord c = cell("hcc", 32, 13.0, 2.0);
+    c.simt_lane_efficiency_ratio = lanes;
+    rs.add(c);
+    return dir;
+  };
+  const std::string a = make_set("sweep-a", {{"had_lambda", 0.5}, {"spp", 1}}, 1.10);
+  const std::string b = make_set("sweep-b", {{"had_lambda", 0.125}, {"spp", 1}}, 1.25);
+  const Sweep sweep = load_sweep({a, b});
+  EXPECT_EQ(sweep.parameter, "had_lambda");
+  ASSERT_EQ(sweep.points.size(), 2u);
+  EXPECT_EQ(sweep.points[0].value, 0.125);
+  const std::string md = render_sweep(sweep);
+  EXPECT_NE(md.find("# Sweep of λ (HAD, Eq. 1)"), std::string::npos) << md;
+  EXPECT_NE(md.find("## hcc 32-bit, bounce1 rays, access gather\n\n| scene | 0.125 | 0.5 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| s | **1.250** · 1.30 | 1.100 · 1.30 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| mean lane ratio | 1.250 | 1.100 |"), std::string::npos) << md;
+
+  // Another difference (spp), no difference, and a repeated value are refused with the reason.
+  const std::string c = make_set("sweep-c", {{"had_lambda", 1.0}, {"spp", 8}}, 1.0);
+  auto refusal = [](const std::vector<std::string>& dirs) {
+    try {
+      load_sweep(dirs);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(refusal({a, c}).find("differ in spp as well"), std::string::npos) << refusal({a, c});
+  EXPECT_NE(refusal({a, a}).find("the sets ran the same matrix"), std::string::npos) << refusal({a, a});
+  EXPECT_NE(refusal({a}).find("two or more result sets"), std::string::npos);
 }
 
 // Issue 22: the paper preset samples as the paper did (§5: "two shadow rays per bounce and eight

@@ -21,6 +21,7 @@ void register_commands(CLI::App& app) {
   register_compare_command(app);
   register_merge_command(app);
   register_report_command(app);
+  register_sweep_command(app);
 }
 
 }  // namespace raysort

@@ -17,6 +17,7 @@ void register_run_command(CLI::App& app);
 void register_compare_command(CLI::App& app);
 void register_merge_command(CLI::App& app);
 void register_report_command(CLI::App& app);
+void register_sweep_command(CLI::App& app);
 
 void set_command_exit_code(int code);
 int command_exit_code();
