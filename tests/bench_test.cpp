@@ -541,6 +541,7 @@ TEST(Matrix, EndToEndAndResume) {
     EXPECT_EQ(rs.find(scene + "/primary/hcc-traffic/32")->keys_hash, rs.find(scene + "/primary/hcc/32")->keys_hash);
   EXPECT_NE(rs.find("multi-instance/bounce1/hcc-traffic/32")->keys_hash,
             rs.find("multi-instance/bounce1/hcc/32")->keys_hash);
+  EXPECT_NE(read_file(opts.out + "/cells.csv").find(",cut_ms,"), std::string::npos);
   std::string tables = read_file(opts.out + "/tables.md");
   EXPECT_NE(tables.find("## Trace speed, bounce1 rays"), std::string::npos);
   EXPECT_NE(tables.find("access permute"), std::string::npos);

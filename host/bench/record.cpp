@@ -266,6 +266,8 @@ std::vector<Col> make_columns() {
   add_timing(c, "permute", &CellRecord::permute);
   add_timing(c, "trace", &CellRecord::trace);
   add_timing(c, "nosort_trace", &CellRecord::nosort_trace);
+  // hcc-traffic's per-batch cut (host ms); empty for other cells.
+  c.push_back(numeric("cut_ms", [](const CellRecord& r) { return r.cut_ms >= 0 ? r.cut_ms : kNaN; }, 3));
   c.push_back(numeric("trace_mrays", [](const CellRecord& r) { return r.trace_mrays; }, 4));
   add_estimate(c, "speedup", &CellRecord::speedup, 4);
   add_estimate(c, "net_speedup", &CellRecord::net_speedup, 4);
