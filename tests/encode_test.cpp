@@ -704,8 +704,10 @@ std::uint64_t key(Encoder e, unsigned bits, const EncodeScene& s, const RsRay& r
       if (rb > 0) code = rs_u64(region) << (64u - rb);
       const RsTraversalRay tr = rs_prepare_ray(r);
       const auto& cut = g.cuts.at(region);
-      for (std::size_t i = 0; i < cut.size(); ++i)
-        if (rs_segment_overlaps_box(tr, to_rs_box(node_box(s.bvh().nodes[cut[i]])))) code |= rs_u64(1) << (63u - rb - i);
+      for (std::size_t i = 0; i < cut.size(); ++i) {
+        const RsBox box = to_rs_box(node_box(s.bvh().nodes[cut[i]]));
+        if (rs_segment_overlaps_box(tr, box)) code |= rs_u64(1) << (63u - rb - i);
+      }
       break;
     }
     default: return encode_ray(e, bits, s, r);

@@ -52,7 +52,8 @@ Sweep load_sweep(const std::vector<std::string>& dirs) {
     (std::find(kSweepable.begin(), kSweepable.end(), key) != kSweepable.end() ? swept : other).insert(key);
   if (!other.empty())
     throw Error(fmt::format("{}: the sets differ in {} as well, so their columns are not comparable; run them with one "
-                            "command that changes only --lambda, --twopoint-length, --direction-bits, --region-bits or --traffic-blend",
+                            "command that changes only --lambda, --twopoint-length, --direction-bits, --region-bits "
+                            "or --traffic-blend",
                             fmt::join(dirs, ", "), fmt::join(other, ", ")));
   if (swept.size() != 1)
     throw Error(fmt::format("{}: {}; a sweep varies exactly one of {}", fmt::join(dirs, ", "),
