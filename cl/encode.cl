@@ -137,6 +137,20 @@ static inline RsRay rs_load_ray(__global const RsRay* rays, uint index) {
     values[j] = j;                                                                                       \
   }                                                                                                      \
                                                                                                          \
+  /* HCC_REGION (keys_cut.h, rs_region_cut_code): the region grid and frame by value, the regions' \
+   * cuts (one row per region) in global memory: rays of one work-group may read different rows. */ \
+  __kernel void encode_region_cut_##SUFFIX(const RsEncodeFrame frame, const RsRegionGrid grid,            \
+                                           __global const RsCutGroup* cuts, __global const uint* cut_count,\
+                                           __global const RsRay* rays, __global const uint* order,       \
+                                           uint count, uint bits, __global KEY_T* keys,                   \
+                                           __global uint* values) {                                       \
+    uint i = get_global_id(0);                                                                           \
+    if (i >= count) return;                                                                              \
+    rs_u64 code = rs_region_cut_code(rays[order[i]], &frame, &grid, cuts, cut_count) & RS_CODE_MASK_##SUFFIX; \
+    keys[i] = (KEY_T)rs_key_from_code(code, bits);                                                       \
+    values[i] = i;                                                                                       \
+  }                                                                                                      \
+                                                                                                         \
   __kernel void encode_prefix_path_##SUFFIX(__global const RsBvhNode* nodes,                             \
                                             __global const RsTriangle* tris, __global const RsRay* rays, \
                                             __global const uint* order, uint count, uint bits,           \

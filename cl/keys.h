@@ -18,6 +18,9 @@
  * [tmin, tmax] overlaps box i. HCC (cut nodes by descending HAD), RegularGrid (grid cells),
  * HCC_DIR (appendix: b − d cut bits, then d direction bits), MLHCC (two-level cut),
  * PPC (section 4.1: the first b box tests of a traversal in fixed left-first order).
+ * Beyond the paper (issue 21): HCC_REGION (r bits of the origin's region, then the HCC of that
+ * region's own cut) and HCC_TRAFFIC (an HCC whose cut priority blends HAD with measured node traffic;
+ * its key is HCC's box-set key over another cut).
  *
  * Quantization is in the scene's box: q = clamp(floor(t·2^n), 0, 2^n − 1) with
  * t = (p − box.min)·inv_extent; a flat axis has inv_extent = 0 (t = 0). The clamp keeps points on
@@ -66,6 +69,8 @@ RS_KEY_INLINE rs_u32 rs_clz64(rs_u64 x) { return (rs_u32)std::countl_zero(x); }
 #define RS_ENC_MLHCC 8
 #define RS_ENC_PPC 9
 #define RS_ENC_HCC_DIR 10
+#define RS_ENC_HCC_REGION 11
+#define RS_ENC_HCC_TRAFFIC 12
 
 /* The most boxes a box-set key reads per ray: one per key bit. */
 #define RS_MAX_KEY_BITS 64

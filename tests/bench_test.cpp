@@ -24,6 +24,7 @@
 #include "render/frame_memory.h"
 #include "scene/provenance.h"
 #include "test_util.h"
+#include "trace/tracer.h"
 #include "util/atomic_file.h"
 
 namespace raysort {
@@ -371,6 +372,69 @@ TEST(Sweep, SetsDifferingInOneParameterSideBySide) {
   EXPECT_NE(refusal({a, c}).find("differ in spp as well"), std::string::npos) << refusal({a, c});
   EXPECT_NE(refusal({a, a}).find("the sets ran the same matrix"), std::string::npos) << refusal({a, a});
   EXPECT_NE(refusal({a}).find("two or more result sets"), std::string::npos);
+
+  // The knobs of the encoders beyond the paper (issue 21) are sweepable too.
+  const std::string r2 = make_set("sweep-r2", {{"region_bits", 2}}, 1.2);
+  const std::string r4 = make_set("sweep-r4", {{"region_bits", 4}}, 1.3);
+  const Sweep regions = load_sweep({r4, r2});
+  EXPECT_EQ(regions.parameter, "region_bits");
+  EXPECT_EQ(regions.points[0].value, 2.0);
+  EXPECT_NE(render_sweep(regions).find("hcc-region region bits"), std::string::npos);
+  const std::string t0 = make_set("sweep-t0", {{"traffic_blend", 0.0}}, 1.2);
+  const std::string t1 = make_set("sweep-t1", {{"traffic_blend", 1.0}}, 1.3);
+  EXPECT_EQ(load_sweep({t0, t1}).parameter, "traffic_blend");
+}
+
+// A matrix records the new encoders' knobs only when it runs them, so the sets written before they
+// existed keep their meta.json entry (and resume).
+TEST(Matrix, NewEncoderKnobsAreRecordedOnlyWhenRun) {
+  MatrixSpec spec;
+  spec.encoders = {Encoder::HCC};
+  EXPECT_FALSE(spec.to_json().contains("region_bits"));
+  EXPECT_FALSE(spec.to_json().contains("traffic_blend"));
+  spec.encoders = {Encoder::HCC_REGION};
+  spec.params.region_bits = 5;
+  EXPECT_EQ(spec.to_json().at("region_bits"), 5);
+  EXPECT_FALSE(spec.to_json().contains("traffic_blend"));
+  spec.encoders = {Encoder::HCC_TRAFFIC};
+  spec.params.traffic_blend = 0.25;
+  EXPECT_EQ(spec.to_json().at("traffic_blend"), 0.25);
+  EXPECT_FALSE(spec.to_json().contains("region_bits"));
+  EXPECT_EQ(matrix_preset("paper").encoders, all_encoders());  // both in the paper preset
+}
+
+// hcc-traffic is causal (issue 21): the traffic for batch k is the previous batch's node traffic,
+// and it does not change when batch k or any later batch changes; the frame's first batch has none.
+TEST(Matrix, TrafficForABatchComesOnlyFromTheBatchBefore) {
+  SceneOptions so;
+  so.frame = {64, 36, 1};
+  const PreparedScene p = prepare_scene("detail-room", so);
+  std::vector<ReferencedBatch> frame = generate_batches(p.scene, p.tris, p.bvh, {});
+  ASSERT_GE(frame.size(), 4u);
+  EXPECT_EQ(frame[0].batch.name, "primary");
+  EXPECT_TRUE(traffic_before(p.bvh, frame, "primary").empty());
+  EXPECT_TRUE(traffic_before(p.bvh, frame, "bounce9").empty());  // not in the frame
+  for (std::size_t k = 1; k < frame.size(); ++k) {
+    const std::string name = frame[k].batch.name;
+    const auto traffic = traffic_before(p.bvh, frame, name);
+    EXPECT_EQ(traffic, node_traffic(p.bvh, frame[k - 1].batch.rays, frame[k - 1].batch.any_hit())) << name;
+    EXPECT_GT(traffic.at(0), 0u) << name;
+    // Batch k and the later ones replaced (rays moved and turned): the same traffic for k.
+    std::vector<ReferencedBatch> changed = frame;
+    for (std::size_t j = k; j < changed.size(); ++j)
+      for (RsRay& r : changed[j].batch.rays) r.d[0] = -r.d[0], r.o[1] += 0.1f;
+    EXPECT_EQ(traffic_before(p.bvh, changed, name), traffic) << name;
+    // The batch before it changed: other traffic.
+    std::vector<ReferencedBatch> earlier = frame;
+    for (RsRay& r : earlier[k - 1].batch.rays) r.d[0] = -r.d[0], r.d[2] = -r.d[2];
+    EXPECT_NE(traffic_before(p.bvh, earlier, name), traffic) << name;
+  }
+  // The cut built from it: β = 0 gives HCC's cut whatever the traffic.
+  EncoderParams p0;
+  p0.traffic_blend = 0.0;
+  EncodeScene s0(p.bvh, p.bvh.bounds(), p0);
+  s0.set_node_traffic(traffic_before(p.bvh, frame, frame[2].batch.name));
+  EXPECT_EQ(s0.traffic_cut(32), s0.hcc_cut(32));
 }
 
 // Issue 22: the paper preset samples as the paper did (§5: "two shadow rays per bounce and eight
@@ -442,9 +506,9 @@ TEST(Matrix, EndToEndAndResume) {
   RunSummary s = run_matrix(spec, opts);
   EXPECT_FALSE(s.interrupted);
   EXPECT_EQ(s.cells_failed, 0u);
-  // 2 scenes x 3 batches x (NoSort + 10 encoders x (bits + top-k) x 2 access modes); cornell runs 3
+  // 2 scenes x 3 batches x (NoSort + 12 encoders x (bits + top-k) x 2 access modes); cornell runs 3
   // key lengths.
-  EXPECT_EQ(s.cells_run, 3u * (1 + 10 * 4 * 2) + 3u * (1 + 10 * 2 * 2));
+  EXPECT_EQ(s.cells_run, 3u * (1 + 12 * 4 * 2) + 3u * (1 + 12 * 2 * 2));
   auto rs = ResultSet::load(opts.out);
   for (auto& c : rs.cells()) {
     EXPECT_TRUE(c.ok()) << c.id() << ": " << c.error;
@@ -463,6 +527,21 @@ TEST(Matrix, EndToEndAndResume) {
       EXPECT_FALSE(c.speedup.has_interval() && !c.same_order_as_nosort) << c.id();
     }
   }
+  // hcc-traffic (issue 21): every cell records its per-batch cut's host cost, no other cell does; on
+  // primary (no earlier batch) its cut is HCC's, so are its keys; later it uses the previous batch's
+  // traffic.
+  for (auto& c : rs.cells()) {
+    if (c.encoder == "hcc-traffic") {
+      EXPECT_GE(c.cut_ms, 0.0) << c.id();
+    } else {
+      EXPECT_EQ(c.cut_ms, -1.0) << c.id();
+    }
+  }
+  for (const std::string scene : {"cornell", "multi-instance"})
+    EXPECT_EQ(rs.find(scene + "/primary/hcc-traffic/32")->keys_hash, rs.find(scene + "/primary/hcc/32")->keys_hash);
+  EXPECT_NE(rs.find("multi-instance/bounce1/hcc-traffic/32")->keys_hash,
+            rs.find("multi-instance/bounce1/hcc/32")->keys_hash);
+  EXPECT_NE(read_file(opts.out + "/cells.csv").find(",cut_ms,"), std::string::npos);
   std::string tables = read_file(opts.out + "/tables.md");
   EXPECT_NE(tables.find("## Trace speed, bounce1 rays"), std::string::npos);
   EXPECT_NE(tables.find("access permute"), std::string::npos);
@@ -474,6 +553,8 @@ TEST(Matrix, EndToEndAndResume) {
   EXPECT_TRUE(fs::exists(opts.out + "/overhead-vs-gain-bounce1-32b-permute.png"));
   // meta.json fingerprints every cell's keys and order.
   auto meta = nlohmann::json::parse(read_file(opts.out + "/meta.json"));
+  EXPECT_EQ(meta["matrix"]["region_bits"], 3);  // the new encoders' knobs, since the matrix runs them
+  EXPECT_EQ(meta["matrix"]["traffic_blend"], 0.5);
   ASSERT_TRUE(meta.contains("fingerprints"));
   EXPECT_EQ(meta["fingerprints"].size(), rs.cells().size());
   EXPECT_EQ(meta["fingerprints"]["cornell/bounce1/hcc/32"]["keys"], rs.find("cornell/bounce1/hcc/32")->keys_hash);

@@ -100,6 +100,12 @@ TEST(Cli, ImpossibleCombinationsRefusedBeforeWork) {
   expect_refused({"run", "--scenes", "cornell", "--top-bits", "40", "--bits", "32"}, {"--top-bits 40"});
   expect_refused({"run", "--scenes", "cornell", "--reps", "0"}, {"--reps"});
   expect_refused({"run", "--scenes", "cornell", "--timeout", "-1"}, {"--timeout -1"});
+  // The knobs of the encoders beyond the paper (issue 21).
+  expect_refused({"run", "--scenes", "cornell", "--region-bits", "9"}, {"--region-bits 9", "0 to 8 region bits"});
+  expect_refused({"run", "--scenes", "cornell", "--encoders", "hcc-region", "--region-bits", "4", "--bits", "4"},
+                 {"encoder hcc-region with 4-bit keys", "more than 4 bits"});
+  expect_refused({"run", "--scenes", "cornell", "--traffic-blend", "1.5"},
+                 {"--traffic-blend 1.5", "from 0 (HAD only) to 1"});
   expect_refused({"trace", "--scene", "cornell", "--adjudicate"}, {"--adjudicate judges", "--variant both"});
   expect_refused({"trace", "--scene", "cornell", "--disagreements", "x"}, {"--disagreements DIR goes with --adjudicate"});
   // A broken OBJ given by path is read before the run starts, not after the first scenes ran.

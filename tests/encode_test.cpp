@@ -17,6 +17,7 @@
 #include "render/batches.h"
 #include "scene/load.h"
 #include "test_util.h"
+#include "trace/tracer.h"
 
 namespace raysort {
 
@@ -181,7 +182,7 @@ TEST(EncodeMath, SceneExitEqualsTheMinMaxForm) {
 }
 
 TEST(Encode, NamesRoundTrip) {
-  EXPECT_EQ(all_encoders().size(), 11u);
+  EXPECT_EQ(all_encoders().size(), 13u);
   for (Encoder e : all_encoders()) {
     auto p = parse_encoder(encoder_name(e));
     ASSERT_TRUE(p.has_value()) << encoder_name(e);
@@ -190,6 +191,8 @@ TEST(Encode, NamesRoundTrip) {
   EXPECT_EQ(parse_encoder("Aila_Compact"), Encoder::Aila);
   EXPECT_EQ(parse_encoder("HCC_DIR"), Encoder::HCC_DIR);
   EXPECT_EQ(parse_encoder("regular-grid"), Encoder::RegularGrid);
+  EXPECT_EQ(parse_encoder("HCC_REGION"), Encoder::HCC_REGION);
+  EXPECT_EQ(parse_encoder("hcc-traffic"), Encoder::HCC_TRAFFIC);
   EXPECT_FALSE(parse_encoder("zorder").has_value());
   EXPECT_NE(key_bits_problem(Encoder::MLHCC, 17, {}), "");
   EXPECT_NE(key_bits_problem(Encoder::HCC, 65, {}), "");
@@ -679,6 +682,7 @@ std::uint64_t key(Encoder e, unsigned bits, const EncodeScene& s, const RsRay& r
     case Encoder::TwoPoint: code = twopoint(f, r); break;
     case Encoder::RegularGrid:
     case Encoder::HCC:
+    case Encoder::HCC_TRAFFIC:
     case Encoder::HCC_DIR: {
       const auto& boxes = s.box_set(e, bits);
       const unsigned dir = e == Encoder::HCC_DIR ? s.params().direction_bits : 0u;
@@ -688,6 +692,22 @@ std::uint64_t key(Encoder e, unsigned bits, const EncodeScene& s, const RsRay& r
     case Encoder::MLHCC: {
       const auto& t = s.two_level(bits);
       code = two_level(r, t.top.data(), static_cast<rs_u32>(t.top.size()), t.low.data(), t.low_count.data(), t.half);
+      break;
+    }
+    case Encoder::HCC_REGION: {
+      // The region from the origin's grid cell, counted here axis by axis; then one scalar slab test
+      // per cut node of that region.
+      const auto& g = s.regions(bits);
+      rs_u32 region = 0;
+      for (int a = 0; a < 3; ++a) region += rs_quantize_axis(f, a, r.o[a], g.grid.levels[a]) * (1u << g.grid.shift[a]);
+      const rs_u32 rb = g.grid.region_bits;
+      if (rb > 0) code = rs_u64(region) << (64u - rb);
+      const RsTraversalRay tr = rs_prepare_ray(r);
+      const auto& cut = g.cuts.at(region);
+      for (std::size_t i = 0; i < cut.size(); ++i) {
+        const RsBox box = to_rs_box(node_box(s.bvh().nodes[cut[i]]));
+        if (rs_segment_overlaps_box(tr, box)) code |= rs_u64(1) << (63u - rb - i);
+      }
       break;
     }
     default: return encode_ray(e, bits, s, r);
@@ -961,6 +981,204 @@ TEST(Encode, CutGroupsMatchTheScalarSlabTest) {
   RsBox empty{{0, 0, 1}, {1, 1, 0}}, nan{{0, 0, 0}, {1, std::nanf(""), 1}};
   EXPECT_THROW(rs_cut_groups(&empty, 1), Error);
   EXPECT_THROW(rs_cut_groups(&nan, 1), Error);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Beyond the paper (issue 21): hcc-region and hcc-traffic.
+// ---------------------------------------------------------------------------------------------
+
+TEST(Encode, NewEncoderKnobsAreValidated) {
+  EncoderParams p;
+  EXPECT_EQ(p.region_bits, 3u);
+  EXPECT_EQ(p.traffic_blend, 0.5);
+  EXPECT_EQ(key_bits_problem(Encoder::HCC_REGION, 16, p), "");
+  EXPECT_NE(key_bits_problem(Encoder::HCC_REGION, 3, p).find("more than 3 bits"), std::string::npos);
+  p.region_bits = 0;
+  EXPECT_EQ(key_bits_problem(Encoder::HCC_REGION, 1, p), "");
+  p.region_bits = kMaxRegionBits;
+  EXPECT_EQ(key_bits_problem(Encoder::HCC_REGION, 64, p), "");
+  p.region_bits = kMaxRegionBits + 1;
+  EXPECT_NE(key_bits_problem(Encoder::HCC_REGION, 64, p).find("0 to 8 region bits"), std::string::npos);
+  EXPECT_EQ(key_bits_problem(Encoder::HCC, 64, p), "");  // the knob is hcc-region's only
+  for (double beta : {0.0, 0.25, 1.0}) {
+    p.traffic_blend = beta;
+    EXPECT_EQ(key_bits_problem(Encoder::HCC_TRAFFIC, 32, p), "") << beta;
+  }
+  for (double beta : {-0.1, 1.5, std::nan("")}) {
+    p.traffic_blend = beta;
+    EXPECT_NE(key_bits_problem(Encoder::HCC_TRAFFIC, 32, p).find("from 0 (HAD only) to 1"), std::string::npos) << beta;
+  }
+  EXPECT_THROW(check_key_bits(Encoder::HCC_TRAFFIC, 32, p), Error);
+}
+
+namespace {
+struct DetailRoom {
+  Bvh bvh;
+  Aabb box;
+  std::vector<ReferencedBatch> batches;
+};
+const DetailRoom& detail_room() {
+  static const DetailRoom d = [] {
+    SceneOptions opts;
+    opts.frame = {64, 36, 1};
+    PreparedScene p = prepare_scene("detail-room", opts);
+    DetailRoom r;
+    r.batches = generate_batches(p.scene, p.tris, p.bvh, {});
+    r.bvh = std::move(p.bvh);
+    r.box = r.bvh.bounds();
+    return r;
+  }();
+  return d;
+}
+}  // namespace
+
+// hcc-region: 2^r regions (the grid rule), each region's cut nodes all overlap it, are at most
+// b − r and in descending HAD; a ray from inside region k has k in its top r bits, so rays from
+// different regions get different top bits; with r = 0 the keys are HCC's.
+TEST(Encode, RegionKeysStartWithTheOriginsRegion) {
+  const DetailRoom& d = detail_room();
+  for (unsigned r : {1u, 3u, 5u}) {
+    EncoderParams p;
+    p.region_bits = r;
+    EncodeScene s(d.bvh, d.box, p);
+    for (unsigned bits : kBits) {
+      const auto& g = s.regions(bits);
+      ASSERT_EQ(g.boxes.size(), 1u << r);
+      ASSERT_EQ(g.cuts.size(), 1u << r);
+      EXPECT_EQ(g.groups.size(), (std::size_t(1) << r) * ((bits - r + 15) / 16));
+      std::set<rs_u64> tops;
+      for (std::size_t k = 0; k < g.boxes.size(); ++k) {
+        const auto& cut = g.cuts[k];
+        EXPECT_LE(cut.size(), bits - r);
+        EXPECT_GT(cut.size(), 0u);
+        EXPECT_EQ(g.counts[k], cut.size());
+        for (std::size_t i = 0; i < cut.size(); ++i) {
+          EXPECT_TRUE(boxes_overlap(node_box(d.bvh.nodes[cut[i]]), g.boxes[k])) << "region " << k << " node " << cut[i];
+          if (i > 0) {
+            EXPECT_GE(s.had()[cut[i - 1]], s.had()[cut[i]]);
+          }
+        }
+        // No node twice, and no node below another one of the same cut.
+        const std::set<std::uint32_t> unique(cut.begin(), cut.end());
+        EXPECT_EQ(unique.size(), cut.size());
+        const Aabb& c = g.boxes[k];
+        const RsRay from_centre = ray(0.5f * (c.min[0] + c.max[0]), 0.5f * (c.min[1] + c.max[1]),
+                                      0.5f * (c.min[2] + c.max[2]), 0.3f, -0.5f, 0.8f);
+        const std::uint64_t key = key1(Encoder::HCC_REGION, bits, s, from_centre);
+        EXPECT_EQ(key >> (bits - r), k) << "r " << r << " bits " << bits;
+        tops.insert(key >> (bits - r));
+      }
+      EXPECT_EQ(tops.size(), g.boxes.size());
+    }
+  }
+  // One region: HCC.
+  EncoderParams p0;
+  p0.region_bits = 0;
+  EncodeScene s0(d.bvh, d.box, p0);
+  for (unsigned bits : kBits) {
+    EXPECT_EQ(s0.regions(bits).cuts.at(0), s0.hcc_cut(bits));
+    for (const auto& rb : d.batches)
+      EXPECT_EQ(encode_on_host(Encoder::HCC_REGION, bits, s0, rb.batch.rays),
+                encode_on_host(Encoder::HCC, bits, s0, rb.batch.rays))
+          << rb.batch.name << " " << bits;
+  }
+}
+
+// hcc-region's kernel equals the host twin for region counts 1 to 256, key lengths whose cut rows
+// end in a full, a more-than-half and an at-most-half group, on edge rays and every batch.
+TEST(Encode, RegionKernelMatchesTheHostForEveryRegionWidth) {
+  const DetailRoom& d = detail_room();
+  for (unsigned r : {0u, 1u, 4u, 8u}) {
+    EncoderParams p;
+    p.region_bits = r;
+    DeviceEncoder dev(testing::runtime(), d.bvh, d.box, p);
+    const std::vector<RsRay> rays = edge_rays(dev.scene(), d.box, 3000);
+    for (unsigned bits : {9u, 16u, 25u, 32u, 33u, 50u, 64u}) {
+      if (!key_bits_problem(Encoder::HCC_REGION, bits, p).empty()) continue;
+      expect_device_equals_host(dev, Encoder::HCC_REGION, bits, rays, "r = " + std::to_string(r));
+      for (const auto& rb : d.batches)
+        expect_device_equals_host(dev, Encoder::HCC_REGION, bits, rb.batch.rays, "r = " + std::to_string(r));
+      const auto keys = encode_on_host(Encoder::HCC_REGION, bits, dev.scene(), rays);
+      for (std::size_t i = 0; i < rays.size(); ++i)
+        ASSERT_EQ(keys[i], ref::key(Encoder::HCC_REGION, bits, dev.scene(), rays[i])) << "r " << r << " bits " << bits;
+    }
+  }
+}
+
+// Node traffic: the root's count is the rays entering the scene box, and no node is entered by more
+// rays than its parent; the order of the rays does not matter.
+TEST(Encode, NodeTrafficCountsTheRaysEnteringEachNode) {
+  const DetailRoom& d = detail_room();
+  for (const auto& rb : d.batches) {
+    const auto visits = node_traffic(d.bvh, rb.batch.rays, rb.batch.any_hit());
+    ASSERT_EQ(visits.size(), d.bvh.nodes.size());
+    std::uint64_t entering = 0;
+    for (const RsRay& r : rb.batch.rays) {
+      int hit = 0;
+      rs_intersect_box(rs_prepare_ray(r), &d.bvh.nodes[0], r.tmax, &hit);
+      entering += hit != 0;
+    }
+    EXPECT_EQ(visits[0], entering) << rb.batch.name;
+    EXPECT_GT(visits[0], 0u) << rb.batch.name;
+    for (std::uint32_t n = 0; n < d.bvh.nodes.size(); ++n) {
+      if (d.bvh.is_leaf(n)) continue;
+      for (std::uint32_t c = d.bvh.nodes[n].first; c < d.bvh.nodes[n].first + 2; ++c) {
+        ASSERT_LE(visits[c], visits[n]);
+      }
+    }
+    std::vector<RsRay> reversed(rb.batch.rays.rbegin(), rb.batch.rays.rend());
+    EXPECT_EQ(node_traffic(d.bvh, reversed, rb.batch.any_hit()), visits) << rb.batch.name;
+  }
+}
+
+// hcc-traffic: without traffic, or with β = 0, its cut is HCC's and so are its keys; with traffic and
+// β = 1 its cut is in descending traffic (ties by HAD) and is a valid cut; the kernel equals the
+// host twin for the cut of every batch's traffic, and setting new traffic changes the device's cut.
+TEST(Encode, TrafficCutBlendsHadWithTheTraffic) {
+  const DetailRoom& d = detail_room();
+  const auto& frame = d.batches;
+  ASSERT_GE(frame.size(), 3u);
+  const std::vector<std::uint64_t> visits = node_traffic(d.bvh, frame[0].batch.rays, frame[0].batch.any_hit());
+  for (unsigned bits : kBits) {
+    EncoderParams p0;
+    p0.traffic_blend = 0.0;
+    EncodeScene s0(d.bvh, d.box, p0);
+    EXPECT_EQ(s0.traffic_cut(bits), s0.hcc_cut(bits));  // no traffic yet
+    s0.set_node_traffic(visits);
+    EXPECT_EQ(s0.traffic_cut(bits), s0.hcc_cut(bits)) << "beta = 0";
+    EXPECT_EQ(encode_on_host(Encoder::HCC_TRAFFIC, bits, s0, frame[1].batch.rays),
+              encode_on_host(Encoder::HCC, bits, s0, frame[1].batch.rays));
+
+    EncoderParams p1;
+    p1.traffic_blend = 1.0;
+    EncodeScene s1(d.bvh, d.box, p1);
+    s1.set_node_traffic(visits);
+    const auto& cut = s1.traffic_cut(bits);
+    EXPECT_EQ(validate_cut(d.bvh, cut), "") << bits;
+    for (std::size_t i = 1; i < cut.size(); ++i) {
+      const auto a = visits[cut[i - 1]], b = visits[cut[i]];
+      EXPECT_TRUE(a > b || (a == b && s1.had()[cut[i - 1]] >= s1.had()[cut[i]])) << "bit " << i;
+    }
+    EXPECT_NE(cut, s1.hcc_cut(bits)) << "detail-room's traffic should move some cut node, " << bits << " bits";
+  }
+  for (double beta : {0.5, 1.0}) {
+    EncoderParams p;
+    p.traffic_blend = beta;
+    DeviceEncoder dev(testing::runtime(), d.bvh, d.box, p);
+    for (std::size_t k = 0; k < frame.size(); ++k) {
+      dev.set_node_traffic(k == 0 ? std::vector<std::uint64_t>{}
+                                  : node_traffic(d.bvh, frame[k - 1].batch.rays, frame[k - 1].batch.any_hit()));
+      const std::string what = "beta " + std::to_string(beta) + " " + frame[k].batch.name;
+      for (unsigned bits : {16u, 32u, 33u, 64u}) {
+        expect_device_equals_host(dev, Encoder::HCC_TRAFFIC, bits, frame[k].batch.rays, what);
+        const auto keys = encode_on_host(Encoder::HCC_TRAFFIC, bits, dev.scene(), frame[k].batch.rays);
+        for (std::size_t i = 0; i < keys.size(); ++i)
+          ASSERT_EQ(keys[i], ref::key(Encoder::HCC_TRAFFIC, bits, dev.scene(), frame[k].batch.rays[i])) << what;
+      }
+    }
+  }
+  EncodeScene s(d.bvh, d.box);
+  EXPECT_THROW(s.set_node_traffic(std::vector<std::uint64_t>(3, 1)), Error);  // not one count per node
 }
 
 }  // namespace raysort

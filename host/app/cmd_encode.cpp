@@ -10,6 +10,7 @@
 #include "app/commands.h"
 #include "app/options.h"
 #include "bench/protocol.h"
+#include "bench/runner.h"
 #include "bvh/prepared_scene.h"
 #include "encode/encode.h"
 #include "render/batches.h"
@@ -30,6 +31,8 @@ struct EncodeBenchArgs {
   ProtocolOptions protocol;
   bool verify = true;
   int direction_bits = -1;  // HCC_DIR's direction bits; -1: the default (EncoderParams)
+  int region_bits = -1;     // hcc-region's region bits; -1: the default
+  double traffic_blend = -1;  // hcc-traffic's blend; -1: the default
   CommonOptions common;
 };
 
@@ -60,7 +63,12 @@ int run_encodebench(const EncodeBenchArgs& args) {
              "ms = median [95 % interval], % trace = paired estimate of encode / trace per round\n\n");
   EncoderParams params;
   if (args.direction_bits >= 0) params.direction_bits = static_cast<unsigned>(args.direction_bits);
+  if (args.region_bits >= 0) params.region_bits = static_cast<unsigned>(args.region_bits);
+  if (args.traffic_blend >= 0) params.traffic_blend = args.traffic_blend;
   DeviceEncoder enc(rt, bvh, bvh.bounds(), params);
+  // hcc-traffic: its cut from the traffic of the batch traced before this one, as raysort run makes it.
+  if (std::find(encoders.begin(), encoders.end(), Encoder::HCC_TRAFFIC) != encoders.end())
+    enc.set_node_traffic(traffic_before(bvh, batches, args.batch));
   Tracer tracer(rt, bvh);
   enc.warm_up();
   std::vector<std::uint32_t> identity(n);
@@ -74,7 +82,7 @@ int run_encodebench(const EncodeBenchArgs& args) {
     return std::isfinite(t.lo_ms) ? fmt::format("{:.3f} [{:.3f}, {:.3f}]", t.median_ms, t.lo_ms, t.hi_ms)
                                   : fmt::format("{:.3f}", t.median_ms);
   };
-  fmt::print("{:<9} {:>4} {:>28} {:>9} {:>24} {:>10} {:>8} {:>7}\n", "encoder", "bits", "encode ms", "MRays/s",
+  fmt::print("{:<11} {:>4} {:>28} {:>9} {:>24} {:>10} {:>8} {:>7}\n", "encoder", "bits", "encode ms", "MRays/s",
              "% trace", "distinct", "host==", "rounds");
   int failures = 0;
   for (Encoder e : encoders)
@@ -119,7 +127,7 @@ int run_encodebench(const EncodeBenchArgs& args) {
       const std::string share_text =
           share.has_interval() ? fmt::format("{:.1f}% [{:.1f}, {:.1f}]", 100 * share.value, 100 * share.lo, 100 * share.hi)
                                : fmt::format("{:.1f}%", 100 * share.value);
-      fmt::print("{:<9} {:>4} {:>28} {:>9.1f} {:>24} {:>10} {:>8} {:>6}{}\n", encoder_name(e), bits, ms_text(encode),
+      fmt::print("{:<11} {:>4} {:>28} {:>9.1f} {:>24} {:>10} {:>8} {:>6}{}\n", encoder_name(e), bits, ms_text(encode),
                  encode.median_ms > 0 ? batch.size() / (encode.median_ms * 1e3) : 0.0, share_text, distinct, check,
                  o.rounds, o.stop == StopReason::Noise ? " " : "*");
       std::fflush(stdout);
@@ -143,6 +151,8 @@ void register_encode_command(CLI::App& app) {
   cmd->add_option("--bits", args->bits, "comma-separated key lengths")->delimiter(',')->capture_default_str();
   cmd->add_option("--direction-bits", args->direction_bits,
                   "HCC_DIR direction bits (more than 1 runs its two-pass kernels, as `run --direction-bits` does)");
+  cmd->add_option("--region-bits", args->region_bits, "hcc-region region bits (as `run --region-bits`)");
+  cmd->add_option("--traffic-blend", args->traffic_blend, "hcc-traffic blend (as `run --traffic-blend`)");
   add_protocol_options(*cmd, args->protocol);
   cmd->add_flag("!--no-verify", args->verify, "skip the comparison with the host twin");
   add_common_options(*cmd, args->common);

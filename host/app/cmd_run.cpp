@@ -24,6 +24,8 @@ struct RunArgs {
   bool warmup_set = false;
   float lambda = -1, twopoint = -1;
   int direction_bits = -1;
+  int region_bits = -1;
+  double traffic_blend = -1;
   double timeout_s = 0;
   std::string shard;
   unsigned shard_plan = 0;
@@ -72,6 +74,17 @@ MatrixSpec matrix_from(const RunArgs& a, const CLI::App& cmd) {
   if (a.lambda >= 0) spec.params.had_lambda = a.lambda;
   if (a.twopoint >= 0) spec.params.twopoint_length_fraction = a.twopoint;
   if (a.direction_bits >= 0) spec.params.direction_bits = static_cast<unsigned>(a.direction_bits);
+  if (cmd.count("--region-bits")) {
+    if (a.region_bits < 0 || a.region_bits > static_cast<int>(kMaxRegionBits))
+      throw Error(fmt::format("--region-bits {}: hcc-region takes 0 to {} region bits", a.region_bits, kMaxRegionBits));
+    spec.params.region_bits = static_cast<unsigned>(a.region_bits);
+  }
+  if (cmd.count("--traffic-blend")) {
+    if (!(a.traffic_blend >= 0.0 && a.traffic_blend <= 1.0))
+      throw Error(fmt::format("--traffic-blend {}: the blend is a number from 0 (HAD only) to 1 (traffic only)",
+                              a.traffic_blend));
+    spec.params.traffic_blend = a.traffic_blend;
+  }
   spec.cell_timeout_s = a.timeout_s;
   return spec;
 }
@@ -117,6 +130,12 @@ void register_run_command(CLI::App& app) {
   cmd->add_option("--lambda", a->lambda, "HAD lambda (paper Eq. 1; default 0.125)");
   cmd->add_option("--twopoint-length", a->twopoint, "TwoPoint ray length as a fraction of the largest extent (0.25)");
   cmd->add_option("--direction-bits", a->direction_bits, "HCC_DIR direction bits");
+  cmd->add_option("--region-bits", a->region_bits,
+                  "hcc-region: key bits that pick the ray origin's region, 2^N regions of the scene box (0-8, default "
+                  "3; docs/encoders.md)");
+  cmd->add_option("--traffic-blend", a->traffic_blend,
+                  "hcc-traffic: beta of the cut priority (1 - beta) HAD + beta traffic of the previous batch (0-1, "
+                  "default 0.5; docs/encoders.md)");
   cmd->add_option("--timeout", a->timeout_s,
                   "per-cell wall-clock limit in seconds (0: none); a cell over it is recorded as \"timeout\" "
                   "(checked between the arms of a round: a kernel in flight runs to completion)");

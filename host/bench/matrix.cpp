@@ -56,6 +56,11 @@ nlohmann::json MatrixSpec::to_json() const {
           {"direction_bits", params.direction_bits}};
   // Only when on, so a set without the model keeps the entry it was written with (and resumes).
   if (!gpu_model.empty()) j["gpu_model"] = gpu_model;
+  // The knobs of the encoders beyond the paper (issue 21), only in a matrix that runs them: a set
+  // written before they existed keeps its entry (and resumes).
+  auto runs = [&](Encoder e) { return std::find(encoders.begin(), encoders.end(), e) != encoders.end(); };
+  if (runs(Encoder::HCC_REGION)) j["region_bits"] = params.region_bits;
+  if (runs(Encoder::HCC_TRAFFIC)) j["traffic_blend"] = params.traffic_blend;
   // Likewise the sampling overrides: a set that keeps the scenes' own shadow rays and depth has no entry.
   if (frame.shadow_rays) j["shadow_rays"] = frame.shadow_rays;
   if (frame.bounces) j["bounces"] = frame.bounces;

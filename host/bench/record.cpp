@@ -116,6 +116,7 @@ void to_json(nlohmann::json& j, const CellRecord& r) {
                      {"order_hash", r.order_hash},
                      {"leaks_per_million", r.leaks_per_million}};
   if (!r.gpu.profile.empty()) j["gpu_model"] = gpu_model_json(r.gpu);
+  if (r.cut_ms >= 0) j["cut_ms"] = r.cut_ms;  // hcc-traffic only (added within format version 3)
   timing_to_json(j, "encode", r.encode);
   timing_to_json(j, "sort", r.sort);
   timing_to_json(j, "permute", r.permute);
@@ -168,6 +169,7 @@ void from_json(const nlohmann::json& j, CellRecord& r) {
   j.at("order_hash").get_to(r.order_hash);
   r.leaks_per_million = j.value("leaks_per_million", -1.0);  // added within format version 1
   if (j.contains("gpu_model")) gpu_model_from_json(j.at("gpu_model"), r.gpu);  // added within format version 3
+  if (j.contains("cut_ms")) r.cut_ms = number_from(j.at("cut_ms"));
   timing_from_json(j, "encode", r.encode);
   timing_from_json(j, "sort", r.sort);
   timing_from_json(j, "permute", r.permute);
@@ -264,6 +266,8 @@ std::vector<Col> make_columns() {
   add_timing(c, "permute", &CellRecord::permute);
   add_timing(c, "trace", &CellRecord::trace);
   add_timing(c, "nosort_trace", &CellRecord::nosort_trace);
+  // hcc-traffic's per-batch cut (host ms); empty for other cells.
+  c.push_back(numeric("cut_ms", [](const CellRecord& r) { return r.cut_ms >= 0 ? r.cut_ms : kNaN; }, 3));
   c.push_back(numeric("trace_mrays", [](const CellRecord& r) { return r.trace_mrays; }, 4));
   add_estimate(c, "speedup", &CellRecord::speedup, 4);
   add_estimate(c, "net_speedup", &CellRecord::net_speedup, 4);

@@ -94,6 +94,11 @@ struct CellRecord {
   // -1 when not measured.
   double leaks_per_million = -1.0;
 
+  // hcc-traffic cells (issue 21): the host time, ms, its per-batch cut cost: counting the previous
+  // batch's node traffic (node_traffic) plus building and uploading the cut for this key length.
+  // Not part of encode (the kernel time) or of net_speedup. -1 (absent in JSON) for other cells.
+  double cut_ms = -1.0;
+
   // Checks and fingerprints (deterministic: equal on every device for the same command).
   bool hits_match_nosort = false;  // sorted trace scattered back == NoSort hits, bit for bit
   bool order_is_permutation = false;

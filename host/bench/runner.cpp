@@ -156,9 +156,10 @@ std::string progress_text(const CellRecord& c) {
           ? fmt::format("same order as NoSort, no speedup (measured {})",
                         with_interval(ratio_interval(c.samples.at("nosort"), c.samples.at("trace"))))
           : fmt::format("speedup {}", with_interval(c.speedup));
-  return fmt::format("{}: {:.2f} MRays/s, {}, net {}, encode {:.2f} + sort {:.2f}{} ms, ANC {:.2f}  ({})", c.id(),
+  return fmt::format("{}: {:.2f} MRays/s, {}, net {}, encode {:.2f} + sort {:.2f}{} ms{}, ANC {:.2f}  ({})", c.id(),
                      c.trace_mrays, speed, with_interval(c.net_speedup), c.encode.median_ms, c.sort.median_ms,
-                     c.access == "permute" ? fmt::format(" + permute {:.2f}", c.permute.median_ms) : "", c.anc, rounds);
+                     c.access == "permute" ? fmt::format(" + permute {:.2f}", c.permute.median_ms) : "",
+                     c.cut_ms >= 0 ? fmt::format(" (host cut {:.1f} ms)", c.cut_ms) : "", c.anc, rounds);
 }
 
 CellRecord cell_of(const PlannedCell& p, TraceLayout layout) {
@@ -230,6 +231,15 @@ struct SceneBench {
                .first;
     return it->second;
   }
+  // hcc-traffic (docs/encoders.md): the cut for batch `name` comes from the node traffic of the
+  // batch traced just before it in the frame (generation order: primary, shadow0, bounce1, shadow1,
+  // ...), never from itself or a later one; the frame's first batch has none and gets HCC's cut.
+  // Sets it on the encoder; returns the host ms the count took.
+  double use_traffic_before(const std::string& name) {
+    const auto start = std::chrono::steady_clock::now();
+    encoder->set_node_traffic(traffic_before(bvh, batches, name));
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  }
   // Rays this variant misses that the other one hits, per million (-1 unless both variants run).
   double leaks_per_million(const ReferencedBatch& b, const std::string& variant, bool both_variants) {
     if (!both_variants || b.batch.size() == 0) return -1.0;
@@ -240,6 +250,27 @@ struct SceneBench {
     return static_cast<double>(leaks) * 1e6 / static_cast<double>(b.batch.size());
   }
 };
+
+// The cells of one encoder × key length × top-k on one batch. hcc-traffic's cut is per batch: it is
+// made here from the previous batch's traffic, and its cells record cut_ms, the host time of the
+// traffic count plus the cut's build and upload (outside the timed rounds).
+std::vector<CellRecord> measure_encoder(BatchBench& bench, SceneBench& scene, std::vector<CellRecord> cells, Encoder e,
+                                        const ProtocolSettings& settings) {
+  double cut_ms = -1.0;
+  if (e == Encoder::HCC_TRAFFIC) {
+    const double traffic_ms = scene.use_traffic_before(cells.front().batch);
+    const auto start = std::chrono::steady_clock::now();
+    try {
+      scene.encoder->prepare(e, cells.front().bits);
+    } catch (const Error&) {
+      // measure_sorted's own prepare fails the cells with this error
+    }
+    cut_ms = traffic_ms + std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  }
+  std::vector<CellRecord> out = bench.measure_sorted(std::move(cells), e, settings);
+  for (CellRecord& c : out) c.cut_ms = cut_ms;
+  return out;
+}
 
 // Scene problems a run can find before any work starts: a scene file or OBJ given by path is
 // parsed (it is small next to a run); an embedded scene's OBJ files must exist under the root.
@@ -323,6 +354,15 @@ void finish_run(ResultSet& results, const std::vector<PlannedCell>& plan, const 
 }
 
 }  // namespace
+
+std::vector<std::uint64_t> traffic_before(const Bvh& bvh, const std::vector<ReferencedBatch>& frame,
+                                          const std::string& batch) {
+  for (std::size_t i = 0; i < frame.size(); ++i)
+    if (frame[i].batch.name == batch)
+      return i == 0 ? std::vector<std::uint64_t>{}
+                    : node_traffic(bvh, frame[i - 1].batch.rays, frame[i - 1].batch.any_hit());
+  return {};
+}
 
 std::string default_result_dir(const MatrixSpec& spec, const std::string& device_slug, const ShardSpec& shard) {
   const std::string matrix = spec.to_json().dump();
@@ -425,7 +465,8 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
           continue;
         }
         const Encoder e = *parse_encoder(group.front().encoder);
-        for (const CellRecord& c : bench.measure_sorted(cells, e, spec.protocol(cells.front().id()))) record(c);
+        const ProtocolSettings settings = spec.protocol(cells.front().id());
+        for (const CellRecord& c : measure_encoder(bench, scene, std::move(cells), e, settings)) record(c);
       }
     }
   }

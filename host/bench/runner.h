@@ -4,10 +4,13 @@
 // (bench/cell_measure.h: encode → radix sort → [permute] → trace, paired with NoSort traces in the
 // rounds of bench/protocol.h, checked bit for bit, ANC and SIMT model) → record (each cell written
 // the moment it finishes; a rerun skips finished cells).
+#include <cstdint>
 #include <string>
+#include <vector>
 
 #include "bench/matrix.h"
 #include "bench/shard.h"
+#include "render/batches.h"
 
 namespace raysort {
 
@@ -37,6 +40,13 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts);
 
 // The default result folder for a matrix (or one shard of it) on a device.
 std::string default_result_dir(const MatrixSpec& spec, const std::string& device_slug, const ShardSpec& shard = {});
+
+// hcc-traffic's input for `batch` (docs/encoders.md): the node traffic (trace/tracer.h,
+// node_traffic) of the batch traced just before it in `frame` (generation order: primary, shadow0,
+// bounce1, shadow1, ...). Causal: only that earlier batch's rays are read. Empty for the frame's
+// first batch and for a batch the frame lacks (hcc-traffic then has HCC's cut).
+std::vector<std::uint64_t> traffic_before(const Bvh& bvh, const std::vector<ReferencedBatch>& frame,
+                                          const std::string& batch);
 
 // The shard plan of a matrix (bench/shard.h), loading its scenes for their sizes and effects.
 std::vector<PlannedCell> plan_matrix_shards(const MatrixSpec& spec, const std::string& scene_root, unsigned count);

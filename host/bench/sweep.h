@@ -19,7 +19,8 @@ struct SweepPoint {
 };
 
 struct Sweep {
-  std::string parameter;            // the matrix key: "had_lambda", "twopoint_length_fraction", "direction_bits"
+  std::string parameter;            // the matrix key: "had_lambda", "twopoint_length_fraction", "direction_bits",
+                                    // "region_bits", "traffic_blend"
   std::vector<SweepPoint> points;   // by ascending value
 };
 

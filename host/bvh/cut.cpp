@@ -9,11 +9,15 @@ namespace raysort {
 
 namespace {
 
-// Highest HAD first; equal HAD: lower node index first (deterministic).
+// Highest priority first; equal priority: higher `tie` first (when given), then the lower node
+// index (deterministic).
 struct ByHad {
   const std::vector<double>* had;
+  const std::vector<double>* tie = nullptr;
   bool higher(std::uint32_t a, std::uint32_t b) const {
-    return (*had)[a] > (*had)[b] || ((*had)[a] == (*had)[b] && a < b);
+    if ((*had)[a] != (*had)[b]) return (*had)[a] > (*had)[b];
+    if (tie && (*tie)[a] != (*tie)[b]) return (*tie)[a] > (*tie)[b];
+    return a < b;
   }
   // std::priority_queue keeps the "largest" on top: a is "less" than b when b comes first.
   bool operator()(std::uint32_t a, std::uint32_t b) const { return higher(b, a); }
@@ -41,24 +45,57 @@ Aabb node_box(const RsBvhNode& n) {
 
 std::vector<std::uint32_t> hierarchy_cut(const Bvh& bvh, const std::vector<double>& had, std::uint32_t size,
                                          std::uint32_t root) {
+  return priority_cut(bvh, had, size, root);
+}
+
+std::vector<std::uint32_t> priority_cut(const Bvh& bvh, const std::vector<double>& priority, std::uint32_t size,
+                                        std::uint32_t root, const std::vector<double>* tie,
+                                        const std::function<bool(std::uint32_t)>& keep) {
   std::vector<std::uint32_t> cut;
   if (size == 0 || bvh.nodes.empty()) return cut;
-  ByHad by{&had};
+  ByHad by{&priority, tie};
   HadQueue queue(by);
-  queue.push(root);
+  if (!keep || keep(root)) queue.push(root);
   std::uint32_t target = size;
   while (!queue.empty() && queue.size() < target) {
     const std::uint32_t n = queue.top();
     queue.pop();
-    if (bvh.is_leaf(n)) {
-      cut.push_back(n);  // a leaf cannot be split: it is a cut node, and one fewer is searched for
+    bool split = false;
+    if (!bvh.is_leaf(n)) {
+      for (std::uint32_t c = bvh.nodes[n].first; c < bvh.nodes[n].first + 2; ++c)
+        if (!keep || keep(c)) {
+          queue.push(c);
+          split = true;
+        }
+    }
+    if (!split) {
+      cut.push_back(n);  // a leaf (or a node with no kept child) cannot be split: it is a cut node
       --target;
-    } else {
-      queue.push(bvh.nodes[n].first);
-      queue.push(bvh.nodes[n].first + 1);
     }
   }
   return in_bit_order(std::move(cut), queue, by);
+}
+
+bool boxes_overlap(const Aabb& a, const Aabb& b) {
+  for (int k = 0; k < 3; ++k)
+    if (!(a.min[k] <= b.max[k] && b.min[k] <= a.max[k])) return false;
+  return true;
+}
+
+std::vector<std::uint32_t> region_cut(const Bvh& bvh, const std::vector<double>& had, std::uint32_t size,
+                                      const Aabb& region) {
+  return priority_cut(bvh, had, size, 0, nullptr,
+                      [&](std::uint32_t n) { return boxes_overlap(node_box(bvh.nodes[n]), region); });
+}
+
+std::vector<double> traffic_priority(const std::vector<double>& had, const std::vector<std::uint64_t>& visits,
+                                     double blend) {
+  if (blend == 0.0 || visits.size() != had.size() || visits.empty() || visits[0] == 0 || !(had[0] > 0.0)) return had;
+  std::vector<double> p(had.size());
+  const double h0 = had[0], v0 = static_cast<double>(visits[0]);
+  for (std::size_t i = 0; i < had.size(); ++i)
+    p[i] = (1.0 - blend) * (had[i] / h0) + blend * (static_cast<double>(visits[i]) / v0);
+  return p;
 }
 
 TwoLevelCut two_level_cut(const Bvh& bvh, const std::vector<double>& had, std::uint32_t half) {

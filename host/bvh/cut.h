@@ -5,6 +5,7 @@
 // node gets the key's most significant bit.
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -18,6 +19,30 @@ namespace raysort {
 // of root's subtree (every root-to-leaf path below `root` crosses it exactly once).
 std::vector<std::uint32_t> hierarchy_cut(const Bvh& bvh, const std::vector<double>& had, std::uint32_t size,
                                          std::uint32_t root = 0);
+
+// Alg. 2 generalised (issue 21, hcc-region and hcc-traffic): the queue orders nodes by `priority`
+// (highest first; ties: `tie` when given, then the lower node index), and only nodes for which
+// keep(n) holds are ever pushed, the root included (an empty `keep` keeps every node). A popped
+// node that cannot be split any further, a leaf or an inner node none of whose children is kept,
+// moves to the cut and the target shrinks by one. Bit order: descending priority (same ties).
+// hierarchy_cut is this with priority = HAD, no tie vector and every node kept.
+std::vector<std::uint32_t> priority_cut(const Bvh& bvh, const std::vector<double>& priority, std::uint32_t size,
+                                        std::uint32_t root = 0, const std::vector<double>* tie = nullptr,
+                                        const std::function<bool(std::uint32_t)>& keep = {});
+
+// hcc-region's cut of one region: priority_cut by HAD keeping only the nodes whose box overlaps
+// `region` (closed boxes: touching counts). Every node of the result overlaps the region.
+std::vector<std::uint32_t> region_cut(const Bvh& bvh, const std::vector<double>& had, std::uint32_t size,
+                                      const Aabb& region);
+
+// hcc-traffic's priority: (1 − β)·HAD/HAD(root) + β·visits/visits(root), visits = rays whose
+// traversal stepped through each node (trace/tracer.h, node_traffic). β = 0, no visits (empty) or
+// no ray entering the root: HAD itself, so the cut is HCC's.
+std::vector<double> traffic_priority(const std::vector<double>& had, const std::vector<std::uint64_t>& visits,
+                                     double blend);
+
+// Closed boxes a and b share a point (on every axis, a.min <= b.max and b.min <= a.max).
+bool boxes_overlap(const Aabb& a, const Aabb& b);
 
 // MLHCC cut, Alg. 3, for keys of 2·half bits: `top` holds at most `half` top-level nodes (bit
 // order), low[i] the HCC cut of `half` nodes under top[i]. The top search expands only nodes whose

@@ -61,6 +61,11 @@ const DeviceEncoder::Uploaded& DeviceEncoder::uploaded(Encoder e, unsigned bits)
     const auto& set = scene_.cut_set(e, bits);
     u.a = rt_.upload(what + "cut boxes", set.groups);
     u.n = set.box_count;
+  } else if (family(e) == EncoderFamily::RegionCut) {
+    const auto& g = scene_.regions(bits);
+    u.a = rt_.upload(what + "region cut boxes", g.groups);
+    u.b = rt_.upload(what + "region cut sizes", g.counts);
+    u.n = static_cast<std::uint32_t>(g.counts.size());
   } else if (family(e) == EncoderFamily::TwoLevel) {
     const auto& t = scene_.two_level(bits);
     u.a = rt_.upload(what + "top-level cut boxes", t.top_groups);
@@ -74,6 +79,11 @@ const DeviceEncoder::Uploaded& DeviceEncoder::uploaded(Encoder e, unsigned bits)
 void DeviceEncoder::prepare(Encoder e, unsigned bits) {
   check_key_bits(e, bits, scene_.params());
   uploaded(e, bits);
+}
+
+void DeviceEncoder::set_node_traffic(std::vector<std::uint64_t> visits) {
+  scene_.set_node_traffic(std::move(visits));
+  std::erase_if(uploads_, [](const auto& kv) { return kv.first.first == static_cast<int>(Encoder::HCC_TRAFFIC); });
 }
 
 void DeviceEncoder::Events::wait() const {
@@ -147,6 +157,15 @@ DeviceEncoder::Events DeviceEncoder::enqueue(Encoder e, unsigned bits, const cl:
                 k->setArg(arg++, count);
                 break;
               }
+              case EncoderFamily::RegionCut:
+                k->setArg(arg++, sizeof(RsEncodeFrame), &scene_.frame());
+                k->setArg(arg++, sizeof(RsRegionGrid), &scene_.regions(bits).grid);
+                k->setArg(arg++, u.a);
+                k->setArg(arg++, u.b);
+                k->setArg(arg++, rays);
+                k->setArg(arg++, order);
+                k->setArg(arg++, count);
+                break;
               case EncoderFamily::TwoLevel:
                 k->setArg(arg++, u.a);
                 k->setArg(arg++, u.n);

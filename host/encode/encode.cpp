@@ -3,6 +3,8 @@
 #include "encode/encode.h"
 
 #include <algorithm>
+#include <array>
+#include <bit>
 #include <cctype>
 #include <thread>
 
@@ -11,7 +13,8 @@
 
 namespace raysort {
 
-static_assert(sizeof(RsBox) == 24 && sizeof(RsEncodeFrame) == 48 && sizeof(RsCutGroup) == 384,
+static_assert(sizeof(RsBox) == 24 && sizeof(RsEncodeFrame) == 48 && sizeof(RsCutGroup) == 384 &&
+                  sizeof(RsRegionGrid) == 32,
               "device struct layouts (cl/keys.h, cl/keys_cut.h)");
 
 const std::vector<EncoderInfo>& encoder_table() {
@@ -30,6 +33,10 @@ const std::vector<EncoderInfo>& encoder_table() {
       {Encoder::MLHCC, "mlhcc", {}, F::TwoLevel, "encode_two_level", 142, true},
       {Encoder::PPC, "ppc", {"prefix-path", "prefix-path-code"}, F::PrefixPath, "encode_prefix_path", 165, false},
       {Encoder::HCC_DIR, "hcc-dir", {}, F::BoxSet, "encode_box_set", 150, false},
+      // Beyond the paper (issue 21). Cost weights estimated from HCC's (not yet measured): the
+      // region code reads its rows from global memory; hcc-traffic adds a host traversal per batch.
+      {Encoder::HCC_REGION, "hcc-region", {"region"}, F::RegionCut, "encode_region_cut", 135, false},
+      {Encoder::HCC_TRAFFIC, "hcc-traffic", {"traffic"}, F::BoxSet, "encode_box_set", 135, false},
   };
   return table;
 }
@@ -100,6 +107,17 @@ std::string key_bits_problem(Encoder e, unsigned bits, const EncoderParams& para
       return "hcc-dir with " + std::to_string(params.direction_bits) + " direction bits needs keys of more than " +
              std::to_string(params.direction_bits) + " bits, not " + std::to_string(bits);
   }
+  if (e == Encoder::HCC_REGION) {
+    if (params.region_bits > kMaxRegionBits)
+      return "hcc-region takes 0 to " + std::to_string(kMaxRegionBits) + " region bits (--region-bits), not " +
+             std::to_string(params.region_bits);
+    if (params.region_bits >= bits)
+      return "hcc-region with " + std::to_string(params.region_bits) + " region bits needs keys of more than " +
+             std::to_string(params.region_bits) + " bits, not " + std::to_string(bits);
+  }
+  if (e == Encoder::HCC_TRAFFIC && !(params.traffic_blend >= 0.0 && params.traffic_blend <= 1.0))
+    return "hcc-traffic's traffic blend (--traffic-blend) is a number from 0 (HAD only) to 1 (traffic only), not " +
+           std::to_string(params.traffic_blend);
   return "";
 }
 
@@ -165,10 +183,65 @@ const std::vector<RsBox>& EncodeScene::box_set(Encoder e, unsigned bits) const {
   } else if (e == Encoder::HCC || e == Encoder::HCC_DIR) {
     const unsigned size = e == Encoder::HCC ? bits : bits - params_.direction_bits;
     for (std::uint32_t n : hcc_cut(size)) boxes.push_back(to_rs_box(node_box(bvh_->nodes[n])));
+  } else if (e == Encoder::HCC_TRAFFIC) {
+    for (std::uint32_t n : traffic_cut(bits)) boxes.push_back(to_rs_box(node_box(bvh_->nodes[n])));
   } else {
     throw Error(std::string(encoder_name(e)) + " is not a box-set encoder");
   }
   return box_sets_.emplace(key, std::move(boxes)).first->second;
+}
+
+void EncodeScene::set_node_traffic(std::vector<std::uint64_t> visits) {
+  if (!visits.empty() && visits.size() != bvh_->nodes.size())
+    throw Error("node traffic for " + std::to_string(visits.size()) + " nodes, the BVH has " +
+                std::to_string(bvh_->nodes.size()));
+  traffic_ = std::move(visits);
+  traffic_cuts_.clear();
+  const int id = static_cast<int>(Encoder::HCC_TRAFFIC);
+  std::erase_if(box_sets_, [&](const auto& kv) { return kv.first.first == id; });
+  std::erase_if(cut_sets_, [&](const auto& kv) { return kv.first.first == id; });
+}
+
+const std::vector<std::uint32_t>& EncodeScene::traffic_cut(unsigned size) const {
+  auto it = traffic_cuts_.find(size);
+  if (it == traffic_cuts_.end()) {
+    const std::vector<double> priority = traffic_priority(had_, traffic_, params_.traffic_blend);
+    it = traffic_cuts_.emplace(size, priority_cut(*bvh_, priority, size, 0, &had_)).first;
+  }
+  return it->second;
+}
+
+const EncodeScene::Regions& EncodeScene::regions(unsigned bits) const {
+  auto it = regions_.find(bits);
+  if (it != regions_.end()) return it->second;
+  check_key_bits(Encoder::HCC_REGION, bits, params_);
+  const unsigned r = params_.region_bits, size = bits - r;
+  Regions g;
+  // The regions: RegularGrid's cells for 2^r cells (cut.h), numbered as regular_grid_cells orders
+  // them: row-major, the most-split axis most significant (ties: lower axis).
+  const auto shape = regular_grid_shape(box_, 1u << r);
+  std::array<int, 3> axes{0, 1, 2};
+  std::stable_sort(axes.begin(), axes.end(), [&](int x, int y) { return shape[x] > shape[y]; });
+  rs_u32 shift = 0;
+  for (int k = 2; k >= 0; --k) {
+    const int a = axes[k];
+    g.grid.levels[a] = static_cast<rs_u32>(std::countr_zero(shape[a]));
+    g.grid.shift[a] = shift;
+    shift += g.grid.levels[a];
+  }
+  g.grid.region_bits = r;
+  g.grid.row_groups = rs_cut_group_count(size);
+  g.boxes = regular_grid_cells(box_, 1u << r);
+  for (const Aabb& region : g.boxes) {
+    g.cuts.push_back(region_cut(*bvh_, had_, size, region));
+    std::vector<RsBox> boxes;
+    for (std::uint32_t n : g.cuts.back()) boxes.push_back(to_rs_box(node_box(bvh_->nodes[n])));
+    auto row = rs_cut_groups(boxes.data(), boxes.size());
+    row.resize(g.grid.row_groups, RsCutGroup{});
+    g.groups.insert(g.groups.end(), row.begin(), row.end());
+    g.counts.push_back(static_cast<rs_u32>(boxes.size()));
+  }
+  return regions_.emplace(bits, std::move(g)).first->second;
 }
 
 const EncodeScene::CutSet& EncodeScene::cut_set(Encoder e, unsigned bits) const {
@@ -216,6 +289,10 @@ std::uint64_t encode_ray(Encoder e, unsigned bits, const EncodeScene& scene, con
       const rs_u64 code = rs_box_set_code(ray, set.groups.data(), set.box_count, bits - dir, dir);
       return rs_key_from_code(code, bits);
     }
+    case EncoderFamily::RegionCut: {
+      const auto& g = scene.regions(bits);
+      return rs_key_from_code(rs_region_cut_code(ray, &scene.frame(), &g.grid, g.groups.data(), g.counts.data()), bits);
+    }
     case EncoderFamily::TwoLevel: {
       const auto& t = scene.two_level(bits);
       return rs_key_from_code(rs_two_level_cut_code(ray, t.top_groups.data(), static_cast<rs_u32>(t.top.size()),
@@ -235,6 +312,7 @@ std::vector<std::uint64_t> encode_on_host(Encoder e, unsigned bits, const Encode
   // Build the cached cut data before the threads read it.
   if (encoder_info(e).family == EncoderFamily::BoxSet) scene.cut_set(e, bits);
   if (encoder_info(e).family == EncoderFamily::TwoLevel) scene.two_level(bits);
+  if (encoder_info(e).family == EncoderFamily::RegionCut) scene.regions(bits);
   std::vector<std::uint64_t> keys(rays.size());
   auto work = [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) keys[i] = encode_ray(e, bits, scene, rays[i]);

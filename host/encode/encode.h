@@ -38,6 +38,8 @@ enum class Encoder : int {
   MLHCC = RS_ENC_MLHCC,
   PPC = RS_ENC_PPC,
   HCC_DIR = RS_ENC_HCC_DIR,
+  HCC_REGION = RS_ENC_HCC_REGION,
+  HCC_TRAFFIC = RS_ENC_HCC_TRAFFIC,
 };
 
 // How an encoder computes its key; the family decides the kernel, the host twin and the per-scene
@@ -45,7 +47,9 @@ enum class Encoder : int {
 enum class EncoderFamily {
   None,        // NoSort: no key, the generation order
   Spatial,     // a Morton-style code of origin, direction or termination point (frame only)
-  BoxSet,      // one bit per box the ray segment overlaps: HCC cut nodes, grid cells (+ direction bits)
+  BoxSet,      // one bit per box the ray segment overlaps: HCC cut nodes (HAD or traffic priority), grid
+               // cells (+ direction bits)
+  RegionCut,   // hcc-region: the origin's region, then the HCC of that region's own cut
   TwoLevel,    // MLHCC: a top-level cut, then the low-level cut under the first top node hit
   PrefixPath,  // PPC: the first box tests of a traversal (the BVH itself)
 };
@@ -66,7 +70,8 @@ struct EncoderInfo {
 const std::vector<EncoderInfo>& encoder_table();
 const EncoderInfo& encoder_info(Encoder e);
 
-// "nosort", "origin", "reis", "costa", "aila", "twopoint", "grid", "hcc", "mlhcc", "ppc", "hcc-dir".
+// "nosort", "origin", "reis", "costa", "aila", "twopoint", "grid", "hcc", "mlhcc", "ppc", "hcc-dir",
+// "hcc-region", "hcc-traffic".
 std::string_view encoder_name(Encoder e);
 // Case-insensitive, ignoring '-', '_' and spaces; also accepts the table's aliases.
 std::optional<Encoder> parse_encoder(std::string_view name);
@@ -82,10 +87,16 @@ struct EncoderParams {
   float twopoint_length_fraction = 0.25f;  // TwoPoint ray length, × largest scene extent (paper §5)
   double had_lambda = 0.125;               // λ of HAD, Eq. 1 (paper §4.2.2)
   unsigned direction_bits = 1;             // HCC_DIR: d direction bits after b − d cut bits (appendix)
+  unsigned region_bits = 3;                // hcc-region: r bits of the origin's region (2^r regions), 0..8
+  double traffic_blend = 0.5;              // hcc-traffic: β of (1 − β)·HAD + β·traffic, in [0, 1]
 };
 
-// "" when `bits` is a valid key length for e (1..64; MLHCC: even; HCC_DIR: more than d bits and
-// d ≤ 42), else why not.
+// The most region bits hcc-region takes (256 regions).
+inline constexpr unsigned kMaxRegionBits = 8;
+
+// "" when `bits` is a valid key length for e with these parameters (1..64; MLHCC: even; HCC_DIR:
+// more than d bits and d ≤ 42; hcc-region: more than r bits and r ≤ 8; hcc-traffic: 0 ≤ β ≤ 1),
+// else why not.
 std::string key_bits_problem(Encoder e, unsigned bits, const EncoderParams& params);
 // Throws Error with key_bits_problem's text.
 void check_key_bits(Encoder e, unsigned bits, const EncoderParams& params);
@@ -103,6 +114,27 @@ class EncodeScene {
 
   // HCC cut of `size` nodes (node indices, bit order), cached.
   const std::vector<std::uint32_t>& hcc_cut(unsigned size) const;
+
+  // hcc-traffic's input: node visit counts of an earlier batch (trace/tracer.h, node_traffic; indexed
+  // like bvh.nodes). Empty (the default, and the first batch of a frame): no traffic, the cut is
+  // HCC's. Setting it drops hcc-traffic's cached cuts; the other encoders' data stays.
+  void set_node_traffic(std::vector<std::uint64_t> visits);
+  const std::vector<std::uint64_t>& node_traffic() const { return traffic_; }
+  // hcc-traffic's cut of `size` nodes: priority_cut by traffic_priority(HAD, traffic, β), ties by
+  // HAD, then node index. Cached until the traffic changes.
+  const std::vector<std::uint32_t>& traffic_cut(unsigned size) const;
+
+  // hcc-region for keys of `bits` bits: the region grid (cl/keys_cut.h, RsRegionGrid), each
+  // region's box (regular_grid_cells of the scene box, in region-number order), its cut of
+  // bits − r nodes (region_cut) and the cuts as sixteen-box groups, row_groups per region.
+  struct Regions {
+    RsRegionGrid grid{};
+    std::vector<Aabb> boxes;
+    std::vector<std::vector<std::uint32_t>> cuts;
+    std::vector<RsCutGroup> groups;
+    std::vector<rs_u32> counts;
+  };
+  const Regions& regions(unsigned bits) const;
   // The boxes of a box-set encoder (HCC, RegularGrid, HCC_DIR) for keys of `bits` bits, bit order.
   const std::vector<RsBox>& box_set(Encoder e, unsigned bits) const;
   // The same boxes as rs_box_set_code reads them: sixteen-box groups (rs_cut_groups) and their
@@ -134,6 +166,9 @@ class EncodeScene {
   mutable std::map<std::pair<int, unsigned>, std::vector<RsBox>> box_sets_;
   mutable std::map<std::pair<int, unsigned>, CutSet> cut_sets_;
   mutable std::map<unsigned, TwoLevel> two_levels_;
+  std::vector<std::uint64_t> traffic_;
+  mutable std::map<unsigned, std::vector<std::uint32_t>> traffic_cuts_;
+  mutable std::map<unsigned, Regions> regions_;
 };
 
 RsBox to_rs_box(const Aabb& b);
@@ -171,6 +206,9 @@ class DeviceEncoder {
                  const cl::Buffer& keys, const cl::Buffer& values);
   // Uploads what (e, bits) needs now, so a timed enqueue does no host work.
   void prepare(Encoder e, unsigned bits);
+  // hcc-traffic's per-batch input (EncodeScene::set_node_traffic); its uploaded cuts are dropped,
+  // the next prepare or enqueue builds and uploads the new ones.
+  void set_node_traffic(std::vector<std::uint64_t> visits);
   // Runs every kernel once on a few rays (PoCL compiles kernels at their first launch). Returns ms.
   double warm_up();
 

@@ -162,6 +162,43 @@ std::vector<RsHit> trace_reference(const Bvh& bvh, const std::vector<RsRay>& ray
   return hits;
 }
 
+std::vector<std::uint64_t> node_traffic(const Bvh& bvh, const std::vector<RsRay>& rays, bool any_hit) {
+  if (bvh.nodes.empty()) return {};
+  const std::size_t n = rays.size();
+  const unsigned threads = std::max(1u, std::min(16u, std::thread::hardware_concurrency()));
+  const unsigned used = n < 4096 ? 1u : threads;
+  std::vector<std::vector<std::uint64_t>> counts(used, std::vector<std::uint64_t>(bvh.nodes.size(), 0));
+  auto work = [&](unsigned t, std::size_t begin, std::size_t end) {
+    std::vector<rs_u32> trail(256);
+    std::vector<std::uint64_t>& c = counts[t];
+    for (std::size_t i = begin; i < end; ++i) {
+      rs_u32 len = 0;
+      rs_traverse_recorded(bvh.nodes.data(), bvh.triangles.data(), rays[i], any_hit ? 1 : 0, nullptr, trail.data(),
+                           static_cast<rs_u32>(trail.size()), &len);
+      if (len > trail.size()) {  // a longer walk than the trail holds: again with room for all of it
+        trail.resize(len);
+        rs_traverse_recorded(bvh.nodes.data(), bvh.triangles.data(), rays[i], any_hit ? 1 : 0, nullptr, trail.data(),
+                             static_cast<rs_u32>(trail.size()), &len);
+      }
+      for (rs_u32 k = 0; k < len; ++k) ++c[trail[k]];
+    }
+  };
+  if (used == 1) {
+    work(0, 0, n);
+  } else {
+    std::vector<std::thread> pool;
+    const std::size_t chunk = (n + used - 1) / used;
+    for (unsigned t = 0; t < used; ++t) {
+      const std::size_t b = t * chunk, e = std::min(n, b + chunk);
+      if (b < e) pool.emplace_back(work, t, b, e);
+    }
+    for (auto& th : pool) th.join();
+  }
+  for (unsigned t = 1; t < used; ++t)
+    for (std::size_t k = 0; k < counts[0].size(); ++k) counts[0][k] += counts[t][k];
+  return counts.empty() ? std::vector<std::uint64_t>{} : std::move(counts[0]);
+}
+
 std::size_t count_hit_mismatches(const std::vector<RsHit>& a, const std::vector<RsHit>& b) {
   if (a.size() != b.size()) return std::max(a.size(), b.size());
   std::size_t bad = 0;

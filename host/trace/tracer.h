@@ -77,6 +77,13 @@ std::vector<RsHit> trace_reference(const Bvh& bvh, const std::vector<RsRay>& ray
                                    bool any_hit, std::vector<std::uint32_t>* node_visits = nullptr,
                                    TraceVariant variant = TraceVariant::Fast, TraceLayout layout = TraceLayout::Wide);
 
+// Node traffic of a batch (hcc-traffic's priority, issue 21): for every node of the binary BVH, the
+// number of rays whose host traversal (cl/traverse_binary.h, fast variant, closest or any hit)
+// stepped through it (the SIMT model's trail: its box was hit when its parent was tested, and the
+// walk reached it). Indexed like bvh.nodes; the root's count is the rays that hit the scene box, and
+// no node has more than its parent. Independent of the rays' order; host threads, deterministic.
+std::vector<std::uint64_t> node_traffic(const Bvh& bvh, const std::vector<RsRay>& rays, bool any_hit);
+
 // Number of positions whose hit records differ in any bit.
 std::size_t count_hit_mismatches(const std::vector<RsHit>& a, const std::vector<RsHit>& b);
 
