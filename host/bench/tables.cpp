@@ -107,10 +107,10 @@ const CellRecord* best_lane_efficiency(const std::vector<const CellRecord*>& col
   return best;
 }
 
-// "1.23 · 1.15": the speedup (as speedup_text prints it, without marks) and the SIMT lane-efficiency
-// ratio, bold when `best`.
+// "1.230 · 1.152": the speedup (as speedup_text prints it, without marks) and the SIMT
+// lane-efficiency ratio (three decimals: these tables compare close variants), bold when `best`.
 std::string speed_and_lanes(const CellRecord& c, bool best) {
-  const std::string lanes = fmt::format("{:.2f}", c.simt_lane_efficiency_ratio);
+  const std::string lanes = fmt::format("{:.3f}", c.simt_lane_efficiency_ratio);
   return fmt::format("{} · {}", speedup_text(c, false), best ? "**" + lanes + "**" : lanes);
 }
 
