@@ -61,7 +61,7 @@ typedef struct {
   float cdf;
 } RsSphereLight;
 
-/* What a frame's shading needs besides the arrays, 64 bytes. */
+/* What a frame's shading needs besides the arrays, 68 bytes. */
 typedef struct {
   float sky_zenith[3];
   rs_u32 sky_enabled;
@@ -75,11 +75,12 @@ typedef struct {
   rs_u32 seed;            /* of the counter-based RNG */
   rs_u32 spp;             /* samples per pixel of this frame (pass) */
   rs_u32 sample_begin;    /* first sample index of this pass */
+  rs_u32 pixel_begin;     /* first pixel (y * width + x) of this pass: a render split into passes of rows */
 } RsShadeParams;
 
 /* A ray's path payload, 16 bytes: [weight.rgb path]. For a path ray, weight is the path
  * throughput; for a shadow ray, the radiance it adds to its path when nothing occludes it.
- * path = pixel * spp + (sample - sample_begin): the index of the path's radiance. */
+ * path = (pixel - pixel_begin) * spp + (sample - sample_begin): the index of the path's radiance. */
 typedef struct {
   float weight[3];
   rs_u32 path;
@@ -94,7 +95,7 @@ RS_INLINE RsPathState rs_path_state(RsVec3 weight, rs_u32 path) {
   return st;
 }
 
-RS_INLINE rs_u32 rs_path_pixel(RsShadeParams p, rs_u32 path) { return path / p.spp; }
+RS_INLINE rs_u32 rs_path_pixel(RsShadeParams p, rs_u32 path) { return p.pixel_begin + path / p.spp; }
 RS_INLINE rs_u32 rs_path_sample(RsShadeParams p, rs_u32 path) { return p.sample_begin + path % p.spp; }
 
 RS_INLINE float rs_random(RsShadeParams p, rs_u32 path, rs_u32 bounce, rs_u32 dim) {

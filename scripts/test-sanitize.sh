@@ -32,5 +32,5 @@ echo "test-sanitize: cli_test (refusals)"
 "$BUILD/cli_test" --gtest_brief=1 --gtest_filter='Cli.UnknownNamesListTheValidOnes:Cli.ImpossibleCombinationsRefusedBeforeWork'
 echo "test-sanitize: adjudicate_test and frame_memory_test (the exact oracle, the memory model)"
 "$BUILD/adjudicate_test" --gtest_brief=1 --gtest_filter='ExactOracle.HandMadeTruths:ExactOracle.RaysRoundTripThroughJson'
-"$BUILD/frame_memory_test" --gtest_brief=1 --gtest_filter='FrameMemory.ModelCountsEveryBatchTheEffectsImply'
+"$BUILD/frame_memory_test" --gtest_brief=1 --gtest_filter='FrameMemory.ModelCountsEveryBatchTheEffectsImply:FrameMemory.RenderIsSizedByItsPassesNotItsSamples'
 echo "test-sanitize: clean in $(( $(date +%s) - start )) s"

@@ -3,11 +3,13 @@
 // really takes (so a frame that passes the check does not run the machine out of memory).
 #include <gtest/gtest.h>
 
+#include <fstream>
 #include <iostream>
 #include <string>
 #include <vector>
 
 #include "render/frame_memory.h"
+#include "scene/load.h"
 #include "test_util.h"
 
 using namespace raysort;
@@ -42,11 +44,16 @@ TEST(FrameMemory, OversizedCommandsAreRefusedAtOnce) {
       {"trace", "--scene", "cornell", "--resolution", "4000000000x4000000000", "--spp", "4000000000"},
   };
   for (const auto& args : commands) {
-    const Measured m = run_cli(args);
+    // A render splits its rays into passes, so only its per-pixel sums (≈ 36 GiB at 20000x20000)
+    // can refuse it: the host's memory is fixed at 16 GiB here, so that this holds on any machine.
+    const bool render = args[0] == "render";
+    const Measured m = run_cli(args, render ? std::vector<std::string>{"RAYSORT_TEST_HOST_MEMORY_BYTES=17179869184"}
+                                            : std::vector<std::string>{});
     const std::string cmd = args[0] + " " + args[4];
     EXPECT_EQ(m.code, 2) << cmd << ": " << m.err;
     EXPECT_EQ(std::count(m.err.begin(), m.err.end(), '\n'), 1) << cmd << ": " << m.err;
-    for (const char* part : {"scene cornell at ", "needs ", "over ", "lower --resolution or --spp"})
+    for (const char* part : {"scene cornell at ", "needs ", "over ", render ? "lower --resolution (a render keeps sums for every pixel"
+                                                                           : "lower --resolution or --spp"})
       EXPECT_NE(m.err.find(part), std::string::npos) << cmd << ": no '" << part << "' in " << m.err;
     EXPECT_LT(m.seconds, 5.0) << cmd;
     EXPECT_LT(m.peak_rss_bytes, 500u << 20) << cmd;
@@ -58,6 +65,40 @@ TEST(FrameMemory, OversizedCommandsAreRefusedAtOnce) {
   EXPECT_EQ(host.code, 2) << host.err;
   EXPECT_NE(host.err.find("of host memory (the CPU device's buffers included)"), std::string::npos) << host.err;
   EXPECT_NE(host.err.find("over the 95.4 MiB available"), std::string::npos) << host.err;
+}
+
+// A scene file whose mesh would not fit (scene/load.h, SceneOptions::max_triangles; the parser's
+// side is tests/scene_test.cpp): exit 2 and one line, like a frame that does not fit.
+TEST(FrameMemory, OversizedSceneFileEndsACommandWithExit2) {
+  const std::string dir = raysort::testing::temp_path("oversized-scene");
+  std::filesystem::create_directories(dir);
+  const std::string file = dir + "/terrain.toml";
+  std::ofstream(file) << "[camera]\nposition = [0.0, 1.0, 3.0]\nlook_at = [0.0, 1.0, 0.0]\n\n[[mesh]]\n"
+                          "name = \"terrain\"\n\ngenerator = \"heightfield\"\n[mesh.params]\nresolution = 8192\n";
+  const Measured m = run_cli({"trace", "--scene", file});
+  EXPECT_EQ(m.code, 2) << m.err;
+  EXPECT_EQ(std::count(m.err.begin(), m.err.end(), '\n'), 1) << m.err;
+  EXPECT_NE(m.err.find("terrain.toml:8: the scene would hold 134217728 triangles"), std::string::npos) << m.err;
+  EXPECT_LT(m.seconds, 5.0);
+  EXPECT_LT(m.peak_rss_bytes, 500u << 20);
+}
+
+// A render traces its rays in passes (render/preview.h): its estimate follows the largest pass and
+// the pixels, not the samples, so the 64-spp full-HD frame the whole-frame model refuses (≈ 20 GiB
+// of a CPU device's memory) fits, and a million samples cost no more memory than one.
+TEST(FrameMemory, RenderIsSizedByItsPassesNotItsSamples) {
+  Scene scene = load_scene("cornell");
+  apply_frame_size(scene, {1920, 1080, 64});
+  const FrameMemory frame = estimate_frame_memory(scene), render = estimate_render_memory(scene);
+  EXPECT_EQ(render.largest_batch, 1920u * 1080u);  // one sample of every pixel per pass
+  EXPECT_GE(render.host_bytes, 1920u * 1080u * FrameMemory::kRenderHostPerPixel);
+  EXPECT_LT(render.host_bytes + render.device_bytes, (frame.host_bytes + frame.device_bytes) / 20);
+  EXPECT_NO_THROW(check_frame_memory(render, nullptr, "render"));
+  apply_frame_size(scene, {1920, 1080, 1000000});
+  EXPECT_EQ(estimate_render_memory(scene).host_bytes, render.host_bytes);
+  // Past the pass budget in pixels: passes of whole rows of one sample.
+  apply_frame_size(scene, {7680, 4320, 4});
+  EXPECT_EQ(estimate_render_memory(scene).largest_batch, 273u * 7680u);
 }
 
 // The estimate is an upper bound of what the commands take: the peak RSS a frame adds over a tiny
@@ -78,7 +119,13 @@ TEST(FrameMemory, EstimateBoundsWhatTheCommandsTake) {
     const Measured large = run_cli(args_at(cmd, "640x640"));
     ASSERT_EQ(small.code, 0) << small.err;
     ASSERT_EQ(large.code, 0) << large.err;
-    const FrameMemory a = estimate_frame_memory(64, 64, 1, 1, 1), b = estimate_frame_memory(640, 640, 1, 1, 1);
+    auto estimate = [&](std::uint32_t side) {
+      if (cmd != "render") return estimate_frame_memory(side, side, 1, 1, 1);
+      Scene scene = load_scene("cornell");
+      apply_frame_size(scene, {side, side, 1});
+      return estimate_render_memory(scene);
+    };
+    const FrameMemory a = estimate(64), b = estimate(640);
     const std::uint64_t estimated = (b.host_bytes + b.device_bytes) - (a.host_bytes + a.device_bytes);
     const std::uint64_t taken = large.peak_rss_bytes - small.peak_rss_bytes;
     std::cout << cmd << " 64x64 -> 640x640: peak RSS grew " << format_bytes(taken) << ", estimated "

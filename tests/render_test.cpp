@@ -10,6 +10,7 @@
 #include "bvh/bvh.h"
 #include "render/batches.h"
 #include "render/pathtrace.h"
+#include "render/preview.h"
 #include "scene/load.h"
 #include "test_util.h"
 #include "util/error.h"
@@ -76,6 +77,16 @@ BatchSink capture(Traced& t) {
     t.batches.push_back(std::move(rb));
     t.states.push_back(b.states);
   };
+}
+
+// The embedded cornell scene at a frame size of the test's choosing.
+Prepared prepare_cornell(const FrameSize& frame) {
+  Prepared p;
+  p.scene = load_scene("cornell");
+  p.tris = p.scene.flatten();
+  p.bvh = build_bvh(p.tris);
+  apply_frame_size(p.scene, frame);
+  return p;
 }
 
 Traced trace_host(const Prepared& p, const RayGenOptions& gen = {}, FrameOptions fo = {}) {
@@ -360,11 +371,7 @@ void expect_device_equals_host(const Prepared& p, const RayGenOptions& gen, Fram
 }
 
 TEST(DevicePathTracer, EqualsHostTwinOnCornell) {
-  Prepared p;
-  p.scene = load_scene("cornell");
-  p.tris = p.scene.flatten();
-  p.bvh = build_bvh(p.tris);
-  apply_frame_size(p.scene, {64, 36, 2});
+  Prepared p = prepare_cornell({64, 36, 2});
   RayGenOptions gen;
   FrameOptions fo;
   fo.count_visits = true;
@@ -372,7 +379,8 @@ TEST(DevicePathTracer, EqualsHostTwinOnCornell) {
 }
 
 // Every effect at once: a mirror, a gradient sky, two lights chosen by power, two shadow rays per
-// hit, Russian roulette, four bounces; and a sample pass that starts past sample 0.
+// hit, Russian roulette, four bounces; and a sample pass that starts past sample 0, over the whole
+// frame and over pixels [37, 537).
 TEST(DevicePathTracer, EqualsHostTwinWithEveryEffect) {
   Prepared p = prepare(room_scene("albedo = [0.9, 0.7, 0.5]", "albedo = [0.5, 0.6, 0.7]",
                                     "[[material]]\nname = \"mirror\"\nalbedo = [0.9, 0.9, 0.9]\nmirror = true\n"
@@ -391,15 +399,87 @@ TEST(DevicePathTracer, EqualsHostTwinWithEveryEffect) {
   fo.sample_begin = 1;
   fo.sample_count = 2;
   expect_device_equals_host(p, gen, fo, 10);
+  fo.pixel_begin = 37;  // and a pass of pixels starting inside a row (a render's row pass)
+  fo.pixel_count = 500;
+  expect_device_equals_host(p, gen, fo, 10);
+}
+
+// Pixel passes partition the frame too: pixels [0, 37) and [37, 144), the second starting inside a
+// row, give the paths of the whole frame (the RNG is keyed by the absolute pixel).
+TEST(PathTracer, PixelPassesPartitionTheFrame) {
+  Prepared p = prepare_cornell({16, 9, 2});
+  ShadeInputs in = make_shade_inputs(p.scene, p.tris, RayGenOptions{});
+  Frame whole = trace_frame_host(in, p.bvh, {});
+  FrameOptions a, b;
+  a.pixel_count = 37;
+  b.pixel_begin = 37;
+  Frame fa = trace_frame_host(in, p.bvh, a), fb = trace_frame_host(in, p.bvh, b);
+  ASSERT_EQ(fa.pixels, 37u);
+  ASSERT_EQ(fb.pixels, 16u * 9u - 37u);
+  EXPECT_EQ(fb.pixel_begin, 37u);
+  ASSERT_EQ(fa.radiance.size() + fb.radiance.size(), whole.radiance.size());
+  EXPECT_EQ(std::memcmp(fa.radiance.data(), whole.radiance.data(), fa.radiance.size() * 4), 0);
+  EXPECT_EQ(std::memcmp(fb.radiance.data(), whole.radiance.data() + fa.radiance.size(), fb.radiance.size() * 4), 0);
+  FrameOptions past;
+  past.pixel_begin = 16 * 9;
+  EXPECT_THROW(trace_frame_host(in, p.bvh, past), Error);
+}
+
+// A render's passes cover every (pixel, sample) once, sample-major, within the path budget: whole
+// frames of several samples while the frame is smaller than the budget, else rows of one sample.
+TEST(RenderPasses, PlanCoversEveryPixelAndSampleOnce) {
+  struct Case {
+    std::uint32_t w, h, spp;
+    std::uint64_t budget;
+    std::size_t passes;
+  };
+  for (Case c : {Case{16, 9, 5, 1000, 1}, Case{16, 9, 5, 300, 3}, Case{16, 9, 5, 144, 5}, Case{16, 9, 3, 100, 6}, Case{16, 9, 2, 40, 10},
+                 Case{16, 9, 1, 7, 9}, Case{1920, 1080, 8, kRenderPassPaths, 8}, Case{7680, 4320, 1, kRenderPassPaths, 16}}) {
+    const auto plan = plan_render_passes(c.w, c.h, c.spp, c.budget);
+    EXPECT_EQ(plan.size(), c.passes) << c.w << "x" << c.h << " budget " << c.budget;
+    std::vector<std::uint32_t> seen(std::size_t{c.w} * c.h, 0);  // samples added per pixel, in order
+    std::uint64_t largest = 0;
+    for (const RenderPass& pass : plan) {
+      largest = std::max<std::uint64_t>(largest, std::uint64_t{pass.pixel_count} * pass.sample_count);
+      EXPECT_EQ(pass.pixel_begin % c.w, 0u);  // whole rows
+      for (std::uint32_t px = pass.pixel_begin; px < pass.pixel_begin + pass.pixel_count; ++px) {
+        ASSERT_EQ(seen[px], pass.sample_begin) << "pixel " << px << " gets its samples out of order";
+        seen[px] += pass.sample_count;
+      }
+    }
+    for (std::uint32_t n : seen) ASSERT_EQ(n, c.spp);
+    EXPECT_LE(largest, std::max<std::uint64_t>(c.budget, c.w));
+    EXPECT_EQ(largest, largest_render_pass(c.w, c.h, c.spp, c.budget));
+  }
+}
+
+// Splitting a render into row passes changes nothing: the image and the cost heatmap's data are
+// the same bit for bit as one pass, on the host twin and on the device.
+TEST(RenderPasses, RowPassesRenderTheSameImage) {
+  PreparedScene p = prepare_scene("cornell", [] {
+    SceneOptions o;
+    o.frame = {24, 10, 3};
+    return o;
+  }());
+  for (Runtime* rt : {static_cast<Runtime*>(nullptr), &testing::runtime()}) {
+    const RenderedFrame one = render_frame(p, RayGenOptions{}, rt, 24 * 10 * 3);
+    const RenderedFrame rows = render_frame(p, RayGenOptions{}, rt, 50);  // two rows of one sample
+    EXPECT_EQ(one.passes, 1u);
+    EXPECT_EQ(rows.passes, 15u);
+    EXPECT_EQ(one.rays, rows.rays);
+    ASSERT_EQ(one.image.rgb.size(), rows.image.rgb.size());
+    EXPECT_EQ(std::memcmp(one.image.rgb.data(), rows.image.rgb.data(), one.image.rgb.size() * 4), 0)
+        << (rt ? "device" : "host twin");
+    EXPECT_EQ(one.cost, rows.cost);
+    ASSERT_EQ(one.first_pass.size(), rows.first_pass.size());
+    for (std::size_t i = 0; i < one.first_pass.size(); ++i) EXPECT_EQ(one.first_pass[i].name, rows.first_pass[i].name);
+    EXPECT_EQ(one.first_pass[0].rays, 3 * rows.first_pass[0].rays);  // primary: one pass held all 3 samples
+  }
 }
 
 // Sample passes partition the frame: passes [0,1) and [1,3) give the paths of one 3-spp frame.
 TEST(PathTracer, SamplePassesPartitionTheFrame) {
-  Prepared p;
-  p.scene = load_scene("cornell");
-  p.tris = p.scene.flatten();
-  p.bvh = build_bvh(p.tris);
-  apply_frame_size(p.scene, {16, 9, 3});
+  Prepared p = prepare_cornell({16, 9, 3});
   RayGenOptions gen;
   ShadeInputs in = make_shade_inputs(p.scene, p.tris, gen);
   Frame whole = trace_frame_host(in, p.bvh, {});

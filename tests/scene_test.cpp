@@ -2,6 +2,7 @@
 // bare OBJ paths, and the real scenes when the scene root is there.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
@@ -12,6 +13,7 @@
 #include "scene/procedural.h"
 #include "scene/provenance.h"
 #include "util/error.h"
+#include "util/host_memory.h"
 #include "test_util.h"
 
 namespace fs = std::filesystem;
@@ -263,6 +265,105 @@ TEST(SceneProcedural, GeneratorsAreDeterministic) {
     for (const auto& t : a.triangles)
       for (auto i : t) ASSERT_LT(i, a.positions.size()) << name;
   }
+}
+
+// Scenes are stored as float: a number past its range would turn into inf (and NaN where a
+// transform multiplies it by 0). Found by fuzz/scene_fuzzer: a box generator's `max` of 7.8e74
+// made inf vertices, NaN after the identity transform, and an undefined float-to-int cast in the
+// scatter's ground grid (input kept as fuzz/corpus/scene/regression-inf-box-max.toml).
+TEST(SceneToml, NumbersBeyondTheFloatRangeAreRefused) {
+  std::string msg = parse_error(replace(kValid, "position = [0.0, 1.0, 3.0]", "position = [0.0, 1e39, 3.0]"));
+  EXPECT_NE(msg.find("bad.toml:3:"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("beyond the float range"), std::string::npos) << msg;
+  msg = parse_error(replace(kValid, "generator = \"plane\"", "generator = \"box\""));  // plane params on a box
+  EXPECT_NE(msg.find("has no number parameter 'size_x'"), std::string::npos) << msg;
+  msg = parse_error(replace(replace(kValid, "generator = \"plane\"", "generator = \"box\""),
+                            "size_x = 4.0\nsize_z = 4.0", "max = [5.0, 7.8e74, 6.0]"));
+  EXPECT_NE(msg.find("'mesh[0].params.max' = 7.8e+74 is not a finite number within the float range"),
+            std::string::npos)
+      << msg;
+  // Each number in range, their product not: a plane of 4 scaled by 3e38.
+  msg = parse_error(kValid + "\n[[instance]]\nmesh = \"floor\"\nscale = [3e38, 1.0, 1.0]\n");
+  EXPECT_NE(msg.find("a placement of mesh 'floor' (a drawn mesh or an [[instance]]) reaches coordinates beyond"),
+            std::string::npos)
+      << msg;
+  msg = parse_error(kValid + "\n[[scatter]]\nmesh = \"floor\"\ncount = 2\nmin = [0.0, 0.0, 0.0]\n"
+                             "max = [1.0, 0.0, 1.0]\nscale = 3e38\n");
+  EXPECT_NE(msg.find("(a [[scatter]]) reaches coordinates beyond"), std::string::npos) << msg;
+  // The fuzzer's input itself: an Error, not a sanitizer report.
+  std::ifstream in(std::string(RAYSORT_SOURCE_DIR) + "/fuzz/corpus/scene/regression-inf-box-max.toml");
+  ASSERT_TRUE(in) << "fuzz/corpus/scene/regression-inf-box-max.toml is missing";
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  SceneOptions o;
+  o.scene_root = "/nonexistent";
+  EXPECT_THROW(parse_scene_toml(text, "regression.toml", o), Error);
+}
+
+// generated_triangle_count is what a scene refuses sizes by before it builds them: an upper bound of
+// what generate_mesh makes, and close to it (poles and open faces drop a few).
+TEST(SceneProcedural, TriangleCountsBoundWhatTheGeneratorsMake) {
+  for (const auto& name : generator_names()) {
+    const std::size_t made = generate_mesh(name, {}, 17).triangles.size();
+    const std::uint64_t counted = generated_triangle_count(name, {});
+    EXPECT_GE(counted, made) << name;
+    EXPECT_LE(counted, made + made / 50 + 2) << name;
+  }
+  GeneratorParams big;
+  big.numbers["resolution"] = 8192;
+  EXPECT_EQ(generated_triangle_count("heightfield", big), 2ull * 8192 * 8192);
+  GeneratorParams bad;
+  bad.numbers["resolution"] = 1e9;
+  EXPECT_THROW(generated_triangle_count("heightfield", bad), Error);  // the same range check as the build
+  EXPECT_THROW(generated_triangle_count("no-such-generator", {}), Error);
+}
+
+// A size a user can type in a scene file (a mesh's resolution, a scatter's count) that would not
+// fit is refused before it is made: ResourceError naming the file, line, triangles and the fix, at
+// once and without the memory (issue 23, "no internal error for any size a user can type").
+TEST(SceneToml, OversizedMeshesAndScattersAreRefusedBeforeTheyAreMade) {
+  auto refusal = [](const std::string& text, const SceneOptions& o) {
+    const auto t0 = std::chrono::steady_clock::now();
+    try {
+      parse_scene_toml(text, "big.toml", o);
+    } catch (const ResourceError& e) {
+      EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 1.0);
+      return std::string(e.what());
+    }
+    ADD_FAILURE() << "not refused";
+    return std::string();
+  };
+  // 2 × 8192² triangles ≈ 64 GiB: over any host this test runs on.
+  const std::string terrain = replace(replace(kValid, "generator = \"plane\"", "generator = \"heightfield\""),
+                                      "size_x = 4.0\nsize_z = 4.0", "resolution = 8192");
+  std::string msg = refusal(terrain, {});
+  for (const char* part : {"big.toml:9:", "134217728 triangles", "mesh 'floor' (heightfield", "of host memory available",
+                           "lower its params"})
+    EXPECT_NE(msg.find(part), std::string::npos) << "no '" << part << "' in " << msg;
+  // Ten million icosphere rocks of 327,680 triangles each.
+  const std::string scatter = kValid + R"(
+[[mesh]]
+name = "rock"
+generator = "rock"
+draw = false
+[mesh.params]
+subdivisions = 7
+
+[[scatter]]
+mesh = "rock"
+count = 10000000
+min = [-1.0, 0.0, -1.0]
+max = [1.0, 0.0, 1.0]
+)";
+  msg = refusal(scatter, {});
+  for (const char* part : {"big.toml:27:", "scatter[0] (10000000 × mesh 'rock')", "lower its count"})
+    EXPECT_NE(msg.find(part), std::string::npos) << "no '" << part << "' in " << msg;
+  // SceneOptions::max_triangles caps a load below the memory (the scene fuzzer's cap): the plane's
+  // 2 triangles pass a cap of 2, a 2 × 2 grid (8) does not, and the refusal names the cap.
+  SceneOptions capped;
+  capped.max_triangles = 2;
+  EXPECT_EQ(parse_scene_toml(kValid, "ok.toml", capped).triangle_count(), 2u);
+  msg = refusal(replace(kValid, "size_z = 4.0", "size_z = 4.0\nsegments_x = 2\nsegments_z = 2"), capped);
+  EXPECT_NE(msg.find("over the limit of 2 triangles set for this load"), std::string::npos) << msg;
 }
 
 // The embedded procedural scenes: deterministic, at least their triangle budgets, fast to load.

@@ -113,11 +113,16 @@ int run_render(const RenderArgs& args) {
     rt = std::make_unique<Runtime>(select_device(args.common.device));
     fmt::print("device   {} ({})\n", rt->info().name, rt->info().platform_name);
   }
-  check_frame_memory(estimate_frame_memory(scene), rt ? &rt->info() : nullptr,
-                     fmt::format("scene {} at {}x{}, {} spp", scene.name, w, h, spp));
+  // Rays are traced in passes of at most kRenderPassPaths paths (render/preview.h): only the image's
+  // per-pixel sums grow with the frame, so a render is refused by its resolution, never its spp.
+  check_frame_memory(estimate_render_memory(scene), rt ? &rt->info() : nullptr,
+                     fmt::format("scene {} at {}x{}, {} spp, rendered in passes of up to {} paths,", scene.name, w, h,
+                                 spp, largest_render_pass(w, h, spp)),
+                     "lower --resolution (a render keeps sums for every pixel; its rays are split into passes)");
   const RenderedFrame r = render_frame(prepared, args.common.raygen_options(), rt.get());
-  fmt::print("frame    {}x{}, {} spp: {} rays in {:.0f} ms ({:.2f} MRays/s incl. shading and compaction)\n", w, h, spp,
-             r.rays, r.ms, r.ms > 0 ? static_cast<double>(r.rays) / r.ms / 1e3 : 0.0);
+  fmt::print("frame    {}x{}, {} spp in {} pass{}: {} rays in {:.0f} ms ({:.2f} MRays/s incl. shading and compaction)\n",
+             w, h, spp, r.passes, r.passes == 1 ? "" : "es", r.rays, r.ms,
+             r.ms > 0 ? static_cast<double>(r.rays) / r.ms / 1e3 : 0.0);
   for (const auto& b : r.first_pass) fmt::print("  {:<10} {:>10} rays\n", b.name, b.rays);
   write_exr(r.image, base + ".exr");
   write_png(r.image, base + ".png", std::exp2(args.exposure));

@@ -3,11 +3,10 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <cstdlib>
-#include <fstream>
 #include <limits>
 
 #include "render/batches.h"
+#include "render/preview.h"
 
 namespace raysort {
 
@@ -15,16 +14,8 @@ namespace {
 
 constexpr std::uint64_t kMax = std::numeric_limits<std::uint64_t>::max();
 
-// a × b, saturating (a resolution a user can type must not wrap into a small estimate).
-std::uint64_t mul(std::uint64_t a, std::uint64_t b) { return b != 0 && a > kMax / b ? kMax : a * b; }
-std::uint64_t add(std::uint64_t a, std::uint64_t b) { return a > kMax - b ? kMax : a + b; }
-
-// The first number in a file ("max" or a missing file: none).
-std::uint64_t read_number(const char* path) {
-  std::ifstream in(path);
-  std::uint64_t v = 0;
-  return in >> v ? v : kMax;
-}
+std::uint64_t mul(std::uint64_t a, std::uint64_t b) { return saturating_mul(a, b); }
+std::uint64_t add(std::uint64_t a, std::uint64_t b) { return saturating_add(a, b); }
 
 }  // namespace
 
@@ -49,36 +40,20 @@ FrameMemory estimate_frame_memory(const Scene& scene) {
                                scene.effects.max_bounces);
 }
 
-std::uint64_t available_host_memory() {
-  if (const char* forced = std::getenv("RAYSORT_TEST_HOST_MEMORY_BYTES")) return std::strtoull(forced, nullptr, 10);
-  std::uint64_t available = kMax;
-  std::ifstream in("/proc/meminfo");
-  std::string key;
-  std::uint64_t kib = 0;
-  std::string unit;
-  while (in >> key >> kib >> unit)
-    if (key == "MemAvailable:") available = kib * 1024;
-  // A cgroup v2 limit (a Slurm job, a container): what is left below it.
-  const std::uint64_t limit = read_number("/sys/fs/cgroup/memory.max");
-  const std::uint64_t used = read_number("/sys/fs/cgroup/memory.current");
-  if (limit != kMax && used != kMax) available = std::min(available, limit > used ? limit - used : 0);
-  return available;
+FrameMemory estimate_render_memory(const Scene& scene) {
+  const std::uint32_t w = scene.camera.width, h = scene.camera.height;
+  FrameMemory m = estimate_frame_memory(largest_render_pass(w, h, scene.effects.samples_per_pixel), 1, 1,
+                                        next_event_estimation(scene) ? scene.effects.shadow_rays_per_bounce : 0,
+                                        scene.effects.max_bounces);
+  m.host_bytes = add(m.host_bytes, mul(mul(w, h), FrameMemory::kRenderHostPerPixel));
+  return m;
 }
 
-std::string format_bytes(std::uint64_t bytes) {
-  if (bytes == kMax) return "more than 16 EiB";
-  const char* units[] = {"B", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"};
-  double v = static_cast<double>(bytes);
-  int u = 0;
-  while (v >= 1024.0 && u < 6) v /= 1024.0, ++u;
-  return u == 0 ? fmt::format("{} B", bytes) : fmt::format("{:.1f} {}", v, units[u]);
-}
-
-void check_frame_memory(const FrameMemory& m, const DeviceInfo* device, const std::string& what) {
+void check_frame_memory(const FrameMemory& m, const DeviceInfo* device, const std::string& what,
+                        const std::string& fix) {
   auto count = [](std::uint64_t n) { return n == kMax ? std::string("more than 1.8e19") : fmt::format("{}", n); };
   const std::string size = fmt::format("{} paths, up to {} rays in its batches, {} in the largest", count(m.paths),
                                        count(m.rays), count(m.largest_batch));
-  const std::string fix = "lower --resolution or --spp (or the scene's bounces)";
   auto refuse = [&](const std::string& need, const std::string& limit) {
     throw ResourceError(fmt::format("{} needs {} ({}), over {}; {}", what, need, size, limit, fix));
   };

@@ -15,6 +15,7 @@
 
 #include "runtime/runtime.h"
 #include "scene/scene.h"
+#include "util/host_memory.h"  // available_host_memory, ResourceError, format_bytes
 
 namespace raysort {
 
@@ -30,6 +31,9 @@ struct FrameMemory {
   static constexpr std::uint64_t kHostPerPath = 64;    // the path tracer's per-path state while generating
   static constexpr std::uint64_t kDevicePerRay = 160;  // rays 32, hits 16, keys 8, order 4, sort scratch, permuted rays 32
   static constexpr std::uint64_t kLargestBufferPerRay = 32;  // the ray buffer (RsRay)
+  // A render's per-pixel state: radiance sums 24, cost 8, image 12, heatmap 12 and its sorted cost
+  // 8, the PNG/EXR conversion, slack.
+  static constexpr std::uint64_t kRenderHostPerPixel = 96;
 };
 
 // The estimate for a scene as loaded (its camera size, samples per pixel and effects).
@@ -37,22 +41,15 @@ FrameMemory estimate_frame_memory(const Scene& scene);
 FrameMemory estimate_frame_memory(std::uint64_t width, std::uint64_t height, std::uint64_t spp,
                                   std::uint32_t shadow_rays_per_bounce, std::uint32_t max_bounces);
 
-// Host memory this process may still take: MemAvailable, lowered by a cgroup limit when one is set
-// (a Slurm job's). RAYSORT_TEST_HOST_MEMORY_BYTES overrides it (tests).
-std::uint64_t available_host_memory();
-
-// Thrown when a request does not fit this machine; raysort exits 2 for it (1 for other errors).
-class ResourceError : public Error {
- public:
-  using Error::Error;
-};
+// A render (render/preview.h) traces one pass of at most kRenderPassPaths paths at a time and keeps
+// per-pixel sums for the whole frame: its rays are sized by the largest pass, not by the frame's
+// spp, and its host memory adds kRenderHostPerPixel per pixel.
+FrameMemory estimate_render_memory(const Scene& scene);
 
 // Throws ResourceError naming `what` ("scene cornell at 20000x20000, 1 spp"), the estimate, the
 // limit it passes (device max allocation, device global memory, host memory; on a CPU device the
 // device's memory is host memory too) and the fix. `device` may be null (the host twin).
-void check_frame_memory(const FrameMemory& m, const DeviceInfo* device, const std::string& what);
-
-// "1.5 GiB"
-std::string format_bytes(std::uint64_t bytes);
+void check_frame_memory(const FrameMemory& m, const DeviceInfo* device, const std::string& what,
+                        const std::string& fix = "lower --resolution or --spp (or the scene's bounces)");
 
 }  // namespace raysort

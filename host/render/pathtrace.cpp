@@ -14,16 +14,23 @@ namespace {
 
 void copy3(float* dst, const Vec3& v) { dst[0] = v[0], dst[1] = v[1], dst[2] = v[2]; }
 
-// The frame's parameters: a pass over samples [sample_begin, sample_begin + sample_count).
-RsShadeParams frame_params(const ShadeInputs& in, const FrameOptions& opts) {
+// The pass's parameters: samples [sample_begin, sample_begin + sample_count) of pixels
+// [pixel_begin, pixel_begin + pixel_count); `pixels` is set to the pass's pixel count.
+RsShadeParams frame_params(const ShadeInputs& in, const FrameOptions& opts, std::uint32_t& pixels) {
   RsShadeParams p = in.params;
   if (opts.sample_begin >= in.spp) throw Error(fmt::format("sample {} is past the frame's {} spp", opts.sample_begin, in.spp));
+  const std::uint64_t frame_pixels = std::uint64_t{in.width} * in.height;
+  if (opts.pixel_begin >= frame_pixels)
+    throw Error(fmt::format("pixel {} is past the frame's {} pixels", opts.pixel_begin, frame_pixels));
   p.sample_begin = opts.sample_begin;
   p.spp = opts.sample_count ? std::min(opts.sample_count, in.spp - opts.sample_begin) : in.spp - opts.sample_begin;
-  const std::uint64_t paths = std::uint64_t{in.width} * in.height * p.spp;
+  p.pixel_begin = opts.pixel_begin;
+  const std::uint64_t left = frame_pixels - opts.pixel_begin;
+  pixels = static_cast<std::uint32_t>(opts.pixel_count ? std::min<std::uint64_t>(opts.pixel_count, left) : left);
+  const std::uint64_t paths = std::uint64_t{pixels} * p.spp;
   if (paths * std::max<std::uint64_t>(1, p.shadow_per_hit) >= (std::uint64_t{1} << 32))
-    throw Error(fmt::format("{}x{} at {} spp is too many paths for one pass; render fewer samples per pass",
-                            in.width, in.height, p.spp));
+    throw Error(fmt::format("{} pixels at {} spp is too many paths for one pass; render fewer pixels or samples per pass",
+                            pixels, p.spp));
   return p;
 }
 
@@ -128,11 +135,14 @@ std::vector<T> compact_host(const std::vector<std::uint32_t>& valid, std::vector
 }  // namespace
 
 Frame trace_frame_host(const ShadeInputs& in, const Bvh& bvh, const FrameOptions& opts, TraceVariant variant) {
-  const RsShadeParams p = frame_params(in, opts);
-  const std::size_t n0 = std::size_t{in.width} * in.height * p.spp;
+  std::uint32_t pixels = 0;
+  const RsShadeParams p = frame_params(in, opts, pixels);
+  const std::size_t n0 = std::size_t{pixels} * p.spp;
   const std::size_t per = p.shadow_per_hit;
   Frame f;
   f.spp = p.spp;
+  f.pixel_begin = p.pixel_begin;
+  f.pixels = pixels;
   f.radiance.assign(3 * n0, 0.0f);
   if (opts.count_visits) f.visits.assign(n0, 0);
 
@@ -245,11 +255,14 @@ std::uint32_t DevicePathTracer::compact(const cl::Buffer& valid, std::uint32_t n
 }
 
 Frame DevicePathTracer::trace_frame(const FrameOptions& opts) {
-  const RsShadeParams p = frame_params(in_, opts);
-  const std::size_t n0 = std::size_t{in_.width} * in_.height * p.spp;
+  std::uint32_t pixels = 0;
+  const RsShadeParams p = frame_params(in_, opts, pixels);
+  const std::size_t n0 = std::size_t{pixels} * p.spp;
   const std::size_t per = p.shadow_per_hit, ns = n0 * per;
   Frame f;
   f.spp = p.spp;
+  f.pixel_begin = p.pixel_begin;
+  f.pixels = pixels;
   auto buf = [&](const char* name, std::size_t bytes) { return rt_.buffer(name, std::max<std::size_t>(16, bytes)); };
   cl::Buffer params = rt_.upload("shading parameters", std::vector<RsShadeParams>{p});
   std::vector<std::uint32_t> identity(std::max(n0, ns));

@@ -44,6 +44,7 @@ using BatchSink = std::function<void(const TracedBatch&)>;
 
 struct FrameOptions {
   std::uint32_t sample_begin = 0, sample_count = 0;  // a pass over samples [begin, begin + count); 0: all
+  std::uint32_t pixel_begin = 0, pixel_count = 0;    // ... and pixels [begin, begin + count), y * width + x; 0: all
   bool count_visits = false;                         // per-path BVH node visits (closest-hit batches)
   BatchSink sink;                                    // called once per non-empty batch, in trace order
 };
@@ -57,7 +58,8 @@ struct BatchCount {
 
 struct Frame {
   std::uint32_t spp = 0;                 // samples in this pass
-  std::vector<float> radiance;           // rgb per path; path = pixel * spp + (sample - sample_begin)
+  std::uint32_t pixel_begin = 0, pixels = 0;  // the pass's pixels
+  std::vector<float> radiance;           // rgb per path; path = (pixel - pixel_begin) * spp + (sample - sample_begin)
   std::vector<std::uint32_t> visits;     // per path, when counted
   std::vector<BatchCount> batches;       // in trace order, non-empty ones only
 };

@@ -63,10 +63,52 @@ void draw_segment(Image& img, const RsCamera& cam, RsVec3 a, RsVec3 b, const Vec
 
 }  // namespace
 
-RenderedFrame render_frame(const PreparedScene& p, const RayGenOptions& gen, Runtime* rt) {
+namespace {
+
+// The shape every pass of plan_render_passes has (the last ones may be smaller).
+struct PassShape {
+  std::uint32_t samples = 0;
+  std::uint64_t rows = 0;
+};
+PassShape render_pass_shape(std::uint32_t width, std::uint32_t height, std::uint32_t spp, std::uint64_t paths_per_pass) {
+  const std::uint64_t pixels = std::uint64_t{width} * height;
+  const std::uint64_t budget = std::max<std::uint64_t>(1, paths_per_pass);
+  // Whole frames of several samples while they fit; else one sample of as many rows as fit.
+  PassShape shape;
+  shape.samples = static_cast<std::uint32_t>(std::clamp<std::uint64_t>(budget / std::max<std::uint64_t>(1, pixels), 1, std::max(1u, spp)));
+  shape.rows = pixels <= budget ? height : std::max<std::uint64_t>(1, budget / width);
+  return shape;
+}
+
+}  // namespace
+
+std::uint64_t largest_render_pass(std::uint32_t width, std::uint32_t height, std::uint32_t spp,
+                                  std::uint64_t paths_per_pass) {
+  const PassShape shape = render_pass_shape(width, height, spp, paths_per_pass);
+  return std::min<std::uint64_t>(shape.rows, height) * width * shape.samples;
+}
+
+std::vector<RenderPass> plan_render_passes(std::uint32_t width, std::uint32_t height, std::uint32_t spp,
+                                           std::uint64_t paths_per_pass) {
+  std::vector<RenderPass> passes;
+  if (std::uint64_t{width} * height == 0 || spp == 0) return passes;
+  const auto [samples, rows] = render_pass_shape(width, height, spp, paths_per_pass);
+  for (std::uint32_t s = 0; s < spp; s += samples)
+    for (std::uint64_t y = 0; y < height; y += rows) {
+      RenderPass pass;
+      pass.sample_begin = s;
+      pass.sample_count = std::min(samples, spp - s);
+      pass.pixel_begin = static_cast<std::uint32_t>(y * width);
+      pass.pixel_count = static_cast<std::uint32_t>(std::min<std::uint64_t>(rows, height - y) * width);
+      passes.push_back(pass);
+    }
+  return passes;
+}
+
+RenderedFrame render_frame(const PreparedScene& p, const RayGenOptions& gen, Runtime* rt,
+                           std::uint64_t paths_per_pass) {
   const ShadeInputs in = make_shade_inputs(p.scene, p.tris, gen);
   const std::size_t pixels = std::size_t{in.width} * in.height;
-  const auto per_pass = static_cast<std::uint32_t>(std::max<std::size_t>(1, (std::size_t{2} << 20) / pixels));
   std::unique_ptr<DevicePathTracer> device;
   if (rt) device = std::make_unique<DevicePathTracer>(*rt, p.bvh, in);
   RenderedFrame r;
@@ -74,20 +116,34 @@ RenderedFrame render_frame(const PreparedScene& p, const RayGenOptions& gen, Run
   r.cost.assign(pixels, 0.0);
   std::vector<double> sum(pixels * 3, 0.0);
   const auto t0 = std::chrono::steady_clock::now();
-  for (std::uint32_t s = 0; s < in.spp; s += per_pass) {
+  for (const RenderPass& pass : plan_render_passes(in.width, in.height, in.spp, paths_per_pass)) {
     FrameOptions fo;
-    fo.sample_begin = s;
-    fo.sample_count = per_pass;
+    fo.sample_begin = pass.sample_begin;
+    fo.sample_count = pass.sample_count;
+    fo.pixel_begin = pass.pixel_begin;
+    fo.pixel_count = pass.pixel_count;
     fo.count_visits = true;
     Frame f = device ? device->trace_frame(fo) : trace_frame_host(in, p.bvh, fo);
-    if (s == 0) r.first_pass = f.batches;
-    for (const auto& b : f.batches) r.rays += b.rays;
+    ++r.passes;
+    for (const auto& b : f.batches) {
+      r.rays += b.rays;
+      if (pass.sample_begin != 0) continue;
+      auto same = std::find_if(r.first_pass.begin(), r.first_pass.end(), [&](const BatchCount& c) { return c.name == b.name; });
+      if (same == r.first_pass.end())
+        r.first_pass.push_back(b);
+      else
+        same->rays += b.rays;
+    }
     for (std::size_t path = 0; path < f.visits.size(); ++path) {
-      const std::size_t pixel = path / f.spp;
+      const std::size_t pixel = f.pixel_begin + path / f.spp;
       for (int c = 0; c < 3; ++c) sum[3 * pixel + c] += f.radiance[3 * path + c];
       r.cost[pixel] += f.visits[path];
     }
   }
+  // Trace order (primary, shadow0, bounce1, shadow1, ...), whichever row pass met a batch first.
+  auto trace_rank = [](const BatchCount& c) { return 2 * c.bounce + (c.kind == BatchKind::Shadow ? 1 : 0); };
+  std::stable_sort(r.first_pass.begin(), r.first_pass.end(),
+                   [&](const BatchCount& a, const BatchCount& b) { return trace_rank(a) < trace_rank(b); });
   r.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   for (std::size_t i = 0; i < sum.size(); ++i) r.image.rgb[i] = static_cast<float>(sum[i] / in.spp);
   for (double& c : r.cost) c /= in.spp;

@@ -33,7 +33,16 @@ struct SceneOptions {
   // default (../shared/scenes beside the source tree).
   std::string scene_root;
   FrameSize frame;  // overrides of the scene's resolution / sampling (0: the scene's own)
+  // Triangles a scene may make (its meshes, and again after instancing). 0: as many as the host
+  // memory available holds at kHostBytesPerTriangle each. A scene over it is refused with a
+  // ResourceError (exit 2) before the mesh or placement that passes it is made.
+  std::uint64_t max_triangles = 0;
 };
+
+// Host memory one triangle takes from load to trace (mesh, flattened copy, BVH, the device's copy):
+// peak RSS of `raysort trace` grows by ≈ 380 B per triangle on heightfields of 0.5–8.4 M triangles
+// (PoCL); rounded up for the wide BVH and the matrix's caches.
+inline constexpr std::uint64_t kHostBytesPerTriangle = 512;
 
 // The scene root in effect for these options (see SceneOptions::scene_root).
 std::string resolve_scene_root(const SceneOptions& opts);

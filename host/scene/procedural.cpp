@@ -352,21 +352,46 @@ Mesh make_table(const Params& p, std::uint64_t) {
 struct Generator {
   const char* name;
   Mesh (*build)(const Params&, std::uint64_t);
+  std::uint64_t (*triangles)(const Params&);  // what build makes, at most; computed without building
   std::vector<const char*> numbers;
   std::vector<const char*> vectors;
 };
 
+// Triangle counts of the generators above (upper bounds where poles or open faces drop a few),
+// so that a scene can refuse a size before it allocates (scene/load.h, SceneOptions::max_triangles).
+std::uint64_t box_triangles(const Params&) { return 12; }
+std::uint64_t displaced_sphere_triangles(const Params& p) {
+  std::uint64_t rings = p.count("subdivisions", 64, 3, 4096);
+  return 4 * rings * (rings - 1);
+}
+std::uint64_t gem_triangles(const Params& p) { return 4 * std::uint64_t{p.count("facets", 8, 3, 4096)}; }
+std::uint64_t heightfield_triangles(const Params& p) {
+  std::uint64_t res = p.count("resolution", 256, 1, 8192);
+  return 2 * res * res;
+}
+std::uint64_t plane_triangles(const Params& p) {
+  return 2 * std::uint64_t{p.count("segments_x", 1, 1, 8192)} * p.count("segments_z", 1, 1, 8192);
+}
+std::uint64_t rock_triangles(const Params& p) { return 20ull << (2 * p.count("subdivisions", 2, 0, 7)); }
+std::uint64_t table_triangles(const Params&) { return 60; }
+std::uint64_t torus_knot_triangles(const Params& p) {
+  return 2 * std::uint64_t{p.count("segments", 256, 3, 1 << 20)} * p.count("sides", 32, 3, 4096);
+}
+std::uint64_t tree_triangles(const Params& p) {
+  return 2 * std::uint64_t{p.count("sides", 8, 3, 4096)} * (1 + p.count("layers", 3, 1, 64));
+}
+
 const std::vector<Generator>& generators() {
   static const std::vector<Generator> g = {
-      {"box", make_box, {"inverted", "open_top"}, {"min", "max"}},
-      {"displaced_sphere", make_displaced_sphere, {"subdivisions", "radius", "amplitude", "frequency", "octaves"}, {}},
-      {"gem", make_gem, {"facets", "radius", "crown_height", "pavilion_depth", "table"}, {}},
-      {"heightfield", make_heightfield, {"resolution", "size", "height", "frequency", "octaves"}, {}},
-      {"plane", make_plane, {"size_x", "size_z", "segments_x", "segments_z"}, {}},
-      {"rock", make_rock, {"subdivisions", "radius", "roughness", "frequency"}, {}},
-      {"table", make_table, {"width", "depth", "height", "top_thickness", "leg_size"}, {}},
-      {"torus_knot", make_torus_knot, {"p", "q", "radius", "tube", "segments", "sides"}, {}},
-      {"tree", make_tree, {"height", "sides", "layers", "trunk_radius", "crown_radius"}, {}},
+      {"box", make_box, box_triangles, {"inverted", "open_top"}, {"min", "max"}},
+      {"displaced_sphere", make_displaced_sphere, displaced_sphere_triangles, {"subdivisions", "radius", "amplitude", "frequency", "octaves"}, {}},
+      {"gem", make_gem, gem_triangles, {"facets", "radius", "crown_height", "pavilion_depth", "table"}, {}},
+      {"heightfield", make_heightfield, heightfield_triangles, {"resolution", "size", "height", "frequency", "octaves"}, {}},
+      {"plane", make_plane, plane_triangles, {"size_x", "size_z", "segments_x", "segments_z"}, {}},
+      {"rock", make_rock, rock_triangles, {"subdivisions", "radius", "roughness", "frequency"}, {}},
+      {"table", make_table, table_triangles, {"width", "depth", "height", "top_thickness", "leg_size"}, {}},
+      {"torus_knot", make_torus_knot, torus_knot_triangles, {"p", "q", "radius", "tube", "segments", "sides"}, {}},
+      {"tree", make_tree, tree_triangles, {"height", "sides", "layers", "trunk_radius", "crown_radius"}, {}},
   };
   return g;
 }
@@ -379,7 +404,10 @@ std::vector<std::string> generator_names() {
   return names;
 }
 
-Mesh generate_mesh(const std::string& name, const GeneratorParams& params, std::uint64_t seed) {
+namespace {
+
+// The generator of that name, after checking that `params` names only its parameters.
+const Generator& find_generator(const std::string& name, const GeneratorParams& params) {
   for (const auto& g : generators()) {
     if (name != g.name) continue;
     auto listed = [](const std::vector<const char*>& keys) { return fmt::format("{}", fmt::join(keys, ", ")); };
@@ -395,11 +423,21 @@ Mesh generate_mesh(const std::string& name, const GeneratorParams& params, std::
         throw Error(fmt::format("generator '{}' has no vector parameter '{}'; its vector parameters are: {}", name,
                                 key, g.vectors.empty() ? "(none)" : listed(g.vectors)));
     }
-    Mesh mesh = g.build(Params(name, params), seed);
-    mesh.source = "procedural:" + name;
-    return mesh;
+    return g;
   }
   throw Error(fmt::format("unknown generator '{}'; the generators are: {}", name, fmt::join(generator_names(), ", ")));
+}
+
+}  // namespace
+
+std::uint64_t generated_triangle_count(const std::string& name, const GeneratorParams& params) {
+  return find_generator(name, params).triangles(Params(name, params));
+}
+
+Mesh generate_mesh(const std::string& name, const GeneratorParams& params, std::uint64_t seed) {
+  Mesh mesh = find_generator(name, params).build(Params(name, params), seed);
+  mesh.source = "procedural:" + name;
+  return mesh;
 }
 
 }  // namespace raysort

@@ -31,4 +31,8 @@ std::vector<std::string> generator_names();
 // generators or the offending parameter.
 Mesh generate_mesh(const std::string& name, const GeneratorParams& params, std::uint64_t seed);
 
+// How many triangles generate_mesh would make (at most), without making them; throws the same
+// Error for an unknown generator or a bad parameter.
+std::uint64_t generated_triangle_count(const std::string& name, const GeneratorParams& params);
+
 }  // namespace raysort

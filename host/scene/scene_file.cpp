@@ -8,7 +8,9 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
+#include <optional>
 #include <sstream>
 
 #include "scene/ground.h"
@@ -19,6 +21,7 @@
 #include "scene/toml_reader.h"
 #include "util/embedded.h"
 #include "util/error.h"
+#include "util/host_memory.h"
 
 namespace fs = std::filesystem;
 
@@ -188,9 +191,12 @@ class SceneBuilder {
       TomlTable t(origin_, *instances[i], fmt::format("instance[{}]", i), {"mesh", "translate", "rotate", "scale"});
       s.instances.push_back({mesh_index(t, "mesh"), read_transform(t)});
     }
+    check_triangles(placed_triangles(s), 1, "its placed meshes", "place fewer instances or lighter meshes");
+    check_finite_placements(s, 0, "a drawn mesh or an [[instance]]");
     std::size_t placed_before_scatter = s.instances.size();
     auto scatters = top.table_array("scatter");
     for (std::size_t i = 0; i < scatters.size(); ++i) read_scatter(s, *scatters[i], i, placed_before_scatter);
+    check_finite_placements(s, placed_before_scatter, "a [[scatter]]");
     if (s.instances.empty())
       throw Error(fmt::format("{}:1: the scene draws nothing: every mesh has draw = false and there is no [[instance]] "
                               "or [[scatter]]; place a mesh",
@@ -300,7 +306,12 @@ class SceneBuilder {
             Vec3 vec{};
             for (std::size_t i = 0; i < 3; ++i) {
               const auto& e = (*arr)[i];
-              vec[i] = static_cast<float>(e.is_integer() ? double(e.as_integer()->get()) : e.as_floating_point()->get());
+              const double x = e.is_integer() ? double(e.as_integer()->get()) : e.as_floating_point()->get();
+              if (!(std::fabs(x) <= std::numeric_limits<float>::max()))
+                throw Error(fmt::format("{}:{}: '{}.params.{}' = {:g} is not a finite number within the float range "
+                                        "scenes are stored in (|x| <= 3.4e38)",
+                                        origin_, line, t.path(), key, x));
+              vec[i] = static_cast<float>(x);
             }
             params.vectors[key] = vec;
           } else {
@@ -309,6 +320,16 @@ class SceneBuilder {
           }
         }
       }
+      std::uint64_t triangles = 0;
+      try {
+        triangles = generated_triangle_count(gen, params);
+      } catch (const Error& e) {
+        std::string_view key = gen_known(gen) ? "params" : "generator";
+        t.fail(key, fmt::format("(mesh '{}'): {}", name, e.what()));
+      }
+      check_triangles(saturating_add(mesh_triangles(s), triangles), t.line("generator"),
+                      fmt::format("mesh '{}' ({}, {} triangles)", name, gen, triangles),
+                      "lower its params (resolution, segments, subdivisions, sides)");
       try {
         mesh = generate_mesh(gen, params, seed);
       } catch (const Error& e) {
@@ -394,6 +415,9 @@ class SceneBuilder {
                                      ground_name));
       ground.emplace(s.meshes[g], xfs);
     }
+    check_triangles(saturating_add(placed_triangles(s), saturating_mul(count, s.meshes[mesh].triangles.size())),
+                    t.line("count"), fmt::format("scatter[{}] ({} × mesh '{}')", index, count, s.meshes[mesh].name),
+                    "lower its count or scatter a mesh with fewer triangles");
     SceneRng rng(seed ^ 0x5CA77E5ull);
     Affine base = Affine::rotation_deg(rotate);
     for (std::uint64_t i = 0; i < count; ++i) {
@@ -418,6 +442,65 @@ class SceneBuilder {
                       .then_after(Affine::scaling({f(scale), f(scale), f(scale)}));
       s.instances.push_back({mesh, xf});
     }
+  }
+
+  // Triangles of the meshes made so far, and of the placements so far (instances flattened).
+  static std::uint64_t mesh_triangles(const Scene& s) {
+    std::uint64_t n = 0;
+    for (const Mesh& m : s.meshes) n = saturating_add(n, m.triangles.size());
+    return n;
+  }
+  static std::uint64_t placed_triangles(const Scene& s) {
+    std::uint64_t n = 0;
+    for (const Instance& i : s.instances) n = saturating_add(n, s.meshes[i.mesh].triangles.size());
+    return n;
+  }
+
+  // Refuses placements whose world-space box leaves the float range (a huge scale or translation:
+  // inf vertices, and NaN where a transform multiplies inf by 0), before anything uses them (the
+  // scatter's ground grid, the BVH). The box's corners bound every vertex under an affine map.
+  void check_finite_placements(const Scene& s, std::size_t first, const char* kind) const {
+    std::vector<std::optional<std::pair<Vec3, Vec3>>> bounds(s.meshes.size());
+    for (std::size_t i = first; i < s.instances.size(); ++i) {
+      const Instance& inst = s.instances[i];
+      auto& b = bounds[inst.mesh];
+      if (!b) {
+        Vec3 lo{0, 0, 0}, hi{0, 0, 0};
+        const auto& pos = s.meshes[inst.mesh].positions;
+        if (!pos.empty()) lo = hi = pos[0];
+        for (const Vec3& p : pos)
+          for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], p[a]), hi[a] = std::max(hi[a], p[a]);
+        b.emplace(lo, hi);
+      }
+      for (int corner = 0; corner < 8; ++corner) {
+        const Vec3 p = inst.transform.apply({corner & 1 ? b->second[0] : b->first[0], corner & 2 ? b->second[1] : b->first[1],
+                                             corner & 4 ? b->second[2] : b->first[2]});
+        if (!(std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2])))
+          throw Error(fmt::format("{}:1: a placement of mesh '{}' ({}) reaches coordinates beyond the float range "
+                                  "scenes are stored in (a scale or translate too large for its mesh's size); make "
+                                  "it smaller",
+                                  origin_, s.meshes[inst.mesh].name, kind));
+      }
+    }
+  }
+
+  // Refuses (ResourceError, exit 2) a scene whose triangles would pass SceneOptions::max_triangles,
+  // or else the host memory available at kHostBytesPerTriangle each, before they are made.
+  void check_triangles(std::uint64_t triangles, std::uint32_t line, const std::string& what, const std::string& fix) const {
+    const std::uint64_t bytes = saturating_mul(triangles, kHostBytesPerTriangle);
+    std::string limit;
+    if (opts_.max_triangles != 0) {
+      if (triangles <= opts_.max_triangles) return;
+      limit = fmt::format("the limit of {} triangles set for this load", opts_.max_triangles);
+    } else {
+      const std::uint64_t available = available_host_memory();
+      if (bytes <= available) return;
+      limit = fmt::format("the {} of host memory available", format_bytes(available));
+    }
+    throw ResourceError(fmt::format("{}:{}: the scene would hold {} triangles with {}, about {} of host memory at {} B "
+                                    "each from load to trace, over {}; {}",
+                                    origin_, line, triangles, what, format_bytes(bytes), kHostBytesPerTriangle, limit,
+                                    fix));
   }
 
   std::string origin_;

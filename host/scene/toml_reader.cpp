@@ -4,6 +4,7 @@
 #include <fmt/ranges.h>
 
 #include <cmath>
+#include <limits>
 
 #include "util/error.h"
 
@@ -83,6 +84,10 @@ double TomlTable::as_number(std::string_view key, const toml::node& n) const {
   else
     fail(key, fmt::format("must be a number, not {}", toml_type_name(n)));
   if (!std::isfinite(v)) fail(key, "must be a finite number, not nan or inf");
+  // Geometry, cameras and lights are stored as float: a larger value would become inf there (and
+  // 0 · inf = NaN in a transform), which no later check could tell from a user's intent.
+  if (std::fabs(v) > std::numeric_limits<float>::max())
+    fail(key, fmt::format("= {:g} is beyond the float range scenes are stored in (|x| <= 3.4e38)", v));
   return v;
 }
 
