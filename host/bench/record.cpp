@@ -231,20 +231,24 @@ void add_gpu_model_columns(std::vector<Col>& c) {
   c.push_back(numeric("gpu_model_speedup", [](const CellRecord& r) { return r.gpu.speedup; }, 4));
   c.push_back(numeric("gpu_model_time_us", [](const CellRecord& r) { return r.gpu.time_us; }, 3));
   using Count = std::uint64_t CellRecord::GpuModelFigures::*;
-  for (auto [name, field] : {std::pair<const char*, Count>{"gpu_warp_steps", &CellRecord::GpuModelFigures::warp_steps},
-                             {"gpu_idle_lanes", &CellRecord::GpuModelFigures::idle_lanes},
-                             {"gpu_l1_hits", &CellRecord::GpuModelFigures::l1_hits},
-                             {"gpu_l1_misses", &CellRecord::GpuModelFigures::l1_misses},
-                             {"gpu_l2_hits", &CellRecord::GpuModelFigures::l2_hits},
-                             {"gpu_l2_misses", &CellRecord::GpuModelFigures::l2_misses},
-                             {"gpu_dram_bytes", &CellRecord::GpuModelFigures::dram_bytes},
-                             {"gpu_replayed_warps", &CellRecord::GpuModelFigures::replayed_warps}})
+  // A plain pair, not a structured binding: clang 14 (make fuzz) cannot capture a binding in a lambda.
+  for (const std::pair<const char*, Count>& column :
+       {std::pair<const char*, Count>{"gpu_warp_steps", &CellRecord::GpuModelFigures::warp_steps},
+        {"gpu_idle_lanes", &CellRecord::GpuModelFigures::idle_lanes},
+        {"gpu_l1_hits", &CellRecord::GpuModelFigures::l1_hits},
+        {"gpu_l1_misses", &CellRecord::GpuModelFigures::l1_misses},
+        {"gpu_l2_hits", &CellRecord::GpuModelFigures::l2_hits},
+        {"gpu_l2_misses", &CellRecord::GpuModelFigures::l2_misses},
+        {"gpu_dram_bytes", &CellRecord::GpuModelFigures::dram_bytes},
+        {"gpu_replayed_warps", &CellRecord::GpuModelFigures::replayed_warps}}) {
+    const Count field = column.second;
     c.push_back(numeric(
-        name,
+        column.first,
         [field](const CellRecord& r) {
           return r.gpu.profile.empty() ? std::numeric_limits<double>::quiet_NaN() : static_cast<double>(r.gpu.*field);
         },
         0));
+  }
 }
 
 std::vector<Col> make_columns() {
