@@ -14,23 +14,21 @@ namespace {
 
 constexpr std::uint64_t kMax = std::numeric_limits<std::uint64_t>::max();
 
-std::uint64_t mul(std::uint64_t a, std::uint64_t b) { return saturating_mul(a, b); }
-std::uint64_t add(std::uint64_t a, std::uint64_t b) { return saturating_add(a, b); }
-
 }  // namespace
 
 FrameMemory estimate_frame_memory(std::uint64_t width, std::uint64_t height, std::uint64_t spp,
                                   std::uint32_t shadow_rays_per_bounce, std::uint32_t max_bounces) {
   FrameMemory m;
-  m.paths = mul(mul(width, height), spp);
+  m.paths = saturating_mul(saturating_mul(width, height), spp);
   for (const PossibleBatch& b : possible_batches(shadow_rays_per_bounce > 0, max_bounces)) {
-    const std::uint64_t rays = b.kind == BatchKind::Shadow ? mul(m.paths, shadow_rays_per_bounce) : m.paths;
-    m.rays = add(m.rays, rays);
+    const std::uint64_t rays = b.kind == BatchKind::Shadow ? saturating_mul(m.paths, shadow_rays_per_bounce) : m.paths;
+    m.rays = saturating_add(m.rays, rays);
     m.largest_batch = std::max(m.largest_batch, rays);
   }
-  m.host_bytes = add(mul(m.rays, FrameMemory::kHostPerRay), mul(m.paths, FrameMemory::kHostPerPath));
-  m.device_bytes = mul(m.largest_batch, FrameMemory::kDevicePerRay);
-  m.largest_buffer_bytes = mul(m.largest_batch, FrameMemory::kLargestBufferPerRay);
+  m.host_bytes = saturating_add(saturating_mul(m.rays, FrameMemory::kHostPerRay),
+                                saturating_mul(m.paths, FrameMemory::kHostPerPath));
+  m.device_bytes = saturating_mul(m.largest_batch, FrameMemory::kDevicePerRay);
+  m.largest_buffer_bytes = saturating_mul(m.largest_batch, FrameMemory::kLargestBufferPerRay);
   return m;
 }
 
@@ -45,7 +43,8 @@ FrameMemory estimate_render_memory(const Scene& scene) {
   FrameMemory m = estimate_frame_memory(largest_render_pass(w, h, scene.effects.samples_per_pixel), 1, 1,
                                         next_event_estimation(scene) ? scene.effects.shadow_rays_per_bounce : 0,
                                         scene.effects.max_bounces);
-  m.host_bytes = add(m.host_bytes, mul(mul(w, h), FrameMemory::kRenderHostPerPixel));
+  const std::uint64_t pixels = std::uint64_t{w} * h;
+  m.host_bytes = saturating_add(m.host_bytes, saturating_mul(pixels, FrameMemory::kRenderHostPerPixel));
   return m;
 }
 
@@ -69,7 +68,7 @@ void check_frame_memory(const FrameMemory& m, const DeviceInfo* device, const st
   }
   // A CPU device's buffers are host memory too.
   const bool shared = device && device->type == "CPU";
-  const std::uint64_t host = shared ? add(m.host_bytes, m.device_bytes) : m.host_bytes;
+  const std::uint64_t host = shared ? saturating_add(m.host_bytes, m.device_bytes) : m.host_bytes;
   const std::uint64_t available = available_host_memory();
   if (host > available)
     refuse(fmt::format("about {} of host memory{}", format_bytes(host), shared ? " (the CPU device's buffers included)" : ""),

@@ -61,10 +61,6 @@ void draw_segment(Image& img, const RsCamera& cam, RsVec3 a, RsVec3 b, const Vec
   }
 }
 
-}  // namespace
-
-namespace {
-
 // The shape every pass of plan_render_passes has (the last ones may be smaller).
 struct PassShape {
   std::uint32_t samples = 0;
@@ -75,7 +71,8 @@ PassShape render_pass_shape(std::uint32_t width, std::uint32_t height, std::uint
   const std::uint64_t budget = std::max<std::uint64_t>(1, paths_per_pass);
   // Whole frames of several samples while they fit; else one sample of as many rows as fit.
   PassShape shape;
-  shape.samples = static_cast<std::uint32_t>(std::clamp<std::uint64_t>(budget / std::max<std::uint64_t>(1, pixels), 1, std::max(1u, spp)));
+  const std::uint64_t fit = budget / std::max<std::uint64_t>(1, pixels);  // whole frames per pass
+  shape.samples = static_cast<std::uint32_t>(std::clamp<std::uint64_t>(fit, 1, std::max(1u, spp)));
   shape.rows = pixels <= budget ? height : std::max<std::uint64_t>(1, budget / width);
   return shape;
 }

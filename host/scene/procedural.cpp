@@ -87,6 +87,19 @@ struct Builder {
   }
 };
 
+// The parameters that set each generator's size, read in one place for its build and for its
+// triangle count (generated_triangle_count below), so that the two cannot disagree.
+std::uint32_t plane_segments_x(const Params& p) { return p.count("segments_x", 1, 1, 8192); }
+std::uint32_t plane_segments_z(const Params& p) { return p.count("segments_z", 1, 1, 8192); }
+std::uint32_t sphere_rings(const Params& p) { return p.count("subdivisions", 64, 3, 4096); }
+std::uint32_t heightfield_resolution(const Params& p) { return p.count("resolution", 256, 1, 8192); }
+std::uint32_t knot_segments(const Params& p) { return p.count("segments", 256, 3, 1 << 20); }
+std::uint32_t knot_sides(const Params& p) { return p.count("sides", 32, 3, 4096); }
+std::uint32_t gem_facets(const Params& p) { return p.count("facets", 8, 3, 4096); }
+std::uint32_t rock_subdivisions(const Params& p) { return p.count("subdivisions", 2, 0, 7); }
+std::uint32_t tree_sides(const Params& p) { return p.count("sides", 8, 3, 4096); }
+std::uint32_t tree_layers(const Params& p) { return p.count("layers", 3, 1, 64); }
+
 Mesh make_box(const Params& p, std::uint64_t) {
   Builder b;
   b.box(p.vector("min", {-0.5f, -0.5f, -0.5f}), p.vector("max", {0.5f, 0.5f, 0.5f}), p.flag("inverted"),
@@ -96,7 +109,7 @@ Mesh make_box(const Params& p, std::uint64_t) {
 
 Mesh make_plane(const Params& p, std::uint64_t) {
   double sx = p.number("size_x", 1.0, 1e-6, 1e9), sz = p.number("size_z", 1.0, 1e-6, 1e9);
-  std::uint32_t nx = p.count("segments_x", 1, 1, 8192), nz = p.count("segments_z", 1, 1, 8192);
+  std::uint32_t nx = plane_segments_x(p), nz = plane_segments_z(p);
   Builder b;
   for (std::uint32_t j = 0; j <= nz; ++j)
     for (std::uint32_t i = 0; i <= nx; ++i) b.vertex(sx * (double(i) / nx - 0.5), 0.0, sz * (double(j) / nz - 0.5));
@@ -111,7 +124,7 @@ Mesh make_plane(const Params& p, std::uint64_t) {
 // A UV sphere with fbm displacement along the normal: rings × 2·rings quads (poles as fans).
 // The noise is sampled at the unit direction, so the seam and the poles close without cracks.
 Mesh make_displaced_sphere(const Params& p, std::uint64_t seed) {
-  std::uint32_t rings = p.count("subdivisions", 64, 3, 4096);
+  std::uint32_t rings = sphere_rings(p);
   double radius = p.number("radius", 1.0, 1e-6, 1e9);
   double amplitude = p.number("amplitude", 0.15, 0.0, 0.9);
   double frequency = p.number("frequency", 3.0, 0.0, 1e6);
@@ -149,7 +162,7 @@ Mesh make_displaced_sphere(const Params& p, std::uint64_t seed) {
 
 // fbm value-noise terrain on a regular (resolution+1)² grid, centred on the origin in x/z.
 Mesh make_heightfield(const Params& p, std::uint64_t seed) {
-  std::uint32_t res = p.count("resolution", 256, 1, 8192);
+  std::uint32_t res = heightfield_resolution(p);
   double size = p.number("size", 100.0, 1e-6, 1e9);
   double height = p.number("height", 10.0, 0.0, 1e9);
   double frequency = p.number("frequency", 4.0, 0.0, 1e6);
@@ -177,7 +190,7 @@ Mesh make_torus_knot(const Params& p, std::uint64_t) {
   double kp = p.count("p", 2, 1, 64), kq = p.count("q", 3, 1, 64);
   double radius = p.number("radius", 1.0, 1e-6, 1e9);
   double tube = p.number("tube", 0.25, 1e-6, 1e9);
-  std::uint32_t segments = p.count("segments", 256, 3, 1 << 20), sides = p.count("sides", 32, 3, 4096);
+  std::uint32_t segments = knot_segments(p), sides = knot_sides(p);
   auto curve = [&](double u) -> std::array<double, 3> {
     double cs = std::cos(kq / kp * u);
     return {radius * (2.0 + cs) * 0.5 * std::cos(u), radius * (2.0 + cs) * 0.5 * std::sin(u),
@@ -212,7 +225,7 @@ Mesh make_torus_knot(const Params& p, std::uint64_t) {
 // A faceted low-poly gem (brilliant-like): table, crown, girdle and pavilion; 4·facets triangles.
 // The seed varies the proportions by up to ±10 %, so scattered gems are not all alike.
 Mesh make_gem(const Params& p, std::uint64_t seed) {
-  std::uint32_t n = p.count("facets", 8, 3, 4096);
+  std::uint32_t n = gem_facets(p);
   double r = p.number("radius", 0.5, 1e-6, 1e9);
   SceneRng rng(seed);
   double crown = p.number("crown_height", 0.35, 0.0, 10.0) * r * rng.uniform(0.9, 1.1);
@@ -281,7 +294,7 @@ Builder icosphere(std::uint32_t subdivisions) {
 
 // A lumpy rock for scattering: a noise-displaced icosphere, flattened below and standing on y = 0.
 Mesh make_rock(const Params& p, std::uint64_t seed) {
-  std::uint32_t subdivisions = p.count("subdivisions", 2, 0, 7);
+  std::uint32_t subdivisions = rock_subdivisions(p);
   double radius = p.number("radius", 0.5, 1e-6, 1e9);
   double roughness = p.number("roughness", 0.35, 0.0, 0.9);
   double frequency = p.number("frequency", 1.5, 0.0, 1e6);
@@ -300,7 +313,7 @@ Mesh make_rock(const Params& p, std::uint64_t seed) {
 // A stylised tree standing on y = 0: an open trunk cylinder and `layers` stacked cones.
 Mesh make_tree(const Params& p, std::uint64_t seed) {
   double height = p.number("height", 3.0, 1e-6, 1e9);
-  std::uint32_t sides = p.count("sides", 8, 3, 4096), layers = p.count("layers", 3, 1, 64);
+  std::uint32_t sides = tree_sides(p), layers = tree_layers(p);
   double trunk = p.number("trunk_radius", 0.08, 1e-6, 1e9);
   double crown = p.number("crown_radius", 0.9, 1e-6, 1e9);
   SceneRng rng(seed);
@@ -361,25 +374,19 @@ struct Generator {
 // so that a scene can refuse a size before it allocates (scene/load.h, SceneOptions::max_triangles).
 std::uint64_t box_triangles(const Params&) { return 12; }
 std::uint64_t displaced_sphere_triangles(const Params& p) {
-  std::uint64_t rings = p.count("subdivisions", 64, 3, 4096);
+  const std::uint64_t rings = sphere_rings(p);
   return 4 * rings * (rings - 1);
 }
-std::uint64_t gem_triangles(const Params& p) { return 4 * std::uint64_t{p.count("facets", 8, 3, 4096)}; }
+std::uint64_t gem_triangles(const Params& p) { return 4 * std::uint64_t{gem_facets(p)}; }
 std::uint64_t heightfield_triangles(const Params& p) {
-  std::uint64_t res = p.count("resolution", 256, 1, 8192);
+  const std::uint64_t res = heightfield_resolution(p);
   return 2 * res * res;
 }
-std::uint64_t plane_triangles(const Params& p) {
-  return 2 * std::uint64_t{p.count("segments_x", 1, 1, 8192)} * p.count("segments_z", 1, 1, 8192);
-}
-std::uint64_t rock_triangles(const Params& p) { return 20ull << (2 * p.count("subdivisions", 2, 0, 7)); }
+std::uint64_t plane_triangles(const Params& p) { return 2 * std::uint64_t{plane_segments_x(p)} * plane_segments_z(p); }
+std::uint64_t rock_triangles(const Params& p) { return 20ull << (2 * rock_subdivisions(p)); }
 std::uint64_t table_triangles(const Params&) { return 60; }
-std::uint64_t torus_knot_triangles(const Params& p) {
-  return 2 * std::uint64_t{p.count("segments", 256, 3, 1 << 20)} * p.count("sides", 32, 3, 4096);
-}
-std::uint64_t tree_triangles(const Params& p) {
-  return 2 * std::uint64_t{p.count("sides", 8, 3, 4096)} * (1 + p.count("layers", 3, 1, 64));
-}
+std::uint64_t torus_knot_triangles(const Params& p) { return 2 * std::uint64_t{knot_segments(p)} * knot_sides(p); }
+std::uint64_t tree_triangles(const Params& p) { return 2 * std::uint64_t{tree_sides(p)} * (1 + tree_layers(p)); }
 
 const std::vector<Generator>& generators() {
   static const std::vector<Generator> g = {

@@ -8,7 +8,6 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <limits>
 #include <map>
 #include <optional>
 #include <sstream>
@@ -298,16 +297,15 @@ class SceneBuilder {
           std::string key(k.str());
           std::uint32_t line = v.source().begin.line;
           if (v.is_number()) {
-            double x = v.is_integer() ? double(v.as_integer()->get()) : v.as_floating_point()->get();
-            params.numbers[key] = x;
+            params.numbers[key] = toml_number(v);
           } else if (auto arr = v.as_array(); arr && arr->size() == 3 &&
                                               std::all_of(arr->begin(), arr->end(),
                                                           [](const toml::node& e) { return e.is_number(); })) {
             Vec3 vec{};
             for (std::size_t i = 0; i < 3; ++i) {
               const auto& e = (*arr)[i];
-              const double x = e.is_integer() ? double(e.as_integer()->get()) : e.as_floating_point()->get();
-              if (!(std::fabs(x) <= std::numeric_limits<float>::max()))
+              const double x = toml_number(e);
+              if (!fits_scene_float(x))
                 throw Error(fmt::format("{}:{}: '{}.params.{}' = {:g} is not a finite number within the float range "
                                         "scenes are stored in (|x| <= 3.4e38)",
                                         origin_, line, t.path(), key, x));
@@ -460,21 +458,18 @@ class SceneBuilder {
   // inf vertices, and NaN where a transform multiplies inf by 0), before anything uses them (the
   // scatter's ground grid, the BVH). The box's corners bound every vertex under an affine map.
   void check_finite_placements(const Scene& s, std::size_t first, const char* kind) const {
-    std::vector<std::optional<std::pair<Vec3, Vec3>>> bounds(s.meshes.size());
+    std::vector<std::optional<Aabb>> bounds(s.meshes.size());  // each placed mesh's own box, once
     for (std::size_t i = first; i < s.instances.size(); ++i) {
       const Instance& inst = s.instances[i];
       auto& b = bounds[inst.mesh];
       if (!b) {
-        Vec3 lo{0, 0, 0}, hi{0, 0, 0};
-        const auto& pos = s.meshes[inst.mesh].positions;
-        if (!pos.empty()) lo = hi = pos[0];
-        for (const Vec3& p : pos)
-          for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], p[a]), hi[a] = std::max(hi[a], p[a]);
-        b.emplace(lo, hi);
+        b.emplace();
+        for (const Vec3& p : s.meshes[inst.mesh].positions) b->grow(p);
       }
+      if (b->empty()) continue;
       for (int corner = 0; corner < 8; ++corner) {
-        const Vec3 p = inst.transform.apply({corner & 1 ? b->second[0] : b->first[0], corner & 2 ? b->second[1] : b->first[1],
-                                             corner & 4 ? b->second[2] : b->first[2]});
+        const Vec3 p = inst.transform.apply({(corner & 1 ? b->max : b->min)[0], (corner & 2 ? b->max : b->min)[1],
+                                             (corner & 4 ? b->max : b->min)[2]});
         if (!(std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2])))
           throw Error(fmt::format("{}:1: a placement of mesh '{}' ({}) reaches coordinates beyond the float range "
                                   "scenes are stored in (a scale or translate too large for its mesh's size); make "
@@ -493,7 +488,8 @@ class SceneBuilder {
       if (triangles <= opts_.max_triangles) return;
       limit = fmt::format("the limit of {} triangles set for this load", opts_.max_triangles);
     } else {
-      const std::uint64_t available = available_host_memory();
+      if (!available_) available_ = available_host_memory();  // /proc/meminfo once per load, not per mesh
+      const std::uint64_t available = *available_;
       if (bytes <= available) return;
       limit = fmt::format("the {} of host memory available", format_bytes(available));
     }
@@ -505,6 +501,7 @@ class SceneBuilder {
 
   std::string origin_;
   const SceneOptions& opts_;
+  mutable std::optional<std::uint64_t> available_;  // host memory, read at the first check
   std::map<std::string, std::uint32_t> mesh_names_;
   std::map<std::string, std::int32_t> material_names_;  // [[material]] name -> index in Scene::materials
 };

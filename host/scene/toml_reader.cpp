@@ -75,18 +75,17 @@ const toml::node& TomlTable::required(std::string_view key, std::string_view exa
   return *n;
 }
 
+double toml_number(const toml::node& n) {
+  return n.is_integer() ? static_cast<double>(n.as_integer()->get()) : n.as_floating_point()->get();
+}
+
+bool fits_scene_float(double x) { return std::fabs(x) <= std::numeric_limits<float>::max(); }
+
 double TomlTable::as_number(std::string_view key, const toml::node& n) const {
-  double v = 0.0;
-  if (auto i = n.as_integer())
-    v = static_cast<double>(i->get());
-  else if (auto f = n.as_floating_point())
-    v = f->get();
-  else
-    fail(key, fmt::format("must be a number, not {}", toml_type_name(n)));
+  if (!n.is_number()) fail(key, fmt::format("must be a number, not {}", toml_type_name(n)));
+  const double v = toml_number(n);
   if (!std::isfinite(v)) fail(key, "must be a finite number, not nan or inf");
-  // Geometry, cameras and lights are stored as float: a larger value would become inf there (and
-  // 0 · inf = NaN in a transform), which no later check could tell from a user's intent.
-  if (std::fabs(v) > std::numeric_limits<float>::max())
+  if (!fits_scene_float(v))
     fail(key, fmt::format("= {:g} is beyond the float range scenes are stored in (|x| <= 3.4e38)", v));
   return v;
 }

@@ -61,6 +61,14 @@ class TomlTable {
 // Name of a TOML value's type for messages ("a string", "an array").
 std::string toml_type_name(const toml::node& n);
 
+// A TOML number (integer or float) as a double; n must be a number (is_number()).
+double toml_number(const toml::node& n);
+
+// Whether x fits the float that geometry, cameras and lights are stored in (|x| <= 3.4e38, not NaN):
+// a larger value would become inf there (and 0 · inf = NaN in a transform), which no later check
+// could tell from a user's intent.
+bool fits_scene_float(double x);
+
 // Parses TOML text; a syntax error throws Error "<origin>:<line>:<column>: ...".
 toml::table parse_toml_text(const std::string& text, const std::string& origin);
 
