@@ -67,6 +67,40 @@ TEST(FrameMemory, OversizedCommandsAreRefusedAtOnce) {
   EXPECT_NE(host.err.find("over the 95.4 MiB available"), std::string::npos) << host.err;
 }
 
+// A CPU device's buffers are host memory: they are checked against the host's free memory, not
+// against the global memory size the driver reports. PoCL reports 3/4 of hwloc's NUMA-node
+// memory, 4.7 GiB on a 24 GiB machine whose container shows a 6.2 GiB node, and allocates past it;
+// the paper preset's largest batch (33.2 M shadow rays, ≈ 4.9 GiB of buffers) runs there. A GPU
+// reporting the same size is refused, naming its global memory.
+TEST(FrameMemory, CpuDeviceBuffersAreHostMemoryNotTheReportedGlobalSize) {
+  const FrameMemory paper = estimate_frame_memory(1920, 1080, 8, 2, 1);
+  DeviceInfo device;
+  device.name = "pthread-test";
+  device.global_mem_bytes = 5003443200;  // what PoCL 3.1 reported on that machine
+  device.max_alloc_bytes = 2ull << 30;
+  ASSERT_GT(paper.device_bytes, device.global_mem_bytes);
+  ASSERT_LT(paper.largest_buffer_bytes, device.max_alloc_bytes);
+  device.type = "CPU";
+  if (paper.host_bytes + paper.device_bytes < available_host_memory())
+    EXPECT_NO_THROW(check_frame_memory(paper, &device, "paper preset"));
+  else  // a smaller machine: refused by the host's memory, never by the reported size
+    try {
+      check_frame_memory(paper, &device, "paper preset");
+      ADD_FAILURE() << "a frame past the host's free memory was accepted";
+    } catch (const ResourceError& e) {
+      EXPECT_NE(std::string(e.what()).find("of host memory (the CPU device's buffers included)"), std::string::npos)
+          << e.what();
+    }
+  device.type = "GPU";
+  try {
+    check_frame_memory(paper, &device, "paper preset");
+    ADD_FAILURE() << "a GPU with less global memory than the frame needs was accepted";
+  } catch (const ResourceError& e) {
+    EXPECT_NE(std::string(e.what()).find("over the device's global memory of 4.7 GiB (pthread-test)"), std::string::npos)
+        << e.what();
+  }
+}
+
 // A scene file whose mesh would not fit (scene/load.h, SceneOptions::max_triangles; the parser's
 // side is tests/scene_test.cpp): exit 2 and one line, like a frame that does not fit.
 TEST(FrameMemory, OversizedSceneFileEndsACommandWithExit2) {

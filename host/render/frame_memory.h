@@ -48,7 +48,8 @@ FrameMemory estimate_render_memory(const Scene& scene);
 
 // Throws ResourceError naming `what` ("scene cornell at 20000x20000, 1 spp"), the estimate, the
 // limit it passes (device max allocation, device global memory, host memory; on a CPU device the
-// device's memory is host memory too) and the fix. `device` may be null (the host twin).
+// device's memory is host memory: its buffers count against the host's free memory, not against
+// the global memory size the driver reports) and the fix. `device` may be null (the host twin).
 void check_frame_memory(const FrameMemory& m, const DeviceInfo* device, const std::string& what,
                         const std::string& fix = "lower --resolution or --spp (or the scene's bounces)");
 
