@@ -462,9 +462,7 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
       }
       BatchBench bench({rt, *scene.encoder, sorter, permuter, *scene.tracers.at(first.variant), gpu ? &*gpu : nullptr},
                        scene.bvh, rb->batch, scene.reference(*rb, first.variant));
-      for (const auto& group : runs_of(batch_cells, [](const PlannedCell& c) {  // → cell
-             return fmt::format("{}/{}/{}", c.encoder, c.bits, c.top_bits);
-           })) {
+      for (const auto& group : runs_of(batch_cells, round_group)) {  // → cell (bench/shard.h)
         if (g_interrupted) break;
         std::vector<CellRecord> cells;
         for (const auto& p : group) cells.push_back(cell_of(p, spec.layout));

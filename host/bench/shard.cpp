@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <bit>
 #include <map>
-#include <numeric>
 #include <regex>
 #include <set>
 
@@ -100,19 +99,33 @@ std::vector<PlannedCell> matrix_cells(const MatrixSpec& spec,
   return out;
 }
 
+std::string round_group(const PlannedCell& c) {
+  return fmt::format("{}/{}/{}/{}/{}/{}/{}", c.scene, c.batch, c.variant, c.baseline, c.encoder, c.bits, c.top_bits);
+}
+
 std::vector<PlannedCell> plan_shards(std::vector<PlannedCell> cells, unsigned count) {
   if (count == 0) throw Error("plan_shards: the number of shards must be at least 1");
-  std::vector<std::size_t> order(cells.size());
-  std::iota(order.begin(), order.end(), std::size_t{0});
-  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-    if (cells[a].cost != cells[b].cost) return cells[a].cost > cells[b].cost;
-    return cells[a].id < cells[b].id;
-  });
-  std::vector<std::uint64_t> load(count, 0);
-  for (std::size_t i : order) {
-    std::size_t least = std::min_element(load.begin(), load.end()) - load.begin();  // first minimum
-    load[least] += cells[i].cost;
-    cells[i].shard = static_cast<unsigned>(least + 1);
+  // Round groups as consecutive runs (the visiting order keeps a group's cells together).
+  struct Group {
+    std::size_t begin = 0, end = 0;
+    std::uint64_t cost = 0;
+  };
+  std::vector<Group> groups;
+  for (std::size_t i = 0; i < cells.size(); ++i) {
+    if (groups.empty() || round_group(cells[groups.back().begin]) != round_group(cells[i])) groups.push_back({i, i, 0});
+    groups.back().end = i + 1;
+    groups.back().cost += cells[i].cost;
+  }
+  unsigned __int128 total = 0;
+  for (const Group& g : groups) total += g.cost;
+  unsigned __int128 before = 0;  // cost of the groups before this one
+  for (const Group& g : groups) {
+    // 128-bit: 2 · total · N exceeds 64 bits for a full-HD matrix split in hundreds.
+    const unsigned __int128 mid2 = 2 * before + g.cost;  // twice the group's midpoint
+    const unsigned shard =
+        total == 0 ? 0u : static_cast<unsigned>(std::min<unsigned __int128>(mid2 * count / (2 * total), count - 1));
+    for (std::size_t i = g.begin; i < g.end; ++i) cells[i].shard = shard + 1;
+    before += g.cost;
   }
   return cells;
 }
@@ -144,7 +157,9 @@ nlohmann::json shard_meta(const MatrixSpec& spec, const ShardSpec& shard, const 
 std::string format_plan(const std::vector<PlannedCell>& planned, unsigned count) {
   const auto loads = shard_loads(planned, count);
   std::uint64_t total = 0, largest = 0;
-  for (const auto& c : planned) total += c.cost, largest = std::max(largest, c.cost);
+  std::map<std::string, std::uint64_t> group_cost;
+  for (const auto& c : planned) total += c.cost, group_cost[round_group(c)] += c.cost;
+  for (const auto& [group, cost] : group_cost) largest = std::max(largest, cost);
   const double mean = count ? static_cast<double>(total) / count : 0.0;
   std::string s = fmt::format("{} cells in {} shards; estimated cost (rays x tree depth x encoder weight):\n",
                               planned.size(), count);
@@ -155,7 +170,7 @@ std::string format_plan(const std::vector<PlannedCell>& planned, unsigned count)
     s += fmt::format("{:>7} {:>6} {:>16} {:>7.3f}x\n", fmt::format("{}/{}", i + 1, count), loads[i].cells,
                      loads[i].cost, mean > 0 ? static_cast<double>(loads[i].cost) / mean : 0.0);
   }
-  s += fmt::format("most loaded shard: {:.3f}x the mean (bound: mean + largest cell = {:.3f}x)\n\n",
+  s += fmt::format("most loaded shard: {:.3f}x the mean (bound: mean + largest round group = {:.3f}x)\n\n",
                    mean > 0 ? static_cast<double>(most) / mean : 0.0,
                    mean > 0 ? (mean + static_cast<double>(largest)) / mean : 0.0);
   s += fmt::format("{:>7} {:>16}  {}\n", "shard", "est. cost", "cell");

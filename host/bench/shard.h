@@ -61,10 +61,17 @@ struct PlannedCell {
 std::vector<PlannedCell> matrix_cells(const MatrixSpec& spec,
                                       const std::function<SceneFacts(const std::string&)>& facts);
 
-// Longest-processing-time-first: cells by descending cost (ties by id), each to the shard with the
-// least cost so far (ties: the lowest index). Returns the cells in their input order, each with
-// its shard. The most loaded shard is within 4/3 of the optimum, and within one cell's cost of the
-// mean (the shard that got the last cell was the least loaded before it).
+// The cells `raysort run` measures in one set of rounds (bench/cell_measure.h): one encoder, key
+// length and top-k on one batch, variant and baseline order, with its access modes side by side
+// (encode + sort and the NoSort arms are timed once for all of them). A shard never splits them.
+std::string round_group(const PlannedCell& c);
+
+// Contiguous split by cost: `cells` in visiting order (as matrix_cells lists them) are cut into
+// round groups, and group g, whose cost spans [P, P + c) of the total T, goes to shard
+// ⌊(P + c/2) · N / T⌋ + 1 (its midpoint's Nth). Shards are consecutive runs of the visiting order,
+// so a shard loads few scenes (N shards generate at most scenes + N − 1 scenes' batches in all)
+// and each shard's cost is within one round group's cost of the mean T / N. Returns the cells in
+// their input order, each with its shard; a shard may be empty when N exceeds the groups.
 std::vector<PlannedCell> plan_shards(std::vector<PlannedCell> cells, unsigned count);
 
 // Per shard (index 0 is shard 1): number of cells and total estimated cost.
