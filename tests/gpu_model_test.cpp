@@ -147,6 +147,49 @@ TEST(GpuModel, LeafStepsReadTheirPacketsAndRayLoadsCoalesce) {
   EXPECT_EQ(replay.counts().requests, 1u + ray_lines);
 }
 
+// An any-hit ray stops in the leaf it hits, after the packet holding the hit: its last step reads
+// only those packets (WarpTrails::last_reads), where the model used to read the whole leaf.
+TEST(GpuModel, AnyHitLanesReadTheirLastLeafOnlyUpToTheHit) {
+  const GpuProfile p = tiny_gpu(1);
+  WideBvh wide = nodes_only();  // packets start at byte 8192 = line 64
+  wide.packets.resize(8);
+  const GpuAddressMap map(wide, 64);
+  const std::uint32_t leaf = RS_WIDE_LEAF | (0u << 2) | 3u;  // packets 0-3: bytes 8192-8959, lines 64-69
+  std::vector<std::uint64_t> lines;
+  map.step_blocks(leaf, 128, lines);
+  EXPECT_EQ(lines, (std::vector<std::uint64_t>{64, 65, 66, 67, 68, 69}));
+  lines.clear();
+  map.step_blocks(leaf, 128, lines, 1);  // stopped in packet 0: bytes 8192-8383
+  EXPECT_EQ(lines, (std::vector<std::uint64_t>{64, 65}));
+  lines.clear();
+  map.step_blocks(leaf, 128, lines, 9);  // more than the leaf holds: the whole leaf
+  EXPECT_EQ(lines.size(), 6u);
+  lines.clear();
+  map.step_blocks(5, 128, lines, 1);  // an inner node has no leaf to cut short
+  EXPECT_EQ(lines, (std::vector<std::uint64_t>{5}));
+
+  auto requests = [&](const WarpTrails& w) {
+    GpuReplay replay(p, map);
+    replay.replay_wave(std::vector<WarpTrails>{w});
+    return replay.counts().requests;
+  };
+  WarpTrails full = warp_of({0, leaf});
+  EXPECT_EQ(requests(full), 1u + 6u);
+  WarpTrails stopped = full;
+  stopped.last_reads.assign(32, 1);
+  EXPECT_EQ(requests(stopped), 1u + 2u);
+  // Lanes that stop at different packets: the warp reads the union; a lane whose last step is not
+  // its leaf step (reads only apply to the last step) still reads the whole leaf.
+  WarpTrails mixed = full;
+  mixed.last_reads.assign(32, 1);
+  mixed.last_reads[7] = 3;  // packets 0-2: lines 64-68
+  EXPECT_EQ(requests(mixed), 1u + 5u);
+  WarpTrails longer = full;
+  longer.lanes[0] = {0, leaf, 1};
+  longer.last_reads.assign(32, 1);
+  EXPECT_EQ(requests(longer), 1u + 6u + 1u);
+}
+
 TEST(GpuModel, PredictedTimeIsIssuePlusMemory) {
   const GpuProfile p = tiny_gpu(1);  // 1 SM at 1 GHz, 10 cycles a step; 1 GB/s DRAM, 2 GB/s L2
   GpuCounts c;

@@ -124,20 +124,22 @@ GpuAddressMap::GpuAddressMap(const Bvh& binary, std::size_t rays) : binary_(bina
   ray_base_ = prim_base_ + align_up(binary.triangles.size() * sizeof(RsTriangle), 4096);
 }
 
-void GpuAddressMap::step_blocks(std::uint32_t ref, unsigned line, std::vector<std::uint64_t>& out) const {
+void GpuAddressMap::step_blocks(std::uint32_t ref, unsigned line, std::vector<std::uint64_t>& out,
+                                std::uint32_t leaf_reads) const {
+  // An any-hit ray that stops at a hit reads its leaf's packets or triangles up to that one only.
+  auto read = [&](std::uint64_t count) { return leaf_reads > 0 ? std::min<std::uint64_t>(count, leaf_reads) : count; };
   if (!binary_) {
     if (!(ref & RS_WIDE_LEAF)) return range_blocks(node_base_ + std::uint64_t{ref} * sizeof(RsWideNode), sizeof(RsWideNode), line, out);
-    // An any-hit ray may stop before the leaf's last packet; the model reads them all.
     const std::uint64_t first = (ref & ~RS_WIDE_LEAF) >> 2, count = (ref & 3u) + 1u;
-    return range_blocks(prim_base_ + first * sizeof(RsTriPacket), count * sizeof(RsTriPacket), line, out);
+    return range_blocks(prim_base_ + first * sizeof(RsTriPacket), read(count) * sizeof(RsTriPacket), line, out);
   }
   const RsBvhNode& n = binary_[ref];
   range_blocks(node_base_ + std::uint64_t{ref} * sizeof(RsBvhNode), sizeof(RsBvhNode), line, out);
   if (n.count == 0)
     range_blocks(node_base_ + std::uint64_t{n.first} * sizeof(RsBvhNode), 2 * sizeof(RsBvhNode), line, out);
   else
-    range_blocks(prim_base_ + std::uint64_t{n.first} * sizeof(RsTriangle), std::uint64_t{n.count} * sizeof(RsTriangle),
-                line, out);
+    range_blocks(prim_base_ + std::uint64_t{n.first} * sizeof(RsTriangle), read(n.count) * sizeof(RsTriangle), line,
+                 out);
 }
 
 void GpuAddressMap::ray_blocks(std::uint32_t ray, unsigned line, std::vector<std::uint64_t>& out) const {
@@ -156,14 +158,18 @@ void GpuReplay::warp_step(unsigned sm, const WarpTrails& warp, std::size_t step)
   const unsigned sector = profile_.sector_bytes, per_line = profile_.line_bytes / sector;
   for (std::size_t l = 0; l < warp.lanes.size(); ++l) {
     if (step == 0 && l < warp.rays.size()) map_.ray_blocks(warp.rays[l], sector, sectors_);
-    if (step < warp.lanes[l].size()) refs_.push_back(warp.lanes[l][step]);
+    if (step >= warp.lanes[l].size()) continue;
+    const bool last = step + 1 == warp.lanes[l].size();
+    const std::uint64_t reads = last && l < warp.last_reads.size() ? warp.last_reads[l] : 0;
+    refs_.push_back(reads << 32 | warp.lanes[l][step]);
   }
   const std::uint64_t active = refs_.size();
   // Lanes of a coherent warp share most references: expanding each distinct one once keeps the
   // sector list short (the replay's cost is mostly this list; docs/gpu-model.md, "Cost").
   std::sort(refs_.begin(), refs_.end());
   refs_.erase(std::unique(refs_.begin(), refs_.end()), refs_.end());
-  for (std::uint32_t ref : refs_) map_.step_blocks(ref, sector, sectors_);
+  for (std::uint64_t r : refs_)
+    map_.step_blocks(static_cast<std::uint32_t>(r), sector, sectors_, static_cast<std::uint32_t>(r >> 32));
   // Lanes of one load instruction that read the same line are served by one request (coalescing);
   // an L1 miss fetches from L2 only the sectors of that line the lanes read (as NVIDIA's L1/L2 do).
   std::sort(sectors_.begin(), sectors_.end());

@@ -70,7 +70,10 @@ class GpuAddressMap {
   GpuAddressMap(const WideBvh& wide, std::size_t rays);
   GpuAddressMap(const Bvh& binary, std::size_t rays);
   // Appends the blocks (address / block_bytes: lines or sectors) step reference `ref` reads.
-  void step_blocks(std::uint32_t ref, unsigned block_bytes, std::vector<std::uint64_t>& out) const;
+  // leaf_reads > 0 on a leaf: only its first leaf_reads packets (wide) or triangles (binary), where
+  // an any-hit ray stopped at a hit; 0: the whole leaf.
+  void step_blocks(std::uint32_t ref, unsigned block_bytes, std::vector<std::uint64_t>& out,
+                   std::uint32_t leaf_reads = 0) const;
   // Appends the blocks the load of ray `ray` reads.
   void ray_blocks(std::uint32_t ray, unsigned block_bytes, std::vector<std::uint64_t>& out) const;
 
@@ -79,10 +82,13 @@ class GpuAddressMap {
   std::uint64_t node_base_ = 0, prim_base_ = 0, ray_base_ = 0;
 };
 
-// The lanes of one warp: each lane's trail and the ray it loads (rays[order[i]]).
+// The lanes of one warp: each lane's trail and the ray it loads (rays[order[i]]). last_reads[l] > 0:
+// lane l's last step is a leaf where its any-hit ray stopped at a hit, after reading that many
+// packets (wide) or triangles (binary); 0 (or no entry): its last step reads the whole step.
 struct WarpTrails {
   std::vector<std::vector<std::uint32_t>> lanes;
   std::vector<std::uint32_t> rays;
+  std::vector<std::uint32_t> last_reads;
 };
 
 // Replays waves of resident warps. Scheduling simplification (docs/gpu-model.md): warps are taken
@@ -104,7 +110,7 @@ class GpuReplay {
   LruCache l2_;
   GpuCounts counts_;
   std::vector<std::uint64_t> sectors_;
-  std::vector<std::uint32_t> refs_;
+  std::vector<std::uint64_t> refs_;  // (leaf reads << 32) | step reference
 };
 
 }  // namespace raysort

@@ -87,6 +87,23 @@ struct TrailRecorder {
   bool wide_layout;
   rs_u32 cap;
 
+  // An any-hit traversal stops in the leaf it hits, right after the packet (wide) or triangle
+  // (binary) holding the hit triangle: how many of the leaf's it read (the GPU model's reads of
+  // that last step). The leaf's triangles are distinct, so the first one holding the id is it.
+  std::uint32_t leaf_reads_until(std::uint32_t tri, std::uint32_t leaf_ref) const {
+    if (wide_layout) {
+      const std::uint32_t first = (leaf_ref & ~RS_WIDE_LEAF) >> 2, count = (leaf_ref & 3u) + 1u;
+      for (std::uint32_t k = 0; k < count; ++k)
+        for (std::uint32_t id : wide.packets[first + k].id)
+          if (id == tri) return k + 1;
+      return 0;
+    }
+    const RsBvhNode& n = bvh.nodes[leaf_ref];
+    for (std::uint32_t k = 0; k < n.count; ++k)
+      if (bvh.triangles[n.first + k].id == tri) return k + 1;
+    return 0;
+  }
+
   void record(std::size_t first_warp, std::span<WarpTrails> slots, std::vector<WarpTally>& partial) const {
     const auto threads = static_cast<unsigned>(partial.size());
     auto work = [&](unsigned tid) {
@@ -98,19 +115,22 @@ struct TrailRecorder {
         // Resized, not cleared: the lanes keep their capacity from wave to wave.
         w.lanes.resize(std::min(kWarpSize, rays.size() - first_ray));
         w.rays.clear();
+        w.last_reads.clear();
         lanes.clear();
         for (std::size_t l = 0; l < w.lanes.size(); ++l) {
           const std::size_t i = first_ray + l;
           const std::uint32_t ray_index = order ? order[i] : static_cast<std::uint32_t>(i);
           rs_u32 len = 0;
-          if (wide_layout)
-            rs_traverse_wide_recorded(wide.nodes.data(), wide.packets.data(), rays[ray_index], robust, any, nullptr,
-                                      buffer.data(), cap, &len);
-          else
-            rs_traverse_variant_recorded(bvh.nodes.data(), bvh.triangles.data(), rays[ray_index], robust, any, nullptr,
-                                         buffer.data(), cap, &len);
+          const RsHit hit =
+              wide_layout ? rs_traverse_wide_recorded(wide.nodes.data(), wide.packets.data(), rays[ray_index], robust,
+                                                      any, nullptr, buffer.data(), cap, &len)
+                          : rs_traverse_variant_recorded(bvh.nodes.data(), bvh.triangles.data(), rays[ray_index],
+                                                         robust, any, nullptr, buffer.data(), cap, &len);
           w.lanes[l].assign(buffer.begin(), buffer.begin() + std::min(len, cap));
           w.rays.push_back(ray_index);
+          w.last_reads.push_back(any && hit.tri != RS_NO_HIT && len > 0 && len <= cap
+                                     ? leaf_reads_until(hit.tri, buffer[len - 1])
+                                     : 0);
         }
         for (const auto& lane : w.lanes) lanes.push_back(&lane);
         tally_warp(lanes, scratch_ids, partial[tid]);
