@@ -1,0 +1,120 @@
+// order_study: how much ordering quality the encoders leave on the table (issue 21's study).
+//
+//   build/order_study SCENE [WIDTHxHEIGHT] [BATCH]      (default 960x540 bounce1)
+//
+// Host twins only (encode_on_host, the SIMT model's traversal), so the figures are deterministic
+// and need no OpenCL device. For one batch it prints the SIMT lane-efficiency and distinct-nodes
+// ratios (vs NoSort, pixel order) and ANC of:
+//   - the paper's cut codes and the spatial codes at 32 and 64 bits (HCC, MLHCC, TwoPoint, PPC);
+//   - oracles no encoder can compute, because they need the traversal itself: rays sorted by their
+//     step count, and HCC's groups with each group's rays sorted by step count. They bound what
+//     ordering rays of equal code could buy on lane efficiency;
+//   - composite keys that spend more bits on the same information: MLHCC's 32-bit code with
+//     TwoPoint's top 32 bits as a tie-break (a 64-bit key), and MLHCC with its 16 top-node bits
+//     folded into the representative's index to free 11 bits for TwoPoint (a 32-bit key).
+// Rays keep their generation order within equal keys (a stable sort), as the radix sort does.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <bit>
+#include <cstdlib>
+#include <numeric>
+#include <string>
+#include <vector>
+
+#include "bench/metrics.h"
+#include "bvh/prepared_scene.h"
+#include "encode/encode.h"
+#include "render/batches.h"
+#include "scene/load.h"
+#include "traverse_wide.h"
+#include "util/error.h"
+
+using namespace raysort;
+
+namespace {
+
+std::vector<std::uint32_t> stable_order(const std::vector<std::uint64_t>& keys) {
+  std::vector<std::uint32_t> order(keys.size());
+  std::iota(order.begin(), order.end(), 0u);
+  std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return keys[a] < keys[b]; });
+  return order;
+}
+
+// Steps of each ray's traversal on the wide tree the kernels walk (fast variant).
+std::vector<std::uint32_t> step_counts(const Bvh& bvh, const std::vector<RsRay>& rays, bool any_hit) {
+  WideBvh scratch;
+  const WideBvh& wide = wide_of(bvh, scratch);
+  std::vector<std::uint32_t> steps(rays.size());
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    rs_u32 len = 0;
+    rs_traverse_wide_recorded(wide.nodes.data(), wide.packets.data(), rays[i], 0, any_hit ? 1 : 0, nullptr, nullptr, 0,
+                              &len);
+    steps[i] = len;
+  }
+  return steps;
+}
+
+int study(int argc, char** argv) {
+  if (argc < 2) throw Error("usage: order_study SCENE [WIDTHxHEIGHT] [BATCH]   (default 960x540 bounce1)");
+  const std::string scene = argv[1];
+  SceneOptions options;
+  options.frame = parse_resolution(argc > 2 ? argv[2] : "960x540");
+  options.frame.spp = 1;
+  const std::string batch = argc > 3 ? argv[3] : "bounce1";
+  const PreparedScene p = prepare_scene(scene, options);
+  RayGenOptions gen;  // the matrix's seed (1)
+  const std::vector<ReferencedBatch> frame = generate_batches(p.scene, p.tris, p.bvh, gen);
+  const auto it = std::find_if(frame.begin(), frame.end(), [&](const ReferencedBatch& b) { return b.batch.name == batch; });
+  if (it == frame.end()) throw Error(fmt::format("scene {} has no batch {}", scene, batch));
+  const std::vector<RsRay>& rays = it->batch.rays;
+  const bool any_hit = it->batch.any_hit();
+  const EncodeScene es(p.bvh, p.scene.bounds(), {});
+  const SimtModel nosort = simt_model(p.bvh, rays, nullptr, any_hit);
+  fmt::print("{} {} at {}x{}: {} rays (lane and distinct-node ratios vs NoSort; ANC of the sorted keys)\n", scene,
+             batch, options.frame.width, options.frame.height, rays.size());
+  auto report = [&](const std::string& name, const std::vector<std::uint64_t>& keys) {
+    const std::vector<std::uint32_t> order = stable_order(keys);
+    const SimtModel m = simt_model(p.bvh, rays, order.data(), any_hit);
+    std::vector<std::uint64_t> sorted(keys.size());
+    for (std::size_t i = 0; i < order.size(); ++i) sorted[i] = keys[order[i]];
+    fmt::print("  {:34} lane {:.3f}  distinct nodes {:.3f}  ANC {:6.2f}\n", name, m.lane_efficiency / nosort.lane_efficiency,
+               m.distinct_nodes_per_visit / nosort.distinct_nodes_per_visit, average_number_of_codes(sorted));
+    std::fflush(stdout);
+  };
+  for (unsigned bits : {32u, 64u})
+    for (Encoder e : {Encoder::HCC, Encoder::MLHCC, Encoder::TwoPoint, Encoder::PPC})
+      report(fmt::format("{}/{}", encoder_name(e), bits), encode_on_host(e, bits, es, rays));
+
+  const std::vector<std::uint32_t> steps = step_counts(p.bvh, rays, any_hit);
+  const std::vector<std::uint64_t> hcc = encode_on_host(Encoder::HCC, 32, es, rays);
+  const std::vector<std::uint64_t> mlhcc = encode_on_host(Encoder::MLHCC, 32, es, rays);
+  const std::vector<std::uint64_t> twopoint = encode_on_host(Encoder::TwoPoint, 64, es, rays);
+  std::vector<std::uint64_t> key(rays.size());
+  for (std::size_t i = 0; i < key.size(); ++i) key[i] = steps[i];
+  report("oracle: step count", key);
+  for (std::size_t i = 0; i < key.size(); ++i) key[i] = hcc[i] << 32 | steps[i];
+  report("oracle: hcc/32, then step count", key);
+  for (std::size_t i = 0; i < key.size(); ++i) key[i] = mlhcc[i] << 32 | twopoint[i] >> 32;
+  report("mlhcc/32 | twopoint/32 (64 bits)", key);
+  for (std::size_t i = 0; i < key.size(); ++i) {
+    // MLHCC/32 is | t (16 top-node bits) | l (16 low bits) |; the representative is the first top
+    // node hit (the highest set bit of t), 16 when none.
+    const auto t = static_cast<std::uint32_t>(mlhcc[i] >> 16), l = static_cast<std::uint32_t>(mlhcc[i] & 0xFFFFu);
+    const std::uint64_t representative = t ? 16u - std::bit_width(t) : 16u;
+    key[i] = representative << 27 | std::uint64_t{l} << 11 | twopoint[i] >> 53;
+  }
+  report("representative | l | twopoint/11", key);
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return study(argc, argv);
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "order_study: {}\n", e.what());
+    return 2;
+  }
+}
