@@ -9,6 +9,10 @@
 //   - oracles no encoder can compute, because they need the traversal itself: rays sorted by their
 //     step count, and HCC's groups with each group's rays sorted by step count. They bound what
 //     ordering rays of equal code could buy on lane efficiency;
+//   - cheap stand-ins for a ray's traversal length inside HCC's groups (the popcount of a 64-node
+//     cut, the distance to the scene-box exit, the mean step count of the origin's Morton cell: an
+//     in-batch oracle), and HCC over a shortened segment (a fixed 0.25 of the scene's largest
+//     extent; the true hit distance, an oracle);
 //   - composite keys that spend more bits on the same information: MLHCC's 32-bit code with
 //     TwoPoint's top 32 bits as a tie-break (a 64-bit key), and MLHCC with its 16 top-node bits
 //     folded into the representative's index to free 11 bits for TwoPoint (a 32-bit key).
@@ -17,9 +21,11 @@
 
 #include <algorithm>
 #include <bit>
+#include <cmath>
 #include <cstdlib>
 #include <numeric>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "bench/metrics.h"
@@ -78,7 +84,7 @@ int study(int argc, char** argv) {
     const SimtModel m = simt_model(p.bvh, rays, order.data(), any_hit);
     std::vector<std::uint64_t> sorted(keys.size());
     for (std::size_t i = 0; i < order.size(); ++i) sorted[i] = keys[order[i]];
-    fmt::print("  {:34} lane {:.3f}  distinct nodes {:.3f}  ANC {:6.2f}\n", name, m.lane_efficiency / nosort.lane_efficiency,
+    fmt::print("  {:38} lane {:.3f}  distinct nodes {:.3f}  ANC {:6.2f}\n", name, m.lane_efficiency / nosort.lane_efficiency,
                m.distinct_nodes_per_visit / nosort.distinct_nodes_per_visit, average_number_of_codes(sorted));
     std::fflush(stdout);
   };
@@ -95,6 +101,44 @@ int study(int argc, char** argv) {
   report("oracle: step count", key);
   for (std::size_t i = 0; i < key.size(); ++i) key[i] = hcc[i] << 32 | steps[i];
   report("oracle: hcc/32, then step count", key);
+
+  const std::vector<std::uint64_t> hcc64 = encode_on_host(Encoder::HCC, 64, es, rays);
+  for (std::size_t i = 0; i < key.size(); ++i) key[i] = hcc[i] << 32 | static_cast<unsigned>(std::popcount(hcc64[i]));
+  report("hcc/32, then popcount of hcc/64", key);
+  const Aabb box = p.scene.bounds();
+  float extent = 0.0f;
+  for (int a = 0; a < 3; ++a) extent = std::max(extent, box.max[a] - box.min[a]);
+  for (std::size_t i = 0; i < key.size(); ++i) {
+    const RsRay& r = rays[i];
+    float exit = r.tmax;  // where the ray leaves the scene box (its origin is inside it)
+    for (int a = 0; a < 3; ++a) {
+      const float inv = 1.0f / r.d[a];
+      exit = std::min(exit, std::max((box.min[a] - r.o[a]) * inv, (box.max[a] - r.o[a]) * inv));
+    }
+    const float length = std::sqrt(r.d[0] * r.d[0] + r.d[1] * r.d[1] + r.d[2] * r.d[2]);
+    key[i] = hcc[i] << 32 | static_cast<std::uint32_t>(std::clamp(exit * length / extent, 0.0f, 1.0f) * 65535.0f);
+  }
+  report("hcc/32, then scene-box exit distance", key);
+  {
+    const std::vector<std::uint64_t> origin = encode_on_host(Encoder::Origin, 64, es, rays);
+    std::unordered_map<std::uint64_t, std::pair<std::uint64_t, std::uint64_t>> cells;  // steps, rays
+    auto cell = [&](std::size_t i) { return origin[i] >> (64 - 3 * 5); };             // 32^3 cells
+    for (std::size_t i = 0; i < rays.size(); ++i) cells[cell(i)].first += steps[i], ++cells[cell(i)].second;
+    for (std::size_t i = 0; i < key.size(); ++i) {
+      const auto& [sum, count] = cells[cell(i)];
+      key[i] = hcc[i] << 32 | (sum * 16 / count);
+    }
+    report("hcc/32, then origin cell's mean steps", key);
+  }
+  std::vector<RsRay> shortened = rays;
+  for (RsRay& r : shortened)
+    r.tmax = std::min(r.tmax, 0.25f * extent / std::sqrt(r.d[0] * r.d[0] + r.d[1] * r.d[1] + r.d[2] * r.d[2]));
+  report("hcc/32 over 0.25 of the extent", encode_on_host(Encoder::HCC, 32, es, shortened));
+  shortened = rays;
+  for (std::size_t i = 0; i < rays.size(); ++i)
+    if (it->reference_hits[i].tri != RS_NO_HIT) shortened[i].tmax = it->reference_hits[i].t;
+  report("oracle: hcc/32 up to the hit", encode_on_host(Encoder::HCC, 32, es, shortened));
+
   for (std::size_t i = 0; i < key.size(); ++i) key[i] = mlhcc[i] << 32 | twopoint[i] >> 32;
   report("mlhcc/32 | twopoint/32 (64 bits)", key);
   for (std::size_t i = 0; i < key.size(); ++i) {
