@@ -11,6 +11,8 @@
 #
 #   bash scripts/paper-8spp.sh            # run (or resume) the next shard, or merge when all are done
 #   bash scripts/paper-8spp.sh status     # which shards are complete
+#   bash scripts/paper-8spp.sh companion  # the same matrix at 1 spp (--preset paper-1spp), same build:
+#                                         # what the 8-spp figures are compared with (about 40 min)
 #
 # Needs RAYSORT_SCENE_ROOT (or ../shared/scenes) with the real scenes.
 set -euo pipefail
@@ -45,6 +47,17 @@ if [ ! -x "$WORK/build/raysort" ]; then
   cmake --build "$WORK/build" -j "$(nproc)" --target raysort
 fi
 RAYSORT="$WORK/build/raysort"
+
+if [ "${1:-run}" = companion ]; then
+  d="$REPO/results/$SLUG/paper-1spp-$PIN"
+  [ -f "$d/COMPLETE" ] && { echo "paper-8spp: companion $d is complete"; exit 0; }
+  /usr/bin/time -v -a -o "$d.run-time.txt" \
+    "$RAYSORT" run --preset paper-1spp --reps 3 --warmup 0 --max-time 0 --gpu-model rtx3060 --out "$d"
+  date -u +%FT%TZ > "$d/COMPLETE"
+  mv "$d.run-time.txt" "$d/run-time.txt"
+  echo "paper-8spp: companion $d complete; commit it"
+  exit 0
+fi
 
 for k in $(seq 1 $SHARDS); do
   complete "$k" && continue
