@@ -1,0 +1,156 @@
+#!/usr/bin/env python3
+"""How the figures move from 1 to 8 samples per pixel (issue 22): two result sets of the same
+matrix at the two samplings, side by side, as results/README.md lays them out.
+
+  scripts/spp_compare.py ONE_SPP_SET EIGHT_SPP_SET [--access permute] [--bits 32] [--out FILE]
+
+Prints markdown:
+  1. per scene and batch: rays, ANC of HCC / TwoPoint / PPC, SIMT lane-efficiency ratio of HCC /
+     MLHCC / PPC and the GPU model's HCC speedup, each "1 spp -> 8 spp" (deterministic figures);
+  2. the paper's Tables 2 (bounce1) and 3 (shadow0) for every scene of results/gpu-model/
+     paper_tables.csv both sets hold: the paper's speedup, the GPU model's 1 -> 8 spp, and PoCL's
+     1 -> 8 spp with the 8-spp set's per-round min-max (three timed rounds give no 95 % interval);
+  3. per table, the GPU model's mean absolute error and Spearman correlation against the paper at
+     each sampling over the cells both sets hold.
+Cells of the given access mode and key length; NoSort's cell (one per batch) is the baseline.
+Standard library only.
+"""
+import argparse
+import csv
+import json
+import os
+import statistics
+import sys
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def load(d, access, bits):
+    """(scene, batch, encoder) -> the cell's JSON record, for ok cells of one access and key length."""
+    out = {}
+    for name in sorted(os.listdir(os.path.join(d, "cells"))):
+        with open(os.path.join(d, "cells", name)) as f:
+            c = json.load(f)
+        if c.get("status") != "ok" or c.get("baseline", "pixel") != "pixel" or c.get("top_bits", 0):
+            continue
+        if c["encoder"] != "nosort" and (c["access"] != access or c["bits"] != bits):
+            continue
+        out[(c["scene"], c["batch"], c["encoder"])] = c
+    return out
+
+
+def gpu(c):
+    g = c.get("gpu_model") or {}
+    return g.get("speedup")
+
+
+def pocl(c):
+    s = c.get("speedup") or {}
+    return s.get("value")
+
+
+def round_range(c):
+    """Min and max of the per-round NoSort / trace time ratios (the rounds are paired)."""
+    s = c.get("samples") or {}
+    ratios = [n / t for n, t in zip(s.get("nosort", []), s.get("trace", [])) if t > 0]
+    return (min(ratios), max(ratios)) if ratios else None
+
+
+def arrow(a, b, fmt="{:.2f}"):
+    if a is None or b is None:
+        return "–"
+    return f"{fmt.format(a)} → {fmt.format(b)}"
+
+
+def ranks(v):
+    order = sorted(range(len(v)), key=lambda i: v[i])
+    r = [0.0] * len(v)
+    i = 0
+    while i < len(order):
+        j = i
+        while j + 1 < len(order) and v[order[j + 1]] == v[order[i]]:
+            j += 1
+        for k in range(i, j + 1):
+            r[order[k]] = (i + j) / 2 + 1
+        i = j + 1
+    return r
+
+
+def spearman(x, y):
+    rx, ry = ranks(x), ranks(y)
+    mx, my = statistics.fmean(rx), statistics.fmean(ry)
+    sxy = sum((a - mx) * (b - my) for a, b in zip(rx, ry))
+    sxx = sum((a - mx) ** 2 for a in rx) ** 0.5
+    syy = sum((b - my) ** 2 for b in ry) ** 0.5
+    return sxy / (sxx * syy) if sxx and syy else float("nan")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("one")
+    ap.add_argument("eight")
+    ap.add_argument("--access", default="permute", choices=("gather", "permute"))
+    ap.add_argument("--bits", type=int, default=32)
+    ap.add_argument("--paper", default=os.path.join(ROOT, "results/gpu-model/paper_tables.csv"))
+    ap.add_argument("--out")
+    a = ap.parse_args()
+    one, eight = load(a.one, a.access, a.bits), load(a.eight, a.access, a.bits)
+    batches = sorted({(s, b) for (s, b, e) in eight if e == "nosort" and (s, b, "nosort") in one})
+    lines = [f"Cells: {a.access}, {a.bits}-bit keys; `{os.path.basename(os.path.normpath(a.one))}` (1 spp) → "
+             f"`{os.path.basename(os.path.normpath(a.eight))}` (8 spp).", "",
+             "| scene, batch | rays 1 spp → 8 spp | HCC ANC | TwoPoint ANC | PPC ANC | HCC SIMT lane ratio | "
+             "MLHCC lane ratio | PPC lane ratio | HCC GPU model |",
+             "|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    for s, b in batches:
+        o, e = (lambda enc: one.get((s, b, enc))), (lambda enc: eight.get((s, b, enc)))
+        def pair(enc, f, fmt="{:.2f}"):
+            x, y = o(enc), e(enc)
+            return arrow(f(x) if x else None, f(y) if y else None, fmt)
+        rays = f"{o('nosort')['rays'] / 1e6:.2f} M → {e('nosort')['rays'] / 1e6:.2f} M"
+        lines.append(f"| {s} {b} | {rays} | {pair('hcc', lambda c: c['anc'])} | {pair('twopoint', lambda c: c['anc'])} | "
+                     f"{pair('ppc', lambda c: c['anc'])} | {pair('hcc', lambda c: c['simt_lane_efficiency_ratio'])} | "
+                     f"{pair('mlhcc', lambda c: c['simt_lane_efficiency_ratio'])} | "
+                     f"{pair('ppc', lambda c: c['simt_lane_efficiency_ratio'])} | {pair('hcc', gpu)} |")
+    with open(a.paper, newline="") as f:
+        paper = [r for r in csv.DictReader(f) if r["table"] in ("2", "3") and int(r["bits"]) == a.bits]
+    for table, batch, title in (("2", "bounce1", "Secondary rays (bounce1) — paper Table 2"),
+                                ("3", "shadow0", "Primary shadow rays (shadow0) — paper Table 3")):
+        rows = [p for p in paper if p["table"] == table
+                and (p["scene"], batch, p["encoder"]) in one and (p["scene"], batch, p["encoder"]) in eight]
+        if not rows:
+            continue
+        scenes = sorted({p["scene"] for p in rows})
+        lines += ["", f"#### {title}", "",
+                  "| encoder | " + " | ".join(f"{s}: paper | GPU model 1 spp → 8 spp | PoCL 1 spp → 8 spp [8-spp rounds min–max]"
+                                              for s in scenes) + " |",
+                  "|---|" + "---:|---:|---:|" * len(scenes)]
+        for enc in dict.fromkeys(p["encoder"] for p in rows):
+            cells = []
+            for s in scenes:
+                p = next((p for p in rows if p["scene"] == s and p["encoder"] == enc), None)
+                if not p:
+                    cells += ["–", "–", "–"]
+                    continue
+                x, y = one[(s, batch, enc)], eight[(s, batch, enc)]
+                rr = round_range(y)
+                cells += [p["paper_speedup"], arrow(gpu(x), gpu(y)),
+                          arrow(pocl(x), pocl(y)) + (f" [{rr[0]:.2f}–{rr[1]:.2f}]" if rr else "")]
+            lines.append(f"| {enc} | " + " | ".join(cells) + " |")
+        truth = [float(p["paper_speedup"]) for p in rows]
+        for label, cells in (("1 spp", one), ("8 spp", eight)):
+            pred = [gpu(cells[(p["scene"], batch, p["encoder"])]) for p in rows]
+            if any(q is None for q in pred):
+                continue
+            err = statistics.fmean(abs(q - t) for q, t in zip(pred, truth))
+            lines.append("")
+            lines.append(f"GPU model against the paper at {label}, {len(rows)} cells: MAE {err:.3f}, "
+                         f"Spearman {spearman(pred, truth):.2f}.")
+    text = "\n".join(lines) + "\n"
+    if a.out:
+        with open(a.out, "w") as f:
+            f.write(text)
+    sys.stdout.write(text)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
