@@ -114,7 +114,9 @@ TEST(ShardPlan, DeterministicCompleteContiguousAndBalancedByCost) {
     // n shards hold at most scenes + n - 1 (scene, shard) pairs.
     std::set<std::pair<std::string, unsigned>> scene_shards;
     for (std::size_t i = 0; i < plan.size(); ++i) {
-      if (i > 0) EXPECT_GE(plan[i].shard, plan[i - 1].shard) << plan[i].id;
+      if (i > 0) {
+        EXPECT_GE(plan[i].shard, plan[i - 1].shard) << plan[i].id;
+      }
       scene_shards.insert({plan[i].scene, plan[i].shard});
     }
     EXPECT_LE(scene_shards.size(), scenes.size() + n - 1) << n << " shards";
