@@ -19,10 +19,11 @@ import argparse
 import csv
 import json
 import os
-import statistics
 import sys
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from gpu_model_validate import mae, spearman  # noqa: E402  (one definition of the statistics)
 
 
 def load(d, access, bits):
@@ -60,29 +61,6 @@ def arrow(a, b, fmt="{:.2f}"):
     if a is None or b is None:
         return "–"
     return f"{fmt.format(a)} → {fmt.format(b)}"
-
-
-def ranks(v):
-    order = sorted(range(len(v)), key=lambda i: v[i])
-    r = [0.0] * len(v)
-    i = 0
-    while i < len(order):
-        j = i
-        while j + 1 < len(order) and v[order[j + 1]] == v[order[i]]:
-            j += 1
-        for k in range(i, j + 1):
-            r[order[k]] = (i + j) / 2 + 1
-        i = j + 1
-    return r
-
-
-def spearman(x, y):
-    rx, ry = ranks(x), ranks(y)
-    mx, my = statistics.fmean(rx), statistics.fmean(ry)
-    sxy = sum((a - mx) * (b - my) for a, b in zip(rx, ry))
-    sxx = sum((a - mx) ** 2 for a in rx) ** 0.5
-    syy = sum((b - my) ** 2 for b in ry) ** 0.5
-    return sxy / (sxx * syy) if sxx and syy else float("nan")
 
 
 def main():
@@ -141,7 +119,7 @@ def main():
             pred = [gpu(cells[(p["scene"], batch, p["encoder"])]) for p in rows]
             if any(q is None for q in pred):
                 continue
-            err = statistics.fmean(abs(q - t) for q, t in zip(pred, truth))
+            err = mae(pred, truth)
             lines.append("")
             lines.append(f"GPU model against the paper at {label}, {len(rows)} cells: MAE {err:.3f}, "
                          f"Spearman {spearman(pred, truth):.2f}.")
