@@ -12,6 +12,10 @@ Prints markdown:
      1 -> 8 spp with the 8-spp set's per-round min-max (three timed rounds give no 95 % interval);
   3. per table, the GPU model's mean absolute error and Spearman correlation against the paper at
      each sampling over the cells both sets hold.
+  4. with --long, tables 2 and 3 one row per scene and encoder (adds the SIMT lane-efficiency ratio),
+     and a per-scene summary of the model's error; with many scenes the wide layout does not fit;
+  5. with --key-lengths, the paper's Table 6 (key length on sibenik, bounce1) the same way, over
+     every key length both sets hold (the --bits filter does not apply to it).
 Cells of the given access mode and key length; NoSort's cell (one per batch) is the baseline.
 Standard library only.
 """
@@ -63,6 +67,37 @@ def arrow(a, b, fmt="{:.2f}"):
     return f"{fmt.format(a)} → {fmt.format(b)}"
 
 
+def long_table(title, rows, batch, at_one, at_eight, with_bits=False):
+    """One row per paper cell (scene, encoder[, bits]): the paper's speedup, then 1 spp -> 8 spp of the
+    SIMT lane-efficiency ratio, the GPU model and PoCL; then the model's error per scene and overall."""
+    out = ["", f"#### {title}", "",
+           "| scene | encoder | " + ("bits | " if with_bits else "") + "paper | SIMT lane ratio 1 spp → 8 spp | "
+           "GPU model 1 spp → 8 spp | PoCL 1 spp → 8 spp [8-spp rounds min–max] |",
+           "|---|---|" + ("---:|" if with_bits else "") + "---:|---:|---:|---:|"]
+    for p in rows:
+        x, y = at_one(p), at_eight(p)
+        rr = round_range(y)
+        out.append(f"| {p['scene']} | {p['encoder']} | " + (f"{p['bits']} | " if with_bits else "") +
+                   f"{p['paper_speedup']} | {arrow(x['simt_lane_efficiency_ratio'], y['simt_lane_efficiency_ratio'])} | "
+                   f"{arrow(gpu(x), gpu(y))} | " + arrow(pocl(x), pocl(y)) + (f" [{rr[0]:.2f}–{rr[1]:.2f}]" if rr else "") + " |")
+    out += ["", "| GPU model against the paper | cells | MAE 1 spp | MAE 8 spp | Spearman 1 spp | Spearman 8 spp |",
+            "|---|---:|---:|---:|---:|---:|"]
+    groups = [(s, [p for p in rows if p["scene"] == s]) for s in dict.fromkeys(p["scene"] for p in rows)]
+    if len(groups) > 1:
+        groups.append(("all", rows))
+    for name, ps in groups:
+        truth = [float(p["paper_speedup"]) for p in ps]
+        stats = []
+        for at in (at_one, at_eight):
+            pred = [gpu(at(p)) for p in ps]
+            ok = all(q is not None for q in pred)
+            stats.append((mae(pred, truth) if ok else None, spearman(pred, truth) if ok and len(ps) > 2 else None))
+        f = lambda v, fmt: "–" if v is None else fmt.format(v)
+        out.append(f"| {name} | {len(ps)} | {f(stats[0][0], '{:.3f}')} | {f(stats[1][0], '{:.3f}')} | "
+                   f"{f(stats[0][1], '{:.2f}')} | {f(stats[1][1], '{:.2f}')} |")
+    return out
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("one")
@@ -71,6 +106,8 @@ def main():
     ap.add_argument("--bits", type=int, default=32)
     ap.add_argument("--paper", default=os.path.join(ROOT, "results/gpu-model/paper_tables.csv"))
     ap.add_argument("--out")
+    ap.add_argument("--long", action="store_true", help="tables 2 and 3 one row per scene and encoder")
+    ap.add_argument("--key-lengths", action="store_true", help="add the paper's Table 6 (sibenik, 16/32/64 bits)")
     a = ap.parse_args()
     one, eight = load(a.one, a.access, a.bits), load(a.eight, a.access, a.bits)
     batches = sorted({(s, b) for (s, b, e) in eight if e == "nosort" and (s, b, "nosort") in one})
@@ -98,6 +135,10 @@ def main():
         if not rows:
             continue
         scenes = sorted({p["scene"] for p in rows})
+        if a.long:
+            lines += long_table(title, rows, batch, lambda p: one[(p["scene"], batch, p["encoder"])],
+                                lambda p: eight[(p["scene"], batch, p["encoder"])])
+            continue
         lines += ["", f"#### {title}", "",
                   "| encoder | " + " | ".join(f"{s}: paper | GPU model 1 spp → 8 spp | PoCL 1 spp → 8 spp [8-spp rounds min–max]"
                                               for s in scenes) + " |",
@@ -123,6 +164,16 @@ def main():
             lines.append("")
             lines.append(f"GPU model against the paper at {label}, {len(rows)} cells: MAE {err:.3f}, "
                          f"Spearman {spearman(pred, truth):.2f}.")
+    if a.key_lengths:
+        with open(a.paper, newline="") as f:
+            table6 = [r for r in csv.DictReader(f) if r["table"] == "6"]
+        by_bits = {b: (load(a.one, a.access, b), load(a.eight, a.access, b)) for b in sorted({int(r["bits"]) for r in table6})}
+        rows = [p for p in table6 if all((p["scene"], p["batch"], e) in by_bits[int(p["bits"])][i]
+                                         for i in (0, 1) for e in (p["encoder"], "nosort"))]
+        if rows:
+            key = lambda p, i: by_bits[int(p["bits"])][i][(p["scene"], p["batch"], p["encoder"])]
+            lines += long_table("Key length on sibenik (bounce1) — paper Table 6", rows, "bounce1",
+                                lambda p: key(p, 0), lambda p: key(p, 1), with_bits=True)
     text = "\n".join(lines) + "\n"
     if a.out:
         with open(a.out, "w") as f:
