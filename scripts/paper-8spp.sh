@@ -2,7 +2,8 @@
 # The whole paper preset at the paper's sampling (issue 22: 1920x1080, 8 spp, 2 shadow rays per
 # bounce; 546 cells) on this machine's PoCL, as six shards that can run in different sessions.
 #
-# About six hours of a 2-core machine in all, longer than one working session, so the run is split
+# 3 h 27 min of a 2-core machine in all (about 2 h 15 min when nothing else runs beside it; the
+# committed paper-8spp-9dab0ed), longer than a working session leaves free, so the run is split
 # with `raysort run --shard K/6` (a contiguous split by cost: each shard holds one to three scenes)
 # and each finished shard is committed under results/ by whoever runs this. Every shard must come
 # from the same build, or `raysort merge` refuses them; so this script builds the pinned commit in
