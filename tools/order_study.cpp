@@ -15,7 +15,8 @@
 //     extent; the true hit distance, an oracle);
 //   - composite keys that spend more bits on the same information: MLHCC's 32-bit code with
 //     TwoPoint's top 32 bits as a tie-break (a 64-bit key), and MLHCC with its 16 top-node bits
-//     folded into the representative's index to free 11 bits for TwoPoint (a 32-bit key).
+//     folded into the representative's index to free 11 bits for TwoPoint (a 32-bit key); HCC/24 or
+//     MLHCC/24 with TwoPoint's top 8 bits (32-bit keys), and HCC/32 with TwoPoint/32 (64 bits).
 // Rays keep their generation order within equal keys (a stable sort), as the radix sort does.
 #include <fmt/format.h>
 
@@ -149,6 +150,18 @@ int study(int argc, char** argv) {
     key[i] = representative << 27 | std::uint64_t{l} << 11 | twopoint[i] >> 53;
   }
   report("representative | l | twopoint/11", key);
+
+  // 32-bit keys that give a quarter of the bits to TwoPoint's code: the cut's coarser groups, then
+  // the endpoints' Morton cell as the tie-break (HCC's ANC at 32 bits is 1.1-2.1: most warps hold one
+  // cut code, so the order inside a code decides their coherence).
+  const std::vector<std::uint64_t> hcc24 = encode_on_host(Encoder::HCC, 24, es, rays);
+  const std::vector<std::uint64_t> mlhcc24 = encode_on_host(Encoder::MLHCC, 24, es, rays);
+  for (std::size_t i = 0; i < key.size(); ++i) key[i] = hcc24[i] << 8 | twopoint[i] >> 56;
+  report("hcc/24 | twopoint/8 (32 bits)", key);
+  for (std::size_t i = 0; i < key.size(); ++i) key[i] = mlhcc24[i] << 8 | twopoint[i] >> 56;
+  report("mlhcc/24 | twopoint/8 (32 bits)", key);
+  for (std::size_t i = 0; i < key.size(); ++i) key[i] = hcc[i] << 32 | twopoint[i] >> 32;
+  report("hcc/32 | twopoint/32 (64 bits)", key);
   return 0;
 }
 
