@@ -16,7 +16,9 @@
 //   - composite keys that spend more bits on the same information: MLHCC's 32-bit code with
 //     TwoPoint's top 32 bits as a tie-break (a 64-bit key), and MLHCC with its 16 top-node bits
 //     folded into the representative's index to free 11 bits for TwoPoint (a 32-bit key); HCC/24 or
-//     MLHCC/24 with TwoPoint's top 8 bits (32-bit keys), and HCC/32 with TwoPoint/32 (64 bits).
+//     MLHCC/24 with TwoPoint's top 8 bits (32-bit keys), and HCC/32 with TwoPoint/32 (64 bits);
+//   - MLHCC/32 with another representative top node: the one the ray enters first, or the one of
+//     lowest HAD (the paper takes the highest).
 // Rays keep their generation order within equal keys (a stable sort), as the radix sort does.
 #include <fmt/format.h>
 
@@ -162,6 +164,51 @@ int study(int argc, char** argv) {
   report("mlhcc/24 | twopoint/8 (32 bits)", key);
   for (std::size_t i = 0; i < key.size(); ++i) key[i] = hcc[i] << 32 | twopoint[i] >> 32;
   report("hcc/32 | twopoint/32 (64 bits)", key);
+
+  // MLHCC's representative (issue 21's optional item; the paper: a single representative "can
+  // significantly impact" the quality). The paper's rule takes the overlapped top node of highest
+  // HAD; the alternatives take the one the ray enters first, or the one of lowest HAD. The low bits
+  // are then that node's low-level cut, as in rs_two_level_cut_code.
+  {
+    const EncodeScene::TwoLevel& tl = es.two_level(32);
+    const rs_u32 groups = rs_cut_group_count(tl.half);
+    auto low_bits = [&](const RsRay& ray, rs_u32 rep) {
+      RsCutRay c = rs_cut_ray(rs_prepare_ray(ray));
+      return rs_cut_bits_g(&c, tl.low_groups.data() + rep * groups, tl.low_count[rep], tl.half);
+    };
+    auto entry = [](const RsRay& r, const RsBox& b) {  // where the ray enters the box (0 inside it)
+      float t = 0.0f;
+      for (int a = 0; a < 3; ++a) {
+        const float inv = 1.0f / r.d[a];
+        t = std::max(t, std::min((b.bmin[a] - r.o[a]) * inv, (b.bmax[a] - r.o[a]) * inv));
+      }
+      return t;
+    };
+    for (const bool nearest : {true, false}) {
+      for (std::size_t i = 0; i < key.size(); ++i) {
+        const auto top = static_cast<std::uint32_t>(mlhcc[i] >> tl.half);  // bit half − 1 − j: top node j
+        if (top == 0) {
+          key[i] = 0;
+          continue;
+        }
+        rs_u32 rep = static_cast<rs_u32>(tl.half) - std::bit_width(top & (~top + 1u));  // lowest HAD
+        if (nearest) {
+          float best = INFINITY;
+          for (rs_u32 j = 0; j < tl.top.size(); ++j)
+            if (top >> (tl.half - 1 - j) & 1u) {
+              const float t = entry(rays[i], tl.top[j]);
+              if (t < best) best = t, rep = j;
+            }
+        }
+        key[i] = (std::uint64_t{top} << (64 - tl.half) | low_bits(rays[i], rep)) >> 32;
+        // The paper's rule through the same lines must give MLHCC's own key (checks the rebuild).
+        const rs_u32 paper_rep = static_cast<rs_u32>(tl.half) - std::bit_width(top);
+        if ((std::uint64_t{top} << (64 - tl.half) | low_bits(rays[i], paper_rep)) >> 32 != mlhcc[i])
+          throw Error(fmt::format("order_study: the rebuilt MLHCC key of ray {} differs from encode_on_host's", i));
+      }
+      report(nearest ? "mlhcc/32, representative entered first" : "mlhcc/32, representative of lowest HAD", key);
+    }
+  }
   return 0;
 }
 
