@@ -2,7 +2,7 @@
 """Validates the GPU cost model (docs/gpu-model.md) against the paper's RTX 3060 speedups.
 
   scripts/gpu_model_validate.py RESULT_SET [RESULT_SET...] --out DIR [--profile gpu/profiles/rtx3060.toml]
-                                [--access gather|permute]
+                                [--access gather|permute] [--baseline pixel|shuffled]
 
 Reads cells.csv of result sets run with `raysort run --gpu-model rtx3060`, pairs every cell with
 its row in results/gpu-model/paper_tables.csv (Tables 2, 3 and 6) and with the NoSort cell of its
@@ -25,6 +25,8 @@ COMBINE = "sum"  # bench/gpu_model.cpp's issue + memory; --combine max shows the
 # The cells' ray access mode (--access): gather loads rays[order[i]], permute consecutive rays. NoSort
 # has one cell per batch (its order is the identity: both modes load consecutive rays), kept for both.
 ACCESS = "gather"
+# NoSort's order, the baseline of every ratio (--baseline): pixel (generation order) or shuffled.
+BASELINE = "pixel"
 GRID = [round(2 ** (i / 8), 4) for i in range(0, 8 * 11)]  # 1 .. ~1900 cycles per step
 
 
@@ -33,7 +35,7 @@ def load_cells(dirs):
     for d in dirs:
         with open(os.path.join(d, "cells.csv"), newline="") as f:
             rows += [r for r in csv.DictReader(f) if r["status"] == "ok" and (r["access"] == ACCESS or r["encoder"] == "nosort")
-                     and r["baseline"] == "pixel" and r["gpu_model"]]
+                     and r["baseline"] == BASELINE and r["gpu_model"]]
     return rows
 
 
@@ -199,10 +201,13 @@ def main():
                     help="issue and memory time: sum (the model's, default) or max (a roofline, a sensitivity check)")
     ap.add_argument("--access", choices=("gather", "permute"), default="gather",
                     help="which access mode's cells to read (the 8-spp paper sets ran both; earlier ones one)")
+    ap.add_argument("--baseline", choices=("pixel", "shuffled"), default="pixel",
+                    help="which baseline order's cells to read (run --baseline): the paper does not say its NoSort order")
     a = ap.parse_args()
-    global COMBINE, ACCESS
+    global COMBINE, ACCESS, BASELINE
     COMBINE = a.combine
     ACCESS = a.access
+    BASELINE = a.baseline
     with open(a.profile, "rb") as f:
         prof = tomllib.load(f)
     with open(a.paper, newline="") as f:
