@@ -61,6 +61,12 @@ def round_range(c):
     return (min(ratios), max(ratios)) if ratios else None
 
 
+def pocl_cell(x, y):
+    """PoCL speedup 1 spp -> 8 spp, with the 8-spp set's per-round min-max."""
+    rr = round_range(y)
+    return arrow(pocl(x), pocl(y)) + (f" [{rr[0]:.2f}–{rr[1]:.2f}]" if rr else "")
+
+
 def arrow(a, b, fmt="{:.2f}"):
     if a is None or b is None:
         return "–"
@@ -76,10 +82,9 @@ def long_table(title, rows, batch, at_one, at_eight, with_bits=False):
            "|---|---|" + ("---:|" if with_bits else "") + "---:|---:|---:|---:|"]
     for p in rows:
         x, y = at_one(p), at_eight(p)
-        rr = round_range(y)
         out.append(f"| {p['scene']} | {p['encoder']} | " + (f"{p['bits']} | " if with_bits else "") +
                    f"{p['paper_speedup']} | {arrow(x['simt_lane_efficiency_ratio'], y['simt_lane_efficiency_ratio'])} | "
-                   f"{arrow(gpu(x), gpu(y))} | " + arrow(pocl(x), pocl(y)) + (f" [{rr[0]:.2f}–{rr[1]:.2f}]" if rr else "") + " |")
+                   f"{arrow(gpu(x), gpu(y))} | {pocl_cell(x, y)} |")
     out += ["", "| GPU model against the paper | cells | MAE 1 spp | MAE 8 spp | Spearman 1 spp | Spearman 8 spp |",
             "|---|---:|---:|---:|---:|---:|"]
     groups = [(s, [p for p in rows if p["scene"] == s]) for s in dict.fromkeys(p["scene"] for p in rows)]
@@ -127,7 +132,8 @@ def main():
                      f"{pair('mlhcc', lambda c: c['simt_lane_efficiency_ratio'])} | "
                      f"{pair('ppc', lambda c: c['simt_lane_efficiency_ratio'])} | {pair('hcc', gpu)} |")
     with open(a.paper, newline="") as f:
-        paper = [r for r in csv.DictReader(f) if r["table"] in ("2", "3") and int(r["bits"]) == a.bits]
+        paper_rows = list(csv.DictReader(f))
+    paper = [r for r in paper_rows if r["table"] in ("2", "3") and int(r["bits"]) == a.bits]
     for table, batch, title in (("2", "bounce1", "Secondary rays (bounce1) — paper Table 2"),
                                 ("3", "shadow0", "Primary shadow rays (shadow0) — paper Table 3")):
         rows = [p for p in paper if p["table"] == table
@@ -151,9 +157,7 @@ def main():
                     cells += ["–", "–", "–"]
                     continue
                 x, y = one[(s, batch, enc)], eight[(s, batch, enc)]
-                rr = round_range(y)
-                cells += [p["paper_speedup"], arrow(gpu(x), gpu(y)),
-                          arrow(pocl(x), pocl(y)) + (f" [{rr[0]:.2f}–{rr[1]:.2f}]" if rr else "")]
+                cells += [p["paper_speedup"], arrow(gpu(x), gpu(y)), pocl_cell(x, y)]
             lines.append(f"| {enc} | " + " | ".join(cells) + " |")
         truth = [float(p["paper_speedup"]) for p in rows]
         for label, cells in (("1 spp", one), ("8 spp", eight)):
@@ -165,8 +169,7 @@ def main():
             lines.append(f"GPU model against the paper at {label}, {len(rows)} cells: MAE {err:.3f}, "
                          f"Spearman {spearman(pred, truth):.2f}.")
     if a.key_lengths:
-        with open(a.paper, newline="") as f:
-            table6 = [r for r in csv.DictReader(f) if r["table"] == "6"]
+        table6 = [r for r in paper_rows if r["table"] == "6"]
         by_bits = {b: (load(a.one, a.access, b), load(a.eight, a.access, b)) for b in sorted({int(r["bits"]) for r in table6})}
         rows = [p for p in table6 if all((p["scene"], p["batch"], e) in by_bits[int(p["bits"])][i]
                                          for i in (0, 1) for e in (p["encoder"], "nosort"))]

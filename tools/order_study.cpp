@@ -167,47 +167,38 @@ int study(int argc, char** argv) {
 
   // MLHCC's representative (issue 21's optional item; the paper: a single representative "can
   // significantly impact" the quality). The paper's rule takes the overlapped top node of highest
-  // HAD; the alternatives take the one the ray enters first, or the one of lowest HAD. The low bits
-  // are then that node's low-level cut, as in rs_two_level_cut_code.
+  // HAD; the alternatives take the one the ray enters first (the kernels' slab test,
+  // rs_intersect_box), or the one of lowest HAD. The low bits are then that node's low-level cut,
+  // as in rs_two_level_cut_code.
   {
     const EncodeScene::TwoLevel& tl = es.two_level(32);
     const rs_u32 groups = rs_cut_group_count(tl.half);
-    auto low_bits = [&](const RsRay& ray, rs_u32 rep) {
-      RsCutRay c = rs_cut_ray(rs_prepare_ray(ray));
-      return rs_cut_bits_g(&c, tl.low_groups.data() + rep * groups, tl.low_count[rep], tl.half);
-    };
-    auto entry = [](const RsRay& r, const RsBox& b) {  // where the ray enters the box (0 inside it)
-      float t = 0.0f;
-      for (int a = 0; a < 3; ++a) {
-        const float inv = 1.0f / r.d[a];
-        t = std::max(t, std::min((b.bmin[a] - r.o[a]) * inv, (b.bmax[a] - r.o[a]) * inv));
+    std::vector<std::uint64_t> entered_first(rays.size(), 0), lowest_had(rays.size(), 0);
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      const auto top = static_cast<std::uint32_t>(mlhcc[i] >> tl.half);  // bit half − 1 − j: top node j
+      if (top == 0) continue;  // no top node overlapped: key 0 under every rule
+      const RsTraversalRay tr = rs_prepare_ray(rays[i]);
+      RsCutRay c = rs_cut_ray(tr);
+      auto key_with = [&](rs_u32 rep) {
+        const rs_u64 low = rs_cut_bits_g(&c, tl.low_groups.data() + rep * groups, tl.low_count[rep], tl.half);
+        return (std::uint64_t{top} << (64 - tl.half) | low) >> 32;
+      };
+      // The paper's rule through the same lines must give MLHCC's own key (checks the rebuild).
+      if (key_with(tl.half - static_cast<rs_u32>(std::bit_width(top))) != mlhcc[i])
+        throw Error(fmt::format("order_study: the rebuilt MLHCC key of ray {} differs from encode_on_host's", i));
+      lowest_had[i] = key_with(tl.half - 1 - static_cast<rs_u32>(std::countr_zero(top)));
+      rs_u32 first = 0;
+      float nearest = INFINITY;
+      for (rs_u32 j = 0; j < tl.cut.top.size(); ++j) {
+        if (!(top >> (tl.half - 1 - j) & 1u)) continue;
+        int hit = 0;
+        const float entry = rs_intersect_box(tr, &p.bvh.nodes[tl.cut.top[j]], tr.tmax, &hit);
+        if (entry < nearest) nearest = entry, first = j;
       }
-      return t;
-    };
-    for (const bool nearest : {true, false}) {
-      for (std::size_t i = 0; i < key.size(); ++i) {
-        const auto top = static_cast<std::uint32_t>(mlhcc[i] >> tl.half);  // bit half − 1 − j: top node j
-        if (top == 0) {
-          key[i] = 0;
-          continue;
-        }
-        rs_u32 rep = static_cast<rs_u32>(tl.half) - std::bit_width(top & (~top + 1u));  // lowest HAD
-        if (nearest) {
-          float best = INFINITY;
-          for (rs_u32 j = 0; j < tl.top.size(); ++j)
-            if (top >> (tl.half - 1 - j) & 1u) {
-              const float t = entry(rays[i], tl.top[j]);
-              if (t < best) best = t, rep = j;
-            }
-        }
-        key[i] = (std::uint64_t{top} << (64 - tl.half) | low_bits(rays[i], rep)) >> 32;
-        // The paper's rule through the same lines must give MLHCC's own key (checks the rebuild).
-        const rs_u32 paper_rep = static_cast<rs_u32>(tl.half) - std::bit_width(top);
-        if ((std::uint64_t{top} << (64 - tl.half) | low_bits(rays[i], paper_rep)) >> 32 != mlhcc[i])
-          throw Error(fmt::format("order_study: the rebuilt MLHCC key of ray {} differs from encode_on_host's", i));
-      }
-      report(nearest ? "mlhcc/32, representative entered first" : "mlhcc/32, representative of lowest HAD", key);
+      entered_first[i] = key_with(first);
     }
+    report("mlhcc/32, representative entered first", entered_first);
+    report("mlhcc/32, representative of lowest HAD", lowest_had);
   }
   return 0;
 }
