@@ -11,10 +11,11 @@ namespace {
 // A tiny GPU: `sms` SMs, an L1 of 4 lines (fully associative) and an L2 of 8 lines' worth of
 // 32-byte sectors (4 sets of 8), 128-byte lines, so that a few wide nodes (128 bytes each, one
 // line, four sectors) fill them.
-GpuProfile tiny_gpu(unsigned sms) {
+GpuProfile tiny_gpu(unsigned sms, unsigned resident_warps = 1, unsigned dynamic_fetch_threshold = 0) {
   return parse_gpu_profile(fmt::format(R"(name = "tiny"
 sms = {}
-resident_warps_per_sm = 1
+resident_warps_per_sm = {}
+dynamic_fetch_threshold = {}
 l1_bytes = 512
 l1_ways = 4
 l2_bytes = 1024
@@ -26,7 +27,7 @@ l2_gbps = 2.0
 clock_ghz = 1.0
 step_cycles = 10.0
 )",
-                                       sms),
+                                       sms, resident_warps, dynamic_fetch_threshold),
                            "test");
 }
 
@@ -188,6 +189,73 @@ TEST(GpuModel, AnyHitLanesReadTheirLastLeafOnlyUpToTheHit) {
   longer.lanes[0] = {0, leaf, 1};
   longer.last_reads.assign(32, 1);
   EXPECT_EQ(requests(longer), 1u + 6u + 1u);
+}
+
+// Dynamic fetch (Aila and Laine's persistent warps): one warp, 64 rays, ray 0 takes 10 steps and
+// every other ray one. Static warps wait for ray 0: 10 + 1 steps. With threshold 32 the finished
+// lanes take rays 32-62 at the second step and ray 63 at the third, beside ray 0: 10 steps.
+TEST(GpuModel, DynamicFetchRefillsFinishedLanes) {
+  const WideBvh wide = nodes_only();
+  const GpuAddressMap map(wide, 0);
+  std::vector<WarpTrails> rays{warp_of({0}), warp_of({0})};
+  rays[0].lanes[0] = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9};
+  GpuReplay fixed(tiny_gpu(1), map);
+  fixed.replay_wave(std::span(rays).first(1));
+  fixed.replay_wave(std::span(rays).last(1));
+  EXPECT_EQ(fixed.counts().warp_steps, 11u);
+  EXPECT_EQ(fixed.counts().idle_lanes, 9u * 31u);
+
+  GpuReplay refill(tiny_gpu(1, 1, 32), map);
+  std::vector<WarpTrails> copy = rays;
+  refill.replay_stream(copy, true);
+  EXPECT_EQ(refill.counts().warp_steps, 10u);
+  EXPECT_EQ(refill.counts().idle_lanes, 30u + 7u * 31u);  // step 3: ray 0 and ray 63; steps 4-10: ray 0
+  EXPECT_EQ(refill.counts().replayed_warps, 2u);
+  // Threshold 1: a warp fetches only when all its lanes have finished, which is the static schedule.
+  GpuReplay empty_only(tiny_gpu(1, 1, 1), map);
+  copy = rays;
+  empty_only.replay_stream(copy, true);
+  EXPECT_EQ(empty_only.counts().warp_steps, 11u);
+  EXPECT_EQ(empty_only.counts().idle_lanes, 9u * 31u);
+}
+
+// raysort run hands the rays over a wave at a time; the counts must not depend on the chunking.
+TEST(GpuModel, DynamicFetchCountsDoNotDependOnChunks) {
+  const WideBvh wide = nodes_only();
+  const GpuAddressMap map(wide, 1024);
+  std::vector<WarpTrails> rays(37);
+  std::uint32_t seed = 12345;
+  auto next = [&] { return seed = seed * 1664525u + 1013904223u; };
+  for (std::size_t k = 0; k < rays.size(); ++k) {
+    rays[k].lanes.resize(32);
+    for (std::uint32_t l = 0; l < 32; ++l) {
+      rays[k].rays.push_back(static_cast<std::uint32_t>(k * 32 + l));
+      for (std::uint32_t s = 0, len = 1 + (next() >> 28); s < len; ++s) rays[k].lanes[l].push_back((next() >> 16) % 64);
+    }
+  }
+  const GpuProfile p = tiny_gpu(2, 3, 20);
+  GpuReplay whole(p, map);
+  std::vector<WarpTrails> copy = rays;
+  whole.replay_stream(copy, true);
+  for (std::size_t chunk : {1u, 5u, 6u, 11u}) {
+    GpuReplay parts(p, map);
+    copy = rays;
+    for (std::size_t k = 0; k < copy.size(); k += chunk) {
+      const std::size_t n = std::min(chunk, copy.size() - k);
+      parts.replay_stream(std::span(copy).subspan(k, n), k + n == copy.size());
+    }
+    const GpuCounts &a = whole.counts(), &b = parts.counts();
+    SCOPED_TRACE(fmt::format("chunks of {} warps", chunk));
+    EXPECT_EQ(a.warp_steps, b.warp_steps);
+    EXPECT_EQ(a.idle_lanes, b.idle_lanes);
+    EXPECT_EQ(a.requests, b.requests);
+    EXPECT_EQ(a.l1_hits, b.l1_hits);
+    EXPECT_EQ(a.l2_hits, b.l2_hits);
+    EXPECT_EQ(a.dram_bytes, b.dram_bytes);
+    EXPECT_EQ(b.replayed_warps, rays.size());
+  }
+  EXPECT_GT(whole.counts().warp_steps, 0u);
+  EXPECT_THROW(tiny_gpu(1, 1, 33), std::exception);  // a threshold above the warp's 32 lanes
 }
 
 TEST(GpuModel, PredictedTimeIsIssuePlusMemory) {

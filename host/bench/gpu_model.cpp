@@ -32,7 +32,8 @@ GpuProfile parse_gpu_profile(const std::string& text, const std::string& origin)
   const toml::table root = parse_toml_text(text, origin);
   TomlTable t(origin, root, "",
               {"name", "description", "sms", "resident_warps_per_sm", "l1_bytes", "l1_ways", "l2_bytes", "l2_ways",
-               "line_bytes", "sector_bytes", "dram_gbps", "l2_gbps", "clock_ghz", "step_cycles"});
+               "line_bytes", "sector_bytes", "dram_gbps", "l2_gbps", "clock_ghz", "step_cycles",
+               "dynamic_fetch_threshold"});
   GpuProfile p;
   p.origin = origin;
   p.name = t.string("name");
@@ -50,6 +51,7 @@ GpuProfile parse_gpu_profile(const std::string& text, const std::string& origin)
   p.l2_gbps = t.number("l2_gbps");
   p.clock_ghz = t.number("clock_ghz");
   p.step_cycles = t.number("step_cycles");
+  p.dynamic_fetch_threshold = static_cast<unsigned>(t.integer("dynamic_fetch_threshold", 0, 0, 32));
   if (p.line_bytes & (p.line_bytes - 1)) t.fail("line_bytes", "must be a power of two");
   if (p.line_bytes % p.sector_bytes) t.fail("sector_bytes", "must divide line_bytes");
   for (auto [key, v] : {std::pair<const char*, double>{"dram_gbps", p.dram_gbps}, {"l2_gbps", p.l2_gbps},
@@ -155,14 +157,18 @@ GpuReplay::GpuReplay(const GpuProfile& profile, const GpuAddressMap& map)
 void GpuReplay::warp_step(unsigned sm, const WarpTrails& warp, std::size_t step) {
   sectors_.clear();
   refs_.clear();
-  const unsigned sector = profile_.sector_bytes, per_line = profile_.line_bytes / sector;
   for (std::size_t l = 0; l < warp.lanes.size(); ++l) {
-    if (step == 0 && l < warp.rays.size()) map_.ray_blocks(warp.rays[l], sector, sectors_);
+    if (step == 0 && l < warp.rays.size()) map_.ray_blocks(warp.rays[l], profile_.sector_bytes, sectors_);
     if (step >= warp.lanes[l].size()) continue;
     const bool last = step + 1 == warp.lanes[l].size();
     const std::uint64_t reads = last && l < warp.last_reads.size() ? warp.last_reads[l] : 0;
     refs_.push_back(reads << 32 | warp.lanes[l][step]);
   }
+  issue(sm, warp.lanes.size());
+}
+
+void GpuReplay::issue(unsigned sm, std::uint64_t lanes) {
+  const unsigned sector = profile_.sector_bytes, per_line = profile_.line_bytes / sector;
   const std::uint64_t active = refs_.size();
   // Lanes of a coherent warp share most references: expanding each distinct one once keeps the
   // sector list short (the replay's cost is mostly this list; docs/gpu-model.md, "Cost").
@@ -175,7 +181,7 @@ void GpuReplay::warp_step(unsigned sm, const WarpTrails& warp, std::size_t step)
   std::sort(sectors_.begin(), sectors_.end());
   sectors_.erase(std::unique(sectors_.begin(), sectors_.end()), sectors_.end());
   ++counts_.warp_steps;
-  counts_.idle_lanes += warp.lanes.size() - active;
+  counts_.idle_lanes += lanes - active;
   for (std::size_t i = 0; i < sectors_.size();) {
     const std::uint64_t line = sectors_[i] / per_line;
     std::size_t end = i;
@@ -208,6 +214,65 @@ void GpuReplay::replay_wave(std::span<const WarpTrails> warps) {
       for (std::size_t k = sm; k < warps.size(); k += profile_.sms)
         if (step < len[k]) warp_step(sm, warps[k], step);
   counts_.replayed_warps += warps.size();
+}
+
+bool GpuReplay::persistent_turn(std::size_t w, bool last) {
+  constexpr std::size_t kLanes = 32;
+  PersistentWarp& warp = resident_[w];
+  auto tracing = [](const Lane& lane) { return lane.step < lane.trail.size(); };
+  const auto active = static_cast<unsigned>(std::count_if(warp.lanes.begin(), warp.lanes.end(), tracing));
+  if (active < profile_.dynamic_fetch_threshold && active < kLanes) {
+    // The finished lanes fetch together (one atomic add per warp in the kernel): wait for rays
+    // rather than fetch fewer than a later chunk would give.
+    if (!last && to_fetch_.size() < kLanes - active) return false;
+    for (Lane& lane : warp.lanes) {
+      if (to_fetch_.empty()) break;
+      if (tracing(lane)) continue;
+      lane = std::move(to_fetch_.front());
+      to_fetch_.pop_front();
+    }
+  }
+  sectors_.clear();
+  refs_.clear();
+  for (Lane& lane : warp.lanes) {
+    if (!tracing(lane)) continue;
+    if (lane.step == 0) map_.ray_blocks(lane.ray, profile_.sector_bytes, sectors_);
+    const bool final_step = lane.step + 1 == lane.trail.size();
+    refs_.push_back(std::uint64_t{final_step ? lane.last_reads : 0u} << 32 | lane.trail[lane.step]);
+    ++lane.step;
+  }
+  if (!refs_.empty()) {
+    issue(static_cast<unsigned>(w % profile_.sms), kLanes);
+    any_stepped_ = true;
+  }
+  return true;
+}
+
+void GpuReplay::replay_stream(std::span<WarpTrails> warps, bool last) {
+  if (resident_.empty()) resident_.assign(wave_warps(), PersistentWarp{std::vector<Lane>(32)});
+  for (WarpTrails& warp : warps) {
+    for (std::size_t l = 0; l < warp.lanes.size(); ++l) {
+      Lane lane;
+      lane.trail = std::move(warp.lanes[l]);
+      lane.ray = l < warp.rays.size() ? warp.rays[l] : 0;
+      lane.last_reads = l < warp.last_reads.size() ? warp.last_reads[l] : 0;
+      to_fetch_.push_back(std::move(lane));
+    }
+  }
+  counts_.replayed_warps += warps.size();
+  // Rounds: every resident warp takes one turn, SM by SM, warp by warp (warp w runs on SM w mod sms,
+  // the order replay_wave uses), until no warp steps and no ray is left to fetch.
+  const std::size_t per_sm = profile_.resident_warps_per_sm;
+  for (;;) {
+    for (; next_warp_ < resident_.size(); ++next_warp_) {
+      const std::size_t sm = next_warp_ / per_sm, k = next_warp_ % per_sm;
+      if (!persistent_turn(k * profile_.sms + sm, last)) return;
+    }
+    next_warp_ = 0;
+    const bool done = !any_stepped_ && to_fetch_.empty();
+    any_stepped_ = false;
+    if (done) return;
+  }
 }
 
 }  // namespace raysort

@@ -4,6 +4,7 @@
 // over the byte addresses of the BVH layout the kernel reads, and the counts give a predicted
 // trace time: issue time + memory time. Deterministic: integers from the host traversal twins.
 #include <cstdint>
+#include <deque>
 #include <span>
 #include <string>
 #include <string_view>
@@ -24,6 +25,11 @@ struct GpuProfile {
   unsigned sector_bytes = 0;  // the L2's and DRAM's unit: a line's sectors are filled one by one
   double dram_gbps = 0, l2_gbps = 0, clock_ghz = 0;
   double step_cycles = 0;  // SM cycles per issued warp step (the fitted constant)
+  // 0: static warps of 32 consecutive rays, replayed in waves (GpuReplay::replay_wave). N > 0:
+  // persistent warps with dynamic fetch (Aila and Laine's kernels): when fewer than N lanes of a warp
+  // are still tracing, its finished lanes take the next rays of the trace order
+  // (GpuReplay::replay_stream).
+  unsigned dynamic_fetch_threshold = 0;
 };
 
 GpuProfile parse_gpu_profile(const std::string& text, const std::string& origin);
@@ -91,19 +97,40 @@ struct WarpTrails {
   std::vector<std::uint32_t> last_reads;
 };
 
-// Replays waves of resident warps. Scheduling simplification (docs/gpu-model.md): warps are taken
-// in trace order, sms · resident_warps_per_sm at a time (a wave); warp k of a wave runs on SM
-// k mod sms; within a wave all warps advance one step per round, SM by SM, warp by warp, and the
-// next wave starts when the whole wave has finished. Caches start cold and persist across waves.
+// Replays the trails through the caches, in one of two schedules (docs/gpu-model.md, "Scheduling simplification" and "Other schedules").
+// Static warps (replay_wave): warps are taken in trace order, sms · resident_warps_per_sm at a time
+// (a wave); warp k of a wave runs on SM k mod sms; within a wave all warps advance one step per
+// round, SM by SM, warp by warp, and the next wave starts when the whole wave has finished.
+// Persistent warps with dynamic fetch (replay_stream, profile.dynamic_fetch_threshold > 0): the same
+// sms · resident_warps_per_sm warps stay resident for the whole batch and advance one step per round
+// in the same order; at its turn, a warp with fewer than the threshold lanes still tracing gives each
+// finished lane the next ray of the trace order (lane order), then steps its tracing lanes.
+// Caches start cold and persist to the end of the batch.
 class GpuReplay {
  public:
   GpuReplay(const GpuProfile& profile, const GpuAddressMap& map);
   std::size_t wave_warps() const { return static_cast<std::size_t>(profile_.sms) * profile_.resident_warps_per_sm; }
+  bool dynamic_fetch() const { return profile_.dynamic_fetch_threshold > 0; }
   void replay_wave(std::span<const WarpTrails> warps);
+  // Dynamic fetch: appends the rays of `warps` (trace order; their trails are moved out) to the
+  // rays still to fetch and replays as far as it can without running out of rays to fetch; `last`
+  // replays to the end. Chunked calls give the counts of one call on all rays.
+  void replay_stream(std::span<WarpTrails> warps, bool last);
   const GpuCounts& counts() const { return counts_; }
 
  private:
+  struct Lane {
+    std::vector<std::uint32_t> trail;
+    std::uint32_t ray = 0, last_reads = 0;
+    std::size_t step = 0;
+  };
+  struct PersistentWarp {
+    std::vector<Lane> lanes;  // 32 lanes; a lane is tracing while step < trail.size()
+  };
   void warp_step(unsigned sm, const WarpTrails& warp, std::size_t step);
+  // Runs the caches on refs_ (each active lane's step reference) and sectors_ (ray loads so far).
+  void issue(unsigned sm, std::uint64_t lanes);
+  bool persistent_turn(std::size_t w, bool last);  // false: paused, needs more rays to fetch
   GpuProfile profile_;
   const GpuAddressMap& map_;
   std::vector<LruCache> l1_;
@@ -111,6 +138,11 @@ class GpuReplay {
   GpuCounts counts_;
   std::vector<std::uint64_t> sectors_;
   std::vector<std::uint64_t> refs_;  // (leaf reads << 32) | step reference
+  // Dynamic fetch state, kept across replay_stream calls.
+  std::vector<PersistentWarp> resident_;
+  std::deque<Lane> to_fetch_;
+  std::size_t next_warp_ = 0;  // the warp whose turn is next in the current round
+  bool any_stepped_ = false;   // some warp stepped in the current round
 };
 
 }  // namespace raysort
