@@ -21,7 +21,7 @@ import sys
 import tomllib
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-COMBINE = "sum"  # bench/gpu_model.cpp's issue + memory; --combine max shows the roofline alternative
+COMBINE = "sum"  # bench/gpu_model.cpp's issue + memory; --combine shows the alternatives tried
 # The cells' ray access mode (--access): gather loads rays[order[i]], permute consecutive rays. NoSort
 # has one cell per batch (its order is the identity: both modes load consecutive rays), kept for both.
 ACCESS = "gather"
@@ -39,13 +39,28 @@ def load_cells(dirs):
     return rows
 
 
+# Load-to-use latencies for --combine sum+latency, in SM cycles at the RTX 3060's 1.78 GHz: an L2 hit
+# about 113 ns and a DRAM access about 270 ns on Ampere (Chips and Cheese, "Measuring GPU Memory
+# Latency", 2021, pointer chasing on an RTX 3090: L1 to L2 over 100 ns, VRAM about 270 ns).
+L2_LATENCY_CYCLES, DRAM_LATENCY_CYCLES = 200.0, 480.0
+
+
 def model_time(r, p, k):
-    """The predicted time of bench/gpu_model.cpp, gpu_model_time(), with step_cycles = k."""
+    """The predicted time of bench/gpu_model.cpp, gpu_model_time(), with step_cycles = k; --combine
+    picks it (sum) or an alternative that was tried against it (results/gpu-model/README.md)."""
     scale = float(r["gpu_warps"]) / float(r["gpu_replayed_warps"])  # a sampled replay stands for all warps
-    issue = float(r["gpu_warp_steps"]) * k / (p["sms"] * p["clock_ghz"] * 1e9)
+    cycles = p["sms"] * p["clock_ghz"] * 1e9
+    issue = float(r["gpu_warp_steps"]) * k / cycles
     l2_sectors = float(r["gpu_l2_hits"]) + float(r["gpu_l2_misses"])
     memory = float(r["gpu_dram_bytes"]) / (p["dram_gbps"] * 1e9) + l2_sectors * p["sector_bytes"] / (p["l2_gbps"] * 1e9)
-    return scale * (max(issue, memory) if COMBINE == "max" else issue + memory)
+    if COMBINE == "max":
+        return scale * max(issue, memory)
+    if COMBINE == "sum+l1":  # plus the L1's throughput: one line request per SM cycle
+        return scale * (issue + memory + (float(r["gpu_l1_hits"]) + float(r["gpu_l1_misses"])) / cycles)
+    if COMBINE == "sum+latency":  # plus each step's wait for its slowest read, hidden by the resident warps
+        stalls = float(r["gpu_steps_l2"]) * L2_LATENCY_CYCLES + float(r["gpu_steps_dram"]) * DRAM_LATENCY_CYCLES
+        return scale * (issue + memory + stalls / cycles / p["resident_warps_per_sm"])
+    return scale * (issue + memory)
 
 
 def pearson(x, y):
@@ -197,8 +212,10 @@ def main():
     ap.add_argument("--out", required=True)
     ap.add_argument("--profile", default=os.path.join(ROOT, "gpu/profiles/rtx3060.toml"))
     ap.add_argument("--paper", default=os.path.join(ROOT, "results/gpu-model/paper_tables.csv"))
-    ap.add_argument("--combine", choices=("max", "sum"), default="sum",
-                    help="issue and memory time: sum (the model's, default) or max (a roofline, a sensitivity check)")
+    ap.add_argument("--combine", choices=("sum", "max", "sum+l1", "sum+latency"), default="sum",
+                    help="issue and memory time: sum (the model's, default); alternatives tried against it: max (a "
+                         "roofline), sum+l1 (plus L1 requests at one per cycle), sum+latency (plus L2/DRAM stalls; "
+                         "needs the gpu_steps_l2/gpu_steps_dram columns)")
     ap.add_argument("--access", choices=("gather", "permute"), default="gather",
                     help="which access mode's cells to read (the 8-spp paper sets ran both; earlier ones one)")
     ap.add_argument("--baseline", choices=("pixel", "shuffled"), default="pixel",

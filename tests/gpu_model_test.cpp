@@ -72,6 +72,8 @@ TEST(GpuModel, WarpFetchingOneLineMakesOneRequestPerStep) {
   EXPECT_EQ(c.l1_hits, 2u);
   EXPECT_EQ(c.l2_misses, 4u);  // the line's four sectors
   EXPECT_EQ(c.dram_bytes, 128u);
+  EXPECT_EQ(c.steps_dram, 1u);  // the first step waits for DRAM, the other two hit L1
+  EXPECT_EQ(c.steps_l2, 0u);
 }
 
 TEST(GpuModel, IdleLanesAreCountedPerStep) {
@@ -124,6 +126,8 @@ TEST(GpuModel, WarmL2ServesAnotherSmsMisses) {
   EXPECT_EQ(warm.counts().l1_misses, 8u);
   EXPECT_EQ(warm.counts().l2_misses, 16u);  // sectors
   EXPECT_EQ(warm.counts().l2_hits, 16u);
+  EXPECT_EQ(warm.counts().steps_dram, 4u);  // SM 0's steps
+  EXPECT_EQ(warm.counts().steps_l2, 4u);    // SM 1's steps: L1 misses served by the warm L2
   // Cold: SM 1 alone, every line from DRAM.
   GpuReplay cold(p, map);
   cold.replay_wave(second);

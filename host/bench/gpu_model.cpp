@@ -182,6 +182,7 @@ void GpuReplay::issue(unsigned sm, std::uint64_t lanes) {
   sectors_.erase(std::unique(sectors_.begin(), sectors_.end()), sectors_.end());
   ++counts_.warp_steps;
   counts_.idle_lanes += lanes - active;
+  bool to_l2 = false, to_dram = false;
   for (std::size_t i = 0; i < sectors_.size();) {
     const std::uint64_t line = sectors_[i] / per_line;
     std::size_t end = i;
@@ -191,17 +192,21 @@ void GpuReplay::issue(unsigned sm, std::uint64_t lanes) {
       ++counts_.l1_hits;
     } else {
       ++counts_.l1_misses;
+      to_l2 = true;
       for (std::size_t k = i; k < end; ++k) {
         if (l2_.access(sectors_[k])) {
           ++counts_.l2_hits;
         } else {
           ++counts_.l2_misses;
           counts_.dram_bytes += sector;
+          to_dram = true;
         }
       }
     }
     i = end;
   }
+  counts_.steps_dram += to_dram;
+  counts_.steps_l2 += to_l2 && !to_dram;
 }
 
 void GpuReplay::replay_wave(std::span<const WarpTrails> warps) {

@@ -57,6 +57,9 @@ struct GpuCounts {
   std::uint64_t l1_hits = 0, l1_misses = 0;  // lines
   std::uint64_t l2_hits = 0, l2_misses = 0;  // sectors: those of an L1-missed line the lanes read
   std::uint64_t dram_bytes = 0;  // l2_misses × sector size
+  // Warp steps by the slowest level one of their reads reached: the step waits for it (latency).
+  std::uint64_t steps_l2 = 0;    // some read missed L1, none missed L2
+  std::uint64_t steps_dram = 0;  // some read missed L2
   std::uint64_t warps = 0, replayed_warps = 0;  // all warps; those replayed (sampling)
 };
 

@@ -65,7 +65,8 @@ nlohmann::json gpu_model_json(const CellRecord::GpuModelFigures& g) {
   return {{"profile", g.profile},       {"time_us", number(g.time_us)},   {"speedup", number(g.speedup)},
           {"warp_steps", g.warp_steps}, {"idle_lanes", g.idle_lanes},     {"l1_hits", g.l1_hits},
           {"l1_misses", g.l1_misses},   {"l2_hits", g.l2_hits},           {"l2_misses", g.l2_misses},
-          {"dram_bytes", g.dram_bytes}, {"warps", g.warps},               {"replayed_warps", g.replayed_warps}};
+          {"dram_bytes", g.dram_bytes}, {"warps", g.warps},               {"replayed_warps", g.replayed_warps},
+          {"steps_l2", g.steps_l2},     {"steps_dram", g.steps_dram}};
 }
 void gpu_model_from_json(const nlohmann::json& j, CellRecord::GpuModelFigures& g) {
   j.at("profile").get_to(g.profile);
@@ -76,6 +77,9 @@ void gpu_model_from_json(const nlohmann::json& j, CellRecord::GpuModelFigures& g
                             {"l2_hits", &g.l2_hits}, {"l2_misses", &g.l2_misses}, {"dram_bytes", &g.dram_bytes},
                             {"warps", &g.warps}, {"replayed_warps", &g.replayed_warps}})
     count_from(j, key, *field);
+  // Added later within format version 3: absent in older records.
+  if (j.contains("steps_l2")) count_from(j, "steps_l2", g.steps_l2);
+  if (j.contains("steps_dram")) count_from(j, "steps_dram", g.steps_dram);
 }
 
 }  // namespace
@@ -240,7 +244,9 @@ void add_gpu_model_columns(std::vector<Col>& c) {
         {"gpu_l2_hits", &CellRecord::GpuModelFigures::l2_hits},
         {"gpu_l2_misses", &CellRecord::GpuModelFigures::l2_misses},
         {"gpu_dram_bytes", &CellRecord::GpuModelFigures::dram_bytes},
-        {"gpu_replayed_warps", &CellRecord::GpuModelFigures::replayed_warps}}) {
+        {"gpu_replayed_warps", &CellRecord::GpuModelFigures::replayed_warps},
+        {"gpu_steps_l2", &CellRecord::GpuModelFigures::steps_l2},
+        {"gpu_steps_dram", &CellRecord::GpuModelFigures::steps_dram}}) {
     const Count field = column.second;
     c.push_back(numeric(
         column.first,
