@@ -2,7 +2,7 @@
 """Validates the GPU cost model (docs/gpu-model.md) against the paper's RTX 3060 speedups.
 
   scripts/gpu_model_validate.py RESULT_SET [RESULT_SET...] --out DIR [--profile gpu/profiles/rtx3060.toml]
-                                [--access gather|permute] [--baseline pixel|shuffled]
+                                [--access gather|permute] [--baseline pixel|shuffled] [--measured SET]
 
 Reads cells.csv of result sets run with `raysort run --gpu-model rtx3060`, pairs every cell with
 its row in results/gpu-model/paper_tables.csv (Tables 2, 3 and 6) and with the NoSort cell of its
@@ -10,7 +10,10 @@ batch, and writes DIR/validation.md, DIR/cells.csv and DIR/scatter.svg. The mode
 constant (step_cycles: SM cycles per issued warp step) is refitted here from the counts, on all
 cells and leave-one-scene-out (fit on four scenes, predict the fifth), by minimising the mean
 absolute error over a log grid. Baselines: the two SIMT ratios, raw and with a leave-one-scene-out
-linear calibration (a + b x), and the PoCL gather speedup. Standard library only.
+linear calibration (a + b x), and the PoCL gather speedup. With --measured SET (a result set
+measured on a GPU, e.g. by scripts/device-check.sh), that set's 32-bit bounce1 and shadow0 speedups
+take the place of the paper's Tables 2 and 3: predicted against measured, with step_cycles fitted
+to that GPU the same way. Standard library only.
 """
 import argparse
 import csv
@@ -27,6 +30,7 @@ COMBINE = "sum"  # bench/gpu_model.cpp's issue + memory; --combine shows the alt
 ACCESS = "gather"
 # NoSort's order, the baseline of every ratio (--baseline): pixel (generation order) or shuffled.
 BASELINE = "pixel"
+TRUTH = "paper speedup (RTX 3060)"  # what the predictions are checked against (--measured: a GPU's set)
 GRID = [round(2 ** (i / 8), 4) for i in range(0, 8 * 11)]  # 1 .. ~1900 cycles per step
 
 
@@ -113,6 +117,21 @@ def pair(paper, cells):
     return out
 
 
+def measured_rows(dirs):
+    """A GPU-measured result set as rows of the paper's table format: 32-bit bounce1 cells as Table 2,
+    shadow0 as Table 3, the measured trace speedup as the truth."""
+    rows = []
+    for d in dirs:
+        with open(os.path.join(d, "cells.csv"), newline="") as f:
+            for r in csv.DictReader(f):
+                table = {"bounce1": "2", "shadow0": "3"}.get(r["batch"])
+                if (table and r["bits"] == "32" and r["status"] == "ok" and r["encoder"] != "nosort"
+                        and r["access"] == ACCESS and r["baseline"] == BASELINE and r["speedup"]):
+                    rows.append({"table": table, "batch": r["batch"], "scene": r["scene"], "encoder": r["encoder"],
+                                 "bits": r["bits"], "paper_speedup": r["speedup"]})
+    return rows
+
+
 def predict(rows, prof, k):
     return [model_time(r["nosort"], prof, k) / model_time(r["cell"], prof, k) for r in rows]
 
@@ -181,7 +200,7 @@ def table_report(title, rows, prof):
 
 
 def svg_scatter(path, series):
-    """series: [(label, colour, [(paper, predicted)])]: predicted vs paper speedup, y = x dashed."""
+    """series: [(label, colour, [(truth, predicted)])]: predicted vs paper (or measured) speedup, y = x dashed."""
     w, h, m = 520, 520, 60
     lo, hi = 0.6, 2.4
     sx = lambda v: m + (v - lo) / (hi - lo) * (w - 2 * m)
@@ -193,7 +212,7 @@ def svg_scatter(path, series):
         out.append(f'<text x="{sx(t) - 10:.0f}" y="{h - m + 18}">{t:.1f}</text>')
         out.append(f'<text x="{m - 35}" y="{sy(t) + 4:.0f}">{t:.1f}</text>')
     out.append(f'<rect x="{m}" y="{m}" width="{w - 2 * m}" height="{h - 2 * m}" fill="none" stroke="black"/>')
-    out.append(f'<text x="{w / 2 - 60}" y="{h - 20}">paper speedup (RTX 3060)</text>')
+    out.append(f'<text x="{w / 2 - 60}" y="{h - 20}">{TRUTH}</text>')
     out.append(f'<text x="15" y="{h / 2 + 60}" transform="rotate(-90 15 {h / 2 + 60})">predicted speedup (LOSO)</text>')
     for i, (label, colour, pts) in enumerate(series):
         for p, q in pts:
@@ -220,20 +239,26 @@ def main():
                     help="which access mode's cells to read (the 8-spp paper sets ran both; earlier ones one)")
     ap.add_argument("--baseline", choices=("pixel", "shuffled"), default="pixel",
                     help="which baseline order's cells to read (run --baseline): the paper does not say its NoSort order")
+    ap.add_argument("--measured", nargs="+", metavar="SET",
+                    help="check against the speedups of result sets measured on a GPU instead of the paper's tables")
     a = ap.parse_args()
-    global COMBINE, ACCESS, BASELINE
+    global COMBINE, ACCESS, BASELINE, TRUTH
     COMBINE = a.combine
     ACCESS = a.access
     BASELINE = a.baseline
     with open(a.profile, "rb") as f:
         prof = tomllib.load(f)
-    with open(a.paper, newline="") as f:
-        paper = list(csv.DictReader(f))
+    if a.measured:
+        paper = measured_rows(a.measured)
+        TRUTH = f"measured speedup ({', '.join(os.path.basename(os.path.normpath(d)) for d in a.measured)})"
+    else:
+        with open(a.paper, newline="") as f:
+            paper = list(csv.DictReader(f))
     cells = load_cells(a.sets)
     for c in cells:  # cells.csv has the replayed warps; the total is the ray count in warps of 32
         c["gpu_warps"] = str((int(c["rays"]) + 31) // 32)
     os.makedirs(a.out, exist_ok=True)
-    report = ["# GPU model against the paper (generated by scripts/gpu_model_validate.py)", ""]
+    report = [f"# GPU model ({prof['name']}) against the {TRUTH} (generated by scripts/gpu_model_validate.py)", ""]
     series, per_cell = [], []
     for table, title, colour in (("2", "Table 2: secondary rays (bounce1), 32-bit keys", "#1f77b4"),
                                  ("3", "Table 3: primary shadow rays (shadow0), 32-bit keys", "#d62728"),

@@ -1,12 +1,26 @@
 #include "util/image.h"
 
-#include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
 
 #include "util/error.h"
+
+#ifdef RAYSORT_NO_IMAGES
+namespace raysort {
+
+// The bundle built with -DRAYSORT_IMAGES=OFF (CMakeLists.txt) writes no images.
+void write_png(const Image&, const std::string& path, float, PngEncoding) {
+  throw Error(fmt::format("cannot write '{}': this raysort was built with -DRAYSORT_IMAGES=OFF (no OpenImageIO); "
+                          "use a default build to write images",
+                          path));
+}
+void write_exr(const Image& img, const std::string& path) { write_png(img, path, 1.0f, PngEncoding::AsIs); }
+
+}  // namespace raysort
+#else
+#include <OpenImageIO/imageio.h>
 
 namespace raysort {
 
@@ -35,3 +49,4 @@ void write_exr(const Image& img, const std::string& path) {
 }
 
 }  // namespace raysort
+#endif

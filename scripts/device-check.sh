@@ -1,0 +1,85 @@
+#!/usr/bin/env bash
+# What a lent GPU machine runs (docs/gpu-runs.md), in one command, from the repository root, with
+# the bundle of scripts/device-bundle.sh carried in .device/:
+#   1. finds NVIDIA's OpenCL library and an ICD file naming it (writes one if the machine has none);
+#   2. lists the OpenCL devices;
+#   3. the golden check (scripts/golden.sh) on the GPU: keys, orders, ANC, SIMT and GPU-model
+#      figures of the quick preset must equal the committed PoCL ones, bit for bit;
+#   4. measures the GPU model's validation matrix (results/gpu-model/README.md: five scenes,
+#      bounce1 and shadow0, eight encoders at 32 bits, gather) on the GPU: a result set whose
+#      speedups are measured, to set beside the model's predictions (scripts/gpu_model_validate.py
+#      --measured).
+# Everything goes to $OUT (the device tool's folder; ./device-out elsewhere): check.log and
+# sets.tar.gz (the result sets). Exit status: 0 when every step passed, else the first failure's.
+#
+#   bash scripts/device-check.sh                 on the GPU machine
+#   DEVICE_CHECK_ANY=1 DEVICE_CHECK_QUICK=1 RAYSORT_BIN=build/raysort bash scripts/device-check.sh
+#                                                here, on PoCL: the same steps on a tiny matrix
+#                                                (ctest: device_check_script)
+set -uo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
+bundle="$root/.device"
+bin="${RAYSORT_BIN:-$bundle/raysort}"
+out="${OUT:-$root/device-out}"
+work="$(mktemp -d)"
+trap 'rm -rf "$work"' EXIT
+mkdir -p "$out"
+exec > >(tee -a "$out/check.log") 2>&1
+status=0
+step() { echo; echo "== $*"; }
+fail() { echo "FAILED: $*"; [ "$status" -ne 0 ] || status=1; }
+
+step "1. NVIDIA's OpenCL library and ICD"
+if [ -z "${DEVICE_CHECK_ANY:-}" ]; then
+  nvidia-smi -L || fail "nvidia-smi"
+  lib="$(ldconfig -p 2>/dev/null | awk '/libnvidia-opencl\.so\.1/ {print $NF; exit}')"
+  [ -n "$lib" ] || lib="$(find /usr/local/nvidia /usr/lib /usr/lib64 /usr/lib/x86_64-linux-gnu -name 'libnvidia-opencl.so.1' 2>/dev/null | head -n 1)"
+  if [ -z "$lib" ]; then
+    echo "no libnvidia-opencl.so.1 on this machine: NVIDIA's OpenCL driver is not installed here"
+    exit 2
+  fi
+  echo "library: $lib"
+  export RAYSORT_EXTRA_LIBS="$(dirname "$lib")"
+  if grep -qs nvidia /etc/OpenCL/vendors/*.icd; then
+    echo "ICD: $(grep -ls nvidia /etc/OpenCL/vendors/*.icd | head -n 1)"
+  else
+    mkdir -p "$work/vendors"
+    echo "$lib" > "$work/vendors/nvidia.icd"
+    export OCL_ICD_VENDORS="$work/vendors"
+    echo "ICD: none under /etc/OpenCL/vendors; wrote $OCL_ICD_VENDORS/nvidia.icd"
+  fi
+  export RAYSORT_DEVICE="${RAYSORT_DEVICE:-gpu}"
+fi
+
+step "2. OpenCL devices"
+"$bin" devices || { echo "raysort cannot list OpenCL devices"; exit 3; }
+
+step "3. golden check on this device"
+bash "$root/scripts/golden.sh" check "$bin" || fail "golden check: a deterministic figure differs from PoCL's"
+
+step "4. the GPU model's validation matrix, measured"
+if [ -n "${DEVICE_CHECK_QUICK:-}" ]; then
+  matrix=(--preset quick --resolution 96x54 --scenes cornell,multi-instance --batches bounce1,shadow0
+          --encoders hcc,twopoint --bits 32 --reps 3 --warmup 1 --max-time 0)
+else
+  if [ -f "$bundle/scenes.tar.xz" ]; then
+    tar -C "$work" -xJf "$bundle/scenes.tar.xz"
+    export RAYSORT_SCENE_ROOT="$work/$(tar -tJf "$bundle/scenes.tar.xz" | head -n 1 | cut -d/ -f1)"
+  fi
+  matrix=(--preset paper-1spp --scenes sibenik,breakfast_room,grey_white_room,multi-instance-real,landscape
+          --batches bounce1,shadow0 --encoders hcc,mlhcc,grid,twopoint,aila,reis,origin,ppc --bits 32
+          --access gather --reps 7 --warmup 1 --max-time 1)
+fi
+commit="$(cut -d' ' -f1 "$(dirname "$bin")/commit" 2>/dev/null || git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown)"
+set_name="gpu-validation-$commit"
+if "$bin" run "${matrix[@]}" --out "$work/$set_name"; then
+  tar -C "$work" -czf "$out/sets.tar.gz" "$set_name"
+  echo "result set: $out/sets.tar.gz ($set_name)"
+else
+  fail "raysort run"
+  [ -d "$work/$set_name" ] && tar -C "$work" -czf "$out/sets.tar.gz" "$set_name"
+fi
+
+echo
+[ "$status" -eq 0 ] && echo "device check: every step passed" || echo "device check: a step failed (above)"
+exit "$status"
