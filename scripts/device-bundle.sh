@@ -8,7 +8,7 @@
 #   scripts/device-bundle.sh [OUT]       OUT defaults to .device/ (ignored by git; carry it)
 #   DEVICE_BUILD_DIR=…                    the build folder (default build-device/)
 #
-# The bundle runs as OUT/raysort (a wrapper): 15 MB of program and libraries, 5 MB of scenes.
+# The bundle runs as OUT/raysort (a wrapper): 15 MB of program and libraries, 7.5 MB of scenes.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 out="${1:-$root/.device}"
@@ -46,7 +46,7 @@ EOF
 chmod +x "$out/raysort"
 
 if [ -d "$scene_root" ]; then
-  tar -C "$scene_root/.." -cJf "$out/scenes.tar.xz" $(printf "$(basename "$scene_root")/%s " "${scene_dirs[@]}")
+  tar -C "$scene_root/.." -czf "$out/scenes.tar.gz" $(printf "$(basename "$scene_root")/%s " "${scene_dirs[@]}")
 else
   echo "device-bundle: no scenes at $scene_root (RAYSORT_SCENE_ROOT): only procedural scenes will run there" >&2
 fi
@@ -54,4 +54,4 @@ fi
 { git -C "$root" rev-parse --short HEAD; git -C "$root" diff --quiet HEAD -- || echo "(with uncommitted changes)"; } \
   | paste -sd' ' > "$out/commit"
 "$out/raysort" --version
-du -sh "$out"/lib "$out"/raysort.bin "$out"/scenes.tar.xz 2>/dev/null || true
+du -sh "$out"/lib "$out"/raysort.bin "$out"/scenes.tar.gz 2>/dev/null || true

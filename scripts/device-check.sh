@@ -62,9 +62,9 @@ if [ -n "${DEVICE_CHECK_QUICK:-}" ]; then
   matrix=(--preset quick --resolution 96x54 --scenes cornell,multi-instance --batches bounce1,shadow0
           --encoders hcc,twopoint --bits 32 --reps 3 --warmup 1 --max-time 0)
 else
-  if [ -f "$bundle/scenes.tar.xz" ]; then
-    tar -C "$work" -xJf "$bundle/scenes.tar.xz"
-    export RAYSORT_SCENE_ROOT="$work/$(tar -tJf "$bundle/scenes.tar.xz" | head -n 1 | cut -d/ -f1)"
+  if [ -f "$bundle/scenes.tar.gz" ]; then
+    tar -C "$work" -xzf "$bundle/scenes.tar.gz"
+    export RAYSORT_SCENE_ROOT="$work/$(tar -tzf "$bundle/scenes.tar.gz" | head -n 1 | cut -d/ -f1)"
   fi
   matrix=(--preset paper-1spp --scenes sibenik,breakfast_room,grey_white_room,multi-instance-real,landscape
           --batches bounce1,shadow0 --encoders hcc,mlhcc,grid,twopoint,aila,reis,origin,ppc --bits 32
