@@ -14,9 +14,13 @@ root="$(cd "$(dirname "$0")/.." && pwd)"
 out="${1:-$root/.device}"
 build="${DEVICE_BUILD_DIR:-$root/build-device}"
 scene_root="${RAYSORT_SCENE_ROOT:-$root/../shared/scenes}"
-# The scene folders of the validation matrix (results/gpu-model/README.md): sibenik, breakfast_room,
-# grey_white_room, and multi-instance-real's models; landscape is procedural.
-scene_dirs=(sibenik breakfast_room grey_white_room cornell_box dragon gems)
+# The OBJ folders of the validation matrix's scenes (device-check.sh's VALIDATION_SCENES), read from
+# their scene files' `obj = "folder/file.obj"` lines (procedural scenes have none).
+validation_scenes="$(sed -n 's/^VALIDATION_SCENES="\(.*\)"/\1/p' "$root/scripts/device-check.sh")"
+scene_dirs=($(for s in ${validation_scenes//,/ }; do
+  sed -n 's/^[[:space:]]*obj[[:space:]]*=[[:space:]]*"\([^/"]*\)\/.*/\1/p' "$root/scenes/$s.toml"
+done | sort -u))
+[ "${#scene_dirs[@]}" -gt 0 ] || { echo "device-bundle: no scene folders found for '$validation_scenes'" >&2; exit 1; }
 
 cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DRAYSORT_IMAGES=OFF -DRAYSORT_EMBREE=OFF > /dev/null
 cmake --build "$build" --target raysort -j "$(nproc)" > /dev/null

@@ -17,6 +17,8 @@
 #                                                here, on PoCL: the same steps on a tiny matrix
 #                                                (ctest: device_check_script)
 set -uo pipefail
+# The validation matrix's scenes (scripts/device-bundle.sh packs their OBJ folders from this line).
+VALIDATION_SCENES="sibenik,breakfast_room,grey_white_room,multi-instance-real,landscape"
 root="$(cd "$(dirname "$0")/.." && pwd)"
 bundle="$root/.device"
 bin="${RAYSORT_BIN:-$bundle/raysort}"
@@ -66,7 +68,7 @@ else
     tar -C "$work" -xzf "$bundle/scenes.tar.gz"
     export RAYSORT_SCENE_ROOT="$work/$(tar -tzf "$bundle/scenes.tar.gz" | head -n 1 | cut -d/ -f1)"
   fi
-  matrix=(--preset paper-1spp --scenes sibenik,breakfast_room,grey_white_room,multi-instance-real,landscape
+  matrix=(--preset paper-1spp --scenes "$VALIDATION_SCENES"
           --batches bounce1,shadow0 --encoders hcc,mlhcc,grid,twopoint,aila,reis,origin,ppc --bits 32
           --access gather --reps 7 --warmup 1 --max-time 1)
 fi

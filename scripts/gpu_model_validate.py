@@ -34,13 +34,18 @@ TRUTH = "paper speedup (RTX 3060)"  # what the predictions are checked against (
 GRID = [round(2 ** (i / 8), 4) for i in range(0, 8 * 11)]  # 1 .. ~1900 cycles per step
 
 
-def load_cells(dirs):
+def read_cells(dirs):
+    """The ok cells of the result sets' cells.csv in the --access mode (and NoSort's) and --baseline order."""
     rows = []
     for d in dirs:
         with open(os.path.join(d, "cells.csv"), newline="") as f:
             rows += [r for r in csv.DictReader(f) if r["status"] == "ok" and (r["access"] == ACCESS or r["encoder"] == "nosort")
-                     and r["baseline"] == BASELINE and r["gpu_model"]]
+                     and r["baseline"] == BASELINE]
     return rows
+
+
+def load_cells(dirs):
+    return [r for r in read_cells(dirs) if r["gpu_model"]]
 
 
 # Load-to-use latencies for --combine sum+latency, in SM cycles at the RTX 3060's 1.78 GHz: an L2 hit
@@ -120,16 +125,11 @@ def pair(paper, cells):
 def measured_rows(dirs):
     """A GPU-measured result set as rows of the paper's table format: 32-bit bounce1 cells as Table 2,
     shadow0 as Table 3, the measured trace speedup as the truth."""
-    rows = []
-    for d in dirs:
-        with open(os.path.join(d, "cells.csv"), newline="") as f:
-            for r in csv.DictReader(f):
-                table = {"bounce1": "2", "shadow0": "3"}.get(r["batch"])
-                if (table and r["bits"] == "32" and r["status"] == "ok" and r["encoder"] != "nosort"
-                        and r["access"] == ACCESS and r["baseline"] == BASELINE and r["speedup"]):
-                    rows.append({"table": table, "batch": r["batch"], "scene": r["scene"], "encoder": r["encoder"],
-                                 "bits": r["bits"], "paper_speedup": r["speedup"]})
-    return rows
+    tables = {"bounce1": "2", "shadow0": "3"}
+    return [{"table": tables[r["batch"]], "batch": r["batch"], "scene": r["scene"], "encoder": r["encoder"],
+             "bits": r["bits"], "paper_speedup": r["speedup"]}
+            for r in read_cells(dirs)
+            if r["batch"] in tables and r["bits"] == "32" and r["encoder"] != "nosort" and r["speedup"]]
 
 
 def predict(rows, prof, k):

@@ -73,7 +73,7 @@ def arrow(a, b, fmt="{:.2f}"):
     return f"{fmt.format(a)} → {fmt.format(b)}"
 
 
-def long_table(title, rows, batch, at_one, at_eight, with_bits=False):
+def long_table(title, rows, at_one, at_eight, with_bits=False):
     """One row per paper cell (scene, encoder[, bits]): the paper's speedup, then 1 spp -> 8 spp of the
     SIMT lane-efficiency ratio, the GPU model and PoCL; then the model's error per scene and overall."""
     out = ["", f"#### {title}", "",
@@ -142,7 +142,7 @@ def main():
             continue
         scenes = sorted({p["scene"] for p in rows})
         if a.long:
-            lines += long_table(title, rows, batch, lambda p: one[(p["scene"], batch, p["encoder"])],
+            lines += long_table(title, rows, lambda p: one[(p["scene"], batch, p["encoder"])],
                                 lambda p: eight[(p["scene"], batch, p["encoder"])])
             continue
         lines += ["", f"#### {title}", "",
@@ -175,7 +175,7 @@ def main():
                                          for i in (0, 1) for e in (p["encoder"], "nosort"))]
         if rows:
             key = lambda p, i: by_bits[int(p["bits"])][i][(p["scene"], p["batch"], p["encoder"])]
-            lines += long_table("Key length on sibenik (bounce1) — paper Table 6", rows, "bounce1",
+            lines += long_table("Key length on sibenik (bounce1) — paper Table 6", rows,
                                 lambda p: key(p, 0), lambda p: key(p, 1), with_bits=True)
     text = "\n".join(lines) + "\n"
     if a.out:

@@ -7,6 +7,7 @@
 #include <limits>
 #include <sstream>
 
+#include "bench/metrics.h"
 #include "bvh_layout.h"
 #include "scene/toml_reader.h"
 #include "util/embedded.h"
@@ -51,7 +52,7 @@ GpuProfile parse_gpu_profile(const std::string& text, const std::string& origin)
   p.l2_gbps = t.number("l2_gbps");
   p.clock_ghz = t.number("clock_ghz");
   p.step_cycles = t.number("step_cycles");
-  p.dynamic_fetch_threshold = static_cast<unsigned>(t.integer("dynamic_fetch_threshold", 0, 0, 32));
+  p.dynamic_fetch_threshold = static_cast<unsigned>(t.integer("dynamic_fetch_threshold", 0, 0, kWarpSize));
   if (p.line_bytes & (p.line_bytes - 1)) t.fail("line_bytes", "must be a power of two");
   if (p.line_bytes % p.sector_bytes) t.fail("sector_bytes", "must divide line_bytes");
   for (auto [key, v] : {std::pair<const char*, double>{"dram_gbps", p.dram_gbps}, {"l2_gbps", p.l2_gbps},
@@ -222,15 +223,15 @@ void GpuReplay::replay_wave(std::span<const WarpTrails> warps) {
 }
 
 bool GpuReplay::persistent_turn(std::size_t w, bool last) {
-  constexpr std::size_t kLanes = 32;
-  PersistentWarp& warp = resident_[w];
+  std::vector<Lane>& warp = resident_[w];
   auto tracing = [](const Lane& lane) { return lane.step < lane.trail.size(); };
-  const auto active = static_cast<unsigned>(std::count_if(warp.lanes.begin(), warp.lanes.end(), tracing));
-  if (active < profile_.dynamic_fetch_threshold && active < kLanes) {
+  const auto active = static_cast<std::size_t>(std::count_if(warp.begin(), warp.end(), tracing));
+  // The threshold is at most kWarpSize (parse_gpu_profile), so a warp that fetches has a finished lane.
+  if (active < profile_.dynamic_fetch_threshold) {
     // The finished lanes fetch together (one atomic add per warp in the kernel): wait for rays
     // rather than fetch fewer than a later chunk would give.
-    if (!last && to_fetch_.size() < kLanes - active) return false;
-    for (Lane& lane : warp.lanes) {
+    if (!last && to_fetch_.size() < kWarpSize - active) return false;
+    for (Lane& lane : warp) {
       if (to_fetch_.empty()) break;
       if (tracing(lane)) continue;
       lane = std::move(to_fetch_.front());
@@ -239,7 +240,7 @@ bool GpuReplay::persistent_turn(std::size_t w, bool last) {
   }
   sectors_.clear();
   refs_.clear();
-  for (Lane& lane : warp.lanes) {
+  for (Lane& lane : warp) {
     if (!tracing(lane)) continue;
     if (lane.step == 0) map_.ray_blocks(lane.ray, profile_.sector_bytes, sectors_);
     const bool final_step = lane.step + 1 == lane.trail.size();
@@ -247,14 +248,14 @@ bool GpuReplay::persistent_turn(std::size_t w, bool last) {
     ++lane.step;
   }
   if (!refs_.empty()) {
-    issue(static_cast<unsigned>(w % profile_.sms), kLanes);
+    issue(static_cast<unsigned>(w % profile_.sms), kWarpSize);
     any_stepped_ = true;
   }
   return true;
 }
 
 void GpuReplay::replay_stream(std::span<WarpTrails> warps, bool last) {
-  if (resident_.empty()) resident_.assign(wave_warps(), PersistentWarp{std::vector<Lane>(32)});
+  if (resident_.empty()) resident_.assign(wave_warps(), std::vector<Lane>(kWarpSize));
   for (WarpTrails& warp : warps) {
     for (std::size_t l = 0; l < warp.lanes.size(); ++l) {
       Lane lane;

@@ -127,9 +127,6 @@ class GpuReplay {
     std::uint32_t ray = 0, last_reads = 0;
     std::size_t step = 0;
   };
-  struct PersistentWarp {
-    std::vector<Lane> lanes;  // 32 lanes; a lane is tracing while step < trail.size()
-  };
   void warp_step(unsigned sm, const WarpTrails& warp, std::size_t step);
   // Runs the caches on refs_ (each active lane's step reference) and sectors_ (ray loads so far).
   void issue(unsigned sm, std::uint64_t lanes);
@@ -142,7 +139,7 @@ class GpuReplay {
   std::vector<std::uint64_t> sectors_;
   std::vector<std::uint64_t> refs_;  // (leaf reads << 32) | step reference
   // Dynamic fetch state, kept across replay_stream calls.
-  std::vector<PersistentWarp> resident_;
+  std::vector<std::vector<Lane>> resident_;  // warp → its lanes; a lane traces while step < trail.size()
   std::deque<Lane> to_fetch_;
   std::size_t next_warp_ = 0;  // the warp whose turn is next in the current round
   bool any_stepped_ = false;   // some warp stepped in the current round

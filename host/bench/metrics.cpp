@@ -173,9 +173,10 @@ SimtModel simt_model(const Bvh& bvh, const std::vector<RsRay>& rays, const std::
   for (std::size_t w0 = 0; w0 < warps; w0 += wave) {
     std::span<WarpTrails> now(slots.data(), std::min(wave, warps - w0));
     recorder.record(w0, now, partial);
-    if (replay && replay->dynamic_fetch())
+    if (!replay) continue;
+    if (replay->dynamic_fetch())
       replay->replay_stream(now, w0 + now.size() == warps);
-    else if (replay)
+    else
       replay->replay_wave(now);
   }
   WarpTally total;
