@@ -137,6 +137,22 @@ static inline RsRay rs_load_ray(__global const RsRay* rays, uint index) {
     values[j] = j;                                                                                       \
   }                                                                                                      \
                                                                                                          \
+  /* MLHCC_COST (keys_cut.h, rs_cost_cut_code): MLHCC's tables with rows of low_bits boxes, and the \
+   * per-bin cost field (RS_COST_BINS words) in global memory. */                                        \
+  __kernel void encode_cost_cut_##SUFFIX(const RsEncodeFrame frame, __constant const RsCutGroup* top,     \
+                                         uint top_count, __global const RsCutGroup* low,                 \
+                                         __global const uint* low_count, uint top_bits, uint low_bits,   \
+                                         __global const uint* cost, __global const RsRay* rays,          \
+                                         __global const uint* order, uint count, uint bits,              \
+                                         __global KEY_T* keys, __global uint* values) {                  \
+    uint i = get_global_id(0);                                                                           \
+    if (i >= count) return;                                                                              \
+    rs_u64 code = rs_cost_cut_code(rays[order[i]], &frame, top, top_count, low, low_count, top_bits,     \
+                                   low_bits, cost, bits) & RS_CODE_MASK_##SUFFIX;                        \
+    keys[i] = (KEY_T)rs_key_from_code(code, bits);                                                       \
+    values[i] = i;                                                                                       \
+  }                                                                                                      \
+                                                                                                         \
   /* HCC_REGION (keys_cut.h, rs_region_cut_code): the region grid and frame by value, the regions' \
    * cuts (one row per region) in global memory: rays of one work-group may read different rows. */ \
   __kernel void encode_region_cut_##SUFFIX(const RsEncodeFrame frame, const RsRegionGrid grid,            \

@@ -20,7 +20,8 @@
  * PPC (section 4.1: the first b box tests of a traversal in fixed left-first order).
  * Beyond the paper (issue 21): HCC_REGION (r bits of the origin's region, then the HCC of that
  * region's own cut) and HCC_TRAFFIC (an HCC whose cut priority blends HAD with measured node traffic;
- * its key is HCC's box-set key over another cut).
+ * its key is HCC's box-set key over another cut), and MLHCC_COST (MLHCC's top level and a shorter
+ * low-level cut, then a traversal-cost estimate from a previous frame; keys_cut.h).
  *
  * Quantization is in the scene's box: q = clamp(floor(t·2^n), 0, 2^n − 1) with
  * t = (p − box.min)·inv_extent; a flat axis has inv_extent = 0 (t = 0). The clamp keeps points on
@@ -71,6 +72,7 @@ RS_KEY_INLINE rs_u32 rs_clz64(rs_u64 x) { return (rs_u32)std::countl_zero(x); }
 #define RS_ENC_HCC_DIR 10
 #define RS_ENC_HCC_REGION 11
 #define RS_ENC_HCC_TRAFFIC 12
+#define RS_ENC_MLHCC_COST 13
 
 /* The most boxes a box-set key reads per ray: one per key bit. */
 #define RS_MAX_KEY_BITS 64

@@ -205,6 +205,61 @@ RS_KEY_INLINE rs_u64 rs_region_cut_code(RsRay ray, const RsEncodeFrame* f, const
   return code;
 }
 
+/* MLHCC_COST (issue 21, beyond the paper): MLHCC's top level in the top `top_bits` bits, the
+ * representative's low-level cut of `low_bits` nodes below it (fewer than MLHCC's, box j at code
+ * bit 63 − top_bits − j), and in the key's last bits an estimate of how long the ray's traversal
+ * is: the quantised mean step count, in a previous frame, of the rays that started in the same
+ * origin cell and went in the same direction cell (rs_cost_bin). The cut groups rays that walk the
+ * same part of the tree; within a group, the estimate puts rays of similar traversal length in the
+ * same warps, so fewer lanes idle while the longest one finishes (the order study: docs/encoders.md).
+ * `cost` holds, per bin, the estimate already quantised to the key's cost field on the host
+ * (host/encode/encode.cpp), at code bits 64 − key_bits and up. */
+#define RS_COST_CELL_LEVELS 4u    /* 16 x 16 x 16 origin cells of the scene box */
+#define RS_COST_DIRECTION_LEVELS 3u /* 8 x 8 direction cells on the octahedral map */
+#define RS_COST_DIRECTION_BITS (2u * RS_COST_DIRECTION_LEVELS)
+#define RS_COST_BINS (1u << (3u * RS_COST_CELL_LEVELS + RS_COST_DIRECTION_BITS))
+
+/* The direction's cell on the octahedral map (Praun and Hoppe 2003; Engelhardt and Dachsbacher
+ * 2008): d / (|dx| + |dy| + |dz|) seen from above, the lower half folded out over the diagonals, in
+ * 2^levels x 2^levels cells of [-1, 1]^2 (u cell in the high bits). Only + − × ÷, where Reis's (φ, θ)
+ * cells need atan2 and acos, and the cells' solid angles differ far less than (φ, θ)'s near the
+ * poles. A −0 component counts as +0; a zero direction is cell (2^(levels−1), 2^(levels−1)). */
+RS_KEY_INLINE rs_u32 rs_octahedral_cell(RsRay ray, rs_u32 levels) {
+  const float x = ray.d[0], y = ray.d[1], z = ray.d[2];
+  const float s = rs_abs(x) + rs_abs(y) + rs_abs(z);
+  const float inv = s > 0.0f ? 1.0f / s : 0.0f;
+  float u = x * inv, v = y * inv;
+  if (z < 0.0f) {
+    const float fu = (1.0f - rs_abs(v)) * (u < 0.0f ? -1.0f : 1.0f);
+    const float fv = (1.0f - rs_abs(u)) * (v < 0.0f ? -1.0f : 1.0f);
+    u = fu;
+    v = fv;
+  }
+  return (rs_quantize(u * 0.5f + 0.5f, levels) << levels) | rs_quantize(v * 0.5f + 0.5f, levels);
+}
+
+/* The bin of a ray: its origin's cell (x, y, z, 4 bits each) then its direction's cell. */
+RS_KEY_INLINE rs_u32 rs_cost_bin(const RsEncodeFrame* f, RsRay ray) {
+  rs_u32 q[3];
+  rs_quantize_point(f, rs_load3(ray.o), RS_COST_CELL_LEVELS, q);
+  const rs_u32 cell = (q[0] << (2u * RS_COST_CELL_LEVELS)) | (q[1] << RS_COST_CELL_LEVELS) | q[2];
+  return (cell << RS_COST_DIRECTION_BITS) | rs_octahedral_cell(ray, RS_COST_DIRECTION_LEVELS);
+}
+
+RS_KEY_INLINE rs_u64 rs_cost_cut_code(RsRay ray, const RsEncodeFrame* f, RS_CUT_SPACE const RsCutGroup* top,
+                                      rs_u32 n_top, RS_GLOBAL const RsCutGroup* low,
+                                      RS_GLOBAL const rs_u32* low_count, rs_u32 top_bits, rs_u32 low_bits,
+                                      RS_GLOBAL const rs_u32* cost, rs_u32 key_bits) {
+  RsTraversalRay r = rs_prepare_ray(ray);
+  RsCutRay c = rs_cut_ray(r);
+  rs_u64 code = RS_CUT_BITS_TOP(&c, top, n_top, 0u);
+  if (code != 0u) {
+    const rs_u32 rep = rs_clz64(code);
+    code |= rs_cut_bits_g(&c, low + rep * rs_cut_group_count(low_bits), low_count[rep], top_bits);
+  }
+  return code | (RS_U64(cost[rs_cost_bin(f, ray)]) << (64u - key_bits));
+}
+
 /* Rays per work-item of the MLHCC kernel (rs_two_level_cut_code2 below; the host sizes the launch). */
 #define RS_TWO_LEVEL_RAYS 2u
 #ifdef __OPENCL_VERSION__

@@ -118,6 +118,26 @@ TEST(Cut, HandCheckedTwoLevelCut) {
   EXPECT_EQ(t.low[0], (std::vector<std::uint32_t>{3, 4, 5, 6}));
 }
 
+TEST(Cut, UnevenTwoLevelSplit) {
+  Bvh bvh = four_leaf_bvh();
+  auto had = hierarchically_accumulated_density(bvh);
+  // The even split is the half form.
+  EXPECT_EQ(two_level_cut(bvh, had, 2, 2).top, two_level_cut(bvh, had, 2).top);
+  EXPECT_EQ(two_level_cut(bvh, had, 2, 2).low, two_level_cut(bvh, had, 2).low);
+  // One top node: the root stays whole, its low cut has three nodes (HCC's cut of 3).
+  TwoLevelCut t = two_level_cut(bvh, had, 1, 3);
+  EXPECT_EQ(t.top, (std::vector<std::uint32_t>{0}));
+  EXPECT_EQ(t.low.at(0), hierarchy_cut(bvh, had, 3, 0));
+  // Four top nodes with one low node each: the four leaves, each its own low cut.
+  t = two_level_cut(bvh, had, 4, 1);
+  ASSERT_EQ(t.top.size(), 4u);
+  for (std::size_t i = 0; i < t.top.size(); ++i) EXPECT_EQ(t.low[i], std::vector<std::uint32_t>{t.top[i]});
+  // Two top nodes that need three leaves each: no child qualifies, the root is the only top node.
+  t = two_level_cut(bvh, had, 2, 3);
+  EXPECT_EQ(t.top, (std::vector<std::uint32_t>{0}));
+  EXPECT_TRUE(two_level_cut(bvh, had, 0, 3).top.empty());
+}
+
 TEST(Cut, SingleLeafBvh) {
   Bvh bvh;
   bvh.nodes = {node(0, 0, 0, 1, 1, 1, 0, 1)};

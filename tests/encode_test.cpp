@@ -182,7 +182,7 @@ TEST(EncodeMath, SceneExitEqualsTheMinMaxForm) {
 }
 
 TEST(Encode, NamesRoundTrip) {
-  EXPECT_EQ(all_encoders().size(), 13u);
+  EXPECT_EQ(all_encoders().size(), 14u);
   for (Encoder e : all_encoders()) {
     auto p = parse_encoder(encoder_name(e));
     ASSERT_TRUE(p.has_value()) << encoder_name(e);

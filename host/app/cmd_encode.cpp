@@ -33,6 +33,7 @@ struct EncodeBenchArgs {
   int direction_bits = -1;  // HCC_DIR's direction bits; -1: the default (EncoderParams)
   int region_bits = -1;     // hcc-region's region bits; -1: the default
   double traffic_blend = -1;  // hcc-traffic's blend; -1: the default
+  int cost_bits = -1;         // mlhcc-cost's cost bits; -1: the default
   CommonOptions common;
 };
 
@@ -65,10 +66,16 @@ int run_encodebench(const EncodeBenchArgs& args) {
   if (args.direction_bits >= 0) params.direction_bits = static_cast<unsigned>(args.direction_bits);
   if (args.region_bits >= 0) params.region_bits = static_cast<unsigned>(args.region_bits);
   if (args.traffic_blend >= 0) params.traffic_blend = args.traffic_blend;
+  if (args.cost_bits > 0) params.cost_bits = static_cast<unsigned>(args.cost_bits);
   DeviceEncoder enc(rt, bvh, bvh.bounds(), params);
   // hcc-traffic: its cut from the traffic of the batch traced before this one, as raysort run makes it.
   if (std::find(encoders.begin(), encoders.end(), Encoder::HCC_TRAFFIC) != encoders.end())
     enc.set_node_traffic(traffic_before(bvh, batches, args.batch));
+  // mlhcc-cost: its estimates from the same batch of a previous frame, as raysort run makes them.
+  if (std::find(encoders.begin(), encoders.end(), Encoder::MLHCC_COST) != encoders.end()) {
+    auto costs = previous_frame_costs(prepared, args.common.raygen_options(), enc.scene().frame());
+    if (auto it = costs.find(args.batch); it != costs.end()) enc.set_cost_estimates(std::move(it->second.first));
+  }
   Tracer tracer(rt, bvh);
   enc.warm_up();
   std::vector<std::uint32_t> identity(n);
@@ -153,6 +160,7 @@ void register_encode_command(CLI::App& app) {
                   "HCC_DIR direction bits (more than 1 runs its two-pass kernels, as `run --direction-bits` does)");
   cmd->add_option("--region-bits", args->region_bits, "hcc-region region bits (as `run --region-bits`)");
   cmd->add_option("--traffic-blend", args->traffic_blend, "hcc-traffic blend (as `run --traffic-blend`)");
+  cmd->add_option("--cost-bits", args->cost_bits, "mlhcc-cost cost bits (as `run --cost-bits`)");
   add_protocol_options(*cmd, args->protocol);
   cmd->add_flag("!--no-verify", args->verify, "skip the comparison with the host twin");
   add_common_options(*cmd, args->common);

@@ -26,6 +26,7 @@ struct RunArgs {
   int direction_bits = -1;
   int region_bits = -1;
   double traffic_blend = -1;
+  int cost_bits = -1;
   double timeout_s = 0;
   std::string shard;
   unsigned shard_plan = 0;
@@ -85,6 +86,12 @@ MatrixSpec matrix_from(const RunArgs& a, const CLI::App& cmd) {
                               a.traffic_blend));
     spec.params.traffic_blend = a.traffic_blend;
   }
+  if (cmd.count("--cost-bits")) {
+    if (a.cost_bits < 1 || a.cost_bits > 31)
+      throw Error(fmt::format("--cost-bits {}: mlhcc-cost takes 1 to 31 cost bits (and fewer than half the key)",
+                              a.cost_bits));
+    spec.params.cost_bits = static_cast<unsigned>(a.cost_bits);
+  }
   spec.cell_timeout_s = a.timeout_s;
   return spec;
 }
@@ -136,6 +143,9 @@ void register_run_command(CLI::App& app) {
   cmd->add_option("--traffic-blend", a->traffic_blend,
                   "hcc-traffic: beta of the cut priority (1 - beta) HAD + beta traffic of the previous batch (0-1, "
                   "default 0.5; docs/encoders.md)");
+  cmd->add_option("--cost-bits", a->cost_bits,
+                  "mlhcc-cost: key bits of the traversal-cost estimate from a previous frame (1-31 and fewer than half "
+                  "the key; default a quarter of the key; docs/encoders.md)");
   cmd->add_option("--timeout", a->timeout_s,
                   "per-cell wall-clock limit in seconds (0: none); a cell over it is recorded as \"timeout\" "
                   "(checked between the arms of a round: a kernel in flight runs to completion)");

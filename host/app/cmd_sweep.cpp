@@ -12,8 +12,8 @@ void register_sweep_command(CLI::App& app) {
   auto dirs = std::make_shared<std::vector<std::string>>();
   auto out = std::make_shared<std::string>();
   auto* cmd = app.add_subcommand("sweep", "tables of a parameter sweep: result sets of one matrix run at different "
-                                          "--lambda, --twopoint-length, --direction-bits, --region-bits or "
-                                          "--traffic-blend values, one column per value");
+                                          "--lambda, --twopoint-length, --direction-bits, --region-bits, "
+                                          "--traffic-blend or --cost-bits values, one column per value");
   cmd->add_option("DIR", *dirs, "result set folders, one per value")->required();
   cmd->add_option("--out", *out, "write the markdown here (default: print it)");
   cmd->callback([dirs, out] {

@@ -194,6 +194,8 @@ struct SceneBench {
   std::map<std::pair<const ReferencedBatch*, std::string>, std::vector<RsHit>> references;  // by batch, variant
   // hcc-traffic's node visits of the batch before, and the ms their count took, by batch name.
   std::map<std::string, std::pair<std::vector<std::uint64_t>, double>> traffic;
+  // mlhcc-cost's estimates from a previous frame, and the ms their count took, by batch name.
+  std::map<std::string, std::pair<std::vector<std::uint64_t>, double>> costs;
 
   SceneBench(Runtime& rt, const std::string& name, const MatrixSpec& matrix, const std::string& scene_root,
              Progress& progress)
@@ -202,6 +204,10 @@ struct SceneBench {
                               bvh.build_ms));
     RayGenOptions gen;
     gen.seed = spec.seed;
+    if (std::find(spec.encoders.begin(), spec.encoders.end(), Encoder::MLHCC_COST) != spec.encoders.end()) {
+      progress.line(fmt::format("{}: a previous frame for mlhcc-cost's estimates", name));
+      costs = previous_frame_costs(prepared, gen, EncodeScene(bvh, prepared.scene.bounds(), spec.params).frame());
+    }
     batches = generate_batches(prepared.scene, prepared.tris, bvh, gen);
     for (TraceVariant v : spec.variants)
       tracers[trace_variant_name(v)] = std::make_unique<Tracer>(rt, bvh, v, spec.layout);
@@ -250,6 +256,14 @@ struct SceneBench {
     encoder->set_node_traffic(it->second.first);
     return it->second.second;
   }
+  // mlhcc-cost (docs/encoders.md): its estimates for batch `name` come from the same batch of a
+  // previous frame (previous_frame_costs); a batch that frame lacks gets none (the cut alone). Sets
+  // them on the encoder; returns the host ms their count took.
+  double use_costs_of_previous_frame(const std::string& name) {
+    auto it = costs.find(name);
+    encoder->set_cost_estimates(it == costs.end() ? std::vector<std::uint64_t>{} : it->second.first);
+    return it == costs.end() ? 0.0 : it->second.second;
+  }
   // Rays this variant misses that the other one hits, per million (-1 unless both variants run).
   double leaks_per_million(const ReferencedBatch& b, const std::string& variant, bool both_variants) {
     if (!both_variants || b.batch.size() == 0) return -1.0;
@@ -267,8 +281,9 @@ struct SceneBench {
 std::vector<CellRecord> measure_encoder(BatchBench& bench, SceneBench& scene, std::vector<CellRecord> cells, Encoder e,
                                         const ProtocolSettings& settings) {
   double cut_ms = -1.0;
-  if (e == Encoder::HCC_TRAFFIC) {
-    const double traffic_ms = scene.use_traffic_before(cells.front().batch);
+  if (e == Encoder::HCC_TRAFFIC || e == Encoder::MLHCC_COST) {
+    const double traffic_ms = e == Encoder::HCC_TRAFFIC ? scene.use_traffic_before(cells.front().batch)
+                                                        : scene.use_costs_of_previous_frame(cells.front().batch);
     const auto start = std::chrono::steady_clock::now();
     try {
       scene.encoder->prepare(e, cells.front().bits);
@@ -372,6 +387,23 @@ std::vector<std::uint64_t> traffic_before(const Bvh& bvh, const std::vector<Refe
       return i == 0 ? std::vector<std::uint64_t>{}
                     : node_traffic(bvh, frame[i - 1].batch.rays, frame[i - 1].batch.any_hit());
   return {};
+}
+
+std::map<std::string, std::pair<std::vector<std::uint64_t>, double>> previous_frame_costs(
+    const PreparedScene& scene, const RayGenOptions& gen, const RsEncodeFrame& keys) {
+  RayGenOptions previous = gen;
+  previous.seed = gen.seed + 1;
+  const std::vector<ReferencedBatch> frame = generate_batches(scene.scene, scene.tris, scene.bvh, previous);
+  std::map<std::string, std::pair<std::vector<std::uint64_t>, double>> out;
+  for (const ReferencedBatch& b : frame) {
+    const auto start = std::chrono::steady_clock::now();
+    std::vector<std::uint32_t> steps;
+    trace_reference(scene.bvh, b.batch.rays, nullptr, b.batch.any_hit(), &steps);
+    std::vector<std::uint64_t> means = cost_statistics(keys, b.batch.rays, steps);
+    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    out.emplace(b.batch.name, std::pair{std::move(means), ms});
+  }
+  return out;
 }
 
 std::string default_result_dir(const MatrixSpec& spec, const std::string& device_slug, const ShardSpec& shard) {

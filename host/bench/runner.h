@@ -5,11 +5,14 @@
 // rounds of bench/protocol.h, checked bit for bit, ANC and SIMT model) → record (each cell written
 // the moment it finishes; a rerun skips finished cells).
 #include <cstdint>
+#include <map>
+#include <utility>
 #include <string>
 #include <vector>
 
 #include "bench/matrix.h"
 #include "bench/shard.h"
+#include "bvh/prepared_scene.h"
 #include "render/batches.h"
 
 namespace raysort {
@@ -47,6 +50,16 @@ std::string default_result_dir(const MatrixSpec& spec, const std::string& device
 // first batch and for a batch the frame lacks (hcc-traffic then has HCC's cut).
 std::vector<std::uint64_t> traffic_before(const Bvh& bvh, const std::vector<ReferencedBatch>& frame,
                                           const std::string& batch);
+
+// mlhcc-cost's input for every batch of a scene (docs/encoders.md): the frame drawn with seed + 1
+// (another frame of the same camera and lights, standing for the one a renderer traced before),
+// each batch traced on the host (trace_reference, fast variant, wide tree) for its rays' step
+// counts, and cost_statistics of them in `keys` (the encoder's frame: the scene box the bins
+// quantise). By batch name: the per-bin means and the ms of the trace
+// and statistics (a renderer would gather them in its own trace; the frame's generation is not
+// counted). The frame is dropped before this returns, so a run never holds two frames.
+std::map<std::string, std::pair<std::vector<std::uint64_t>, double>> previous_frame_costs(
+    const PreparedScene& scene, const RayGenOptions& gen, const RsEncodeFrame& keys);
 
 // The shard plan of a matrix (bench/shard.h), loading its scenes for their sizes and effects.
 std::vector<PlannedCell> plan_matrix_shards(const MatrixSpec& spec, const std::string& scene_root, unsigned count);

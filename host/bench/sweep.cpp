@@ -17,13 +17,14 @@ namespace {
 
 // The encoder parameters a sweep may vary (MatrixSpec::params, as meta.json's matrix names them).
 const std::vector<std::string> kSweepable{"had_lambda", "twopoint_length_fraction", "direction_bits", "region_bits",
-                                          "traffic_blend"};
+                                          "traffic_blend", "cost_bits"};
 
 const char* parameter_label(const std::string& p) {
   if (p == "had_lambda") return "λ (HAD, Eq. 1)";
   if (p == "twopoint_length_fraction") return "TwoPoint average distance (× largest extent)";
   if (p == "region_bits") return "hcc-region region bits";
   if (p == "traffic_blend") return "hcc-traffic blend β";
+  if (p == "cost_bits") return "mlhcc-cost cost bits";
   return "HCC_DIR direction bits";
 }
 
@@ -52,8 +53,8 @@ Sweep load_sweep(const std::vector<std::string>& dirs) {
     (std::find(kSweepable.begin(), kSweepable.end(), key) != kSweepable.end() ? swept : other).insert(key);
   if (!other.empty())
     throw Error(fmt::format("{}: the sets differ in {} as well, so their columns are not comparable; run them with one "
-                            "command that changes only --lambda, --twopoint-length, --direction-bits, --region-bits "
-                            "or --traffic-blend",
+                            "command that changes only --lambda, --twopoint-length, --direction-bits, --region-bits, "
+                            "--traffic-blend or --cost-bits",
                             fmt::join(dirs, ", "), fmt::join(other, ", ")));
   if (swept.size() != 1)
     throw Error(fmt::format("{}: {}; a sweep varies exactly one of {}", fmt::join(dirs, ", "),

@@ -20,7 +20,7 @@ struct SweepPoint {
 
 struct Sweep {
   std::string parameter;            // the matrix key: "had_lambda", "twopoint_length_fraction", "direction_bits",
-                                    // "region_bits", "traffic_blend"
+                                    // "region_bits", "traffic_blend", "cost_bits"
   std::vector<SweepPoint> points;   // by ascending value
 };
 

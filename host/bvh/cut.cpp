@@ -99,21 +99,26 @@ std::vector<double> traffic_priority(const std::vector<double>& had, const std::
 }
 
 TwoLevelCut two_level_cut(const Bvh& bvh, const std::vector<double>& had, std::uint32_t half) {
+  return two_level_cut(bvh, had, half, half);
+}
+
+TwoLevelCut two_level_cut(const Bvh& bvh, const std::vector<double>& had, std::uint32_t top_count,
+                          std::uint32_t low_count) {
   TwoLevelCut out;
-  if (half == 0 || bvh.nodes.empty()) return out;
+  if (top_count == 0 || low_count == 0 || bvh.nodes.empty()) return out;
   const auto leaves = subtree_leaf_counts(bvh);
   ByHad by{&had};
   HadQueue queue(by);
   queue.push(0);
   std::vector<std::uint32_t> final_nodes;
-  std::uint32_t target = half;
+  std::uint32_t target = top_count;
   while (!queue.empty() && queue.size() < target) {
     const std::uint32_t n = queue.top();
     queue.pop();
     bool expanded = false;
     if (!bvh.is_leaf(n)) {
       for (std::uint32_t c = bvh.nodes[n].first; c < bvh.nodes[n].first + 2; ++c) {
-        if (leaves[c] >= half) {
+        if (leaves[c] >= low_count) {
           queue.push(c);
           expanded = true;
         }
@@ -125,7 +130,7 @@ TwoLevelCut two_level_cut(const Bvh& bvh, const std::vector<double>& had, std::u
     }
   }
   out.top = in_bit_order(std::move(final_nodes), queue, by);
-  for (std::uint32_t t : out.top) out.low.push_back(hierarchy_cut(bvh, had, half, t));
+  for (std::uint32_t t : out.top) out.low.push_back(hierarchy_cut(bvh, had, low_count, t));
   return out;
 }
 

@@ -55,6 +55,11 @@ struct TwoLevelCut {
   std::vector<std::vector<std::uint32_t>> low;
 };
 TwoLevelCut two_level_cut(const Bvh& bvh, const std::vector<double>& had, std::uint32_t half);
+// The same search for an uneven split of the key (tools/order_study): at most `top_count` top nodes,
+// each with a low-level cut of `low_count` nodes, pushing only children with at least `low_count`
+// leaves. two_level_cut(bvh, had, half) is two_level_cut(bvh, had, half, half).
+TwoLevelCut two_level_cut(const Bvh& bvh, const std::vector<double>& had, std::uint32_t top_count,
+                          std::uint32_t low_count);
 
 // RegularGrid cells (Xiang et al. section 5): the largest power of two ≤ max_cells equal cells of
 // `box`, made by doubling, one step at a time, the axis whose cells are longest (ties: lower axis),

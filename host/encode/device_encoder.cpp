@@ -72,6 +72,13 @@ const DeviceEncoder::Uploaded& DeviceEncoder::uploaded(Encoder e, unsigned bits)
     u.b = rt_.upload(what + "low-level cut boxes", t.low_groups);
     u.c = rt_.upload(what + "low-level cut sizes", t.low_count);
     u.n = static_cast<std::uint32_t>(t.top.size());
+  } else if (family(e) == EncoderFamily::CostCut) {
+    const auto& t = scene_.cost_cut(bits);
+    u.a = rt_.upload(what + "top-level cut boxes", t.top_groups);
+    u.b = rt_.upload(what + "low-level cut boxes", t.low_groups);
+    u.c = rt_.upload(what + "low-level cut sizes", t.low_count);
+    u.d = rt_.upload(what + "cost estimates", t.cost);
+    u.n = static_cast<std::uint32_t>(t.top.size());
   }
   return uploads_.emplace(key, std::move(u)).first->second;
 }
@@ -84,6 +91,11 @@ void DeviceEncoder::prepare(Encoder e, unsigned bits) {
 void DeviceEncoder::set_node_traffic(std::vector<std::uint64_t> visits) {
   scene_.set_node_traffic(std::move(visits));
   std::erase_if(uploads_, [](const auto& kv) { return kv.first.first == static_cast<int>(Encoder::HCC_TRAFFIC); });
+}
+
+void DeviceEncoder::set_cost_estimates(std::vector<std::uint64_t> mean_steps) {
+  scene_.set_cost_estimates(std::move(mean_steps));
+  std::erase_if(uploads_, [](const auto& kv) { return kv.first.first == static_cast<int>(Encoder::MLHCC_COST); });
 }
 
 void DeviceEncoder::Events::wait() const {
@@ -176,6 +188,21 @@ DeviceEncoder::Events DeviceEncoder::enqueue(Encoder e, unsigned bits, const cl:
                 k->setArg(arg++, order);
                 k->setArg(arg++, count);
                 break;
+              case EncoderFamily::CostCut: {
+                const CostSplit split = scene_.cost_cut(bits).split;
+                k->setArg(arg++, sizeof(RsEncodeFrame), &scene_.frame());
+                k->setArg(arg++, u.a);
+                k->setArg(arg++, u.n);
+                k->setArg(arg++, u.b);
+                k->setArg(arg++, u.c);
+                k->setArg(arg++, static_cast<cl_uint>(split.top_bits));
+                k->setArg(arg++, static_cast<cl_uint>(split.low_bits));
+                k->setArg(arg++, u.d);
+                k->setArg(arg++, rays);
+                k->setArg(arg++, order);
+                k->setArg(arg++, count);
+                break;
+              }
               case EncoderFamily::PrefixPath:
                 k->setArg(arg++, nodes_);
                 k->setArg(arg++, triangles_);

@@ -37,6 +37,9 @@ const std::vector<EncoderInfo>& encoder_table() {
       // region code reads its rows from global memory; hcc-traffic adds a host traversal per batch.
       {Encoder::HCC_REGION, "hcc-region", {"region"}, F::RegionCut, "encode_region_cut", 135, false},
       {Encoder::HCC_TRAFFIC, "hcc-traffic", {"traffic"}, F::BoxSet, "encode_box_set", 135, false},
+      // MLHCC's tables plus a direction cell per ray (atan2, acos) and one table read; its cost
+      // statistics are a host traversal of a previous frame's batch, outside the weight.
+      {Encoder::MLHCC_COST, "mlhcc-cost", {"cost"}, F::CostCut, "encode_cost_cut", 150, false},
   };
   return table;
 }
@@ -115,10 +118,27 @@ std::string key_bits_problem(Encoder e, unsigned bits, const EncoderParams& para
       return "hcc-region with " + std::to_string(params.region_bits) + " region bits needs keys of more than " +
              std::to_string(params.region_bits) + " bits, not " + std::to_string(bits);
   }
+  if (e == Encoder::MLHCC_COST) {
+    if (bits % 2 != 0 || bits < 4)
+      return "mlhcc-cost keys need an even number of bits, at least 4 (half top-level cut, then low-level cut "
+             "and cost estimate), not " + std::to_string(bits);
+    const CostSplit split = cost_split(bits, params);
+    if (split.low_bits == 0)
+      return "mlhcc-cost with " + std::to_string(split.cost_bits) + " cost bits (--cost-bits) leaves no low-level "
+             "cut in a " + std::to_string(bits) + "-bit key: take fewer than " + std::to_string(bits / 2);
+  }
   if (e == Encoder::HCC_TRAFFIC && !(params.traffic_blend >= 0.0 && params.traffic_blend <= 1.0))
     return "hcc-traffic's traffic blend (--traffic-blend) is a number from 0 (HAD only) to 1 (traffic only), not " +
            std::to_string(params.traffic_blend);
   return "";
+}
+
+CostSplit cost_split(unsigned bits, const EncoderParams& params) {
+  CostSplit s;
+  s.top_bits = bits / 2;
+  s.cost_bits = params.cost_bits > 0 ? params.cost_bits : bits / 4;
+  s.low_bits = bits - s.top_bits > s.cost_bits ? bits - s.top_bits - s.cost_bits : 0u;
+  return s;
 }
 
 void check_key_bits(Encoder e, unsigned bits, const EncoderParams& params) {
@@ -278,6 +298,69 @@ const EncodeScene::TwoLevel& EncodeScene::two_level(unsigned bits) const {
   return two_levels_.emplace(bits, std::move(t)).first->second;
 }
 
+void EncodeScene::set_cost_estimates(std::vector<std::uint64_t> mean_steps) {
+  if (!mean_steps.empty() && mean_steps.size() != RS_COST_BINS)
+    throw Error("cost estimates for " + std::to_string(mean_steps.size()) + " bins, mlhcc-cost has " +
+                std::to_string(RS_COST_BINS));
+  cost_means_ = std::move(mean_steps);
+  cost_cuts_.clear();
+}
+
+const EncodeScene::CostCut& EncodeScene::cost_cut(unsigned bits) const {
+  auto it = cost_cuts_.find(bits);
+  if (it != cost_cuts_.end()) return it->second;
+  check_key_bits(Encoder::MLHCC_COST, bits, params_);
+  CostCut t;
+  t.split = cost_split(bits, params_);
+  const unsigned low_bits = t.split.low_bits;
+  t.cut = two_level_cut(*bvh_, had_, t.split.top_bits, low_bits);
+  for (std::uint32_t n : t.cut.top) t.top.push_back(to_rs_box(node_box(bvh_->nodes[n])));
+  t.top_groups = rs_cut_groups(t.top.data(), t.top.size());
+  for (const auto& low : t.cut.low) {
+    std::vector<RsBox> boxes;
+    for (std::uint32_t n : low) boxes.push_back(to_rs_box(node_box(bvh_->nodes[n])));
+    auto row = rs_cut_groups(boxes.data(), boxes.size());
+    row.resize(rs_cut_group_count(low_bits), RsCutGroup{});
+    t.low_groups.insert(t.low_groups.end(), row.begin(), row.end());
+    t.low_count.push_back(static_cast<rs_u32>(boxes.size()));
+  }
+  // The estimate on cost_bits bits: scaled to the largest bin mean, so the field's range covers
+  // this batch's estimates; integer arithmetic, the same on every machine.
+  t.cost.assign(RS_COST_BINS, 0u);
+  if (!cost_means_.empty()) {
+    const std::uint64_t largest = *std::max_element(cost_means_.begin(), cost_means_.end());
+    for (std::size_t b = 0; b < cost_means_.size(); ++b)
+      t.cost[b] = static_cast<rs_u32>((cost_means_[b] << t.split.cost_bits) / (largest + 1));
+  }
+  return cost_cuts_.emplace(bits, std::move(t)).first->second;
+}
+
+std::vector<std::uint64_t> cost_statistics(const RsEncodeFrame& frame, const std::vector<RsRay>& rays,
+                                           const std::vector<std::uint32_t>& steps) {
+  if (steps.size() != rays.size())
+    throw Error("cost_statistics: " + std::to_string(steps.size()) + " step counts for " +
+                std::to_string(rays.size()) + " rays");
+  constexpr std::size_t kCells = std::size_t{1} << (3 * RS_COST_CELL_LEVELS);
+  std::vector<std::uint64_t> bin_sum(RS_COST_BINS, 0), bin_count(RS_COST_BINS, 0);
+  std::vector<std::uint64_t> cell_sum(kCells, 0), cell_count(kCells, 0);
+  std::uint64_t sum = 0;
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    const rs_u32 bin = rs_cost_bin(&frame, rays[i]);
+    bin_sum[bin] += steps[i], ++bin_count[bin];
+    cell_sum[bin >> RS_COST_DIRECTION_BITS] += steps[i], ++cell_count[bin >> RS_COST_DIRECTION_BITS];
+    sum += steps[i];
+  }
+  const std::uint64_t batch_mean = rays.empty() ? 0 : sum * 16 / rays.size();
+  std::vector<std::uint64_t> mean(RS_COST_BINS);
+  for (std::size_t b = 0; b < RS_COST_BINS; ++b) {
+    const std::size_t cell = b >> RS_COST_DIRECTION_BITS;
+    mean[b] = bin_count[b] > 0    ? bin_sum[b] * 16 / bin_count[b]
+              : cell_count[cell] > 0 ? cell_sum[cell] * 16 / cell_count[cell]
+                                     : batch_mean;
+  }
+  return mean;
+}
+
 std::uint64_t encode_ray(Encoder e, unsigned bits, const EncodeScene& scene, const RsRay& ray) {
   switch (encoder_info(e).family) {
     case EncoderFamily::None: return 0;
@@ -299,6 +382,14 @@ std::uint64_t encode_ray(Encoder e, unsigned bits, const EncodeScene& scene, con
                                                     t.low_groups.data(), t.low_count.data(), t.half),
                               bits);
     }
+    case EncoderFamily::CostCut: {
+      const auto& t = scene.cost_cut(bits);
+      return rs_key_from_code(rs_cost_cut_code(ray, &scene.frame(), t.top_groups.data(),
+                                               static_cast<rs_u32>(t.top.size()), t.low_groups.data(),
+                                               t.low_count.data(), t.split.top_bits, t.split.low_bits,
+                                               t.cost.data(), bits),
+                              bits);
+    }
     case EncoderFamily::PrefixPath:
       return rs_key_from_code(rs_prefix_path_code(scene.bvh().nodes.data(), scene.bvh().triangles.data(), ray, bits),
                               bits);
@@ -313,6 +404,7 @@ std::vector<std::uint64_t> encode_on_host(Encoder e, unsigned bits, const Encode
   if (encoder_info(e).family == EncoderFamily::BoxSet) scene.cut_set(e, bits);
   if (encoder_info(e).family == EncoderFamily::TwoLevel) scene.two_level(bits);
   if (encoder_info(e).family == EncoderFamily::RegionCut) scene.regions(bits);
+  if (encoder_info(e).family == EncoderFamily::CostCut) scene.cost_cut(bits);
   std::vector<std::uint64_t> keys(rays.size());
   auto work = [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) keys[i] = encode_ray(e, bits, scene, rays[i]);

@@ -40,6 +40,7 @@ enum class Encoder : int {
   HCC_DIR = RS_ENC_HCC_DIR,
   HCC_REGION = RS_ENC_HCC_REGION,
   HCC_TRAFFIC = RS_ENC_HCC_TRAFFIC,
+  MLHCC_COST = RS_ENC_MLHCC_COST,
 };
 
 // How an encoder computes its key; the family decides the kernel, the host twin and the per-scene
@@ -52,6 +53,7 @@ enum class EncoderFamily {
   RegionCut,   // hcc-region: the origin's region, then the HCC of that region's own cut
   TwoLevel,    // MLHCC: a top-level cut, then the low-level cut under the first top node hit
   PrefixPath,  // PPC: the first box tests of a traversal (the BVH itself)
+  CostCut,     // mlhcc-cost: MLHCC's top level, a shorter low-level cut, then a traversal-cost estimate
 };
 
 // One row of the encoder table: everything the code knows about an encoder, in one place. Adding
@@ -71,7 +73,7 @@ const std::vector<EncoderInfo>& encoder_table();
 const EncoderInfo& encoder_info(Encoder e);
 
 // "nosort", "origin", "reis", "costa", "aila", "twopoint", "grid", "hcc", "mlhcc", "ppc", "hcc-dir",
-// "hcc-region", "hcc-traffic".
+// "hcc-region", "hcc-traffic", "mlhcc-cost".
 std::string_view encoder_name(Encoder e);
 // Case-insensitive, ignoring '-', '_' and spaces; also accepts the table's aliases.
 std::optional<Encoder> parse_encoder(std::string_view name);
@@ -89,14 +91,22 @@ struct EncoderParams {
   unsigned direction_bits = 1;             // HCC_DIR: d direction bits after b − d cut bits (appendix)
   unsigned region_bits = 3;                // hcc-region: r bits of the origin's region (2^r regions), 0..8
   double traffic_blend = 0.5;              // hcc-traffic: β of (1 − β)·HAD + β·traffic, in [0, 1]
+  unsigned cost_bits = 0;                  // mlhcc-cost: bits of the cost estimate; 0: a quarter of the key
 };
+
+// mlhcc-cost's split of a key of `bits` bits (cl/keys_cut.h, rs_cost_cut_code): the top-level
+// cut's bits (half the key, as MLHCC), the low-level cut's and the cost estimate's (the rest).
+struct CostSplit {
+  unsigned top_bits = 0, low_bits = 0, cost_bits = 0;
+};
+CostSplit cost_split(unsigned bits, const EncoderParams& params);
 
 // The most region bits hcc-region takes (256 regions).
 inline constexpr unsigned kMaxRegionBits = 8;
 
 // "" when `bits` is a valid key length for e with these parameters (1..64; MLHCC: even; HCC_DIR:
-// more than d bits and d ≤ 42; hcc-region: more than r bits and r ≤ 8; hcc-traffic: 0 ≤ β ≤ 1),
-// else why not.
+// more than d bits and d ≤ 42; hcc-region: more than r bits and r ≤ 8; hcc-traffic: 0 ≤ β ≤ 1;
+// mlhcc-cost: even, at least 4, and fewer cost bits than half the key), else why not.
 std::string key_bits_problem(Encoder e, unsigned bits, const EncoderParams& params);
 // Throws Error with key_bits_problem's text.
 void check_key_bits(Encoder e, unsigned bits, const EncoderParams& params);
@@ -156,6 +166,25 @@ class EncodeScene {
   };
   const TwoLevel& two_level(unsigned bits) const;
 
+  // mlhcc-cost's input: the mean traversal steps per cost bin (cl/keys_cut.h, rs_cost_bin) of a
+  // previous frame's batch, in sixteenths of a step (cost_statistics). Empty (the default): no
+  // estimate, the cost field is 0 and the key is the cut alone. Setting it drops mlhcc-cost's
+  // cached tables; the other encoders' data stays.
+  void set_cost_estimates(std::vector<std::uint64_t> mean_steps);
+  const std::vector<std::uint64_t>& cost_estimates() const { return cost_means_; }
+  // mlhcc-cost for keys of `bits` bits: the two-level cut of top_bits top nodes with low-level cuts
+  // of low_bits nodes (two_level_cut), as MLHCC's tables (rows of ceil(low_bits / 16) groups), and
+  // per bin the estimate quantised to cost_bits: mean · 2^cost_bits / (largest mean + 1).
+  struct CostCut {
+    CostSplit split;
+    TwoLevelCut cut;
+    std::vector<RsBox> top;
+    std::vector<rs_u32> low_count;
+    std::vector<RsCutGroup> top_groups, low_groups;
+    std::vector<rs_u32> cost;  // RS_COST_BINS entries
+  };
+  const CostCut& cost_cut(unsigned bits) const;
+
  private:
   const Bvh* bvh_;
   EncoderParams params_;
@@ -169,7 +198,16 @@ class EncodeScene {
   std::vector<std::uint64_t> traffic_;
   mutable std::map<unsigned, std::vector<std::uint32_t>> traffic_cuts_;
   mutable std::map<unsigned, Regions> regions_;
+  std::vector<std::uint64_t> cost_means_;
+  mutable std::map<unsigned, CostCut> cost_cuts_;
 };
+
+// mlhcc-cost's statistics of one batch (a previous frame's, the same batch name): per cost bin
+// (rs_cost_bin in `frame`), the mean of `steps` (each ray's traversal steps, trace_reference's
+// node_visits) in sixteenths of a step, rounded down; a bin no ray fell in takes its origin cell's
+// mean over every direction, and a cell with no rays the batch's mean. Deterministic.
+std::vector<std::uint64_t> cost_statistics(const RsEncodeFrame& frame, const std::vector<RsRay>& rays,
+                                           const std::vector<std::uint32_t>& steps);
 
 RsBox to_rs_box(const Aabb& b);
 // Boxes [0, n ≤ 64) transposed into ceil(n / 16) RsCutGroups (cl/keys_cut.h): box i in lane 15 − i % 16
@@ -209,6 +247,8 @@ class DeviceEncoder {
   // hcc-traffic's per-batch input (EncodeScene::set_node_traffic); its uploaded cuts are dropped,
   // the next prepare or enqueue builds and uploads the new ones.
   void set_node_traffic(std::vector<std::uint64_t> visits);
+  // mlhcc-cost's per-batch input (EncodeScene::set_cost_estimates); its uploaded tables are dropped.
+  void set_cost_estimates(std::vector<std::uint64_t> mean_steps);
   // Runs every kernel once on a few rays (PoCL compiles kernels at their first launch). Returns ms.
   double warm_up();
 
@@ -227,7 +267,7 @@ class DeviceEncoder {
 
  private:
   struct Uploaded {
-    cl::Buffer a, b, c;
+    cl::Buffer a, b, c, d;
     std::uint32_t n = 0;
   };
   const Uploaded& uploaded(Encoder e, unsigned bits);
