@@ -20,8 +20,8 @@
  * PPC (section 4.1: the first b box tests of a traversal in fixed left-first order).
  * Beyond the paper (issue 21): HCC_REGION (r bits of the origin's region, then the HCC of that
  * region's own cut) and HCC_TRAFFIC (an HCC whose cut priority blends HAD with measured node traffic;
- * its key is HCC's box-set key over another cut), and MLHCC_COST (MLHCC's top level and a shorter
- * low-level cut, then a traversal-cost estimate from a previous frame; keys_cut.h).
+ * its key is HCC's box-set key over another cut), and MLHCC_COST (MLHCC's two-level cut with a
+ * shorter low level, then a traversal-cost estimate from a previous frame; keys_cut.h).
  *
  * Quantization is in the scene's box: q = clamp(floor(t·2^n), 0, 2^n − 1) with
  * t = (p − box.min)·inv_extent; a flat axis has inv_extent = 0 (t = 0). The clamp keeps points on

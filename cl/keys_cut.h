@@ -205,9 +205,10 @@ RS_KEY_INLINE rs_u64 rs_region_cut_code(RsRay ray, const RsEncodeFrame* f, const
   return code;
 }
 
-/* MLHCC_COST (issue 21, beyond the paper): MLHCC's top level in the top `top_bits` bits, the
- * representative's low-level cut of `low_bits` nodes below it (fewer than MLHCC's, box j at code
- * bit 63 − top_bits − j), and in the key's last bits an estimate of how long the ray's traversal
+/* MLHCC_COST (issue 21, beyond the paper): MLHCC's two-level cut (Alg. 3) with a shorter low
+ * level: in the top `top_bits` bits (half the key) the top-level nodes overlapped, searched as
+ * MLHCC's but for nodes of at least `low_bits` leaves; below them the representative's low-level
+ * cut of `low_bits` nodes (box j at code bit 63 − top_bits − j); and in the key's last bits an estimate of how long the ray's traversal
  * is: the quantised mean step count, in a previous frame, of the rays that started in the same
  * origin cell and went in the same direction cell (rs_cost_bin). The cut groups rays that walk the
  * same part of the tree; within a group, the estimate puts rays of similar traversal length in the

@@ -20,6 +20,7 @@
 #include "bench/shard.h"
 #include "bench/sweep.h"
 #include "bvh/prepared_scene.h"
+#include "encode/encode.h"
 #include "render/batches.h"
 #include "render/frame_memory.h"
 #include "scene/provenance.h"
@@ -400,7 +401,40 @@ TEST(Matrix, NewEncoderKnobsAreRecordedOnlyWhenRun) {
   spec.params.traffic_blend = 0.25;
   EXPECT_EQ(spec.to_json().at("traffic_blend"), 0.25);
   EXPECT_FALSE(spec.to_json().contains("region_bits"));
-  EXPECT_EQ(matrix_preset("paper").encoders, all_encoders());  // both in the paper preset
+  spec.encoders = {Encoder::MLHCC_COST};
+  EXPECT_FALSE(spec.to_json().contains("cost_bits"));  // the default, a quarter of the key
+  spec.params.cost_bits = 6;
+  EXPECT_EQ(spec.to_json().at("cost_bits"), 6);
+  EXPECT_EQ(matrix_preset("paper").encoders, all_encoders());  // all three in the paper preset
+}
+
+// mlhcc-cost is causal (issue 21): its estimates for a batch come from the same batch of another
+// frame (seed + 1), traced on the host; never from the frame being measured.
+TEST(Matrix, CostEstimatesComeFromAnotherFrame) {
+  SceneOptions so;
+  so.frame = {64, 36, 1};
+  const PreparedScene p = prepare_scene("detail-room", so);
+  const EncodeScene keys(p.bvh, p.scene.bounds());
+  RayGenOptions gen;
+  gen.seed = 7;
+  const auto costs = previous_frame_costs(p, gen, keys.frame());
+  RayGenOptions next = gen;
+  next.seed = 8;
+  const std::vector<ReferencedBatch> other = generate_batches(p.scene, p.tris, p.bvh, next);
+  const std::vector<ReferencedBatch> own = generate_batches(p.scene, p.tris, p.bvh, gen);
+  ASSERT_EQ(costs.size(), other.size());
+  for (std::size_t k = 0; k < other.size(); ++k) {
+    const std::string& name = other[k].batch.name;
+    ASSERT_TRUE(costs.count(name)) << name;
+    std::vector<std::uint32_t> steps;
+    trace_reference(p.bvh, other[k].batch.rays, nullptr, other[k].batch.any_hit(), &steps);
+    EXPECT_EQ(costs.at(name).first, cost_statistics(keys.frame(), other[k].batch.rays, steps)) << name;
+    EXPECT_GE(costs.at(name).second, 0.0) << name;
+    // The measured frame's own statistics differ: its rays are not the ones counted.
+    std::vector<std::uint32_t> own_steps;
+    trace_reference(p.bvh, own[k].batch.rays, nullptr, own[k].batch.any_hit(), &own_steps);
+    EXPECT_NE(costs.at(name).first, cost_statistics(keys.frame(), own[k].batch.rays, own_steps)) << name;
+  }
 }
 
 // hcc-traffic is causal (issue 21): the traffic for batch k is the previous batch's node traffic,

@@ -106,6 +106,9 @@ TEST(Cli, ImpossibleCombinationsRefusedBeforeWork) {
                  {"encoder hcc-region with 4-bit keys", "more than 4 bits"});
   expect_refused({"run", "--scenes", "cornell", "--traffic-blend", "1.5"},
                  {"--traffic-blend 1.5", "from 0 (HAD only) to 1"});
+  expect_refused({"run", "--scenes", "cornell", "--cost-bits", "0"}, {"--cost-bits 0", "1 to 31 cost bits"});
+  expect_refused({"run", "--scenes", "cornell", "--encoders", "mlhcc-cost", "--cost-bits", "8", "--bits", "16"},
+                 {"encoder mlhcc-cost with 16-bit keys", "leaves no low-level cut"});
   expect_refused({"trace", "--scene", "cornell", "--adjudicate"}, {"--adjudicate judges", "--variant both"});
   expect_refused({"trace", "--scene", "cornell", "--disagreements", "x"}, {"--disagreements DIR goes with --adjudicate"});
   // A broken OBJ given by path is read before the run starts, not after the first scenes ran.

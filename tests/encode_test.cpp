@@ -193,11 +193,24 @@ TEST(Encode, NamesRoundTrip) {
   EXPECT_EQ(parse_encoder("regular-grid"), Encoder::RegularGrid);
   EXPECT_EQ(parse_encoder("HCC_REGION"), Encoder::HCC_REGION);
   EXPECT_EQ(parse_encoder("hcc-traffic"), Encoder::HCC_TRAFFIC);
+  EXPECT_EQ(parse_encoder("MLHCC_COST"), Encoder::MLHCC_COST);
   EXPECT_FALSE(parse_encoder("zorder").has_value());
   EXPECT_NE(key_bits_problem(Encoder::MLHCC, 17, {}), "");
   EXPECT_NE(key_bits_problem(Encoder::HCC, 65, {}), "");
   EXPECT_NE(key_bits_problem(Encoder::HCC_DIR, 1, {}), "");
   EXPECT_EQ(key_bits_problem(Encoder::HCC_DIR, 16, {}), "");
+  // mlhcc-cost: even, at least 4; its cost bits fewer than half the key (a low-level cut remains).
+  EXPECT_NE(key_bits_problem(Encoder::MLHCC_COST, 17, {}), "");
+  EXPECT_NE(key_bits_problem(Encoder::MLHCC_COST, 2, {}), "");
+  EXPECT_EQ(key_bits_problem(Encoder::MLHCC_COST, 4, {}), "");
+  EncoderParams cost;
+  cost.cost_bits = 16;
+  EXPECT_NE(key_bits_problem(Encoder::MLHCC_COST, 32, cost), "");
+  EXPECT_EQ(key_bits_problem(Encoder::MLHCC_COST, 34, cost), "");
+  EXPECT_EQ(cost_split(32, {}).top_bits, 16u);
+  EXPECT_EQ(cost_split(32, {}).low_bits, 8u);
+  EXPECT_EQ(cost_split(32, {}).cost_bits, 8u);
+  EXPECT_EQ(cost_split(64, cost).low_bits, 16u);
   EXPECT_THROW(check_key_bits(Encoder::Origin, 0, {}), Error);
 }
 
@@ -710,6 +723,35 @@ std::uint64_t key(Encoder e, unsigned bits, const EncodeScene& s, const RsRay& r
       }
       break;
     }
+    case Encoder::MLHCC_COST: {
+      // Scalar slab tests over the top nodes and the representative's low cut, then the table's
+      // value for the bin worked out here: the origin's cell per axis, the octahedral cell from
+      // the direction's octant (upper half: (x, y) / L1 norm; lower half: folded).
+      const auto& t = s.cost_cut(bits);
+      const RsTraversalRay tr = rs_prepare_ray(r);
+      std::size_t rep = t.cut.top.size();
+      for (std::size_t i = 0; i < t.cut.top.size(); ++i)
+        if (rs_segment_overlaps_box(tr, t.top[i])) {
+          code |= rs_u64(1) << (63u - i);
+          rep = std::min(rep, i);
+        }
+      if (rep < t.cut.top.size())
+        for (std::size_t j = 0; j < t.cut.low[rep].size(); ++j)
+          if (rs_segment_overlaps_box(tr, to_rs_box(node_box(s.bvh().nodes[t.cut.low[rep][j]]))))
+            code |= rs_u64(1) << (63u - t.split.top_bits - j);
+      rs_u32 cell = 0;
+      for (int a = 0; a < 3; ++a) cell = cell * 16u + rs_quantize_axis(f, a, r.o[a], 4);
+      const float l1 = std::fabs(r.d[0]) + std::fabs(r.d[1]) + std::fabs(r.d[2]);
+      float u = l1 > 0 ? r.d[0] * (1.0f / l1) : 0.0f, v = l1 > 0 ? r.d[1] * (1.0f / l1) : 0.0f;
+      if (r.d[2] < 0.0f) {
+        const float fu = std::signbit(u) && u != 0.0f ? -(1.0f - std::fabs(v)) : 1.0f - std::fabs(v);
+        const float fv = std::signbit(v) && v != 0.0f ? -(1.0f - std::fabs(u)) : 1.0f - std::fabs(u);
+        u = fu, v = fv;
+      }
+      const rs_u32 bin = cell * 64u + rs_quantize(u * 0.5f + 0.5f, 3) * 8u + rs_quantize(v * 0.5f + 0.5f, 3);
+      code |= rs_u64(t.cost.at(bin)) << (64u - bits);
+      break;
+    }
     default: return encode_ray(e, bits, s, r);
   }
   return rs_key_from_code(code, bits);
@@ -1179,6 +1221,105 @@ TEST(Encode, TrafficCutBlendsHadWithTheTraffic) {
   }
   EncodeScene s(d.bvh, d.box);
   EXPECT_THROW(s.set_node_traffic(std::vector<std::uint64_t>(3, 1)), Error);  // not one count per node
+}
+
+
+// mlhcc-cost (issue 21): the octahedral direction cells of the axes and of ±0 components, worked out
+// by hand (levels = 3: cells 0..7 per side, u in the high bits).
+TEST(Encode, OctahedralCellsOfTheAxes) {
+  auto cell = [](float x, float y, float z) { return rs_octahedral_cell(ray(0, 0, 0, x, y, z), 3); };
+  EXPECT_EQ(cell(0, 0, 1), 4u * 8u + 4u);    // the upper pole: the centre (u = v = 0 -> 0.5)
+  EXPECT_EQ(cell(0, 0, -1), 7u * 8u + 7u);   // the lower pole: folded to the corner (1, 1)
+  EXPECT_EQ(cell(1, 0, 0), 7u * 8u + 4u);    // u = 1 clamps into the last cell
+  EXPECT_EQ(cell(-1, 0, 0), 0u * 8u + 4u);
+  EXPECT_EQ(cell(0, -1, 0), 4u * 8u + 0u);
+  EXPECT_EQ(cell(3, 0, 0), cell(1, 0, 0));   // the direction need not be unit
+  EXPECT_EQ(cell(1, -0.0f, 0), cell(1, 0, 0));
+  EXPECT_EQ(cell(-0.0f, -0.0f, -1), cell(0, 0, -1));  // −0 counts as +0, also when folding
+  EXPECT_EQ(cell(0, 0, 0), 4u * 8u + 4u);    // a zero direction: the centre
+  EXPECT_EQ(cell(0.5f, 0.5f, -1), 7u * 8u + 7u);  // folded: (1 − |v|, 1 − |u|) = (0.75, 0.75)
+  EXPECT_EQ(cell(-0.5f, 0.25f, -0.25f), 1u * 8u + 6u);  // folded: (−0.75, 0.5) -> (0.125, 0.75) of [0, 1]
+}
+
+// cost_statistics: the mean steps per bin in sixteenths, the origin cell's mean for a bin with no
+// rays, the batch's mean for a cell with none; and the quantised table of cost_cut.
+TEST(Encode, CostStatisticsMeansAndFallbacks) {
+  RsEncodeFrame f{};
+  for (int a = 0; a < 3; ++a) f.box_max[a] = 1.0f, f.inv_extent[a] = 1.0f;
+  const RsRay up = ray(0.01f, 0.01f, 0.01f, 0, 0, 1), down = ray(0.01f, 0.01f, 0.01f, 0, 0, -1);
+  const RsRay far_cell = ray(0.99f, 0.99f, 0.99f, 0, 0, 1);
+  const std::vector<RsRay> rays{up, up, down, far_cell};
+  const std::vector<std::uint32_t> steps{3, 6, 12, 21};
+  const auto mean = cost_statistics(f, rays, steps);
+  ASSERT_EQ(mean.size(), RS_COST_BINS);
+  EXPECT_EQ(mean[rs_cost_bin(&f, up)], 72u);  // (3 + 6) / 2 steps, in sixteenths
+  EXPECT_EQ(mean[rs_cost_bin(&f, down)], 12u * 16u);
+  EXPECT_EQ(mean[rs_cost_bin(&f, far_cell)], 21u * 16u);
+  // Another direction from the first cell: that cell's mean over its three rays, (3 + 6 + 12) / 3.
+  EXPECT_EQ(mean[rs_cost_bin(&f, ray(0.01f, 0.01f, 0.01f, 1, 0, 0))], 7u * 16u);
+  // A cell no ray started in: the batch's mean, 42 / 4 steps = 168 sixteenths.
+  EXPECT_EQ(mean[rs_cost_bin(&f, ray(0.5f, 0.5f, 0.5f, 0, 0, 1))], 168u);
+  EXPECT_THROW(cost_statistics(f, rays, {1, 2}), Error);
+  EXPECT_EQ(cost_statistics(f, {}, {}), std::vector<std::uint64_t>(RS_COST_BINS, 0));
+
+  // Quantised for a 32-bit key (8 cost bits): mean · 256 / (largest + 1), largest = 21 · 16.
+  const DetailRoom& d = detail_room();
+  EncodeScene s(d.bvh, d.box);
+  EXPECT_EQ(s.cost_cut(32).cost, std::vector<rs_u32>(RS_COST_BINS, 0u));  // no estimates: field 0
+  s.set_cost_estimates(mean);
+  const auto& t = s.cost_cut(32);
+  EXPECT_EQ(t.split.cost_bits, 8u);
+  EXPECT_EQ(t.cost[rs_cost_bin(&f, far_cell)], 336u * 256u / 337u);
+  EXPECT_EQ(t.cost[rs_cost_bin(&f, up)], 72u * 256u / 337u);
+  EXPECT_THROW(s.set_cost_estimates({1, 2, 3}), Error);
+}
+
+// mlhcc-cost's kernel equals the host twin and the bitwise reference with a real table (the
+// detail room's previous frame, traced for its step counts), at every key length and cost width;
+// the cost field is the table's value for the ray's bin.
+TEST(Encode, CostKernelMatchesTheHostWithEstimates) {
+  const DetailRoom& d = detail_room();
+  SceneOptions opts;
+  opts.frame = {64, 36, 1};
+  const PreparedScene p = prepare_scene("detail-room", opts);
+  RayGenOptions previous;
+  previous.seed = 2;
+  const auto frame = generate_batches(p.scene, p.tris, p.bvh, previous);
+  for (unsigned cost_bits : {0u, 1u, 3u, 12u}) {
+    EncoderParams params;
+    params.cost_bits = cost_bits;
+    DeviceEncoder dev(testing::runtime(), d.bvh, d.box, params);
+    for (const auto& rb : d.batches) {
+      const auto same = std::find_if(frame.begin(), frame.end(), [&](const ReferencedBatch& b) {
+        return b.batch.name == rb.batch.name;
+      });
+      ASSERT_NE(same, frame.end()) << rb.batch.name;
+      std::vector<std::uint32_t> steps;
+      trace_reference(p.bvh, same->batch.rays, nullptr, same->batch.any_hit(), &steps);
+      dev.set_cost_estimates(cost_statistics(dev.scene().frame(), same->batch.rays, steps));
+      for (unsigned bits : {4u, 16u, 26u, 32u, 50u, 64u}) {
+        if (!key_bits_problem(Encoder::MLHCC_COST, bits, params).empty()) continue;
+        const std::string what = rb.batch.name + " cost bits " + std::to_string(cost_bits);
+        expect_device_equals_host(dev, Encoder::MLHCC_COST, bits, rb.batch.rays, what);
+        const auto keys = encode_on_host(Encoder::MLHCC_COST, bits, dev.scene(), rb.batch.rays);
+        const CostSplit split = dev.scene().cost_cut(bits).split;
+        std::size_t nonzero_cost = 0;
+        for (std::size_t i = 0; i < keys.size(); ++i) {
+          ASSERT_EQ(keys[i], ref::key(Encoder::MLHCC_COST, bits, dev.scene(), rb.batch.rays[i])) << what << " ray " << i;
+          // No top node overlapped: no low-level bits either (the cost field stays).
+          if ((keys[i] >> (bits - split.top_bits)) == 0) {
+            ASSERT_EQ(keys[i] >> split.cost_bits, 0u) << what << " ray " << i;
+          }
+          const std::uint64_t field = keys[i] & ((std::uint64_t{1} << split.cost_bits) - 1);
+          ASSERT_EQ(field, dev.scene().cost_cut(bits).cost[rs_cost_bin(&dev.scene().frame(), rb.batch.rays[i])]);
+          nonzero_cost += field != 0;
+        }
+        if (split.cost_bits >= 3) {
+          EXPECT_GT(nonzero_cost, 0u) << what << " bits " << bits;
+        }
+      }
+    }
+  }
 }
 
 }  // namespace raysort

@@ -53,7 +53,7 @@ enum class EncoderFamily {
   RegionCut,   // hcc-region: the origin's region, then the HCC of that region's own cut
   TwoLevel,    // MLHCC: a top-level cut, then the low-level cut under the first top node hit
   PrefixPath,  // PPC: the first box tests of a traversal (the BVH itself)
-  CostCut,     // mlhcc-cost: MLHCC's top level, a shorter low-level cut, then a traversal-cost estimate
+  CostCut,     // mlhcc-cost: MLHCC's cut with a shorter low level, then a traversal-cost estimate
 };
 
 // One row of the encoder table: everything the code knows about an encoder, in one place. Adding
