@@ -151,6 +151,22 @@ RS_KEY_INLINE rs_u64 rs_box_set_code(RsRay ray, RS_CUT_SPACE const RsCutGroup* s
   return code;
 }
 
+/* The two-level code with `top_bits` bits for the top level and rows of `low_bits` boxes (row rep
+ * of `low`, ceil(low_bits / 16) groups, box j at code bit 63 − top_bits − j): MLHCC below with
+ * both half the key, mlhcc-cost's cut with a shorter low level. */
+RS_KEY_INLINE rs_u64 rs_two_level_split_code(RsRay ray, RS_CUT_SPACE const RsCutGroup* top, rs_u32 n_top,
+                                             RS_GLOBAL const RsCutGroup* low, RS_GLOBAL const rs_u32* low_count,
+                                             rs_u32 top_bits, rs_u32 low_bits) {
+  RsTraversalRay r = rs_prepare_ray(ray);
+  RsCutRay c = rs_cut_ray(r);
+  rs_u64 code = RS_CUT_BITS_TOP(&c, top, n_top, 0u);
+  if (code != 0u) {
+    const rs_u32 rep = rs_clz64(code);
+    code |= rs_cut_bits_g(&c, low + rep * rs_cut_group_count(low_bits), low_count[rep], top_bits);
+  }
+  return code;
+}
+
 /* MLHCC (Xiang et al. section 4.3): the top `half_bits` bits are the HCC of the top-level cut; the
  * representative top node is the first one hit (top nodes are in descending HAD order); the next
  * `half_bits` bits are the HCC of its low-level cut: row rep of `low` (ceil(half_bits / 16)
@@ -159,14 +175,7 @@ RS_KEY_INLINE rs_u64 rs_box_set_code(RsRay ray, RS_CUT_SPACE const RsCutGroup* s
 RS_KEY_INLINE rs_u64 rs_two_level_cut_code(RsRay ray, RS_CUT_SPACE const RsCutGroup* top, rs_u32 n_top,
                                            RS_GLOBAL const RsCutGroup* low, RS_GLOBAL const rs_u32* low_count,
                                            rs_u32 half_bits) {
-  RsTraversalRay r = rs_prepare_ray(ray);
-  RsCutRay c = rs_cut_ray(r);
-  rs_u64 code = RS_CUT_BITS_TOP(&c, top, n_top, 0u);
-  if (code != 0u) {
-    const rs_u32 rep = rs_clz64(code);
-    code |= rs_cut_bits_g(&c, low + rep * rs_cut_group_count(half_bits), low_count[rep], half_bits);
-  }
-  return code;
+  return rs_two_level_split_code(ray, top, n_top, low, low_count, half_bits, half_bits);
 }
 
 /* HCC_REGION (issue 21; the paper's §6 suggestion for open scenes, "dividing the scene into
@@ -251,14 +260,8 @@ RS_KEY_INLINE rs_u64 rs_cost_cut_code(RsRay ray, const RsEncodeFrame* f, RS_CUT_
                                       rs_u32 n_top, RS_GLOBAL const RsCutGroup* low,
                                       RS_GLOBAL const rs_u32* low_count, rs_u32 top_bits, rs_u32 low_bits,
                                       RS_GLOBAL const rs_u32* cost, rs_u32 key_bits) {
-  RsTraversalRay r = rs_prepare_ray(ray);
-  RsCutRay c = rs_cut_ray(r);
-  rs_u64 code = RS_CUT_BITS_TOP(&c, top, n_top, 0u);
-  if (code != 0u) {
-    const rs_u32 rep = rs_clz64(code);
-    code |= rs_cut_bits_g(&c, low + rep * rs_cut_group_count(low_bits), low_count[rep], top_bits);
-  }
-  return code | (RS_U64(cost[rs_cost_bin(f, ray)]) << (64u - key_bits));
+  return rs_two_level_split_code(ray, top, n_top, low, low_count, top_bits, low_bits) |
+         (RS_U64(cost[rs_cost_bin(f, ray)]) << (64u - key_bits));
 }
 
 /* Rays per work-item of the MLHCC kernel (rs_two_level_cut_code2 below; the host sizes the launch). */

@@ -429,18 +429,23 @@ TEST(Encode, ThroughAnOrderBuffer) {
     for (std::size_t i = 0; i < rays.size(); ++i) bad += run.keys[i] != host[reversed[i]] || run.values[i] != i;
     EXPECT_EQ(bad, 0u) << encoder_name(e);
   }
-  // Odd and tiny counts: MLHCC's work-items take two rays each (cl/keys_cut.h, RS_TWO_LEVEL_RAYS).
+  // Odd and tiny counts: MLHCC's work-items take two rays each (cl/keys_cut.h, RS_TWO_LEVEL_RAYS);
+  // mlhcc-cost's one (with a table from these rays' own step counts).
+  std::vector<std::uint32_t> steps;
+  trace_reference(bvh, rays, nullptr, false, &steps);
+  dev.set_cost_estimates(cost_statistics(dev.scene().frame(), rays, steps));
   for (std::size_t n : {1u, 2u, 3u, 5u, 577u}) {
     std::vector<RsRay> some(rays.begin(), rays.begin() + static_cast<std::ptrdiff_t>(n));
-    for (unsigned bits : {16u, 64u}) {
-      const auto host = encode_on_host(Encoder::MLHCC, bits, dev.scene(), some);
-      const auto run = dev.run(Encoder::MLHCC, bits, some);
-      ASSERT_EQ(run.keys.size(), n);
-      for (std::size_t i = 0; i < n; ++i) {
-        EXPECT_EQ(run.keys[i], host[i]) << n << " rays, bits " << bits << ", ray " << i;
-        EXPECT_EQ(run.values[i], i) << n << " rays, bits " << bits;
+    for (unsigned bits : {16u, 64u})
+      for (Encoder e : {Encoder::MLHCC, Encoder::MLHCC_COST}) {
+        const auto host = encode_on_host(e, bits, dev.scene(), some);
+        const auto run = dev.run(e, bits, some);
+        ASSERT_EQ(run.keys.size(), n);
+        for (std::size_t i = 0; i < n; ++i) {
+          EXPECT_EQ(run.keys[i], host[i]) << encoder_name(e) << " " << n << " rays, bits " << bits << ", ray " << i;
+          EXPECT_EQ(run.values[i], i) << encoder_name(e) << " " << n << " rays, bits " << bits;
+        }
       }
-    }
   }
 }
 

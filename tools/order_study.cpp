@@ -21,9 +21,10 @@
 //     lowest HAD (the paper takes the highest).
 //   - MLHCC/32 with its bits split 8 | 24 or 24 | 8 between the top mask and the low cut; MLHCC
 //     with PPC's first box tests as the tie-break (mlhcc/24 | ppc/8, mlhcc/32 | ppc/32);
-//   - a causal estimate of traversal length: the previous frame's mean step count per (origin cell,
-//     direction bin), after HCC/32 or MLHCC/32 (64-bit keys) or in the last 8 bits of HCC/24 or
-//     MLHCC/24 (32-bit keys); and the same table built from this frame (an oracle).
+//   - a causal estimate of traversal length (mlhcc-cost's table): the previous frame's mean step
+//     count per (origin cell, direction cell), after HCC/32 or MLHCC/32 (64-bit keys) or in the last
+//     8 bits of HCC/24 or MLHCC/24 (32-bit keys); the same table built from this frame (an oracle);
+//     and mlhcc-cost/32 itself with 4, 8 and 12 cost bits.
 // Rays keep their generation order within equal keys (a stable sort), as the radix sort does.
 #include <fmt/format.h>
 
@@ -42,6 +43,7 @@
 #include "encode/encode.h"
 #include "render/batches.h"
 #include "scene/load.h"
+#include "trace/tracer.h"
 #include "traverse_wide.h"
 #include "util/error.h"
 
@@ -244,66 +246,47 @@ int study(int argc, char** argv) {
     report("mlhcc/32 | ppc/32 (64 bits)", key);
   }
 
-  // A causal estimate of traversal length: the mean step count of the rays of the *previous* frame
-  // (seed 2; the study's frame is seed 1) that fell in the same (origin cell, direction bin), with
-  // the origin cell's mean where the bin was empty. A renderer could gather it with one atomic add
-  // per ray in its trace kernel. Compared with the same table built from this frame (an oracle).
+  // A causal estimate of traversal length, mlhcc-cost's (docs/encoders.md): per (origin cell,
+  // octahedral direction cell), the mean step count of the same batch in the frame of seed 2 (the
+  // study's frame is seed 1), from cost_statistics as `raysort run` makes it. After HCC/32 or
+  // MLHCC/32 (64-bit keys), or in the last 8 bits of HCC/24 or MLHCC/24 (quantised as mlhcc-cost
+  // quantises); the same table built from this frame (an oracle); and mlhcc-cost itself.
   {
     RayGenOptions prev_gen;
     prev_gen.seed = 2;
     const std::vector<ReferencedBatch> prev_frame = generate_batches(p.scene, p.tris, p.bvh, prev_gen);
-    const auto prev = std::find_if(prev_frame.begin(), prev_frame.end(), [&](const ReferencedBatch& b) { return b.batch.name == batch; });
-    const std::vector<RsRay>& prev_rays = prev->batch.rays;
-    const std::vector<std::uint32_t> prev_steps = step_counts(p.bvh, prev_rays, any_hit);
-    const std::vector<std::uint64_t> origin = encode_on_host(Encoder::Origin, 64, es, rays);
-    const std::vector<std::uint64_t> prev_origin = encode_on_host(Encoder::Origin, 64, es, prev_rays);
-    auto direction_bin = [](const RsRay& r, unsigned n) {  // octahedral map, n x n bins
-      const float s = std::fabs(r.d[0]) + std::fabs(r.d[1]) + std::fabs(r.d[2]);
-      float u = r.d[0] / s, v = r.d[1] / s;
-      if (r.d[2] < 0.0f) {
-        const float fu = (1.0f - std::fabs(v)) * (u >= 0.0f ? 1.0f : -1.0f);
-        const float fv = (1.0f - std::fabs(u)) * (v >= 0.0f ? 1.0f : -1.0f);
-        u = fu, v = fv;
-      }
-      const auto q = [n](float x) { return std::min(n - 1, static_cast<unsigned>((x * 0.5f + 0.5f) * n)); };
-      return q(u) * n + q(v);
+    const auto prev =
+        std::find_if(prev_frame.begin(), prev_frame.end(), [&](const ReferencedBatch& b) { return b.batch.name == batch; });
+    if (prev == prev_frame.end()) throw Error(fmt::format("the frame of seed 2 has no batch {}", batch));
+    std::vector<std::uint32_t> prev_steps;
+    trace_reference(p.bvh, prev->batch.rays, nullptr, any_hit, &prev_steps);
+    const std::vector<std::uint64_t> causal_means = cost_statistics(es.frame(), prev->batch.rays, prev_steps);
+    const std::vector<std::uint64_t> oracle_means = cost_statistics(es.frame(), rays, steps);
+    auto per_ray = [&](const std::vector<std::uint64_t>& means) {
+      std::vector<std::uint64_t> e(rays.size());
+      for (std::size_t i = 0; i < rays.size(); ++i) e[i] = means[rs_cost_bin(&es.frame(), rays[i])];
+      return e;
     };
-    // 16^3 cells x 8^2 directions: on sibenik and Breakfast the best of 8^3 x 8^2, 16^3 x 4^2,
-    // 16^3 x 8^2 and 32^3 x 4^2 (by at most 0.02 in the lane ratio).
-    for (const auto& [cell_bits, dir_n] : {std::pair{12u, 8u}}) {
-      auto estimate = [&](const std::vector<RsRay>& src_rays, const std::vector<std::uint64_t>& src_origin,
-                          const std::vector<std::uint32_t>& src_steps) {
-        std::unordered_map<std::uint64_t, std::pair<std::uint64_t, std::uint64_t>> bins, cells;
-        for (std::size_t i = 0; i < src_rays.size(); ++i) {
-          const std::uint64_t c = src_origin[i] >> (64 - cell_bits);
-          const std::uint64_t b = c << 8 | direction_bin(src_rays[i], dir_n);
-          bins[b].first += src_steps[i], ++bins[b].second;
-          cells[c].first += src_steps[i], ++cells[c].second;
-        }
-        std::vector<std::uint32_t> e(rays.size(), 0);
-        for (std::size_t i = 0; i < rays.size(); ++i) {
-          const std::uint64_t c = origin[i] >> (64 - cell_bits);
-          auto it_b = bins.find(c << 8 | direction_bin(rays[i], dir_n));
-          if (it_b == bins.end()) it_b = cells.find(c);
-          if (it_b != cells.end()) e[i] = static_cast<std::uint32_t>(it_b->second.first * 4 / it_b->second.second);
-        }
-        return e;
-      };
-      const std::vector<std::uint32_t> causal = estimate(prev_rays, prev_origin, prev_steps);
-      const std::vector<std::uint32_t> oracle = estimate(rays, origin, steps);
-      std::uint32_t top = 1;
-      for (std::uint32_t v : causal) top = std::max(top, v);
-      const std::string tag = fmt::format("{}^3 cells x {}^2 dirs", 1u << (cell_bits / 3), dir_n);
-      for (std::size_t i = 0; i < key.size(); ++i) key[i] = hcc[i] << 32 | oracle[i];
-      report("oracle table " + tag + ": hcc/32 | est", key);
-      for (std::size_t i = 0; i < key.size(); ++i) key[i] = hcc[i] << 32 | causal[i];
-      report("prev-frame " + tag + ": hcc/32 | est", key);
-      for (std::size_t i = 0; i < key.size(); ++i) key[i] = mlhcc[i] << 32 | causal[i];
-      report("prev-frame " + tag + ": mlhcc/32 | est", key);
-      for (std::size_t i = 0; i < key.size(); ++i) key[i] = hcc24[i] << 8 | std::min(255u, causal[i] * 256 / (top + 1));
-      report("prev-frame " + tag + ": hcc/24 | est/8", key);
-      for (std::size_t i = 0; i < key.size(); ++i) key[i] = mlhcc24[i] << 8 | std::min(255u, causal[i] * 256 / (top + 1));
-      report("prev-frame " + tag + ": mlhcc/24 | est/8", key);
+    const std::vector<std::uint64_t> causal = per_ray(causal_means), oracle = per_ray(oracle_means);
+    const std::uint64_t largest = *std::max_element(causal_means.begin(), causal_means.end());
+    for (std::size_t i = 0; i < key.size(); ++i) key[i] = hcc[i] << 32 | oracle[i];
+    report("oracle cost table: hcc/32 | est", key);
+    for (std::size_t i = 0; i < key.size(); ++i) key[i] = hcc[i] << 32 | causal[i];
+    report("prev-frame cost table: hcc/32 | est", key);
+    for (std::size_t i = 0; i < key.size(); ++i) key[i] = mlhcc[i] << 32 | causal[i];
+    report("prev-frame cost table: mlhcc/32 | est", key);
+    for (std::size_t i = 0; i < key.size(); ++i) key[i] = hcc24[i] << 8 | (causal[i] << 8) / (largest + 1);
+    report("prev-frame cost table: hcc/24 | est/8", key);
+    for (std::size_t i = 0; i < key.size(); ++i) key[i] = mlhcc24[i] << 8 | (causal[i] << 8) / (largest + 1);
+    report("prev-frame cost table: mlhcc/24 | est/8", key);
+    for (unsigned cost_bits : {4u, 8u, 12u}) {
+      EncoderParams params;
+      params.cost_bits = cost_bits;
+      EncodeScene with_costs(p.bvh, p.scene.bounds(), params);
+      with_costs.set_cost_estimates(causal_means);
+      const CostSplit split = cost_split(32, params);
+      report(fmt::format("mlhcc-cost/32 ({} | {} | {})", split.top_bits, split.low_bits, split.cost_bits),
+             encode_on_host(Encoder::MLHCC_COST, 32, with_costs, rays));
     }
   }
   return 0;

@@ -205,7 +205,7 @@ struct SceneBench {
     RayGenOptions gen;
     gen.seed = spec.seed;
     if (std::find(spec.encoders.begin(), spec.encoders.end(), Encoder::MLHCC_COST) != spec.encoders.end()) {
-      progress.line(fmt::format("{}: a previous frame for mlhcc-cost's estimates", name));
+      progress.line(fmt::format("{}: first a previous frame (seed {}) for mlhcc-cost's estimates", name, gen.seed + 1));
       costs = previous_frame_costs(prepared, gen, EncodeScene(bvh, prepared.scene.bounds(), spec.params).frame());
     }
     batches = generate_batches(prepared.scene, prepared.tris, bvh, gen);
