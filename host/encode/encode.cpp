@@ -37,8 +37,8 @@ const std::vector<EncoderInfo>& encoder_table() {
       // region code reads its rows from global memory; hcc-traffic adds a host traversal per batch.
       {Encoder::HCC_REGION, "hcc-region", {"region"}, F::RegionCut, "encode_region_cut", 135, false},
       {Encoder::HCC_TRAFFIC, "hcc-traffic", {"traffic"}, F::BoxSet, "encode_box_set", 135, false},
-      // MLHCC's tables plus a direction cell per ray (atan2, acos) and one table read; its cost
-      // statistics are a host traversal of a previous frame's batch, outside the weight.
+      // MLHCC's tables plus an origin cell and an octahedral direction cell per ray and one table
+      // read; its cost statistics are a host traversal of a previous frame's batch, outside the weight.
       {Encoder::MLHCC_COST, "mlhcc-cost", {"cost"}, F::CostCut, "encode_cost_cut", 150, false},
   };
   return table;
