@@ -435,6 +435,10 @@ TEST(Matrix, CostEstimatesComeFromAnotherFrame) {
     trace_reference(p.bvh, own[k].batch.rays, nullptr, own[k].batch.any_hit(), &own_steps);
     EXPECT_NE(costs.at(name).first, cost_statistics(keys.frame(), own[k].batch.rays, own_steps)) << name;
   }
+  // Only the batches asked for are traced (a matrix's batches).
+  const auto some = previous_frame_costs(p, gen, keys.frame(), {"bounce1", "shadow9"});
+  ASSERT_EQ(some.size(), 1u);
+  EXPECT_EQ(some.at("bounce1").first, costs.at("bounce1").first);
 }
 
 // hcc-traffic is causal (issue 21): the traffic for batch k is the previous batch's node traffic,

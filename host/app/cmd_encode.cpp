@@ -73,7 +73,7 @@ int run_encodebench(const EncodeBenchArgs& args) {
     enc.set_node_traffic(traffic_before(bvh, batches, args.batch));
   // mlhcc-cost: its estimates from the same batch of a previous frame, as raysort run makes them.
   if (std::find(encoders.begin(), encoders.end(), Encoder::MLHCC_COST) != encoders.end()) {
-    auto costs = previous_frame_costs(prepared, args.common.raygen_options(), enc.scene().frame());
+    auto costs = previous_frame_costs(prepared, args.common.raygen_options(), enc.scene().frame(), {args.batch});
     if (auto it = costs.find(args.batch); it != costs.end()) enc.set_cost_estimates(std::move(it->second.first));
   }
   Tracer tracer(rt, bvh);

@@ -206,7 +206,8 @@ struct SceneBench {
     gen.seed = spec.seed;
     if (std::find(spec.encoders.begin(), spec.encoders.end(), Encoder::MLHCC_COST) != spec.encoders.end()) {
       progress.line(fmt::format("{}: first a previous frame (seed {}) for mlhcc-cost's estimates", name, gen.seed + 1));
-      costs = previous_frame_costs(prepared, gen, EncodeScene(bvh, prepared.scene.bounds(), spec.params).frame());
+      costs = previous_frame_costs(prepared, gen, EncodeScene(bvh, prepared.scene.bounds(), spec.params).frame(),
+                                   spec.batches);
     }
     batches = generate_batches(prepared.scene, prepared.tris, bvh, gen);
     for (TraceVariant v : spec.variants)
@@ -390,12 +391,14 @@ std::vector<std::uint64_t> traffic_before(const Bvh& bvh, const std::vector<Refe
 }
 
 std::map<std::string, std::pair<std::vector<std::uint64_t>, double>> previous_frame_costs(
-    const PreparedScene& scene, const RayGenOptions& gen, const RsEncodeFrame& keys) {
+    const PreparedScene& scene, const RayGenOptions& gen, const RsEncodeFrame& keys,
+    const std::vector<std::string>& wanted) {
   RayGenOptions previous = gen;
   previous.seed = gen.seed + 1;
   const std::vector<ReferencedBatch> frame = generate_batches(scene.scene, scene.tris, scene.bvh, previous);
   std::map<std::string, std::pair<std::vector<std::uint64_t>, double>> out;
   for (const ReferencedBatch& b : frame) {
+    if (!wanted.empty() && std::find(wanted.begin(), wanted.end(), b.batch.name) == wanted.end()) continue;
     const auto start = std::chrono::steady_clock::now();
     std::vector<std::uint32_t> steps;
     trace_reference(scene.bvh, b.batch.rays, nullptr, b.batch.any_hit(), &steps);

@@ -55,11 +55,12 @@ std::vector<std::uint64_t> traffic_before(const Bvh& bvh, const std::vector<Refe
 // (another frame of the same camera and lights, standing for the one a renderer traced before),
 // each batch traced on the host (trace_reference, fast variant, wide tree) for its rays' step
 // counts, and cost_statistics of them in `keys` (the encoder's frame: the scene box the bins
-// quantise). By batch name: the per-bin means and the ms of the trace
+// quantise). Only the batches named in `wanted` (empty: every batch) are traced. By batch name: the per-bin means and the ms of the trace
 // and statistics (a renderer would gather them in its own trace; the frame's generation is not
 // counted). The frame is dropped before this returns, so a run never holds two frames.
 std::map<std::string, std::pair<std::vector<std::uint64_t>, double>> previous_frame_costs(
-    const PreparedScene& scene, const RayGenOptions& gen, const RsEncodeFrame& keys);
+    const PreparedScene& scene, const RayGenOptions& gen, const RsEncodeFrame& keys,
+    const std::vector<std::string>& wanted = {});
 
 // The shard plan of a matrix (bench/shard.h), loading its scenes for their sizes and effects.
 std::vector<PlannedCell> plan_matrix_shards(const MatrixSpec& spec, const std::string& scene_root, unsigned count);
