@@ -208,8 +208,9 @@ TEST(Encode, NamesRoundTrip) {
   EXPECT_NE(key_bits_problem(Encoder::MLHCC_COST, 32, cost), "");
   EXPECT_EQ(key_bits_problem(Encoder::MLHCC_COST, 34, cost), "");
   EXPECT_EQ(cost_split(32, {}).top_bits, 16u);
-  EXPECT_EQ(cost_split(32, {}).low_bits, 8u);
-  EXPECT_EQ(cost_split(32, {}).cost_bits, 8u);
+  EXPECT_EQ(cost_split(32, {}).low_bits, 12u);
+  EXPECT_EQ(cost_split(32, {}).cost_bits, 4u);
+  EXPECT_EQ(cost_split(4, {}).cost_bits, 1u);  // at least one cost bit
   EXPECT_EQ(cost_split(64, cost).low_bits, 16u);
   EXPECT_THROW(check_key_bits(Encoder::Origin, 0, {}), Error);
 }
@@ -1267,15 +1268,15 @@ TEST(Encode, CostStatisticsMeansAndFallbacks) {
   EXPECT_THROW(cost_statistics(f, rays, {1, 2}), Error);
   EXPECT_EQ(cost_statistics(f, {}, {}), std::vector<std::uint64_t>(RS_COST_BINS, 0));
 
-  // Quantised for a 32-bit key (8 cost bits): mean · 256 / (largest + 1), largest = 21 · 16.
+  // Quantised for a 32-bit key (4 cost bits by default): mean · 16 / (largest + 1), largest = 21 · 16.
   const DetailRoom& d = detail_room();
   EncodeScene s(d.bvh, d.box);
   EXPECT_EQ(s.cost_cut(32).cost, std::vector<rs_u32>(RS_COST_BINS, 0u));  // no estimates: field 0
   s.set_cost_estimates(mean);
   const auto& t = s.cost_cut(32);
-  EXPECT_EQ(t.split.cost_bits, 8u);
-  EXPECT_EQ(t.cost[rs_cost_bin(&f, far_cell)], 336u * 256u / 337u);
-  EXPECT_EQ(t.cost[rs_cost_bin(&f, up)], 72u * 256u / 337u);
+  EXPECT_EQ(t.split.cost_bits, 4u);
+  EXPECT_EQ(t.cost[rs_cost_bin(&f, far_cell)], 336u * 16u / 337u);  // 15: the top of the field
+  EXPECT_EQ(t.cost[rs_cost_bin(&f, up)], 72u * 16u / 337u);         // 3
   EXPECT_THROW(s.set_cost_estimates({1, 2, 3}), Error);
 }
 

@@ -145,7 +145,7 @@ void register_run_command(CLI::App& app) {
                   "default 0.5; docs/encoders.md)");
   cmd->add_option("--cost-bits", a->cost_bits,
                   "mlhcc-cost: key bits of the traversal-cost estimate from a previous frame (1-31 and fewer than half "
-                  "the key; default a quarter of the key; docs/encoders.md)");
+                  "the key; default an eighth of the key; docs/encoders.md)");
   cmd->add_option("--timeout", a->timeout_s,
                   "per-cell wall-clock limit in seconds (0: none); a cell over it is recorded as \"timeout\" "
                   "(checked between the arms of a round: a kernel in flight runs to completion)");

@@ -91,11 +91,12 @@ struct EncoderParams {
   unsigned direction_bits = 1;             // HCC_DIR: d direction bits after b − d cut bits (appendix)
   unsigned region_bits = 3;                // hcc-region: r bits of the origin's region (2^r regions), 0..8
   double traffic_blend = 0.5;              // hcc-traffic: β of (1 − β)·HAD + β·traffic, in [0, 1]
-  unsigned cost_bits = 0;                  // mlhcc-cost: bits of the cost estimate; 0: a quarter of the key
+  unsigned cost_bits = 0;                  // mlhcc-cost: bits of the cost estimate; 0: an eighth of the key
 };
 
 // mlhcc-cost's split of a key of `bits` bits (cl/keys_cut.h, rs_cost_cut_code): the top-level
-// cut's bits (half the key, as MLHCC), the low-level cut's and the cost estimate's (the rest).
+// cut's bits (half the key, as MLHCC), the cost estimate's (params.cost_bits, or an eighth of the
+// key and at least 1) and the low-level cut's (the rest).
 struct CostSplit {
   unsigned top_bits = 0, low_bits = 0, cost_bits = 0;
 };
