@@ -210,29 +210,14 @@ int study(int argc, char** argv) {
   }
 
   // MLHCC's 32 bits split unevenly between the top-level mask and the representative's low cut
-  // (two_level_cut with top_count + low_count = 32; the paper splits them 16 | 16). Keys from the
-  // kernels' slab test, one box at a time.
+  // (two_level_cut with top_count + low_count = 32; the paper splits them 16 | 16), through the
+  // kernels' two-level code (rs_two_level_split_code, as mlhcc-cost's).
   for (const auto& [top_count, low_count] : {std::pair{8u, 24u}, std::pair{24u, 8u}}) {
-    const TwoLevelCut cut = two_level_cut(p.bvh, es.had(), top_count, low_count);
-    for (std::size_t i = 0; i < rays.size(); ++i) {
-      const RsTraversalRay tr = rs_prepare_ray(rays[i]);
-      auto overlaps = [&](std::uint32_t node) {
-        int hit = 0;
-        rs_intersect_box(tr, &p.bvh.nodes[node], tr.tmax, &hit);
-        return hit != 0;
-      };
-      std::uint64_t top = 0, low = 0;
-      std::size_t representative = cut.top.size();
-      for (std::size_t j = 0; j < cut.top.size(); ++j)
-        if (overlaps(cut.top[j])) {
-          top |= std::uint64_t{1} << (top_count - 1 - j);
-          representative = std::min(representative, j);
-        }
-      if (representative < cut.top.size())
-        for (std::size_t j = 0; j < cut.low[representative].size(); ++j)
-          if (overlaps(cut.low[representative][j])) low |= std::uint64_t{1} << (low_count - 1 - j);
-      key[i] = top << low_count | low;
-    }
+    const TwoLevelTables t = two_level_tables(p.bvh, two_level_cut(p.bvh, es.had(), top_count, low_count), low_count);
+    for (std::size_t i = 0; i < rays.size(); ++i)
+      key[i] = rs_key_from_code(rs_two_level_split_code(rays[i], t.top_groups.data(), static_cast<rs_u32>(t.top.size()),
+                                                        t.low_groups.data(), t.low_count.data(), top_count, low_count),
+                                32);
     report(fmt::format("mlhcc/32 split {} | {}", top_count, low_count), key);
   }
 

@@ -202,17 +202,16 @@ struct SceneBench {
       : prepared(prepare_scene(name, SceneOptions{scene_root, matrix.frame})), spec(matrix) {
     progress.line(fmt::format("{}: {} triangles, BVH {:.0f} ms; generating batches", name, prepared.tris.size(),
                               bvh.build_ms));
+    encoder = std::make_unique<DeviceEncoder>(rt, bvh, prepared.scene.bounds(), spec.params);
     RayGenOptions gen;
     gen.seed = spec.seed;
     if (std::find(spec.encoders.begin(), spec.encoders.end(), Encoder::MLHCC_COST) != spec.encoders.end()) {
       progress.line(fmt::format("{}: first a previous frame (seed {}) for mlhcc-cost's estimates", name, gen.seed + 1));
-      costs = previous_frame_costs(prepared, gen, EncodeScene(bvh, prepared.scene.bounds(), spec.params).frame(),
-                                   spec.batches);
+      costs = previous_frame_costs(prepared, gen, encoder->scene().frame(), spec.batches);
     }
     batches = generate_batches(prepared.scene, prepared.tris, bvh, gen);
     for (TraceVariant v : spec.variants)
       tracers[trace_variant_name(v)] = std::make_unique<Tracer>(rt, bvh, v, spec.layout);
-    encoder = std::make_unique<DeviceEncoder>(rt, bvh, prepared.scene.bounds(), spec.params);
     encoder->warm_up();
   }
   // The batch in a baseline order (render/batches.h), or null when the frame has no such batch.
@@ -276,22 +275,23 @@ struct SceneBench {
   }
 };
 
-// The cells of one encoder × key length × top-k on one batch. hcc-traffic's cut is per batch: it is
-// made here from the previous batch's traffic, and its cells record cut_ms, the host time of the
-// traffic count plus the cut's build and upload (outside the timed rounds).
+// The cells of one encoder × key length × top-k on one batch. hcc-traffic's cut and mlhcc-cost's
+// table are per batch: they are made here from the previous batch's traffic or the previous frame's
+// statistics, and their cells record cut_ms, the host time of that input plus the cut's build and
+// upload (outside the timed rounds).
 std::vector<CellRecord> measure_encoder(BatchBench& bench, SceneBench& scene, std::vector<CellRecord> cells, Encoder e,
                                         const ProtocolSettings& settings) {
   double cut_ms = -1.0;
   if (e == Encoder::HCC_TRAFFIC || e == Encoder::MLHCC_COST) {
-    const double traffic_ms = e == Encoder::HCC_TRAFFIC ? scene.use_traffic_before(cells.front().batch)
-                                                        : scene.use_costs_of_previous_frame(cells.front().batch);
+    const double input_ms = e == Encoder::HCC_TRAFFIC ? scene.use_traffic_before(cells.front().batch)
+                                                      : scene.use_costs_of_previous_frame(cells.front().batch);
     const auto start = std::chrono::steady_clock::now();
     try {
       scene.encoder->prepare(e, cells.front().bits);
     } catch (const Error&) {
       // measure_sorted's own prepare fails the cells with this error
     }
-    cut_ms = traffic_ms + std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    cut_ms = input_ms + std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   }
   std::vector<CellRecord> out = bench.measure_sorted(std::move(cells), e, settings);
   for (CellRecord& c : out) c.cut_ms = cut_ms;

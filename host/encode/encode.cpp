@@ -282,22 +282,29 @@ const EncodeScene::TwoLevel& EncodeScene::two_level(unsigned bits) const {
   TwoLevel t;
   t.half = bits / 2;
   t.cut = two_level_cut(*bvh_, had_, t.half);
-  t.low.assign(t.cut.top.size() * t.half, RsBox{});
-  for (std::size_t i = 0; i < t.cut.top.size(); ++i) {
-    t.top.push_back(to_rs_box(node_box(bvh_->nodes[t.cut.top[i]])));
-    const auto& low = t.cut.low[i];
+  static_cast<TwoLevelTables&>(t) = two_level_tables(*bvh_, t.cut, t.half);
+  return two_levels_.emplace(bits, std::move(t)).first->second;
+}
+
+TwoLevelTables two_level_tables(const Bvh& bvh, const TwoLevelCut& cut, unsigned row) {
+  TwoLevelTables t;
+  t.low.assign(cut.top.size() * row, RsBox{});
+  for (std::size_t i = 0; i < cut.top.size(); ++i) {
+    t.top.push_back(to_rs_box(node_box(bvh.nodes[cut.top[i]])));
+    const auto& low = cut.low[i];
+    if (low.size() > row) throw Error("two_level_tables: a low-level cut longer than its row");
     t.low_count.push_back(static_cast<rs_u32>(low.size()));
-    for (std::size_t j = 0; j < low.size(); ++j) t.low[i * t.half + j] = to_rs_box(node_box(bvh_->nodes[low[j]]));
+    for (std::size_t j = 0; j < low.size(); ++j) t.low[i * row + j] = to_rs_box(node_box(bvh.nodes[low[j]]));
   }
   t.top_groups = rs_cut_groups(t.top.data(), t.top.size());
   for (std::size_t i = 0; i < t.top.size(); ++i) {
-    // Row i: its low_count[i] boxes, then zero groups up to half (rs_cut_bits reads low_count[i]
-    // boxes and places them below the top half).
-    auto row = rs_cut_groups(t.low.data() + i * t.half, t.low_count[i]);
-    row.resize(rs_cut_group_count(t.half), RsCutGroup{});
-    t.low_groups.insert(t.low_groups.end(), row.begin(), row.end());
+    // Row i: its low_count[i] boxes, then zero groups up to `row` (rs_cut_bits reads low_count[i]
+    // boxes and places them below the top level).
+    auto groups = rs_cut_groups(t.low.data() + i * row, t.low_count[i]);
+    groups.resize(rs_cut_group_count(row), RsCutGroup{});
+    t.low_groups.insert(t.low_groups.end(), groups.begin(), groups.end());
   }
-  return two_levels_.emplace(bits, std::move(t)).first->second;
+  return t;
 }
 
 void EncodeScene::set_cost_estimates(std::vector<std::uint64_t> mean_steps) {
@@ -314,18 +321,8 @@ const EncodeScene::CostCut& EncodeScene::cost_cut(unsigned bits) const {
   check_key_bits(Encoder::MLHCC_COST, bits, params_);
   CostCut t;
   t.split = cost_split(bits, params_);
-  const unsigned low_bits = t.split.low_bits;
-  t.cut = two_level_cut(*bvh_, had_, t.split.top_bits, low_bits);
-  for (std::uint32_t n : t.cut.top) t.top.push_back(to_rs_box(node_box(bvh_->nodes[n])));
-  t.top_groups = rs_cut_groups(t.top.data(), t.top.size());
-  for (const auto& low : t.cut.low) {
-    std::vector<RsBox> boxes;
-    for (std::uint32_t n : low) boxes.push_back(to_rs_box(node_box(bvh_->nodes[n])));
-    auto row = rs_cut_groups(boxes.data(), boxes.size());
-    row.resize(rs_cut_group_count(low_bits), RsCutGroup{});
-    t.low_groups.insert(t.low_groups.end(), row.begin(), row.end());
-    t.low_count.push_back(static_cast<rs_u32>(boxes.size()));
-  }
+  t.cut = two_level_cut(*bvh_, had_, t.split.top_bits, t.split.low_bits);
+  static_cast<TwoLevelTables&>(t) = two_level_tables(*bvh_, t.cut, t.split.low_bits);
   // The estimate on cost_bits bits: scaled to the largest bin mean, so the field's range covers
   // this batch's estimates; integer arithmetic, the same on every machine.
   t.cost.assign(RS_COST_BINS, 0u);

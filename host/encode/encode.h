@@ -112,6 +112,17 @@ std::string key_bits_problem(Encoder e, unsigned bits, const EncoderParams& para
 // Throws Error with key_bits_problem's text.
 void check_key_bits(Encoder e, unsigned bits, const EncoderParams& params);
 
+// The tables the two-level kernels read (cl/keys_cut.h, rs_two_level_split_code) for a two-level
+// cut: the top boxes, and boxes [top.size() × row] (row i: the low cut of top i, zero-padded to
+// `row` boxes), both also as sixteen-box groups (rs_cut_groups: ceil(row / 16) groups per row);
+// the low counts per top node. MLHCC's rows are half the key, mlhcc-cost's its low_bits.
+struct TwoLevelTables {
+  std::vector<RsBox> top, low;
+  std::vector<rs_u32> low_count;
+  std::vector<RsCutGroup> top_groups, low_groups;
+};
+TwoLevelTables two_level_tables(const Bvh& bvh, const TwoLevelCut& cut, unsigned row);
+
 // What the keys of one scene depend on, computed on the host once and cached per key length.
 // Holds a reference to the BVH: keep it alive as long as this.
 class EncodeScene {
@@ -155,15 +166,10 @@ class EncodeScene {
     rs_u32 box_count = 0;
   };
   const CutSet& cut_set(Encoder e, unsigned bits) const;
-  // MLHCC for keys of `bits` bits: top boxes (≤ half), low boxes [top.size() × half] (row i: the
-  // low cut of top i, zero-padded), low counts per top node.
-  struct TwoLevel {
+  // MLHCC for keys of `bits` bits: its cut and tables (two_level_tables) with rows of half boxes.
+  struct TwoLevel : TwoLevelTables {
     unsigned half = 0;
     TwoLevelCut cut;
-    std::vector<RsBox> top, low;
-    std::vector<rs_u32> low_count;
-    // top and each row of low as sixteen-box groups (rs_cut_groups): ceil(half / 16) groups per row.
-    std::vector<RsCutGroup> top_groups, low_groups;
   };
   const TwoLevel& two_level(unsigned bits) const;
 
@@ -172,16 +178,12 @@ class EncodeScene {
   // estimate, the cost field is 0 and the key is the cut alone. Setting it drops mlhcc-cost's
   // cached tables; the other encoders' data stays.
   void set_cost_estimates(std::vector<std::uint64_t> mean_steps);
-  const std::vector<std::uint64_t>& cost_estimates() const { return cost_means_; }
   // mlhcc-cost for keys of `bits` bits: the two-level cut of top_bits top nodes with low-level cuts
-  // of low_bits nodes (two_level_cut), as MLHCC's tables (rows of ceil(low_bits / 16) groups), and
+  // of low_bits nodes (two_level_cut), its tables (two_level_tables, rows of low_bits boxes), and
   // per bin the estimate quantised to cost_bits: mean · 2^cost_bits / (largest mean + 1).
-  struct CostCut {
+  struct CostCut : TwoLevelTables {
     CostSplit split;
     TwoLevelCut cut;
-    std::vector<RsBox> top;
-    std::vector<rs_u32> low_count;
-    std::vector<RsCutGroup> top_groups, low_groups;
     std::vector<rs_u32> cost;  // RS_COST_BINS entries
   };
   const CostCut& cost_cut(unsigned bits) const;
