@@ -154,16 +154,17 @@ static inline RsRay rs_load_ray(__global const RsRay* rays, uint index) {
     values[i] = i;                                                                                       \
   }                                                                                                      \
                                                                                                          \
-  /* HCC_REGION (keys_cut.h, rs_region_cut_code): the region grid and frame by value, the regions' \
-   * cuts (one row per region) in global memory: rays of one work-group may read different rows. */ \
-  __kernel void encode_region_cut_##SUFFIX(const RsEncodeFrame frame, const RsRegionGrid grid,            \
+  /* HCC_REGION (keys_cut.h, rs_region_cut_code): the region splits and the regions' cuts (one \
+   * row per region) in global memory: rays of one work-group may read different rows. */         \
+  __kernel void encode_region_cut_##SUFFIX(__global const RsRegionSplit* splits, uint region_bits,       \
                                            __global const RsCutGroup* cuts, __global const uint* cut_count,\
-                                           __global const RsRay* rays, __global const uint* order,       \
-                                           uint count, uint bits, __global KEY_T* keys,                   \
-                                           __global uint* values) {                                       \
+                                           uint row_groups, __global const RsRay* rays,                  \
+                                           __global const uint* order, uint count, uint bits,            \
+                                           __global KEY_T* keys, __global uint* values) {                 \
     uint i = get_global_id(0);                                                                           \
     if (i >= count) return;                                                                              \
-    rs_u64 code = rs_region_cut_code(rays[order[i]], &frame, &grid, cuts, cut_count) & RS_CODE_MASK_##SUFFIX; \
+    rs_u64 code = rs_region_cut_code(rays[order[i]], splits, region_bits, cuts, cut_count, row_groups) &  \
+                  RS_CODE_MASK_##SUFFIX;                                                                 \
     keys[i] = (KEY_T)rs_key_from_code(code, bits);                                                       \
     values[i] = i;                                                                                       \
   }                                                                                                      \

@@ -179,38 +179,42 @@ RS_KEY_INLINE rs_u64 rs_two_level_cut_code(RsRay ray, RS_CUT_SPACE const RsCutGr
 }
 
 /* HCC_REGION (issue 21; the paper's §6 suggestion for open scenes, "dividing the scene into
- * different regions ... and encoding rays in different regions separately"): the scene box is split
- * into 2^r regions (the RegularGrid rule of cut.h: doubling the axis with the longest cells), a ray's
- * region is the cell of its origin, and each region has its own HCC cut of the b − r nodes that
- * overlap it. Code: | region (r bits) | overlap bits of the region's cut nodes | 0 … |.
- * The region grid, 32 bytes, built on the host (host/encode/encode.cpp): per axis the number of
- * levels (2^levels cells) and the shift of its cell index in the region number (row-major, the
- * most-split axis most significant, as regular_grid_cells orders cells); r, and the groups per
- * region row of the cut table. */
+ * different regions ... and encoding rays in different regions separately"): the scene is split
+ * into 2^r regions by a k-d tree of r levels, a ray's region is the cell its origin falls in, and
+ * each region has its own cut of b − r nodes. Code: | region (r bits) | overlap bits of the
+ * region's cut nodes | 0 … |. The host (host/encode/encode.cpp, EncodeScene::regions) places the
+ * splits at the median origin of a previous frame's rays, so the regions hold equal shares of the
+ * rays, and picks each region's cut by the traffic of that region's rays (or, with no previous
+ * frame, halves each cell and cuts by HAD among the nodes overlapping it).
+ *
+ * Split k of the tree (2^r − 1 of them, heap order: the children of k are 2k + 1 and 2k + 2) sends
+ * a ray whose origin has o[axis] ≥ at to the second child. Only comparisons: exact on every device,
+ * and an origin outside the scene box still falls in a region. */
 typedef struct {
-  rs_u32 levels[3];
-  rs_u32 region_bits;
-  rs_u32 shift[3];
-  rs_u32 row_groups;
-} RsRegionGrid;
+  float at;
+  rs_u32 axis;
+} RsRegionSplit;
 
-/* The region of a ray: its origin quantized in the scene box per axis (rs_quantize_axis: the
- * clamp keeps origins on the max faces and outside the box in the border regions). */
-RS_KEY_INLINE rs_u32 rs_region_of(const RsEncodeFrame* f, const RsRegionGrid* g, RsRay ray) {
-  return (rs_quantize_axis(f, 0, ray.o[0], g->levels[0]) << g->shift[0]) |
-         (rs_quantize_axis(f, 1, ray.o[1], g->levels[1]) << g->shift[1]) |
-         (rs_quantize_axis(f, 2, ray.o[2], g->levels[2]) << g->shift[2]);
+/* The region of a ray, 0 … 2^region_bits − 1: the leaf of the split tree its origin reaches. */
+RS_KEY_INLINE rs_u32 rs_region_of(RS_GLOBAL const RsRegionSplit* splits, rs_u32 region_bits, RsRay ray) {
+  rs_u32 k = 0u;
+  for (rs_u32 level = 0u; level < region_bits; ++level) {
+    const RsRegionSplit s = splits[k];
+    k = 2u * k + (ray.o[s.axis] >= s.at ? 2u : 1u);
+  }
+  return k + 1u - (1u << region_bits);
 }
 
 /* The HCC_REGION code: the region in the top region_bits bits, then the overlap bits of row
  * `region` of `cuts` (row_groups groups per region, count[region] boxes, box i at code bit
- * 63 − region_bits − i). With region_bits = 0 there is one region and this is HCC's code. */
-RS_KEY_INLINE rs_u64 rs_region_cut_code(RsRay ray, const RsEncodeFrame* f, const RsRegionGrid* g,
-                                        RS_GLOBAL const RsCutGroup* cuts, RS_GLOBAL const rs_u32* count) {
-  const rs_u32 region = rs_region_of(f, g, ray);
+ * 63 − region_bits − i). With region_bits = 0 there is one region and no split. */
+RS_KEY_INLINE rs_u64 rs_region_cut_code(RsRay ray, RS_GLOBAL const RsRegionSplit* splits, rs_u32 region_bits,
+                                        RS_GLOBAL const RsCutGroup* cuts, RS_GLOBAL const rs_u32* count,
+                                        rs_u32 row_groups) {
+  const rs_u32 region = rs_region_of(splits, region_bits, ray);
   const RsCutRay c = rs_cut_ray(rs_prepare_ray(ray));
-  rs_u64 code = g->region_bits > 0u ? RS_U64(region) << (64u - g->region_bits) : RS_U64(0);
-  code |= rs_cut_bits_g(&c, cuts + region * g->row_groups, count[region], g->region_bits);
+  rs_u64 code = region_bits > 0u ? RS_U64(region) << (64u - region_bits) : RS_U64(0);
+  code |= rs_cut_bits_g(&c, cuts + region * row_groups, count[region], region_bits);
   return code;
 }
 

@@ -396,13 +396,13 @@ TEST(Matrix, NewEncoderKnobsAreRecordedOnlyWhenRun) {
   spec.encoders = {Encoder::HCC_REGION};
   spec.params.region_bits = 5;
   EXPECT_EQ(spec.to_json().at("region_bits"), 5);
-  EXPECT_FALSE(spec.to_json().contains("traffic_blend"));
+  EXPECT_EQ(spec.to_json().at("traffic_blend"), 0.5);  // hcc-region's cuts blend traffic too
   spec.encoders = {Encoder::HCC_TRAFFIC};
   spec.params.traffic_blend = 0.25;
   EXPECT_EQ(spec.to_json().at("traffic_blend"), 0.25);
   EXPECT_FALSE(spec.to_json().contains("region_bits"));
   spec.encoders = {Encoder::MLHCC_COST};
-  EXPECT_FALSE(spec.to_json().contains("cost_bits"));  // the default, a quarter of the key
+  EXPECT_FALSE(spec.to_json().contains("cost_bits"));  // the default, an eighth of the key
   spec.params.cost_bits = 6;
   EXPECT_EQ(spec.to_json().at("cost_bits"), 6);
   EXPECT_EQ(matrix_preset("paper").encoders, all_encoders());  // all three in the paper preset
@@ -417,7 +417,7 @@ TEST(Matrix, CostEstimatesComeFromAnotherFrame) {
   const EncodeScene keys(p.bvh, p.scene.bounds());
   RayGenOptions gen;
   gen.seed = 7;
-  const auto costs = previous_frame_costs(p, gen, keys.frame());
+  const auto costs = previous_frame_statistics(p, gen, keys, true, false);
   RayGenOptions next = gen;
   next.seed = 8;
   const std::vector<ReferencedBatch> other = generate_batches(p.scene, p.tris, p.bvh, next);
@@ -428,17 +428,58 @@ TEST(Matrix, CostEstimatesComeFromAnotherFrame) {
     ASSERT_TRUE(costs.count(name)) << name;
     std::vector<std::uint32_t> steps;
     trace_reference(p.bvh, other[k].batch.rays, nullptr, other[k].batch.any_hit(), &steps);
-    EXPECT_EQ(costs.at(name).first, cost_statistics(keys.frame(), other[k].batch.rays, steps)) << name;
-    EXPECT_GE(costs.at(name).second, 0.0) << name;
+    EXPECT_EQ(costs.at(name).cost_means, cost_statistics(keys.frame(), other[k].batch.rays, steps)) << name;
+    EXPECT_GE(costs.at(name).cost_ms, 0.0) << name;
+    EXPECT_TRUE(costs.at(name).regions.empty()) << name;  // not asked for
     // The measured frame's own statistics differ: its rays are not the ones counted.
     std::vector<std::uint32_t> own_steps;
     trace_reference(p.bvh, own[k].batch.rays, nullptr, own[k].batch.any_hit(), &own_steps);
-    EXPECT_NE(costs.at(name).first, cost_statistics(keys.frame(), own[k].batch.rays, own_steps)) << name;
+    EXPECT_NE(costs.at(name).cost_means, cost_statistics(keys.frame(), own[k].batch.rays, own_steps)) << name;
   }
   // Only the batches asked for are traced (a matrix's batches).
-  const auto some = previous_frame_costs(p, gen, keys.frame(), {"bounce1", "shadow9"});
+  const auto some = previous_frame_statistics(p, gen, keys, true, false, {"bounce1", "shadow9"});
   ASSERT_EQ(some.size(), 1u);
-  EXPECT_EQ(some.at("bounce1").first, costs.at("bounce1").first);
+  EXPECT_EQ(some.at("bounce1").cost_means, costs.at("bounce1").cost_means);
+}
+
+// hcc-region is causal too: its splits and per-region traffic for a batch come from the same batch
+// of the frame of seed + 1, for the encoder's region bits and scene box.
+TEST(Matrix, RegionStatisticsComeFromAnotherFrame) {
+  SceneOptions so;
+  so.frame = {64, 36, 1};
+  const PreparedScene p = prepare_scene("detail-room", so);
+  EncoderParams params;
+  params.region_bits = 2;
+  const EncodeScene keys(p.bvh, p.scene.bounds(), params);
+  RayGenOptions gen;
+  gen.seed = 7;
+  const auto stats = previous_frame_statistics(p, gen, keys, false, true, {"bounce1"});
+  ASSERT_EQ(stats.size(), 1u);
+  const PreviousBatchStatistics& b = stats.at("bounce1");
+  EXPECT_TRUE(b.cost_means.empty());  // not asked for
+  ASSERT_EQ(b.regions.splits.size(), 3u);
+  ASSERT_EQ(b.regions.visits.size(), 4u);
+  RayGenOptions next = gen;
+  next.seed = 8;
+  const auto other = generate_batches(p.scene, p.tris, p.bvh, next);
+  const auto own = generate_batches(p.scene, p.tris, p.bvh, gen);
+  auto bounce1 = [](const std::vector<ReferencedBatch>& frame) -> const ReferencedBatch& {
+    return *std::find_if(frame.begin(), frame.end(), [](const ReferencedBatch& x) { return x.batch.name == "bounce1"; });
+  };
+  const RegionStatistics expected = region_statistics(p.bvh, p.scene.bounds(), bounce1(other).batch.rays, false, 2);
+  EXPECT_EQ(b.regions.visits, expected.visits);
+  for (std::size_t k = 0; k < 3; ++k) {
+    EXPECT_EQ(b.regions.splits[k].axis, expected.splits[k].axis);
+    EXPECT_EQ(b.regions.splits[k].at, expected.splits[k].at);
+  }
+  const RegionStatistics from_own = region_statistics(p.bvh, p.scene.bounds(), bounce1(own).batch.rays, false, 2);
+  EXPECT_NE(b.regions.visits, from_own.visits);
+  // The regions' traffic adds up to the batch's: every ray starts in exactly one region.
+  const std::vector<std::uint64_t> all = node_traffic(p.bvh, bounce1(other).batch.rays, false);
+  std::vector<std::uint64_t> sum(all.size(), 0);
+  for (const auto& region : b.regions.visits)
+    for (const auto& [node, count] : region) sum[node] += count;
+  EXPECT_EQ(sum, all);
 }
 
 // hcc-traffic is causal (issue 21): the traffic for batch k is the previous batch's node traffic,
@@ -565,12 +606,12 @@ TEST(Matrix, EndToEndAndResume) {
       EXPECT_FALSE(c.speedup.has_interval() && !c.same_order_as_nosort) << c.id();
     }
   }
-  // hcc-traffic and mlhcc-cost (issue 21): every cell records its per-batch host cost (the traffic
-  // count and cut; the previous frame's statistics and tables), no other cell does; on primary (no
+  // hcc-traffic, hcc-region and mlhcc-cost (issue 21): every cell records its per-batch host cost
+  // (the traffic count and cut; the previous frame's statistics, cuts and tables), no other cell does; on primary (no
   // earlier batch) hcc-traffic's cut is HCC's, so are its keys; later it uses the previous batch's
   // traffic.
   for (auto& c : rs.cells()) {
-    if (c.encoder == "hcc-traffic" || c.encoder == "mlhcc-cost") {
+    if (c.encoder == "hcc-traffic" || c.encoder == "hcc-region" || c.encoder == "mlhcc-cost") {
       EXPECT_GE(c.cut_ms, 0.0) << c.id();
     } else {
       EXPECT_EQ(c.cut_ms, -1.0) << c.id();
@@ -592,7 +633,7 @@ TEST(Matrix, EndToEndAndResume) {
   EXPECT_TRUE(fs::exists(opts.out + "/overhead-vs-gain-bounce1-32b-permute.png"));
   // meta.json fingerprints every cell's keys and order.
   auto meta = nlohmann::json::parse(read_file(opts.out + "/meta.json"));
-  EXPECT_EQ(meta["matrix"]["region_bits"], 3);  // the new encoders' knobs, since the matrix runs them
+  EXPECT_EQ(meta["matrix"]["region_bits"], 4);  // the new encoders' knobs, since the matrix runs them
   EXPECT_EQ(meta["matrix"]["traffic_blend"], 0.5);
   ASSERT_TRUE(meta.contains("fingerprints"));
   EXPECT_EQ(meta["fingerprints"].size(), rs.cells().size());

@@ -714,12 +714,21 @@ std::uint64_t key(Encoder e, unsigned bits, const EncodeScene& s, const RsRay& r
       break;
     }
     case Encoder::HCC_REGION: {
-      // The region from the origin's grid cell, counted here axis by axis; then one scalar slab test
-      // per cut node of that region.
+      // The region: the one leaf of the split tree all of whose ancestors' conditions the origin
+      // meets, found by testing every leaf bottom-up (the kernel walks down); then one scalar slab
+      // test per cut node of that region.
       const auto& g = s.regions(bits);
-      rs_u32 region = 0;
-      for (int a = 0; a < 3; ++a) region += rs_quantize_axis(f, a, r.o[a], g.grid.levels[a]) * (1u << g.grid.shift[a]);
-      const rs_u32 rb = g.grid.region_bits;
+      const rs_u32 rb = g.region_bits;
+      rs_u32 region = 0, matches = 0;
+      for (rs_u32 leaf = 0; leaf < (1u << rb); ++leaf) {
+        bool inside = true;
+        for (rs_u32 k = leaf + (1u << rb) - 1u; k > 0; k = (k - 1) / 2) {
+          const RsRegionSplit sp = g.splits.at((k - 1) / 2);
+          inside = inside && ((k % 2 == 0) == (r.o[sp.axis] >= sp.at));  // even k: the second child
+        }
+        if (inside) region = leaf, ++matches;
+      }
+      EXPECT_EQ(matches, 1u);
       if (rb > 0) code = rs_u64(region) << (64u - rb);
       const RsTraversalRay tr = rs_prepare_ray(r);
       const auto& cut = g.cuts.at(region);
@@ -1037,10 +1046,10 @@ TEST(Encode, CutGroupsMatchTheScalarSlabTest) {
 
 TEST(Encode, NewEncoderKnobsAreValidated) {
   EncoderParams p;
-  EXPECT_EQ(p.region_bits, 3u);
+  EXPECT_EQ(p.region_bits, 4u);
   EXPECT_EQ(p.traffic_blend, 0.5);
   EXPECT_EQ(key_bits_problem(Encoder::HCC_REGION, 16, p), "");
-  EXPECT_NE(key_bits_problem(Encoder::HCC_REGION, 3, p).find("more than 3 bits"), std::string::npos);
+  EXPECT_NE(key_bits_problem(Encoder::HCC_REGION, 4, p).find("more than 4 bits"), std::string::npos);
   p.region_bits = 0;
   EXPECT_EQ(key_bits_problem(Encoder::HCC_REGION, 1, p), "");
   p.region_bits = kMaxRegionBits;
@@ -1080,7 +1089,7 @@ const DetailRoom& detail_room() {
 }
 }  // namespace
 
-// hcc-region: 2^r regions (the grid rule), each region's cut nodes all overlap it, are at most
+// hcc-region without statistics: 2^r regions (each split halves its cell), each region's cut nodes all overlap it, are at most
 // b − r and in descending HAD; a ray from inside region k has k in its top r bits, so rays from
 // different regions get different top bits; with r = 0 the keys are HCC's.
 TEST(Encode, RegionKeysStartWithTheOriginsRegion) {
@@ -1151,6 +1160,73 @@ TEST(Encode, RegionKernelMatchesTheHostForEveryRegionWidth) {
         ASSERT_EQ(keys[i], ref::key(Encoder::HCC_REGION, bits, dev.scene(), rays[i])) << "r " << r << " bits " << bits;
     }
   }
+}
+
+// hcc-region with a previous frame's statistics: the splits put half of the sample's origins on
+// each side (up to ties), each region's cut is the HAD/traffic priority cut of the traffic of the
+// rays that start in it (HCC's cut for a region none starts in), and the kernel equals the host twin
+// and the bottom-up reference. Statistics of the wrong shape are refused.
+TEST(Encode, RegionsFromAPreviousFrameSplitAtMedianOriginsAndCutByTraffic) {
+  const DetailRoom& d = detail_room();
+  const auto& sample = d.batches.back();  // the deepest bounce: origins spread over the room
+  ASSERT_GT(sample.batch.size(), 100u);
+  const std::vector<RsRay>& rays = sample.batch.rays;
+  for (unsigned r : {0u, 2u, 3u}) {
+    EncoderParams p;
+    p.region_bits = r;
+    DeviceEncoder dev(testing::runtime(), d.bvh, d.box, p);
+    RegionStatistics stats;
+    stats.splits = median_region_splits(d.box, rays, r);
+    ASSERT_EQ(stats.splits.size(), (1u << r) - 1u);
+    std::vector<std::vector<RsRay>> starting_in(1u << r);
+    for (const RsRay& x : rays) starting_in[rs_region_of(stats.splits.data(), r, x)].push_back(x);
+    std::size_t fewest = rays.size(), most = 0;
+    for (const auto& group : starting_in) fewest = std::min(fewest, group.size()), most = std::max(most, group.size());
+    EXPECT_LE(most - fewest, std::size_t{1} << r) << "r " << r;  // medians: equal shares up to one per split
+    std::vector<std::vector<std::uint64_t>> dense;
+    for (std::size_t k = 0; k < starting_in.size(); ++k) {
+      // Region 0 gets no traffic in this test: a region no ray started in.
+      dense.push_back(k == 0 && r > 0 ? std::vector<std::uint64_t>{} : node_traffic(d.bvh, starting_in[k], sample.batch.any_hit()));
+      std::vector<std::pair<std::uint32_t, std::uint64_t>> sparse;
+      for (std::size_t n = 0; n < dense.back().size(); ++n)
+        if (dense.back()[n]) sparse.emplace_back(static_cast<std::uint32_t>(n), dense.back()[n]);
+      stats.visits.push_back(sparse);
+    }
+    dev.set_region_statistics(stats);
+    for (unsigned bits : {16u, 32u, 64u}) {
+      const auto& g = dev.scene().regions(bits);
+      for (std::size_t k = 0; k < starting_in.size(); ++k) {
+        const std::vector<double> priority = traffic_priority(dev.scene().had(), dense[k], p.traffic_blend);
+        EXPECT_EQ(g.cuts[k], priority_cut(d.bvh, priority, bits - r, 0, &dev.scene().had())) << "r " << r << " region " << k;
+      }
+      if (r > 0) {
+        EXPECT_EQ(g.cuts[0], dev.scene().hcc_cut(bits - r));
+      }
+      const std::vector<RsRay> edges = edge_rays(dev.scene(), d.box, 1000);
+      expect_device_equals_host(dev, Encoder::HCC_REGION, bits, edges, "with statistics, r = " + std::to_string(r));
+      for (const auto& rb : d.batches)
+        expect_device_equals_host(dev, Encoder::HCC_REGION, bits, rb.batch.rays, "with statistics, r = " + std::to_string(r));
+      const auto keys = encode_on_host(Encoder::HCC_REGION, bits, dev.scene(), edges);
+      for (std::size_t i = 0; i < edges.size(); ++i)
+        ASSERT_EQ(keys[i], ref::key(Encoder::HCC_REGION, bits, dev.scene(), edges[i])) << "r " << r << " bits " << bits;
+    }
+    // Clearing the statistics returns to the halved cells and HAD's region cuts.
+    dev.set_region_statistics({});
+    EncodeScene plain(d.bvh, d.box, p);
+    EXPECT_EQ(dev.scene().regions(32).cuts, plain.regions(32).cuts);
+  }
+  EncoderParams p;
+  p.region_bits = 2;
+  EncodeScene s(d.bvh, d.box, p);
+  RegionStatistics wrong;
+  wrong.splits = median_region_splits(d.box, rays, 3);
+  wrong.visits.resize(8);
+  EXPECT_THROW(s.set_region_statistics(wrong), Error);  // 8 regions for a 4-region code
+  RegionStatistics outside;
+  outside.splits = median_region_splits(d.box, rays, 2);
+  outside.visits.resize(4);
+  outside.visits[1].emplace_back(static_cast<std::uint32_t>(d.bvh.nodes.size()), 1);
+  EXPECT_THROW(s.set_region_statistics(outside), Error);  // a node the BVH does not have
 }
 
 // Node traffic: the root's count is the rays entering the scene box, and no node is entered by more

@@ -32,7 +32,7 @@ struct EncodeBenchArgs {
   bool verify = true;
   int direction_bits = -1;  // HCC_DIR's direction bits; -1: the default (EncoderParams)
   int region_bits = -1;     // hcc-region's region bits; -1: the default
-  double traffic_blend = -1;  // hcc-traffic's blend; -1: the default
+  double traffic_blend = -1;  // hcc-traffic's and hcc-region's blend; -1: the default
   int cost_bits = -1;         // mlhcc-cost's cost bits; -1: the default
   CommonOptions common;
 };
@@ -71,10 +71,16 @@ int run_encodebench(const EncodeBenchArgs& args) {
   // hcc-traffic: its cut from the traffic of the batch traced before this one, as raysort run makes it.
   if (std::find(encoders.begin(), encoders.end(), Encoder::HCC_TRAFFIC) != encoders.end())
     enc.set_node_traffic(traffic_before(bvh, batches, args.batch));
-  // mlhcc-cost: its estimates from the same batch of a previous frame, as raysort run makes them.
-  if (std::find(encoders.begin(), encoders.end(), Encoder::MLHCC_COST) != encoders.end()) {
-    auto costs = previous_frame_costs(prepared, args.common.raygen_options(), enc.scene().frame(), {args.batch});
-    if (auto it = costs.find(args.batch); it != costs.end()) enc.set_cost_estimates(std::move(it->second.first));
+  // mlhcc-cost and hcc-region: their input from the same batch of a previous frame, as raysort run
+  // makes it.
+  auto runs = [&](Encoder e) { return std::find(encoders.begin(), encoders.end(), e) != encoders.end(); };
+  if (runs(Encoder::MLHCC_COST) || runs(Encoder::HCC_REGION)) {
+    auto previous = previous_frame_statistics(prepared, args.common.raygen_options(), enc.scene(),
+                                              runs(Encoder::MLHCC_COST), runs(Encoder::HCC_REGION), {args.batch});
+    if (auto it = previous.find(args.batch); it != previous.end()) {
+      if (runs(Encoder::MLHCC_COST)) enc.set_cost_estimates(std::move(it->second.cost_means));
+      if (runs(Encoder::HCC_REGION)) enc.set_region_statistics(std::move(it->second.regions));
+    }
   }
   Tracer tracer(rt, bvh);
   enc.warm_up();
@@ -159,7 +165,7 @@ void register_encode_command(CLI::App& app) {
   cmd->add_option("--direction-bits", args->direction_bits,
                   "HCC_DIR direction bits (more than 1 runs its two-pass kernels, as `run --direction-bits` does)");
   cmd->add_option("--region-bits", args->region_bits, "hcc-region region bits (as `run --region-bits`)");
-  cmd->add_option("--traffic-blend", args->traffic_blend, "hcc-traffic blend (as `run --traffic-blend`)");
+  cmd->add_option("--traffic-blend", args->traffic_blend, "hcc-traffic and hcc-region blend (as `run --traffic-blend`)");
   cmd->add_option("--cost-bits", args->cost_bits, "mlhcc-cost cost bits (as `run --cost-bits`)");
   add_protocol_options(*cmd, args->protocol);
   cmd->add_flag("!--no-verify", args->verify, "skip the comparison with the host twin");

@@ -138,11 +138,12 @@ void register_run_command(CLI::App& app) {
   cmd->add_option("--twopoint-length", a->twopoint, "TwoPoint ray length as a fraction of the largest extent (0.25)");
   cmd->add_option("--direction-bits", a->direction_bits, "HCC_DIR direction bits");
   cmd->add_option("--region-bits", a->region_bits,
-                  "hcc-region: key bits that pick the ray origin's region, 2^N regions of the scene box (0-8, default "
-                  "3; docs/encoders.md)");
+                  "hcc-region: key bits that pick the ray origin's region, 2^N regions split at a previous frame's "
+                  "median origins (0-8, default 4; docs/encoders.md)");
   cmd->add_option("--traffic-blend", a->traffic_blend,
-                  "hcc-traffic: beta of the cut priority (1 - beta) HAD + beta traffic of the previous batch (0-1, "
-                  "default 0.5; docs/encoders.md)");
+                  "hcc-traffic and hcc-region: beta of the cut priority (1 - beta) HAD + beta traffic (hcc-traffic: of "
+                  "the previous batch; hcc-region: of the region's rays in a previous frame; 0-1, default 0.5; "
+                  "docs/encoders.md)");
   cmd->add_option("--cost-bits", a->cost_bits,
                   "mlhcc-cost: key bits of the traversal-cost estimate from a previous frame (1-31 and fewer than half "
                   "the key; default an eighth of the key; docs/encoders.md)");

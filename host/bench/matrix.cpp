@@ -60,7 +60,7 @@ nlohmann::json MatrixSpec::to_json() const {
   // written before they existed keeps its entry (and resumes).
   auto runs = [&](Encoder e) { return std::find(encoders.begin(), encoders.end(), e) != encoders.end(); };
   if (runs(Encoder::HCC_REGION)) j["region_bits"] = params.region_bits;
-  if (runs(Encoder::HCC_TRAFFIC)) j["traffic_blend"] = params.traffic_blend;
+  if (runs(Encoder::HCC_TRAFFIC) || runs(Encoder::HCC_REGION)) j["traffic_blend"] = params.traffic_blend;
   if (runs(Encoder::MLHCC_COST) && params.cost_bits > 0) j["cost_bits"] = params.cost_bits;
   // Likewise the sampling overrides: a set that keeps the scenes' own shadow rays and depth has no entry.
   if (frame.shadow_rays) j["shadow_rays"] = frame.shadow_rays;

@@ -120,7 +120,7 @@ void to_json(nlohmann::json& j, const CellRecord& r) {
                      {"order_hash", r.order_hash},
                      {"leaks_per_million", r.leaks_per_million}};
   if (!r.gpu.profile.empty()) j["gpu_model"] = gpu_model_json(r.gpu);
-  if (r.cut_ms >= 0) j["cut_ms"] = r.cut_ms;  // hcc-traffic only (added within format version 3)
+  if (r.cut_ms >= 0) j["cut_ms"] = r.cut_ms;  // the encoders with per-batch input (added within format version 3)
   timing_to_json(j, "encode", r.encode);
   timing_to_json(j, "sort", r.sort);
   timing_to_json(j, "permute", r.permute);

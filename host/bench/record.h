@@ -95,9 +95,10 @@ struct CellRecord {
   // -1 when not measured.
   double leaks_per_million = -1.0;
 
-  // hcc-traffic cells (issue 21): the host time, ms, its per-batch cut cost: counting the previous
-  // batch's node traffic (node_traffic) plus building and uploading the cut for this key length.
-  // Not part of encode (the kernel time) or of net_speedup. -1 (absent in JSON) for other cells.
+  // hcc-traffic, hcc-region and mlhcc-cost cells (issue 21): the host time, ms, of the per-batch
+  // input (docs/measurement.md): counting the traffic or statistics it learns from, plus building
+  // and uploading its cut or tables for this key length. Not part of encode (the kernel time) or of
+  // net_speedup. -1 (absent in JSON) for other cells.
   double cut_ms = -1.0;
 
   // Checks and fingerprints (deterministic: equal on every device for the same command).

@@ -194,8 +194,8 @@ struct SceneBench {
   std::map<std::pair<const ReferencedBatch*, std::string>, std::vector<RsHit>> references;  // by batch, variant
   // hcc-traffic's node visits of the batch before, and the ms their count took, by batch name.
   std::map<std::string, std::pair<std::vector<std::uint64_t>, double>> traffic;
-  // mlhcc-cost's estimates from a previous frame, and the ms their count took, by batch name.
-  std::map<std::string, std::pair<std::vector<std::uint64_t>, double>> costs;
+  // mlhcc-cost's estimates and hcc-region's statistics from a previous frame, by batch name.
+  std::map<std::string, PreviousBatchStatistics> previous;
 
   SceneBench(Runtime& rt, const std::string& name, const MatrixSpec& matrix, const std::string& scene_root,
              Progress& progress)
@@ -205,9 +205,12 @@ struct SceneBench {
     encoder = std::make_unique<DeviceEncoder>(rt, bvh, prepared.scene.bounds(), spec.params);
     RayGenOptions gen;
     gen.seed = spec.seed;
-    if (std::find(spec.encoders.begin(), spec.encoders.end(), Encoder::MLHCC_COST) != spec.encoders.end()) {
-      progress.line(fmt::format("{}: first a previous frame (seed {}) for mlhcc-cost's estimates", name, gen.seed + 1));
-      costs = previous_frame_costs(prepared, gen, encoder->scene().frame(), spec.batches);
+    auto runs = [&](Encoder e) { return std::find(spec.encoders.begin(), spec.encoders.end(), e) != spec.encoders.end(); };
+    if (runs(Encoder::MLHCC_COST) || runs(Encoder::HCC_REGION)) {
+      progress.line(fmt::format("{}: first a previous frame (seed {}) for mlhcc-cost's and hcc-region's statistics",
+                                name, gen.seed + 1));
+      previous = previous_frame_statistics(prepared, gen, encoder->scene(), runs(Encoder::MLHCC_COST),
+                                           runs(Encoder::HCC_REGION), spec.batches);
     }
     batches = generate_batches(prepared.scene, prepared.tris, bvh, gen);
     for (TraceVariant v : spec.variants)
@@ -256,13 +259,20 @@ struct SceneBench {
     encoder->set_node_traffic(it->second.first);
     return it->second.second;
   }
-  // mlhcc-cost (docs/encoders.md): its estimates for batch `name` come from the same batch of a
-  // previous frame (previous_frame_costs); a batch that frame lacks gets none (the cut alone). Sets
-  // them on the encoder; returns the host ms their count took.
-  double use_costs_of_previous_frame(const std::string& name) {
-    auto it = costs.find(name);
-    encoder->set_cost_estimates(it == costs.end() ? std::vector<std::uint64_t>{} : it->second.first);
-    return it == costs.end() ? 0.0 : it->second.second;
+  // mlhcc-cost and hcc-region (docs/encoders.md): their input for batch `name` comes from the same
+  // batch of a previous frame (previous_frame_statistics); a batch that frame lacks gets none
+  // (mlhcc-cost: the cut alone; hcc-region: halved cells and HAD cuts). Sets it on the encoder;
+  // returns the host ms its trace and statistics took.
+  double use_previous_frame(Encoder e, const std::string& name) {
+    auto it = previous.find(name);
+    const PreviousBatchStatistics none;
+    const PreviousBatchStatistics& stats = it == previous.end() ? none : it->second;
+    if (e == Encoder::HCC_REGION) {
+      encoder->set_region_statistics(stats.regions);
+      return stats.regions_ms;
+    }
+    encoder->set_cost_estimates(stats.cost_means);
+    return stats.cost_ms;
   }
   // Rays this variant misses that the other one hits, per million (-1 unless both variants run).
   double leaks_per_million(const ReferencedBatch& b, const std::string& variant, bool both_variants) {
@@ -275,16 +285,16 @@ struct SceneBench {
   }
 };
 
-// The cells of one encoder × key length × top-k on one batch. hcc-traffic's cut and mlhcc-cost's
-// table are per batch: they are made here from the previous batch's traffic or the previous frame's
-// statistics, and their cells record cut_ms, the host time of that input plus the cut's build and
+// The cells of one encoder × key length × top-k on one batch. hcc-traffic's cut, hcc-region's regions
+// and mlhcc-cost's table are per batch: they are made here from the previous batch's traffic or the
+// previous frame's statistics, and their cells record cut_ms, the host time of that input plus the cut's build and
 // upload (outside the timed rounds).
 std::vector<CellRecord> measure_encoder(BatchBench& bench, SceneBench& scene, std::vector<CellRecord> cells, Encoder e,
                                         const ProtocolSettings& settings) {
   double cut_ms = -1.0;
-  if (e == Encoder::HCC_TRAFFIC || e == Encoder::MLHCC_COST) {
+  if (e == Encoder::HCC_TRAFFIC || e == Encoder::MLHCC_COST || e == Encoder::HCC_REGION) {
     const double input_ms = e == Encoder::HCC_TRAFFIC ? scene.use_traffic_before(cells.front().batch)
-                                                      : scene.use_costs_of_previous_frame(cells.front().batch);
+                                                      : scene.use_previous_frame(e, cells.front().batch);
     const auto start = std::chrono::steady_clock::now();
     try {
       scene.encoder->prepare(e, cells.front().bits);
@@ -390,21 +400,55 @@ std::vector<std::uint64_t> traffic_before(const Bvh& bvh, const std::vector<Refe
   return {};
 }
 
-std::map<std::string, std::pair<std::vector<std::uint64_t>, double>> previous_frame_costs(
-    const PreparedScene& scene, const RayGenOptions& gen, const RsEncodeFrame& keys,
-    const std::vector<std::string>& wanted) {
+RegionStatistics region_statistics(const Bvh& bvh, const Aabb& box, const std::vector<RsRay>& rays, bool any_hit,
+                                   unsigned r) {
+  return region_statistics(bvh, median_region_splits(box, rays, r), r, rays, any_hit);
+}
+
+RegionStatistics region_statistics(const Bvh& bvh, std::vector<RsRegionSplit> splits, unsigned r,
+                                   const std::vector<RsRay>& rays, bool any_hit) {
+  RegionStatistics stats;
+  stats.splits = std::move(splits);
+  std::vector<std::vector<RsRay>> starting_in(std::size_t{1} << r);
+  for (const RsRay& ray : rays) starting_in[rs_region_of(stats.splits.data(), r, ray)].push_back(ray);
+  for (const std::vector<RsRay>& group : starting_in) {
+    std::vector<std::pair<std::uint32_t, std::uint64_t>> visited;
+    const std::vector<std::uint64_t> visits = group.empty() ? std::vector<std::uint64_t>{} : node_traffic(bvh, group, any_hit);
+    for (std::size_t n = 0; n < visits.size(); ++n)
+      if (visits[n] > 0) visited.emplace_back(static_cast<std::uint32_t>(n), visits[n]);
+    stats.visits.push_back(std::move(visited));
+  }
+  return stats;
+}
+
+std::map<std::string, PreviousBatchStatistics> previous_frame_statistics(const PreparedScene& scene,
+                                                                        const RayGenOptions& gen,
+                                                                        const EncodeScene& keys, bool costs,
+                                                                        bool regions,
+                                                                        const std::vector<std::string>& wanted) {
   RayGenOptions previous = gen;
   previous.seed = gen.seed + 1;
   const std::vector<ReferencedBatch> frame = generate_batches(scene.scene, scene.tris, scene.bvh, previous);
-  std::map<std::string, std::pair<std::vector<std::uint64_t>, double>> out;
+  std::map<std::string, PreviousBatchStatistics> out;
+  auto since = [](auto start) {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  };
   for (const ReferencedBatch& b : frame) {
     if (!wanted.empty() && std::find(wanted.begin(), wanted.end(), b.batch.name) == wanted.end()) continue;
-    const auto start = std::chrono::steady_clock::now();
-    std::vector<std::uint32_t> steps;
-    trace_reference(scene.bvh, b.batch.rays, nullptr, b.batch.any_hit(), &steps);
-    std::vector<std::uint64_t> means = cost_statistics(keys, b.batch.rays, steps);
-    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-    out.emplace(b.batch.name, std::pair{std::move(means), ms});
+    PreviousBatchStatistics& stats = out[b.batch.name];
+    if (costs) {
+      const auto start = std::chrono::steady_clock::now();
+      std::vector<std::uint32_t> steps;
+      trace_reference(scene.bvh, b.batch.rays, nullptr, b.batch.any_hit(), &steps);
+      stats.cost_means = cost_statistics(keys.frame(), b.batch.rays, steps);
+      stats.cost_ms = since(start);
+    }
+    if (regions) {
+      const auto start = std::chrono::steady_clock::now();
+      stats.regions =
+          region_statistics(scene.bvh, keys.box(), b.batch.rays, b.batch.any_hit(), keys.params().region_bits);
+      stats.regions_ms = since(start);
+    }
   }
   return out;
 }

@@ -23,7 +23,7 @@ const char* parameter_label(const std::string& p) {
   if (p == "had_lambda") return "λ (HAD, Eq. 1)";
   if (p == "twopoint_length_fraction") return "TwoPoint average distance (× largest extent)";
   if (p == "region_bits") return "hcc-region region bits";
-  if (p == "traffic_blend") return "hcc-traffic blend β";
+  if (p == "traffic_blend") return "hcc-traffic and hcc-region blend β";
   if (p == "cost_bits") return "mlhcc-cost cost bits";
   return "HCC_DIR direction bits";
 }

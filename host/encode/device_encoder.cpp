@@ -65,6 +65,7 @@ const DeviceEncoder::Uploaded& DeviceEncoder::uploaded(Encoder e, unsigned bits)
     const auto& g = scene_.regions(bits);
     u.a = rt_.upload(what + "region cut boxes", g.groups);
     u.b = rt_.upload(what + "region cut sizes", g.counts);
+    u.c = rt_.upload(what + "region splits", g.splits);
     u.n = static_cast<std::uint32_t>(g.counts.size());
   } else if (family(e) == EncoderFamily::TwoLevel) {
     const auto& t = scene_.two_level(bits);
@@ -91,6 +92,11 @@ void DeviceEncoder::prepare(Encoder e, unsigned bits) {
 void DeviceEncoder::set_node_traffic(std::vector<std::uint64_t> visits) {
   scene_.set_node_traffic(std::move(visits));
   std::erase_if(uploads_, [](const auto& kv) { return kv.first.first == static_cast<int>(Encoder::HCC_TRAFFIC); });
+}
+
+void DeviceEncoder::set_region_statistics(RegionStatistics stats) {
+  scene_.set_region_statistics(std::move(stats));
+  std::erase_if(uploads_, [](const auto& kv) { return kv.first.first == static_cast<int>(Encoder::HCC_REGION); });
 }
 
 void DeviceEncoder::set_cost_estimates(std::vector<std::uint64_t> mean_steps) {
@@ -169,15 +175,18 @@ DeviceEncoder::Events DeviceEncoder::enqueue(Encoder e, unsigned bits, const cl:
                 k->setArg(arg++, count);
                 break;
               }
-              case EncoderFamily::RegionCut:
-                k->setArg(arg++, sizeof(RsEncodeFrame), &scene_.frame());
-                k->setArg(arg++, sizeof(RsRegionGrid), &scene_.regions(bits).grid);
+              case EncoderFamily::RegionCut: {
+                const auto& g = scene_.regions(bits);
+                k->setArg(arg++, u.c);
+                k->setArg(arg++, static_cast<cl_uint>(g.region_bits));
                 k->setArg(arg++, u.a);
                 k->setArg(arg++, u.b);
+                k->setArg(arg++, static_cast<cl_uint>(g.row_groups));
                 k->setArg(arg++, rays);
                 k->setArg(arg++, order);
                 k->setArg(arg++, count);
                 break;
+              }
               case EncoderFamily::TwoLevel:
                 k->setArg(arg++, u.a);
                 k->setArg(arg++, u.n);

@@ -14,7 +14,7 @@
 namespace raysort {
 
 static_assert(sizeof(RsBox) == 24 && sizeof(RsEncodeFrame) == 48 && sizeof(RsCutGroup) == 384 &&
-                  sizeof(RsRegionGrid) == 32,
+                  sizeof(RsRegionSplit) == 8,
               "device struct layouts (cl/keys.h, cl/keys_cut.h)");
 
 const std::vector<EncoderInfo>& encoder_table() {
@@ -34,7 +34,8 @@ const std::vector<EncoderInfo>& encoder_table() {
       {Encoder::PPC, "ppc", {"prefix-path", "prefix-path-code"}, F::PrefixPath, "encode_prefix_path", 165, false},
       {Encoder::HCC_DIR, "hcc-dir", {}, F::BoxSet, "encode_box_set", 150, false},
       // Beyond the paper (issue 21). Cost weights estimated from HCC's (not yet measured): the
-      // region code reads its rows from global memory; hcc-traffic adds a host traversal per batch.
+      // region code walks its split tree and reads its row from global memory; the cut inputs of
+      // hcc-region and hcc-traffic are host traversals, outside the weight.
       {Encoder::HCC_REGION, "hcc-region", {"region"}, F::RegionCut, "encode_region_cut", 135, false},
       {Encoder::HCC_TRAFFIC, "hcc-traffic", {"traffic"}, F::BoxSet, "encode_box_set", 135, false},
       // MLHCC's tables plus an origin cell and an octahedral direction cell per ray and one table
@@ -233,33 +234,113 @@ const std::vector<std::uint32_t>& EncodeScene::traffic_cut(unsigned size) const 
   return it->second;
 }
 
+namespace {
+
+// The axis along which a k-d cell is split: its longest (ties: the lower axis).
+rs_u32 longest_axis(const Aabb& cell) {
+  rs_u32 axis = 0;
+  for (rs_u32 a = 1; a < 3; ++a)
+    if (cell.max[a] - cell.min[a] > cell.max[axis] - cell.min[axis]) axis = a;
+  return axis;
+}
+
+}  // namespace
+
+std::vector<RsRegionSplit> median_region_splits(const Aabb& box, const std::vector<RsRay>& rays, unsigned r) {
+  std::vector<RsRegionSplit> splits((std::size_t{1} << r) - 1);
+  std::vector<std::array<float, 3>> origins;
+  origins.reserve(rays.size());
+  for (const RsRay& ray : rays) origins.push_back({ray.o[0], ray.o[1], ray.o[2]});
+  // Split k of a cell holding origins [begin, end); its children are 2k + 1 and 2k + 2.
+  auto split = [&](auto&& self, std::size_t k, Aabb cell, std::size_t begin, std::size_t end, unsigned level) -> void {
+    if (level == r) return;
+    const rs_u32 axis = longest_axis(cell);
+    float at = 0.5f * (cell.min[axis] + cell.max[axis]);
+    if (end > begin) {
+      const auto mid = origins.begin() + static_cast<std::ptrdiff_t>(begin + (end - begin) / 2);
+      std::nth_element(origins.begin() + static_cast<std::ptrdiff_t>(begin), mid,
+                       origins.begin() + static_cast<std::ptrdiff_t>(end),
+                       [axis](const auto& p, const auto& q) { return p[axis] < q[axis]; });
+      at = std::clamp((*mid)[axis], cell.min[axis], cell.max[axis]);
+    }
+    splits[k] = RsRegionSplit{at, axis};
+    // The children's origins as rs_region_of sends them (ties to the second child).
+    const auto second = std::partition(origins.begin() + static_cast<std::ptrdiff_t>(begin),
+                                       origins.begin() + static_cast<std::ptrdiff_t>(end),
+                                       [&](const auto& p) { return !(p[axis] >= at); });
+    const auto middle = static_cast<std::size_t>(second - origins.begin());
+    Aabb low = cell, high = cell;
+    low.max[axis] = at;
+    high.min[axis] = at;
+    self(self, 2 * k + 1, low, begin, middle, level + 1);
+    self(self, 2 * k + 2, high, middle, end, level + 1);
+  };
+  split(split, 0, box, 0, origins.size(), 0);
+  return splits;
+}
+
+std::vector<Aabb> region_boxes(const Aabb& box, const std::vector<RsRegionSplit>& splits, unsigned r) {
+  std::vector<Aabb> cells(std::size_t{1} << r);
+  auto walk = [&](auto&& self, std::size_t k, Aabb cell, unsigned level) -> void {
+    if (level == r) {
+      cells[k + 1 - cells.size()] = cell;
+      return;
+    }
+    const RsRegionSplit s = splits.at(k);
+    Aabb low = cell, high = cell;
+    low.max[s.axis] = s.at;
+    high.min[s.axis] = s.at;
+    self(self, 2 * k + 1, low, level + 1);
+    self(self, 2 * k + 2, high, level + 1);
+  };
+  walk(walk, 0, box, 0);
+  return cells;
+}
+
+void EncodeScene::set_region_statistics(RegionStatistics stats) {
+  const std::size_t regions = std::size_t{1} << params_.region_bits;
+  if (!stats.empty() && (stats.splits.size() != regions - 1 || stats.visits.size() != regions))
+    throw Error("region statistics for " + std::to_string(stats.visits.size()) + " regions, hcc-region has " +
+                std::to_string(regions) + " (" + std::to_string(params_.region_bits) + " region bits)");
+  for (const auto& region : stats.visits)
+    for (const auto& [node, count] : region)
+      if (node >= bvh_->nodes.size())
+        throw Error("region statistics name node " + std::to_string(node) + ", the BVH has " +
+                    std::to_string(bvh_->nodes.size()));
+  region_stats_ = std::move(stats);
+  regions_.clear();
+}
+
 const EncodeScene::Regions& EncodeScene::regions(unsigned bits) const {
   auto it = regions_.find(bits);
   if (it != regions_.end()) return it->second;
   check_key_bits(Encoder::HCC_REGION, bits, params_);
   const unsigned r = params_.region_bits, size = bits - r;
   Regions g;
-  // The regions: RegularGrid's cells for 2^r cells (cut.h), numbered as regular_grid_cells orders
-  // them: row-major, the most-split axis most significant (ties: lower axis).
-  const auto shape = regular_grid_shape(box_, 1u << r);
-  std::array<int, 3> axes{0, 1, 2};
-  std::stable_sort(axes.begin(), axes.end(), [&](int x, int y) { return shape[x] > shape[y]; });
-  rs_u32 shift = 0;
-  for (int k = 2; k >= 0; --k) {
-    const int a = axes[k];
-    g.grid.levels[a] = static_cast<rs_u32>(std::countr_zero(shape[a]));
-    g.grid.shift[a] = shift;
-    shift += g.grid.levels[a];
-  }
-  g.grid.region_bits = r;
-  g.grid.row_groups = rs_cut_group_count(size);
-  g.boxes = regular_grid_cells(box_, 1u << r);
-  for (const Aabb& region : g.boxes) {
-    g.cuts.push_back(region_cut(*bvh_, had_, size, region));
+  g.region_bits = r;
+  g.row_groups = rs_cut_group_count(size);
+  const bool measured = !region_stats_.empty();
+  g.splits = measured ? region_stats_.splits : median_region_splits(box_, {}, r);
+  g.boxes = region_boxes(box_, g.splits, r);
+  if (g.splits.empty()) g.splits.push_back(RsRegionSplit{0.0f, 0u});  // r = 0: unused, but a buffer
+  std::vector<double> visits(measured ? bvh_->nodes.size() : 0);
+  for (std::size_t region = 0; region < g.boxes.size(); ++region) {
+    if (measured) {
+      // Where this region's rays went: HAD blended with their traffic (a region no ray started in
+      // has none, and gets HCC's cut).
+      std::vector<std::uint64_t> traffic;
+      if (!region_stats_.visits[region].empty()) {
+        traffic.assign(bvh_->nodes.size(), 0);
+        for (const auto& [node, count] : region_stats_.visits[region]) traffic[node] = count;
+      }
+      g.cuts.push_back(priority_cut(*bvh_, traffic_priority(had_, traffic, params_.traffic_blend), size, 0, &had_));
+    } else {
+      g.cuts.push_back(region_cut(*bvh_, had_, size, g.boxes[region]));
+    }
     std::vector<RsBox> boxes;
     for (std::uint32_t n : g.cuts.back()) boxes.push_back(to_rs_box(node_box(bvh_->nodes[n])));
     auto row = rs_cut_groups(boxes.data(), boxes.size());
-    row.resize(g.grid.row_groups, RsCutGroup{});
+    row.resize(g.row_groups, RsCutGroup{});
     g.groups.insert(g.groups.end(), row.begin(), row.end());
     g.counts.push_back(static_cast<rs_u32>(boxes.size()));
   }
@@ -373,7 +454,8 @@ std::uint64_t encode_ray(Encoder e, unsigned bits, const EncodeScene& scene, con
     }
     case EncoderFamily::RegionCut: {
       const auto& g = scene.regions(bits);
-      return rs_key_from_code(rs_region_cut_code(ray, &scene.frame(), &g.grid, g.groups.data(), g.counts.data()), bits);
+      return rs_key_from_code(
+          rs_region_cut_code(ray, g.splits.data(), g.region_bits, g.groups.data(), g.counts.data(), g.row_groups), bits);
     }
     case EncoderFamily::TwoLevel: {
       const auto& t = scene.two_level(bits);

@@ -89,8 +89,8 @@ struct EncoderParams {
   float twopoint_length_fraction = 0.25f;  // TwoPoint ray length, × largest scene extent (paper §5)
   double had_lambda = 0.125;               // λ of HAD, Eq. 1 (paper §4.2.2)
   unsigned direction_bits = 1;             // HCC_DIR: d direction bits after b − d cut bits (appendix)
-  unsigned region_bits = 3;                // hcc-region: r bits of the origin's region (2^r regions), 0..8
-  double traffic_blend = 0.5;              // hcc-traffic: β of (1 − β)·HAD + β·traffic, in [0, 1]
+  unsigned region_bits = 4;                // hcc-region: r bits of the origin's region (2^r regions), 0..8
+  double traffic_blend = 0.5;              // hcc-traffic, hcc-region: β of (1 − β)·HAD + β·traffic, in [0, 1]
   unsigned cost_bits = 0;                  // mlhcc-cost: bits of the cost estimate; 0: an eighth of the key
 };
 
@@ -123,6 +123,24 @@ struct TwoLevelTables {
 };
 TwoLevelTables two_level_tables(const Bvh& bvh, const TwoLevelCut& cut, unsigned row);
 
+// hcc-region's regions (docs/encoders.md): a k-d tree of r levels over `box`, split k in heap order
+// (cl/keys_cut.h, RsRegionSplit). median_region_splits places each split, along its cell's longest
+// axis (ties: the lower axis), at the median origin of the rays in that cell (the upper median;
+// rays with o[axis] ≥ at go to the second child, as rs_region_of sends them), or at the cell's
+// middle when no ray is in it; with no rays every split halves its cell. Deterministic.
+std::vector<RsRegionSplit> median_region_splits(const Aabb& box, const std::vector<RsRay>& rays, unsigned r);
+// The 2^r cells of a split tree, in region order.
+std::vector<Aabb> region_boxes(const Aabb& box, const std::vector<RsRegionSplit>& splits, unsigned r);
+
+// hcc-region's input from a previous frame's batch (region_statistics, bench/runner.h): the splits
+// at its rays' median origins, and per region the node traffic (trace/tracer.h, node_traffic) of
+// the rays that start there, kept sparse: (node, visits) pairs of the visited nodes, by node.
+struct RegionStatistics {
+  std::vector<RsRegionSplit> splits;
+  std::vector<std::vector<std::pair<std::uint32_t, std::uint64_t>>> visits;
+  bool empty() const { return visits.empty(); }  // no statistics (visits has 2^r entries otherwise)
+};
+
 // What the keys of one scene depend on, computed on the host once and cached per key length.
 // Holds a reference to the BVH: keep it alive as long as this.
 class EncodeScene {
@@ -131,6 +149,7 @@ class EncodeScene {
 
   const Bvh& bvh() const { return *bvh_; }
   const EncoderParams& params() const { return params_; }
+  const Aabb& box() const { return box_; }  // the scene box the keys quantise and hcc-region splits
   const RsEncodeFrame& frame() const { return frame_; }
   const std::vector<double>& had() const { return had_; }
 
@@ -146,11 +165,19 @@ class EncodeScene {
   // HAD, then node index. Cached until the traffic changes.
   const std::vector<std::uint32_t>& traffic_cut(unsigned size) const;
 
-  // hcc-region for keys of `bits` bits: the region grid (cl/keys_cut.h, RsRegionGrid), each
-  // region's box (regular_grid_cells of the scene box, in region-number order), its cut of
-  // bits − r nodes (region_cut) and the cuts as sixteen-box groups, row_groups per region.
+  // hcc-region's input from a previous frame (region_statistics, bench/runner.h): the split tree
+  // for params.region_bits and each region's node traffic. Without it (the default) each split
+  // halves its cell and each region's cut is HAD's among the nodes overlapping it. Setting it drops
+  // hcc-region's cached regions; the other encoders' data stays.
+  void set_region_statistics(RegionStatistics stats);
+  // hcc-region for keys of `bits` bits (cl/keys_cut.h, rs_region_cut_code): the split tree (at
+  // least one entry, a kernel argument; 2^r − 1 used), each region's box (region_boxes), its cut of
+  // bits − r nodes and the cuts as sixteen-box groups, row_groups per region. With statistics a
+  // region's cut is priority_cut by traffic_priority(HAD, the region's traffic, β), else region_cut.
   struct Regions {
-    RsRegionGrid grid{};
+    rs_u32 region_bits = 0;
+    rs_u32 row_groups = 0;
+    std::vector<RsRegionSplit> splits;
     std::vector<Aabb> boxes;
     std::vector<std::vector<std::uint32_t>> cuts;
     std::vector<RsCutGroup> groups;
@@ -200,6 +227,7 @@ class EncodeScene {
   mutable std::map<unsigned, TwoLevel> two_levels_;
   std::vector<std::uint64_t> traffic_;
   mutable std::map<unsigned, std::vector<std::uint32_t>> traffic_cuts_;
+  RegionStatistics region_stats_;
   mutable std::map<unsigned, Regions> regions_;
   std::vector<std::uint64_t> cost_means_;
   mutable std::map<unsigned, CostCut> cost_cuts_;
@@ -250,6 +278,8 @@ class DeviceEncoder {
   // hcc-traffic's per-batch input (EncodeScene::set_node_traffic); its uploaded cuts are dropped,
   // the next prepare or enqueue builds and uploads the new ones.
   void set_node_traffic(std::vector<std::uint64_t> visits);
+  // hcc-region's previous-frame input (EncodeScene::set_region_statistics); its uploads are dropped.
+  void set_region_statistics(RegionStatistics stats);
   // mlhcc-cost's per-batch input (EncodeScene::set_cost_estimates); its uploaded tables are dropped.
   void set_cost_estimates(std::vector<std::uint64_t> mean_steps);
   // Runs every kernel once on a few rays (PoCL compiles kernels at their first launch). Returns ms.
