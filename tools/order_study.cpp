@@ -46,17 +46,11 @@
 #include "trace/tracer.h"
 #include "traverse_wide.h"
 #include "util/error.h"
+#include "study.h"
 
 using namespace raysort;
 
 namespace {
-
-std::vector<std::uint32_t> stable_order(const std::vector<std::uint64_t>& keys) {
-  std::vector<std::uint32_t> order(keys.size());
-  std::iota(order.begin(), order.end(), 0u);
-  std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return keys[a] < keys[b]; });
-  return order;
-}
 
 // Steps of each ray's traversal on the wide tree the kernels walk (fast variant).
 std::vector<std::uint32_t> step_counts(const Bvh& bvh, const std::vector<RsRay>& rays, bool any_hit) {
@@ -72,33 +66,21 @@ std::vector<std::uint32_t> step_counts(const Bvh& bvh, const std::vector<RsRay>&
   return steps;
 }
 
-int study(int argc, char** argv) {
-  if (argc < 2) throw Error("usage: order_study SCENE [WIDTHxHEIGHT] [BATCH]   (default 960x540 bounce1)");
-  const std::string scene = argv[1];
-  SceneOptions options;
-  options.frame = parse_resolution(argc > 2 ? argv[2] : "960x540");
-  options.frame.spp = 1;
-  const std::string batch = argc > 3 ? argv[3] : "bounce1";
+int run_study(int argc, char** argv) {
+  const study::Args args = study::parse_args("order_study", argc, argv, "960x540");
+  const std::string& scene = args.scene;
+  const std::string& batch = args.batch;
+  const SceneOptions& options = args.options;
   const PreparedScene p = prepare_scene(scene, options);
   RayGenOptions gen;  // the matrix's seed (1)
   const std::vector<ReferencedBatch> frame = generate_batches(p.scene, p.tris, p.bvh, gen);
-  const auto it = std::find_if(frame.begin(), frame.end(), [&](const ReferencedBatch& b) { return b.batch.name == batch; });
-  if (it == frame.end()) throw Error(fmt::format("scene {} has no batch {}", scene, batch));
+  const ReferencedBatch* it = &study::find_batch(frame, args);
   const std::vector<RsRay>& rays = it->batch.rays;
   const bool any_hit = it->batch.any_hit();
   const EncodeScene es(p.bvh, p.scene.bounds(), {});
-  const SimtModel nosort = simt_model(p.bvh, rays, nullptr, any_hit);
+  const study::OrderReport report(p.bvh, rays, any_hit, 38);
   fmt::print("{} {} at {}x{}: {} rays (lane and distinct-node ratios vs NoSort; ANC of the sorted keys)\n", scene,
              batch, options.frame.width, options.frame.height, rays.size());
-  auto report = [&](const std::string& name, const std::vector<std::uint64_t>& keys) {
-    const std::vector<std::uint32_t> order = stable_order(keys);
-    const SimtModel m = simt_model(p.bvh, rays, order.data(), any_hit);
-    std::vector<std::uint64_t> sorted(keys.size());
-    for (std::size_t i = 0; i < order.size(); ++i) sorted[i] = keys[order[i]];
-    fmt::print("  {:38} lane {:.3f}  distinct nodes {:.3f}  ANC {:6.2f}\n", name, m.lane_efficiency / nosort.lane_efficiency,
-               m.distinct_nodes_per_visit / nosort.distinct_nodes_per_visit, average_number_of_codes(sorted));
-    std::fflush(stdout);
-  };
   for (unsigned bits : {32u, 64u})
     for (Encoder e : {Encoder::HCC, Encoder::MLHCC, Encoder::TwoPoint, Encoder::PPC})
       report(fmt::format("{}/{}", encoder_name(e), bits), encode_on_host(e, bits, es, rays));
@@ -240,9 +222,7 @@ int study(int argc, char** argv) {
     RayGenOptions prev_gen;
     prev_gen.seed = 2;
     const std::vector<ReferencedBatch> prev_frame = generate_batches(p.scene, p.tris, p.bvh, prev_gen);
-    const auto prev =
-        std::find_if(prev_frame.begin(), prev_frame.end(), [&](const ReferencedBatch& b) { return b.batch.name == batch; });
-    if (prev == prev_frame.end()) throw Error(fmt::format("the frame of seed 2 has no batch {}", batch));
+    const ReferencedBatch* prev = &study::find_batch(prev_frame, args);
     std::vector<std::uint32_t> prev_steps;
     trace_reference(p.bvh, prev->batch.rays, nullptr, any_hit, &prev_steps);
     const std::vector<std::uint64_t> causal_means = cost_statistics(es.frame(), prev->batch.rays, prev_steps);
@@ -279,11 +259,4 @@ int study(int argc, char** argv) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  try {
-    return study(argc, argv);
-  } catch (const std::exception& e) {
-    fmt::print(stderr, "order_study: {}\n", e.what());
-    return 2;
-  }
-}
+int main(int argc, char** argv) { return study::run("order_study", run_study, argc, argv); }
