@@ -323,7 +323,6 @@ const EncodeScene::Regions& EncodeScene::regions(unsigned bits) const {
   g.splits = measured ? region_stats_.splits : median_region_splits(box_, {}, r);
   g.boxes = region_boxes(box_, g.splits, r);
   if (g.splits.empty()) g.splits.push_back(RsRegionSplit{0.0f, 0u});  // r = 0: unused, but a buffer
-  std::vector<double> visits(measured ? bvh_->nodes.size() : 0);
   for (std::size_t region = 0; region < g.boxes.size(); ++region) {
     if (measured) {
       // Where this region's rays went: HAD blended with their traffic (a region no ray started in
