@@ -1089,9 +1089,9 @@ const DetailRoom& detail_room() {
 }
 }  // namespace
 
-// hcc-region without statistics: 2^r regions (each split halves its cell), each region's cut nodes all overlap it, are at most
-// b − r and in descending HAD; a ray from inside region k has k in its top r bits, so rays from
-// different regions get different top bits; with r = 0 the keys are HCC's.
+// hcc-region without statistics: 2^r regions (each split halves its cell); each region's cut nodes
+// all overlap it, are at most b − r and in descending HAD; a ray from inside region k has k in its
+// top r bits, so rays from different regions get different top bits; with r = 0 the keys are HCC's.
 TEST(Encode, RegionKeysStartWithTheOriginsRegion) {
   const DetailRoom& d = detail_room();
   for (unsigned r : {1u, 3u, 5u}) {
