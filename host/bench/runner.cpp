@@ -207,8 +207,10 @@ struct SceneBench {
     gen.seed = spec.seed;
     auto runs = [&](Encoder e) { return std::find(spec.encoders.begin(), spec.encoders.end(), e) != spec.encoders.end(); };
     if (runs(Encoder::MLHCC_COST) || runs(Encoder::HCC_REGION)) {
-      progress.line(fmt::format("{}: first a previous frame (seed {}) for mlhcc-cost's and hcc-region's statistics",
-                                name, gen.seed + 1));
+      const char* whose = !runs(Encoder::HCC_REGION) ? "mlhcc-cost's"
+                          : !runs(Encoder::MLHCC_COST) ? "hcc-region's"
+                                                       : "mlhcc-cost's and hcc-region's";
+      progress.line(fmt::format("{}: first a previous frame (seed {}) for {} statistics", name, gen.seed + 1, whose));
       previous = previous_frame_statistics(prepared, gen, encoder->scene(), runs(Encoder::MLHCC_COST),
                                            runs(Encoder::HCC_REGION), spec.batches);
     }
