@@ -442,6 +442,35 @@ TEST(Matrix, CostEstimatesComeFromAnotherFrame) {
   EXPECT_EQ(some.at("bounce1").cost_means, costs.at("bounce1").cost_means);
 }
 
+// A previous frame whose batch has no rays (every primary ray missed, say) still gives hcc-region
+// statistics of the right shape: every split halves its cell, no region has traffic, and every
+// region's cut is HCC's.
+TEST(Matrix, RegionStatisticsOfAnEmptyBatch) {
+  SceneOptions so;
+  so.frame = {64, 36, 1};
+  const PreparedScene p = prepare_scene("detail-room", so);
+  EncoderParams params;
+  params.region_bits = 3;
+  EncodeScene keys(p.bvh, p.scene.bounds(), params);
+  const RegionStatistics stats = region_statistics(p.bvh, p.scene.bounds(), {}, false, 3);
+  ASSERT_EQ(stats.splits.size(), 7u);
+  ASSERT_EQ(stats.visits.size(), 8u);
+  for (const auto& region : stats.visits) EXPECT_TRUE(region.empty());
+  const std::vector<RsRegionSplit> halves = median_region_splits(p.scene.bounds(), {}, 3);
+  const Aabb box = p.scene.bounds();
+  rs_u32 longest = 0;
+  for (rs_u32 a = 1; a < 3; ++a)
+    if (box.max[a] - box.min[a] > box.max[longest] - box.min[longest]) longest = a;
+  EXPECT_EQ(halves[0].axis, longest);
+  EXPECT_EQ(halves[0].at, 0.5f * (box.min[longest] + box.max[longest]));
+  for (std::size_t k = 0; k < 7; ++k) {
+    EXPECT_EQ(stats.splits[k].axis, halves[k].axis);
+    EXPECT_EQ(stats.splits[k].at, halves[k].at);
+  }
+  keys.set_region_statistics(stats);
+  for (const auto& cut : keys.regions(32).cuts) EXPECT_EQ(cut, keys.hcc_cut(29));
+}
+
 // hcc-region is causal too: its splits and per-region traffic for a batch come from the same batch
 // of the frame of seed + 1, for the encoder's region bits and scene box.
 TEST(Matrix, RegionStatisticsComeFromAnotherFrame) {
