@@ -17,8 +17,8 @@
 //     TwoPoint's top 32 bits as a tie-break (a 64-bit key), and MLHCC with its 16 top-node bits
 //     folded into the representative's index to free 11 bits for TwoPoint (a 32-bit key); HCC/24 or
 //     MLHCC/24 with TwoPoint's top 8 bits (32-bit keys), and HCC/32 with TwoPoint/32 (64 bits);
-//   - MLHCC/32 with another representative top node: the one the ray enters first, or the one of
-//     lowest HAD (the paper takes the highest).
+//   - MLHCC/32 with another representative top node: the one the ray enters first, the one of
+//     lowest HAD (the paper takes the highest), or the one the previous frame's rays entered most.
 //   - MLHCC/32 with its bits split 8 | 24 or 24 | 8 between the top mask and the low cut; MLHCC
 //     with PPC's first box tests as the tie-break (mlhcc/24 | ppc/8, mlhcc/32 | ppc/32);
 //   - a causal estimate of traversal length (mlhcc-cost's table): the previous frame's mean step
@@ -155,15 +155,24 @@ int run_study(int argc, char** argv) {
   for (std::size_t i = 0; i < key.size(); ++i) key[i] = hcc[i] << 32 | twopoint[i] >> 32;
   report("hcc/32 | twopoint/32 (64 bits)", key);
 
+  // The same batch of the frame of seed 2 (the study's frame is seed 1): the previous frame the
+  // causal rows below learn from, as `raysort run` draws it.
+  RayGenOptions prev_gen;
+  prev_gen.seed = 2;
+  const std::vector<ReferencedBatch> prev_frame = generate_batches(p.scene, p.tris, p.bvh, prev_gen);
+  const ReferencedBatch* prev = &study::find_batch(prev_frame, args);
+
   // MLHCC's representative (issue 21's optional item; the paper: a single representative "can
   // significantly impact" the quality). The paper's rule takes the overlapped top node of highest
   // HAD; the alternatives take the one the ray enters first (the kernels' slab test,
-  // rs_intersect_box), or the one of lowest HAD. The low bits are then that node's low-level cut,
-  // as in rs_two_level_cut_code.
+  // rs_intersect_box), the one of lowest HAD, or the one the previous frame's rays of this batch
+  // entered most (node_traffic; ties: the higher HAD). The low bits are then that node's low-level
+  // cut, as in rs_two_level_cut_code.
   {
+    const std::vector<std::uint64_t> traffic = node_traffic(p.bvh, prev->batch.rays, any_hit);
     const EncodeScene::TwoLevel& tl = es.two_level(32);
     const rs_u32 groups = rs_cut_group_count(tl.half);
-    std::vector<std::uint64_t> entered_first(rays.size(), 0), lowest_had(rays.size(), 0);
+    std::vector<std::uint64_t> entered_first(rays.size(), 0), lowest_had(rays.size(), 0), most_traffic(rays.size(), 0);
     for (std::size_t i = 0; i < rays.size(); ++i) {
       const auto top = static_cast<std::uint32_t>(mlhcc[i] >> tl.half);  // bit half − 1 − j: top node j
       if (top == 0) continue;  // no top node overlapped: key 0 under every rule
@@ -186,9 +195,15 @@ int run_study(int argc, char** argv) {
         if (entry < nearest) nearest = entry, first = j;
       }
       entered_first[i] = key_with(first);
+      rs_u32 busiest = tl.half;
+      for (rs_u32 j = 0; j < tl.cut.top.size(); ++j)
+        if (top >> (tl.half - 1 - j) & 1u)
+          if (busiest == tl.half || traffic[tl.cut.top[j]] > traffic[tl.cut.top[busiest]]) busiest = j;
+      most_traffic[i] = key_with(busiest);
     }
     report("mlhcc/32, representative entered first", entered_first);
     report("mlhcc/32, representative of lowest HAD", lowest_had);
+    report("mlhcc/32, busiest representative", most_traffic);
   }
 
   // MLHCC's 32 bits split unevenly between the top-level mask and the representative's low cut
@@ -219,10 +234,6 @@ int run_study(int argc, char** argv) {
   // MLHCC/32 (64-bit keys), or in the last 8 bits of HCC/24 or MLHCC/24 (quantised as mlhcc-cost
   // quantises); the same table built from this frame (an oracle); and mlhcc-cost itself.
   {
-    RayGenOptions prev_gen;
-    prev_gen.seed = 2;
-    const std::vector<ReferencedBatch> prev_frame = generate_batches(p.scene, p.tris, p.bvh, prev_gen);
-    const ReferencedBatch* prev = &study::find_batch(prev_frame, args);
     std::vector<std::uint32_t> prev_steps;
     trace_reference(p.bvh, prev->batch.rays, nullptr, any_hit, &prev_steps);
     const std::vector<std::uint64_t> causal_means = cost_statistics(es.frame(), prev->batch.rays, prev_steps);
