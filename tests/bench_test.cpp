@@ -63,6 +63,25 @@ std::map<std::string, std::string> deterministic(const ResultSet& rs) {
   return m;
 }
 
+// detail-room at 64x36, 1 spp: the scene of the tests of the encoders' per-batch inputs.
+const PreparedScene& tiny_detail_room() {
+  static const PreparedScene p = [] {
+    SceneOptions so;
+    so.frame = {64, 36, 1};
+    return prepare_scene("detail-room", so);
+  }();
+  return p;
+}
+
+// Two split trees of hcc-region are the same split by split (RsRegionSplit is a C struct).
+void expect_same_splits(const std::vector<RsRegionSplit>& a, const std::vector<RsRegionSplit>& b) {
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    EXPECT_EQ(a[k].axis, b[k].axis) << "split " << k;
+    EXPECT_EQ(a[k].at, b[k].at) << "split " << k;
+  }
+}
+
 int run_cli(const std::vector<std::string>& args, int kill_after_ms = -1, int kill_after_cells = 0) {
   pid_t pid = fork();
   if (pid == 0) {
@@ -411,9 +430,7 @@ TEST(Matrix, NewEncoderKnobsAreRecordedOnlyWhenRun) {
 // mlhcc-cost is causal (issue 21): its estimates for a batch come from the same batch of another
 // frame (seed + 1), traced on the host; never from the frame being measured.
 TEST(Matrix, CostEstimatesComeFromAnotherFrame) {
-  SceneOptions so;
-  so.frame = {64, 36, 1};
-  const PreparedScene p = prepare_scene("detail-room", so);
+  const PreparedScene& p = tiny_detail_room();
   const EncodeScene keys(p.bvh, p.scene.bounds());
   RayGenOptions gen;
   gen.seed = 7;
@@ -446,9 +463,7 @@ TEST(Matrix, CostEstimatesComeFromAnotherFrame) {
 // statistics of the right shape: every split halves its cell, no region has traffic, and every
 // region's cut is HCC's.
 TEST(Matrix, RegionStatisticsOfAnEmptyBatch) {
-  SceneOptions so;
-  so.frame = {64, 36, 1};
-  const PreparedScene p = prepare_scene("detail-room", so);
+  const PreparedScene& p = tiny_detail_room();
   EncoderParams params;
   params.region_bits = 3;
   EncodeScene keys(p.bvh, p.scene.bounds(), params);
@@ -463,10 +478,7 @@ TEST(Matrix, RegionStatisticsOfAnEmptyBatch) {
     if (box.max[a] - box.min[a] > box.max[longest] - box.min[longest]) longest = a;
   EXPECT_EQ(halves[0].axis, longest);
   EXPECT_EQ(halves[0].at, 0.5f * (box.min[longest] + box.max[longest]));
-  for (std::size_t k = 0; k < 7; ++k) {
-    EXPECT_EQ(stats.splits[k].axis, halves[k].axis);
-    EXPECT_EQ(stats.splits[k].at, halves[k].at);
-  }
+  expect_same_splits(stats.splits, halves);
   keys.set_region_statistics(stats);
   for (const auto& cut : keys.regions(32).cuts) EXPECT_EQ(cut, keys.hcc_cut(29));
 }
@@ -474,9 +486,7 @@ TEST(Matrix, RegionStatisticsOfAnEmptyBatch) {
 // hcc-region is causal too: its splits and per-region traffic for a batch come from the same batch
 // of the frame of seed + 1, for the encoder's region bits and scene box.
 TEST(Matrix, RegionStatisticsComeFromAnotherFrame) {
-  SceneOptions so;
-  so.frame = {64, 36, 1};
-  const PreparedScene p = prepare_scene("detail-room", so);
+  const PreparedScene& p = tiny_detail_room();
   EncoderParams params;
   params.region_bits = 2;
   const EncodeScene keys(p.bvh, p.scene.bounds(), params);
@@ -497,10 +507,7 @@ TEST(Matrix, RegionStatisticsComeFromAnotherFrame) {
   };
   const RegionStatistics expected = region_statistics(p.bvh, p.scene.bounds(), bounce1(other).batch.rays, false, 2);
   EXPECT_EQ(b.regions.visits, expected.visits);
-  for (std::size_t k = 0; k < 3; ++k) {
-    EXPECT_EQ(b.regions.splits[k].axis, expected.splits[k].axis);
-    EXPECT_EQ(b.regions.splits[k].at, expected.splits[k].at);
-  }
+  expect_same_splits(b.regions.splits, expected.splits);
   const RegionStatistics from_own = region_statistics(p.bvh, p.scene.bounds(), bounce1(own).batch.rays, false, 2);
   EXPECT_NE(b.regions.visits, from_own.visits);
   // The regions' traffic adds up to the batch's: every ray starts in exactly one region.
@@ -514,9 +521,7 @@ TEST(Matrix, RegionStatisticsComeFromAnotherFrame) {
 // hcc-traffic is causal (issue 21): the traffic for batch k is the previous batch's node traffic,
 // and it does not change when batch k or any later batch changes; the frame's first batch has none.
 TEST(Matrix, TrafficForABatchComesOnlyFromTheBatchBefore) {
-  SceneOptions so;
-  so.frame = {64, 36, 1};
-  const PreparedScene p = prepare_scene("detail-room", so);
+  const PreparedScene& p = tiny_detail_room();
   std::vector<ReferencedBatch> frame = generate_batches(p.scene, p.tris, p.bvh, {});
   ASSERT_GE(frame.size(), 4u);
   EXPECT_EQ(frame[0].batch.name, "primary");

@@ -66,21 +66,14 @@ int run_study(int argc, char** argv) {
     // The HAD cuts of a split tree's cells, in the layout hcc-region's code reads (the region's
     // overlap-restricted cuts: what EncodeScene::regions does without statistics).
     auto had_keys = [&](const std::vector<RsRegionSplit>& splits) {
-      const std::vector<Aabb> cells = region_boxes(box, splits, r);
-      std::vector<std::vector<RsCutGroup>> rows;
-      std::vector<rs_u32> counts;
-      for (const Aabb& cell : cells) {
-        std::vector<RsBox> boxes;
-        for (std::uint32_t n : region_cut(p.bvh, es.had(), 32 - r, cell)) boxes.push_back(to_rs_box(node_box(p.bvh.nodes[n])));
-        rows.push_back(rs_cut_groups(boxes.data(), boxes.size()));
-        counts.push_back(static_cast<rs_u32>(boxes.size()));
-      }
+      std::vector<std::vector<std::uint32_t>> cuts;
+      for (const Aabb& cell : region_boxes(box, splits, r)) cuts.push_back(region_cut(p.bvh, es.had(), 32 - r, cell));
+      const CutRows rows = cut_rows(p.bvh, cuts, 32 - r);
       std::vector<std::uint64_t> keys(rays.size());
-      for (std::size_t i = 0; i < rays.size(); ++i) {
-        const rs_u32 g = rs_region_of(splits.data(), r, rays[i]);
-        const RsCutRay c = rs_cut_ray(rs_prepare_ray(rays[i]));
-        keys[i] = rs_key_from_code(RS_U64(g) << (64u - r) | rs_cut_bits_g(&c, rows[g].data(), counts[g], r), 32);
-      }
+      for (std::size_t i = 0; i < rays.size(); ++i)
+        keys[i] = rs_key_from_code(rs_region_cut_code(rays[i], splits.data(), r, rows.groups.data(), rows.counts.data(),
+                                                      rs_cut_group_count(32 - r)),
+                                   32);
       return keys;
     };
     auto traffic_keys = [&](const std::vector<RsRegionSplit>& splits) {

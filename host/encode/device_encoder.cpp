@@ -89,19 +89,23 @@ void DeviceEncoder::prepare(Encoder e, unsigned bits) {
   uploaded(e, bits);
 }
 
+void DeviceEncoder::drop_uploads(Encoder e) {
+  std::erase_if(uploads_, [e](const auto& kv) { return kv.first.first == static_cast<int>(e); });
+}
+
 void DeviceEncoder::set_node_traffic(std::vector<std::uint64_t> visits) {
   scene_.set_node_traffic(std::move(visits));
-  std::erase_if(uploads_, [](const auto& kv) { return kv.first.first == static_cast<int>(Encoder::HCC_TRAFFIC); });
+  drop_uploads(Encoder::HCC_TRAFFIC);
 }
 
 void DeviceEncoder::set_region_statistics(RegionStatistics stats) {
   scene_.set_region_statistics(std::move(stats));
-  std::erase_if(uploads_, [](const auto& kv) { return kv.first.first == static_cast<int>(Encoder::HCC_REGION); });
+  drop_uploads(Encoder::HCC_REGION);
 }
 
 void DeviceEncoder::set_cost_estimates(std::vector<std::uint64_t> mean_steps) {
   scene_.set_cost_estimates(std::move(mean_steps));
-  std::erase_if(uploads_, [](const auto& kv) { return kv.first.first == static_cast<int>(Encoder::MLHCC_COST); });
+  drop_uploads(Encoder::MLHCC_COST);
 }
 
 void DeviceEncoder::Events::wait() const {

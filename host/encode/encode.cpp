@@ -244,6 +244,14 @@ rs_u32 longest_axis(const Aabb& cell) {
   return axis;
 }
 
+// The two children of a k-d cell at a split: below `at` on its axis, and from `at` on.
+std::pair<Aabb, Aabb> split_cell(const Aabb& cell, RsRegionSplit s) {
+  Aabb low = cell, high = cell;
+  low.max[s.axis] = s.at;
+  high.min[s.axis] = s.at;
+  return {low, high};
+}
+
 }  // namespace
 
 std::vector<RsRegionSplit> median_region_splits(const Aabb& box, const std::vector<RsRay>& rays, unsigned r) {
@@ -269,9 +277,7 @@ std::vector<RsRegionSplit> median_region_splits(const Aabb& box, const std::vect
                                        origins.begin() + static_cast<std::ptrdiff_t>(end),
                                        [&](const auto& p) { return !(p[axis] >= at); });
     const auto middle = static_cast<std::size_t>(second - origins.begin());
-    Aabb low = cell, high = cell;
-    low.max[axis] = at;
-    high.min[axis] = at;
+    const auto [low, high] = split_cell(cell, splits[k]);
     self(self, 2 * k + 1, low, begin, middle, level + 1);
     self(self, 2 * k + 2, high, middle, end, level + 1);
   };
@@ -286,10 +292,7 @@ std::vector<Aabb> region_boxes(const Aabb& box, const std::vector<RsRegionSplit>
       cells[k + 1 - cells.size()] = cell;
       return;
     }
-    const RsRegionSplit s = splits.at(k);
-    Aabb low = cell, high = cell;
-    low.max[s.axis] = s.at;
-    high.min[s.axis] = s.at;
+    const auto [low, high] = split_cell(cell, splits.at(k));
     self(self, 2 * k + 1, low, level + 1);
     self(self, 2 * k + 2, high, level + 1);
   };
@@ -336,13 +339,10 @@ const EncodeScene::Regions& EncodeScene::regions(unsigned bits) const {
     } else {
       g.cuts.push_back(region_cut(*bvh_, had_, size, g.boxes[region]));
     }
-    std::vector<RsBox> boxes;
-    for (std::uint32_t n : g.cuts.back()) boxes.push_back(to_rs_box(node_box(bvh_->nodes[n])));
-    auto row = rs_cut_groups(boxes.data(), boxes.size());
-    row.resize(g.row_groups, RsCutGroup{});
-    g.groups.insert(g.groups.end(), row.begin(), row.end());
-    g.counts.push_back(static_cast<rs_u32>(boxes.size()));
   }
+  CutRows rows = cut_rows(*bvh_, g.cuts, size);
+  g.groups = std::move(rows.groups);
+  g.counts = std::move(rows.counts);
   return regions_.emplace(bits, std::move(g)).first->second;
 }
 
@@ -366,24 +366,30 @@ const EncodeScene::TwoLevel& EncodeScene::two_level(unsigned bits) const {
   return two_levels_.emplace(bits, std::move(t)).first->second;
 }
 
+CutRows cut_rows(const Bvh& bvh, const std::vector<std::vector<std::uint32_t>>& cuts, unsigned row) {
+  CutRows rows;
+  rows.boxes.assign(cuts.size() * row, RsBox{});
+  for (std::size_t i = 0; i < cuts.size(); ++i) {
+    if (cuts[i].size() > row)
+      throw Error("cut_rows: a cut of " + std::to_string(cuts[i].size()) + " nodes in a row of " + std::to_string(row));
+    for (std::size_t j = 0; j < cuts[i].size(); ++j) rows.boxes[i * row + j] = to_rs_box(node_box(bvh.nodes[cuts[i][j]]));
+    rows.counts.push_back(static_cast<rs_u32>(cuts[i].size()));
+    // Row i: its counts[i] boxes, then zero groups up to `row` (rs_cut_bits reads counts[i] boxes).
+    auto groups = rs_cut_groups(rows.boxes.data() + i * row, cuts[i].size());
+    groups.resize(rs_cut_group_count(row), RsCutGroup{});
+    rows.groups.insert(rows.groups.end(), groups.begin(), groups.end());
+  }
+  return rows;
+}
+
 TwoLevelTables two_level_tables(const Bvh& bvh, const TwoLevelCut& cut, unsigned row) {
   TwoLevelTables t;
-  t.low.assign(cut.top.size() * row, RsBox{});
-  for (std::size_t i = 0; i < cut.top.size(); ++i) {
-    t.top.push_back(to_rs_box(node_box(bvh.nodes[cut.top[i]])));
-    const auto& low = cut.low[i];
-    if (low.size() > row) throw Error("two_level_tables: a low-level cut longer than its row");
-    t.low_count.push_back(static_cast<rs_u32>(low.size()));
-    for (std::size_t j = 0; j < low.size(); ++j) t.low[i * row + j] = to_rs_box(node_box(bvh.nodes[low[j]]));
-  }
+  for (std::uint32_t n : cut.top) t.top.push_back(to_rs_box(node_box(bvh.nodes[n])));
   t.top_groups = rs_cut_groups(t.top.data(), t.top.size());
-  for (std::size_t i = 0; i < t.top.size(); ++i) {
-    // Row i: its low_count[i] boxes, then zero groups up to `row` (rs_cut_bits reads low_count[i]
-    // boxes and places them below the top level).
-    auto groups = rs_cut_groups(t.low.data() + i * row, t.low_count[i]);
-    groups.resize(rs_cut_group_count(row), RsCutGroup{});
-    t.low_groups.insert(t.low_groups.end(), groups.begin(), groups.end());
-  }
+  CutRows low = cut_rows(bvh, cut.low, row);
+  t.low = std::move(low.boxes);
+  t.low_groups = std::move(low.groups);
+  t.low_count = std::move(low.counts);
   return t;
 }
 

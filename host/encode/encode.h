@@ -112,6 +112,17 @@ std::string key_bits_problem(Encoder e, unsigned bits, const EncoderParams& para
 // Throws Error with key_bits_problem's text.
 void check_key_bits(Encoder e, unsigned bits, const EncoderParams& params);
 
+// Rows of cut boxes as the kernels read them per ray (rs_cut_bits_g on row i, at groups + i ·
+// ceil(row / 16)): for each cut, its nodes' boxes zero-padded to `row` boxes ([cuts × row]), the
+// same as sixteen-box groups (rs_cut_groups), and its box count. MLHCC's and mlhcc-cost's low
+// levels and hcc-region's regions are such rows.
+struct CutRows {
+  std::vector<RsBox> boxes;
+  std::vector<RsCutGroup> groups;
+  std::vector<rs_u32> counts;
+};
+CutRows cut_rows(const Bvh& bvh, const std::vector<std::vector<std::uint32_t>>& cuts, unsigned row);
+
 // The tables the two-level kernels read (cl/keys_cut.h, rs_two_level_split_code) for a two-level
 // cut: the top boxes, and boxes [top.size() × row] (row i: the low cut of top i, zero-padded to
 // `row` boxes), both also as sixteen-box groups (rs_cut_groups: ceil(row / 16) groups per row);
@@ -304,6 +315,8 @@ class DeviceEncoder {
     std::uint32_t n = 0;
   };
   const Uploaded& uploaded(Encoder e, unsigned bits);
+  // Forgets e's uploaded tables (its per-batch input changed); the next encode uploads them again.
+  void drop_uploads(Encoder e);
 
   Runtime& rt_;
   EncodeScene scene_;
