@@ -154,16 +154,17 @@ static inline RsRay rs_load_ray(__global const RsRay* rays, uint index) {
     values[i] = i;                                                                                       \
   }                                                                                                      \
                                                                                                          \
-  /* HCC_REGION (keys_cut.h, rs_region_cut_code): the region splits and the regions' cuts (one \
-   * row per region) in global memory: rays of one work-group may read different rows. */         \
-  __kernel void encode_region_cut_##SUFFIX(__global const RsRegionSplit* splits, uint region_bits,       \
+  /* HCC_REGION (keys_cut.h, rs_region_cut_code): the region cells in __constant memory, as HCC's \
+   * cut boxes (the same for every ray); the regions' cuts (one row per region) in global memory: \
+   * rays of one work-group may read different rows. */                                           \
+  __kernel void encode_region_cut_##SUFFIX(__constant const RsRegionCells* cells, uint region_bits,      \
                                            __global const RsCutGroup* cuts, __global const uint* cut_count,\
-                                           uint row_groups, __global const RsRay* rays,                  \
+                                           uint row_size, __global const RsRay* rays,                    \
                                            __global const uint* order, uint count, uint bits,            \
                                            __global KEY_T* keys, __global uint* values) {                 \
     uint i = get_global_id(0);                                                                           \
     if (i >= count) return;                                                                              \
-    rs_u64 code = rs_region_cut_code(rays[order[i]], splits, region_bits, cuts, cut_count, row_groups) &  \
+    rs_u64 code = rs_region_cut_code(rays[order[i]], cells, region_bits, cuts, cut_count, row_size) &     \
                   RS_CODE_MASK_##SUFFIX;                                                                 \
     keys[i] = (KEY_T)rs_key_from_code(code, bits);                                                       \
     values[i] = i;                                                                                       \

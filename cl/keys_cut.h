@@ -189,13 +189,16 @@ RS_KEY_INLINE rs_u64 rs_two_level_cut_code(RsRay ray, RS_CUT_SPACE const RsCutGr
  *
  * Split k of the tree (2^r − 1 of them, heap order: the children of k are 2k + 1 and 2k + 2) sends
  * a ray whose origin has o[axis] ≥ at to the second child. Only comparisons: exact on every device,
- * and an origin outside the scene box still falls in a region. */
+ * and an origin outside the scene box still falls in a region. The kernel tests the tree's leaves
+ * as cells (RsRegionCells below) instead of walking it. */
 typedef struct {
   float at;
   rs_u32 axis;
 } RsRegionSplit;
 
-/* The region of a ray, 0 … 2^region_bits − 1: the leaf of the split tree its origin reaches. */
+/* The region of a ray, 0 … 2^region_bits − 1: the leaf of the split tree its origin reaches. This
+ * walk is the definition; the key kernel finds the same leaf by testing the origin against the
+ * leaves' cells (rs_region_in_cells below), and the host bins a previous frame's rays with it. */
 RS_KEY_INLINE rs_u32 rs_region_of(RS_GLOBAL const RsRegionSplit* splits, rs_u32 region_bits, RsRay ray) {
   rs_u32 k = 0u;
   for (rs_u32 level = 0u; level < region_bits; ++level) {
@@ -205,16 +208,82 @@ RS_KEY_INLINE rs_u32 rs_region_of(RS_GLOBAL const RsRegionSplit* splits, rs_u32 
   return k + 1u - (1u << region_bits);
 }
 
+/* The leaves of the split tree as cells, sixteen to a group, cell j of group g (region 16g + j) in
+ * lane j. Per axis, lo is the largest split value on that axis that the walk to the leaf took the
+ * second child of (−∞ when none), and hi the smallest it took the first child of (NaN when none).
+ * An origin is in a cell when, per axis, o' ≥ lo and not o' ≥ hi, where o' = fmax(o, −∞) (NaN read
+ * as −∞; rs_region_coordinate). These are the walk's own comparisons, each split of the path once:
+ * on one axis, o ≥ a1 and o ≥ a2 is o ≥ max(a1, a2), and not o ≥ b1 and not o ≥ b2 is not
+ * o ≥ min(b1, b2). A NaN coordinate, which the walk never sends to a second child, is −∞, which
+ * is ≥ only the missing lo. So every origin (on a split plane, outside the scene box, ±∞ or NaN) is
+ * in exactly the cell of the leaf the walk reaches; the host test Encode.RegionCellsAreTheWalk checks
+ * it. Built on the host (host/encode/encode.cpp, region_cells), which accepts only finite split
+ * values. Lanes past the last region hold lo = +∞ and hi = −∞, which no o' is in.
+ * Why cells: on PoCL the walk is r dependent loads before the region's row of cut boxes can be
+ * read. It cost hcc-region about as much as HCC's whole key (docs/encoders.md, "Encode cost"); the
+ * cells are one sixteen-lane test of bounds that are the same for every ray, as HCC's cut boxes
+ * are, and held in __constant memory as they are. */
+typedef struct {
+  rs_f16 lo_x, hi_x, lo_y, hi_y, lo_z, hi_z;
+} RsRegionCells;
+
+/* A coordinate as the cells compare it: NaN as −∞ (fmax returns the other operand of a NaN). */
+#ifdef __OPENCL_VERSION__
+RS_KEY_INLINE float rs_region_coordinate(float o) { return fmax(o, -INFINITY); }
+#else
+RS_KEY_INLINE float rs_region_coordinate(float o) { return std::fmax(o, -INFINITY); }
+#endif
+
+/* The cells of group g that hold the point (x, y, z) (coordinates through rs_region_coordinate),
+ * as lane bits: lane j -> bit j. */
+#ifdef __OPENCL_VERSION__
+RS_KEY_INLINE rs_u32 rs_region_cell_mask(RS_CONSTANT const RsRegionCells* g, float x, float y, float z) {
+  const float16 vx = (float16)(x), vy = (float16)(y), vz = (float16)(z);
+  return rs16_mask_bits((vx >= g->lo_x) & ~(vx >= g->hi_x) & (vy >= g->lo_y) & ~(vy >= g->hi_y) & (vz >= g->lo_z) &
+                        ~(vz >= g->hi_z));
+}
+#else
+RS_KEY_INLINE rs_u32 rs_region_cell_mask(const RsRegionCells* g, float x, float y, float z) {
+  rs_u32 m = 0u;
+  for (int j = 0; j < 16; ++j)
+    m |= static_cast<rs_u32>(x >= g->lo_x.s[j] && !(x >= g->hi_x.s[j]) && y >= g->lo_y.s[j] &&
+                             !(y >= g->hi_y.s[j]) && z >= g->lo_z.s[j] && !(z >= g->hi_z.s[j]))
+         << j;
+  return m;
+}
+#endif
+
+/* The number of cell groups of 2^region_bits regions. */
+RS_KEY_INLINE rs_u32 rs_region_cell_groups(rs_u32 region_bits) { return ((1u << region_bits) + 15u) / 16u; }
+
+/* rs_region_of's region, found from the cells: the one cell, over all groups, that holds the origin.
+ * (A branch on each group's mask measured as fast as a select on PoCL, and skips nothing at r ≤ 4.) */
+RS_KEY_INLINE rs_u32 rs_region_in_cells(RS_CONSTANT const RsRegionCells* cells, rs_u32 region_bits, RsRay ray) {
+  const float x = rs_region_coordinate(ray.o[0]), y = rs_region_coordinate(ray.o[1]),
+              z = rs_region_coordinate(ray.o[2]);
+  rs_u32 region = 0u;
+  for (rs_u32 g = 0u; g < rs_region_cell_groups(region_bits); ++g) {
+    const rs_u32 m = rs_region_cell_mask(&cells[g], x, y, z);
+    if (m != 0u) region = 16u * g + 63u - rs_clz64(RS_U64(m & (0u - m))); /* its lowest (only) bit */
+  }
+  return region;
+}
+
 /* The HCC_REGION code: the region in the top region_bits bits, then the overlap bits of row
- * `region` of `cuts` (row_groups groups per region, count[region] boxes, box i at code bit
- * 63 − region_bits − i). With region_bits = 0 there is one region and no split. */
-RS_KEY_INLINE rs_u64 rs_region_cut_code(RsRay ray, RS_GLOBAL const RsRegionSplit* splits, rs_u32 region_bits,
+ * `region` of `cuts` (rows of row_size boxes, rs_cut_group_count(row_size) groups each; row
+ * `region` holds count[region] ≤ row_size boxes, box i at code bit 63 − region_bits − i). The row
+ * is tested as if full and the bits past its count dropped, so every ray runs the same loop,
+ * whatever its region: on PoCL, a trip count that differed per ray cost about a tenth of the key.
+ * With region_bits = 0 there is one region. */
+RS_KEY_INLINE rs_u64 rs_region_cut_code(RsRay ray, RS_CONSTANT const RsRegionCells* cells, rs_u32 region_bits,
                                         RS_GLOBAL const RsCutGroup* cuts, RS_GLOBAL const rs_u32* count,
-                                        rs_u32 row_groups) {
-  const rs_u32 region = rs_region_of(splits, region_bits, ray);
+                                        rs_u32 row_size) {
+  const rs_u32 region = rs_region_in_cells(cells, region_bits, ray);
   const RsCutRay c = rs_cut_ray(rs_prepare_ray(ray));
+  const rs_u32 n = count[region];
+  const rs_u64 kept = n == 0u ? RS_U64(0) : (~RS_U64(0) << (64u - n)) >> region_bits;
   rs_u64 code = region_bits > 0u ? RS_U64(region) << (64u - region_bits) : RS_U64(0);
-  code |= rs_cut_bits_g(&c, cuts + region * row_groups, count[region], region_bits);
+  code |= rs_cut_bits_g(&c, cuts + region * rs_cut_group_count(row_size), row_size, region_bits) & kept;
   return code;
 }
 

@@ -1162,6 +1162,109 @@ TEST(Encode, RegionKernelMatchesTheHostForEveryRegionWidth) {
   }
 }
 
+// hcc-region's kernel finds a ray's region by testing the split tree's leaves as cells
+// (cl/keys_cut.h, RsRegionCells) instead of walking the tree: the two agree for every origin, on
+// the host and in the kernel. Trees: halving, and random ones whose splits may fall outside their
+// cell (leaves no origin reaches) or repeat an axis; origins on every split plane and a float on
+// either side, ±0, ±∞, NaN and the largest floats in each coordinate, and random ones.
+TEST(Encode, RegionCellsAreTheWalk) {
+  const DetailRoom& d = detail_room();
+  std::mt19937 rng(2026);
+  std::uniform_real_distribution<float> u(-2.0f, 2.0f);
+  const float inf = std::numeric_limits<float>::infinity(), nan = std::numeric_limits<float>::quiet_NaN(),
+              big = std::numeric_limits<float>::max();
+  const std::vector<float> specials = {0.0f, -0.0f, inf, -inf, nan, big, -big, 1e-40f, -1e-40f};
+  auto origins_for = [&](const std::vector<RsRegionSplit>& splits) {
+    std::vector<std::array<float, 3>> points;
+    for (const RsRegionSplit& sp : splits)
+      for (float at : {sp.at, std::nextafter(sp.at, -inf), std::nextafter(sp.at, inf)}) {
+        std::array<float, 3> p{u(rng), u(rng), u(rng)};
+        p[sp.axis] = at;
+        points.push_back(p);
+        for (const RsRegionSplit& other : splits) {  // on two planes at once
+          std::array<float, 3> q = p;
+          if (other.axis != sp.axis) q[other.axis] = other.at, points.push_back(q);
+        }
+      }
+    for (float a : specials)
+      for (int axis = 0; axis < 3; ++axis) {
+        std::array<float, 3> p{u(rng), u(rng), u(rng)};
+        p[axis] = a;
+        points.push_back(p);
+        points.push_back({a, a, a});
+      }
+    for (int i = 0; i < 2000; ++i) points.push_back({u(rng), u(rng), u(rng)});
+    return points;
+  };
+  auto random_splits = [&](unsigned r) {
+    std::vector<RsRegionSplit> splits((std::size_t{1} << r) - 1);
+    for (RsRegionSplit& sp : splits) {
+      sp.axis = static_cast<rs_u32>(rng() % 3);
+      sp.at = rng() % 4 == 0 ? 0.5f : u(rng);  // some ties between splits
+    }
+    return splits;
+  };
+  const Aabb unit{{-1, -1, -1}, {1, 1, 1}};
+  std::size_t checked = 0;
+  for (unsigned r = 0; r <= kMaxRegionBits; ++r)
+    for (const auto& splits : {median_region_splits(unit, {}, r), random_splits(r), random_splits(r)}) {
+      const std::vector<RsRegionCells> cells = region_cells(splits, r);
+      ASSERT_EQ(cells.size(), rs_region_cell_groups(r));
+      for (const auto& o : origins_for(splits)) {
+        const RsRay x = ray(o[0], o[1], o[2], 1, 0, 0);
+        ASSERT_EQ(rs_region_in_cells(cells.data(), r, x), rs_region_of(splits.data(), r, x))
+            << "r " << r << " origin " << o[0] << " " << o[1] << " " << o[2];
+        ++checked;
+      }
+    }
+  EXPECT_GT(checked, 50000u);
+
+  // The kernel: the key's top r bits are the walk's region, for the same trees and origins.
+  for (unsigned r : {1u, 4u, 5u, 8u}) {
+    EncoderParams p;
+    p.region_bits = r;
+    DeviceEncoder dev(testing::runtime(), d.bvh, d.box, p);
+    RegionStatistics stats;
+    stats.splits = random_splits(r);
+    stats.visits.resize(std::size_t{1} << r);  // no traffic: every region gets HCC's cut
+    dev.set_region_statistics(stats);
+    std::vector<RsRay> rays;
+    for (const auto& o : origins_for(stats.splits)) rays.push_back(ray(o[0], o[1], o[2], 0.6f, -0.8f, 0));
+    for (unsigned bits : {32u, 64u}) {
+      const auto run = dev.run(Encoder::HCC_REGION, bits, rays);
+      std::size_t bad = 0;
+      for (std::size_t i = 0; i < rays.size(); ++i)
+        bad += (run.keys[i] >> (bits - r)) != rs_region_of(stats.splits.data(), r, rays[i]);
+      EXPECT_EQ(bad, 0u) << "r " << r << " bits " << bits << " of " << rays.size() << " rays";
+      // Where the origin is finite, the whole key is the host twin's.
+      std::vector<RsRay> finite;
+      for (const RsRay& x : rays)
+        if (std::isfinite(x.o[0]) && std::isfinite(x.o[1]) && std::isfinite(x.o[2])) finite.push_back(x);
+      expect_device_equals_host(dev, Encoder::HCC_REGION, bits, finite, "cells, r = " + std::to_string(r));
+    }
+  }
+
+  // A split tree the cells cannot hold is refused, naming the split.
+  for (const RsRegionSplit bad : {RsRegionSplit{nan, 0}, RsRegionSplit{inf, 1}, RsRegionSplit{0.0f, 3}}) {
+    std::vector<RsRegionSplit> splits = median_region_splits(unit, {}, 2);
+    splits[2] = bad;
+    try {
+      region_cells(splits, 2);
+      ADD_FAILURE() << "accepted split " << bad.at << " on axis " << bad.axis;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("region split 2"), std::string::npos) << e.what();
+    }
+    EncoderParams p;
+    p.region_bits = 2;
+    EncodeScene s(d.bvh, d.box, p);
+    RegionStatistics stats;
+    stats.splits = splits;
+    stats.visits.resize(4);
+    EXPECT_THROW(s.set_region_statistics(stats), Error);
+  }
+  EXPECT_THROW(region_cells(median_region_splits(unit, {}, 2), 3), Error);  // too few splits
+}
+
 // hcc-region with a previous frame's statistics: the splits put half of the sample's origins on
 // each side (up to ties), each region's cut is the HAD/traffic priority cut of the traffic of the
 // rays that start in it (HCC's cut for a region none starts in), and the kernel equals the host twin

@@ -69,11 +69,11 @@ int run_study(int argc, char** argv) {
       std::vector<std::vector<std::uint32_t>> cuts;
       for (const Aabb& cell : region_boxes(box, splits, r)) cuts.push_back(region_cut(p.bvh, es.had(), 32 - r, cell));
       const CutRows rows = cut_rows(p.bvh, cuts, 32 - r);
+      const std::vector<RsRegionCells> cells = region_cells(splits, r);
       std::vector<std::uint64_t> keys(rays.size());
       for (std::size_t i = 0; i < rays.size(); ++i)
-        keys[i] = rs_key_from_code(rs_region_cut_code(rays[i], splits.data(), r, rows.groups.data(), rows.counts.data(),
-                                                      rs_cut_group_count(32 - r)),
-                                   32);
+        keys[i] = rs_key_from_code(
+            rs_region_cut_code(rays[i], cells.data(), r, rows.groups.data(), rows.counts.data(), 32 - r), 32);
       return keys;
     };
     auto traffic_keys = [&](const std::vector<RsRegionSplit>& splits) {

@@ -65,7 +65,7 @@ const DeviceEncoder::Uploaded& DeviceEncoder::uploaded(Encoder e, unsigned bits)
     const auto& g = scene_.regions(bits);
     u.a = rt_.upload(what + "region cut boxes", g.groups);
     u.b = rt_.upload(what + "region cut sizes", g.counts);
-    u.c = rt_.upload(what + "region splits", g.splits);
+    u.c = rt_.upload(what + "region cells", g.cells);
     u.n = static_cast<std::uint32_t>(g.counts.size());
   } else if (family(e) == EncoderFamily::TwoLevel) {
     const auto& t = scene_.two_level(bits);
@@ -185,7 +185,7 @@ DeviceEncoder::Events DeviceEncoder::enqueue(Encoder e, unsigned bits, const cl:
                 k->setArg(arg++, static_cast<cl_uint>(g.region_bits));
                 k->setArg(arg++, u.a);
                 k->setArg(arg++, u.b);
-                k->setArg(arg++, static_cast<cl_uint>(g.row_groups));
+                k->setArg(arg++, static_cast<cl_uint>(g.row_size));
                 k->setArg(arg++, rays);
                 k->setArg(arg++, order);
                 k->setArg(arg++, count);

@@ -6,6 +6,8 @@
 #include <array>
 #include <bit>
 #include <cctype>
+#include <cmath>
+#include <limits>
 #include <thread>
 
 #include "bvh/had.h"
@@ -300,11 +302,50 @@ std::vector<Aabb> region_boxes(const Aabb& box, const std::vector<RsRegionSplit>
   return cells;
 }
 
+std::vector<RsRegionCells> region_cells(const std::vector<RsRegionSplit>& splits, unsigned r) {
+  if (splits.size() + 1 < (std::size_t{1} << r))
+    throw Error("hcc-region: " + std::to_string(splits.size()) + " region splits for " + std::to_string(r) +
+                " region bits, which need " + std::to_string((std::size_t{1} << r) - 1));
+  const float none = std::numeric_limits<float>::infinity();
+  std::vector<RsRegionCells> groups(rs_region_cell_groups(r));
+  for (RsRegionCells& g : groups)
+    for (int j = 0; j < 16; ++j) {  // a lane past the last region: lo = +∞, hi = −∞, which no coordinate is in
+      for (rs_f16* lo : {&g.lo_x, &g.lo_y, &g.lo_z}) lo->s[j] = none;
+      for (rs_f16* hi : {&g.hi_x, &g.hi_y, &g.hi_z}) hi->s[j] = -none;
+    }
+  // The walk of rs_region_of: the first child keeps o[axis] < at (hi = min), the second o[axis] ≥ at (lo = max).
+  auto walk = [&](auto&& self, std::size_t k, std::array<float, 3> lo, std::array<float, 3> hi, unsigned level) -> void {
+    if (level == r) {
+      const std::size_t region = k + 1 - (std::size_t{1} << r);
+      RsRegionCells& g = groups[region / 16];
+      const std::size_t j = region % 16;
+      // No upper bound: NaN, which no coordinate is ≥ (cl/keys_cut.h, RsRegionCells).
+      for (float& h : hi) h = h == none ? std::numeric_limits<float>::quiet_NaN() : h;
+      g.lo_x.s[j] = lo[0], g.hi_x.s[j] = hi[0];
+      g.lo_y.s[j] = lo[1], g.hi_y.s[j] = hi[1];
+      g.lo_z.s[j] = lo[2], g.hi_z.s[j] = hi[2];
+      return;
+    }
+    const RsRegionSplit& s = splits[k];
+    if (s.axis > 2 || !std::isfinite(s.at))
+      throw Error("hcc-region: region split " + std::to_string(k) + " (axis " + std::to_string(s.axis) + " at " +
+                  std::to_string(s.at) + ") is not a finite split on the x, y or z axis");
+    auto below = hi, above = lo;
+    below[s.axis] = std::min(hi[s.axis], s.at);
+    above[s.axis] = std::max(lo[s.axis], s.at);
+    self(self, 2 * k + 1, lo, below, level + 1);
+    self(self, 2 * k + 2, above, hi, level + 1);
+  };
+  walk(walk, 0, {-none, -none, -none}, {none, none, none}, 0);
+  return groups;
+}
+
 void EncodeScene::set_region_statistics(RegionStatistics stats) {
   const std::size_t regions = std::size_t{1} << params_.region_bits;
   if (!stats.empty() && (stats.splits.size() != regions - 1 || stats.visits.size() != regions))
     throw Error("region statistics for " + std::to_string(stats.visits.size()) + " regions, hcc-region has " +
                 std::to_string(regions) + " (" + std::to_string(params_.region_bits) + " region bits)");
+  if (!stats.empty()) region_cells(stats.splits, params_.region_bits);  // throws on a split that is not finite
   for (const auto& region : stats.visits)
     for (const auto& [node, count] : region)
       if (node >= bvh_->nodes.size())
@@ -321,11 +362,11 @@ const EncodeScene::Regions& EncodeScene::regions(unsigned bits) const {
   const unsigned r = params_.region_bits, size = bits - r;
   Regions g;
   g.region_bits = r;
-  g.row_groups = rs_cut_group_count(size);
+  g.row_size = size;
   const bool measured = !region_stats_.empty();
   g.splits = measured ? region_stats_.splits : median_region_splits(box_, {}, r);
+  g.cells = region_cells(g.splits, r);
   g.boxes = region_boxes(box_, g.splits, r);
-  if (g.splits.empty()) g.splits.push_back(RsRegionSplit{0.0f, 0u});  // r = 0: unused, but a buffer
   for (std::size_t region = 0; region < g.boxes.size(); ++region) {
     if (measured) {
       // Where this region's rays went: HAD blended with their traffic (a region no ray started in
@@ -460,7 +501,7 @@ std::uint64_t encode_ray(Encoder e, unsigned bits, const EncodeScene& scene, con
     case EncoderFamily::RegionCut: {
       const auto& g = scene.regions(bits);
       return rs_key_from_code(
-          rs_region_cut_code(ray, g.splits.data(), g.region_bits, g.groups.data(), g.counts.data(), g.row_groups), bits);
+          rs_region_cut_code(ray, g.cells.data(), g.region_bits, g.groups.data(), g.counts.data(), g.row_size), bits);
     }
     case EncoderFamily::TwoLevel: {
       const auto& t = scene.two_level(bits);

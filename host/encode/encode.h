@@ -142,6 +142,10 @@ TwoLevelTables two_level_tables(const Bvh& bvh, const TwoLevelCut& cut, unsigned
 std::vector<RsRegionSplit> median_region_splits(const Aabb& box, const std::vector<RsRay>& rays, unsigned r);
 // The 2^r cells of a split tree, in region order.
 std::vector<Aabb> region_boxes(const Aabb& box, const std::vector<RsRegionSplit>& splits, unsigned r);
+// The same cells unbounded by the scene box, as the key kernel tests them (cl/keys_cut.h,
+// RsRegionCells: ±∞ where the walk to a leaf passed no split on an axis), sixteen to a group.
+// Throws on a split that is not finite or names no axis.
+std::vector<RsRegionCells> region_cells(const std::vector<RsRegionSplit>& splits, unsigned r);
 
 // hcc-region's input from a previous frame's batch (region_statistics, bench/runner.h): the splits
 // at its rays' median origins, and per region the node traffic (trace/tracer.h, node_traffic) of
@@ -181,14 +185,16 @@ class EncodeScene {
   // halves its cell and each region's cut is HAD's among the nodes overlapping it. Setting it drops
   // hcc-region's cached regions; the other encoders' data stays.
   void set_region_statistics(RegionStatistics stats);
-  // hcc-region for keys of `bits` bits (cl/keys_cut.h, rs_region_cut_code): the split tree (at
-  // least one entry, a kernel argument; 2^r − 1 used), each region's box (region_boxes), its cut of
-  // bits − r nodes and the cuts as sixteen-box groups, row_groups per region. With statistics a
-  // region's cut is priority_cut by traffic_priority(HAD, the region's traffic, β), else region_cut.
+  // hcc-region for keys of `bits` bits (cl/keys_cut.h, rs_region_cut_code): the split tree (2^r − 1
+  // splits), its leaves as the kernel tests them (region_cells), each region's box (region_boxes),
+  // its cut of row_size = bits − r nodes and the cuts as sixteen-box groups,
+  // rs_cut_group_count(row_size) per region. With statistics a region's cut is priority_cut by
+  // traffic_priority(HAD, the region's traffic, β), else region_cut.
   struct Regions {
     rs_u32 region_bits = 0;
-    rs_u32 row_groups = 0;
+    rs_u32 row_size = 0;
     std::vector<RsRegionSplit> splits;
+    std::vector<RsRegionCells> cells;
     std::vector<Aabb> boxes;
     std::vector<std::vector<std::uint32_t>> cuts;
     std::vector<RsCutGroup> groups;
