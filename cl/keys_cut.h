@@ -151,6 +151,14 @@ RS_KEY_INLINE rs_u64 rs_box_set_code(RsRay ray, RS_CUT_SPACE const RsCutGroup* s
   return code;
 }
 
+/* The code bits of the first n boxes of a row whose box 0 is at code bit 63 − first_bit. A row is
+ * tested as if full (rs_cut_bits over its whole width, the same loop for every ray) and this drops
+ * the bits past its n boxes: on PoCL a trip count that differed per ray, the row's own count, cost
+ * about a tenth of hcc-region's key (docs/encoders.md, "The third kernel"). */
+RS_KEY_INLINE rs_u64 rs_row_kept(rs_u32 n, rs_u32 first_bit) {
+  return n == 0u ? RS_U64(0) : (~RS_U64(0) << (64u - n)) >> first_bit;
+}
+
 /* The two-level code with `top_bits` bits for the top level and rows of `low_bits` boxes (row rep
  * of `low`, ceil(low_bits / 16) groups, box j at code bit 63 − top_bits − j): MLHCC below with
  * both half the key, mlhcc-cost's cut with a shorter low level. */
@@ -159,12 +167,10 @@ RS_KEY_INLINE rs_u64 rs_two_level_split_code(RsRay ray, RS_CUT_SPACE const RsCut
                                              rs_u32 top_bits, rs_u32 low_bits) {
   RsTraversalRay r = rs_prepare_ray(ray);
   RsCutRay c = rs_cut_ray(r);
-  rs_u64 code = RS_CUT_BITS_TOP(&c, top, n_top, 0u);
-  if (code != 0u) {
-    const rs_u32 rep = rs_clz64(code);
-    code |= rs_cut_bits_g(&c, low + rep * rs_cut_group_count(low_bits), low_count[rep], top_bits);
-  }
-  return code;
+  const rs_u64 code = RS_CUT_BITS_TOP(&c, top, n_top, 0u);
+  const rs_u32 rep = code != 0u ? rs_clz64(code) : 0u;
+  return code | (rs_cut_bits_g(&c, low + rep * rs_cut_group_count(low_bits), low_bits, top_bits) &
+                 rs_row_kept(code != 0u ? low_count[rep] : 0u, top_bits));
 }
 
 /* MLHCC (Xiang et al. section 4.3): the top `half_bits` bits are the HCC of the top-level cut; the
@@ -271,19 +277,16 @@ RS_KEY_INLINE rs_u32 rs_region_in_cells(RS_CONSTANT const RsRegionCells* cells, 
 
 /* The HCC_REGION code: the region in the top region_bits bits, then the overlap bits of row
  * `region` of `cuts` (rows of row_size boxes, rs_cut_group_count(row_size) groups each; row
- * `region` holds count[region] ≤ row_size boxes, box i at code bit 63 − region_bits − i). The row
- * is tested as if full and the bits past its count dropped, so every ray runs the same loop,
- * whatever its region: on PoCL, a trip count that differed per ray cost about a tenth of the key.
- * With region_bits = 0 there is one region. */
+ * `region` holds count[region] ≤ row_size boxes, box i at code bit 63 − region_bits − i), tested
+ * as if full (rs_row_kept). With region_bits = 0 there is one region. */
 RS_KEY_INLINE rs_u64 rs_region_cut_code(RsRay ray, RS_CONSTANT const RsRegionCells* cells, rs_u32 region_bits,
                                         RS_GLOBAL const RsCutGroup* cuts, RS_GLOBAL const rs_u32* count,
                                         rs_u32 row_size) {
   const rs_u32 region = rs_region_in_cells(cells, region_bits, ray);
   const RsCutRay c = rs_cut_ray(rs_prepare_ray(ray));
-  const rs_u32 n = count[region];
-  const rs_u64 kept = n == 0u ? RS_U64(0) : (~RS_U64(0) << (64u - n)) >> region_bits;
   rs_u64 code = region_bits > 0u ? RS_U64(region) << (64u - region_bits) : RS_U64(0);
-  code |= rs_cut_bits_g(&c, cuts + region * rs_cut_group_count(row_size), row_size, region_bits) & kept;
+  code |= rs_cut_bits_g(&c, cuts + region * rs_cut_group_count(row_size), row_size, region_bits) &
+          rs_row_kept(count[region], region_bits);
   return code;
 }
 
@@ -355,10 +358,10 @@ RS_KEY_INLINE void rs_two_level_cut_code2(RsRay ray_a, RsRay ray_b, RS_CUT_SPACE
   const rs_u64 top_b = RS_CUT_BITS_TOP(&b, top, n_top, 0u);
   const rs_u32 rep_a = top_a != 0u ? rs_clz64(top_a) : 0u, rep_b = top_b != 0u ? rs_clz64(top_b) : 0u;
   const rs_u32 row = rs_cut_group_count(half_bits);
-  const rs_u64 low_a = rs_cut_bits_g(&a, low + rep_a * row, low_count[rep_a], half_bits);
-  const rs_u64 low_b = rs_cut_bits_g(&b, low + rep_b * row, low_count[rep_b], half_bits);
-  *code_a = top_a | (top_a != 0u ? low_a : 0u);
-  *code_b = top_b | (top_b != 0u ? low_b : 0u);
+  const rs_u64 low_a = rs_cut_bits_g(&a, low + rep_a * row, half_bits, half_bits);
+  const rs_u64 low_b = rs_cut_bits_g(&b, low + rep_b * row, half_bits, half_bits);
+  *code_a = top_a | (low_a & rs_row_kept(top_a != 0u ? low_count[rep_a] : 0u, half_bits));
+  *code_b = top_b | (low_b & rs_row_kept(top_b != 0u ? low_count[rep_b] : 0u, half_bits));
 }
 #endif
 

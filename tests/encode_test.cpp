@@ -782,7 +782,10 @@ namespace {
 std::vector<RsRay> edge_rays(const EncodeScene& s, const Aabb& box, std::size_t random_count) {
   std::mt19937 rng(1234);
   std::uniform_real_distribution<float> u(0.0f, 1.0f);
-  std::vector<std::array<float, 3>> points;
+  // The origin first: a ray that starts there overlaps a zero box (all six planes at 0, so every
+  // slab is [0, 0]), which is what the unused lanes of a cut row hold: its keys show whether a
+  // kernel keeps bits past a row's count.
+  std::vector<std::array<float, 3>> points = {{0.0f, 0.0f, 0.0f}};
   for (int c = 0; c < 8; ++c)
     points.push_back({c & 1 ? box.max[0] : box.min[0], c & 2 ? box.max[1] : box.min[1], c & 4 ? box.max[2] : box.min[2]});
   for (unsigned bits : {16u, 64u})
@@ -843,6 +846,50 @@ TEST(Encode, SameKeysAsTheBitwiseReference) {
     }
   }
   expect_all_encoders_bit_exact(dev, rays, "edge rays");  // PPC and NoSort too
+}
+
+// The row-based codes (MLHCC's and mlhcc-cost's low level, hcc-region's regions) test a whole row
+// of cut boxes and keep the bits of the row's own boxes (cl/keys_cut.h, rs_row_kept). In a scene
+// too small to fill hcc-region's rows, the unused lanes are zero boxes, which a ray starting at the
+// origin overlaps: its keys must still be the bitwise reference's, on the host and the device.
+TEST(Encode, ShortRowsKeepOnlyTheirOwnBoxes) {
+  Scene scene;
+  Mesh m;
+  for (int i = 0; i < 24; ++i) {  // 24 triangles on a 4 x 6 grid around the origin
+    const float x = static_cast<float>(i % 4) - 2.0f, y = static_cast<float>(i / 4) - 3.0f, z = 0.1f * static_cast<float>(i % 3);
+    const auto b = static_cast<std::uint32_t>(m.positions.size());
+    m.positions.push_back({x, y, z});
+    m.positions.push_back({x + 0.9f, y, z + 0.2f});
+    m.positions.push_back({x, y + 0.9f, z - 0.2f});
+    m.triangles.push_back({b, b + 1, b + 2});
+  }
+  scene.meshes.push_back(m);
+  Bvh bvh = build_bvh(scene.flatten());
+  const Aabb box = bvh.bounds();
+  for (unsigned r : {0u, 2u}) {
+    EncoderParams p;
+    p.region_bits = r;
+    DeviceEncoder dev(testing::runtime(), bvh, box, p);
+    const EncodeScene& s = dev.scene();
+    std::vector<RsRay> rays = edge_rays(s, box, 500);
+    for (const auto& d : std::vector<std::array<float, 3>>{{1, 0, 0}, {0, -1, 0}, {0.3f, 0.4f, -1}, {-1, -1, -1}})
+      for (float tmax : {RS_T_FAR, 0.5f}) rays.push_back(ray(0, 0, 0, d[0], d[1], d[2], tmax));
+    for (unsigned bits : {32u, 64u}) {
+      // The precondition: hcc-region has rows shorter than their width here. (MLHCC's top nodes have
+      // at least as many leaves as a row has boxes, so its rows are full; for it and mlhcc-cost the
+      // kept bits matter to rays that hit no top node, whose low bits are 0.)
+      const auto& counts = s.regions(bits).counts;
+      ASSERT_TRUE(std::any_of(counts.begin(), counts.end(), [&](rs_u32 n) { return n < bits - r; })) << bits;
+      for (Encoder e : {Encoder::MLHCC, Encoder::MLHCC_COST, Encoder::HCC_REGION}) {
+        const std::string what = std::string(encoder_name(e)) + "/" + std::to_string(bits) + " r " + std::to_string(r);
+        const auto keys = encode_on_host(e, bits, s, rays);
+        std::size_t bad = 0;
+        for (std::size_t i = 0; i < rays.size(); ++i) bad += keys[i] != ref::key(e, bits, s, rays[i]);
+        EXPECT_EQ(bad, 0u) << what;
+        expect_device_equals_host(dev, e, bits, rays, what);
+      }
+    }
+  }
 }
 
 // HCC_DIR runs on the device in two passes (direction bits, then the box bits ORed in) when it has

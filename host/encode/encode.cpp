@@ -415,7 +415,8 @@ CutRows cut_rows(const Bvh& bvh, const std::vector<std::vector<std::uint32_t>>& 
       throw Error("cut_rows: a cut of " + std::to_string(cuts[i].size()) + " nodes in a row of " + std::to_string(row));
     for (std::size_t j = 0; j < cuts[i].size(); ++j) rows.boxes[i * row + j] = to_rs_box(node_box(bvh.nodes[cuts[i][j]]));
     rows.counts.push_back(static_cast<rs_u32>(cuts[i].size()));
-    // Row i: its counts[i] boxes, then zero groups up to `row` (rs_cut_bits reads counts[i] boxes).
+    // Row i: its counts[i] boxes, then zero groups up to `row`. The kernels test the whole row and
+    // keep the bits of its first counts[i] boxes (cl/keys_cut.h, rs_row_kept).
     auto groups = rs_cut_groups(rows.boxes.data() + i * row, cuts[i].size());
     groups.resize(rs_cut_group_count(row), RsCutGroup{});
     rows.groups.insert(rows.groups.end(), groups.begin(), groups.end());
@@ -431,6 +432,10 @@ TwoLevelTables two_level_tables(const Bvh& bvh, const TwoLevelCut& cut, unsigned
   t.low = std::move(low.boxes);
   t.low_groups = std::move(low.groups);
   t.low_count = std::move(low.counts);
+  if (t.low_count.empty()) {  // no top node: keys read row 0 (and keep none of its bits), so there is one
+    t.low_count.push_back(0);
+    t.low_groups.resize(rs_cut_group_count(row), RsCutGroup{});
+  }
   return t;
 }
 
