@@ -143,8 +143,9 @@ std::vector<RsRegionSplit> median_region_splits(const Aabb& box, const std::vect
 // The 2^r cells of a split tree, in region order.
 std::vector<Aabb> region_boxes(const Aabb& box, const std::vector<RsRegionSplit>& splits, unsigned r);
 // The same cells unbounded by the scene box, as the key kernel tests them (cl/keys_cut.h,
-// RsRegionCells: ±∞ where the walk to a leaf passed no split on an axis), sixteen to a group.
-// Throws on a split that is not finite or names no axis.
+// RsRegionCells: lo = −∞ and hi = NaN where the walk to a leaf passed no split on that side of an
+// axis), sixteen to a group. Throws on a split that is not finite or names no axis, and on fewer
+// than 2^r − 1 splits.
 std::vector<RsRegionCells> region_cells(const std::vector<RsRegionSplit>& splits, unsigned r);
 
 // hcc-region's input from a previous frame's batch (region_statistics, bench/runner.h): the splits
