@@ -1134,6 +1134,16 @@ const DetailRoom& detail_room() {
   }();
   return d;
 }
+
+// hcc-region's keys on `rays` and on every batch of the detail room: kernel == host twin, and the
+// host's keys on `rays` == the bitwise reference (ref::key).
+void expect_region_keys_exact(DeviceEncoder& dev, unsigned bits, const std::vector<RsRay>& rays, const std::string& what) {
+  expect_device_equals_host(dev, Encoder::HCC_REGION, bits, rays, what);
+  for (const auto& rb : detail_room().batches) expect_device_equals_host(dev, Encoder::HCC_REGION, bits, rb.batch.rays, what);
+  const auto keys = encode_on_host(Encoder::HCC_REGION, bits, dev.scene(), rays);
+  for (std::size_t i = 0; i < rays.size(); ++i)
+    ASSERT_EQ(keys[i], ref::key(Encoder::HCC_REGION, bits, dev.scene(), rays[i])) << what << " bits " << bits;
+}
 }  // namespace
 
 // hcc-region without statistics: 2^r regions (each split halves its cell); each region's cut nodes
@@ -1199,12 +1209,7 @@ TEST(Encode, RegionKernelMatchesTheHostForEveryRegionWidth) {
     const std::vector<RsRay> rays = edge_rays(dev.scene(), d.box, 3000);
     for (unsigned bits : {9u, 16u, 25u, 32u, 33u, 50u, 64u}) {
       if (!key_bits_problem(Encoder::HCC_REGION, bits, p).empty()) continue;
-      expect_device_equals_host(dev, Encoder::HCC_REGION, bits, rays, "r = " + std::to_string(r));
-      for (const auto& rb : d.batches)
-        expect_device_equals_host(dev, Encoder::HCC_REGION, bits, rb.batch.rays, "r = " + std::to_string(r));
-      const auto keys = encode_on_host(Encoder::HCC_REGION, bits, dev.scene(), rays);
-      for (std::size_t i = 0; i < rays.size(); ++i)
-        ASSERT_EQ(keys[i], ref::key(Encoder::HCC_REGION, bits, dev.scene(), rays[i])) << "r " << r << " bits " << bits;
+      ASSERT_NO_FATAL_FAILURE(expect_region_keys_exact(dev, bits, rays, "r = " + std::to_string(r)));
     }
   }
 }
@@ -1353,12 +1358,7 @@ TEST(Encode, RegionsFromAPreviousFrameSplitAtMedianOriginsAndCutByTraffic) {
         EXPECT_EQ(g.cuts[0], dev.scene().hcc_cut(bits - r));
       }
       const std::vector<RsRay> edges = edge_rays(dev.scene(), d.box, 1000);
-      expect_device_equals_host(dev, Encoder::HCC_REGION, bits, edges, "with statistics, r = " + std::to_string(r));
-      for (const auto& rb : d.batches)
-        expect_device_equals_host(dev, Encoder::HCC_REGION, bits, rb.batch.rays, "with statistics, r = " + std::to_string(r));
-      const auto keys = encode_on_host(Encoder::HCC_REGION, bits, dev.scene(), edges);
-      for (std::size_t i = 0; i < edges.size(); ++i)
-        ASSERT_EQ(keys[i], ref::key(Encoder::HCC_REGION, bits, dev.scene(), edges[i])) << "r " << r << " bits " << bits;
+      ASSERT_NO_FATAL_FAILURE(expect_region_keys_exact(dev, bits, edges, "with statistics, r = " + std::to_string(r)));
     }
     // Clearing the statistics returns to the halved cells and HAD's region cuts.
     dev.set_region_statistics({});

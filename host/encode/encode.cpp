@@ -36,8 +36,8 @@ const std::vector<EncoderInfo>& encoder_table() {
       {Encoder::PPC, "ppc", {"prefix-path", "prefix-path-code"}, F::PrefixPath, "encode_prefix_path", 165, false},
       {Encoder::HCC_DIR, "hcc-dir", {}, F::BoxSet, "encode_box_set", 150, false},
       // Beyond the paper (issue 21). Cost weights estimated from HCC's (not yet measured): the
-      // region code walks its split tree and reads its row from global memory; the cut inputs of
-      // hcc-region and hcc-traffic are host traversals, outside the weight.
+      // region code tests its region cells, then reads its row from global memory; the cut inputs
+      // of hcc-region and hcc-traffic are host traversals, outside the weight.
       {Encoder::HCC_REGION, "hcc-region", {"region"}, F::RegionCut, "encode_region_cut", 135, false},
       {Encoder::HCC_TRAFFIC, "hcc-traffic", {"traffic"}, F::BoxSet, "encode_box_set", 135, false},
       // MLHCC's tables plus an origin cell and an octahedral direction cell per ray and one table
@@ -254,6 +254,31 @@ std::pair<Aabb, Aabb> split_cell(const Aabb& cell, RsRegionSplit s) {
   return {low, high};
 }
 
+// Walks a split tree of r levels (rs_region_of's heap order) from `root`: split(cell, split k)
+// gives the two children's cells, and leaf(region, cell) sees each of the 2^r leaves.
+template <class Cell, class Split, class Leaf>
+void walk_split_tree(const std::vector<RsRegionSplit>& splits, unsigned r, const Cell& root, Split split, Leaf leaf) {
+  auto walk = [&](auto&& self, std::size_t k, const Cell& cell, unsigned level) -> void {
+    if (level == r) return leaf(k + 1 - (std::size_t{1} << r), cell);
+    const auto [first, second] = split(cell, splits.at(k));
+    self(self, 2 * k + 1, first, level + 1);
+    self(self, 2 * k + 2, second, level + 1);
+  };
+  walk(walk, 0, root, 0);
+}
+
+// region_cells' input check: 2^r − 1 splits, each finite and on the x, y or z axis.
+void check_region_splits(const std::vector<RsRegionSplit>& splits, unsigned r) {
+  const std::size_t needed = (std::size_t{1} << r) - 1;
+  if (splits.size() < needed)
+    throw Error("hcc-region: " + std::to_string(splits.size()) + " region splits for " + std::to_string(r) +
+                " region bits, which need " + std::to_string(needed));
+  for (std::size_t k = 0; k < needed; ++k)
+    if (splits[k].axis > 2 || !std::isfinite(splits[k].at))
+      throw Error("hcc-region: region split " + std::to_string(k) + " (axis " + std::to_string(splits[k].axis) +
+                  " at " + std::to_string(splits[k].at) + ") is not a finite split on the x, y or z axis");
+}
+
 }  // namespace
 
 std::vector<RsRegionSplit> median_region_splits(const Aabb& box, const std::vector<RsRay>& rays, unsigned r) {
@@ -289,23 +314,12 @@ std::vector<RsRegionSplit> median_region_splits(const Aabb& box, const std::vect
 
 std::vector<Aabb> region_boxes(const Aabb& box, const std::vector<RsRegionSplit>& splits, unsigned r) {
   std::vector<Aabb> cells(std::size_t{1} << r);
-  auto walk = [&](auto&& self, std::size_t k, Aabb cell, unsigned level) -> void {
-    if (level == r) {
-      cells[k + 1 - cells.size()] = cell;
-      return;
-    }
-    const auto [low, high] = split_cell(cell, splits.at(k));
-    self(self, 2 * k + 1, low, level + 1);
-    self(self, 2 * k + 2, high, level + 1);
-  };
-  walk(walk, 0, box, 0);
+  walk_split_tree(splits, r, box, split_cell, [&](std::size_t region, const Aabb& cell) { cells[region] = cell; });
   return cells;
 }
 
 std::vector<RsRegionCells> region_cells(const std::vector<RsRegionSplit>& splits, unsigned r) {
-  if (splits.size() + 1 < (std::size_t{1} << r))
-    throw Error("hcc-region: " + std::to_string(splits.size()) + " region splits for " + std::to_string(r) +
-                " region bits, which need " + std::to_string((std::size_t{1} << r) - 1));
+  check_region_splits(splits, r);
   const float none = std::numeric_limits<float>::infinity();
   std::vector<RsRegionCells> groups(rs_region_cell_groups(r));
   for (RsRegionCells& g : groups)
@@ -313,30 +327,26 @@ std::vector<RsRegionCells> region_cells(const std::vector<RsRegionSplit>& splits
       for (rs_f16* lo : {&g.lo_x, &g.lo_y, &g.lo_z}) lo->s[j] = none;
       for (rs_f16* hi : {&g.hi_x, &g.hi_y, &g.hi_z}) hi->s[j] = -none;
     }
-  // The walk of rs_region_of: the first child keeps o[axis] < at (hi = min), the second o[axis] ≥ at (lo = max).
-  auto walk = [&](auto&& self, std::size_t k, std::array<float, 3> lo, std::array<float, 3> hi, unsigned level) -> void {
-    if (level == r) {
-      const std::size_t region = k + 1 - (std::size_t{1} << r);
-      RsRegionCells& g = groups[region / 16];
-      const std::size_t j = region % 16;
-      // No upper bound: NaN, which no coordinate is ≥ (cl/keys_cut.h, RsRegionCells).
-      for (float& h : hi) h = h == none ? std::numeric_limits<float>::quiet_NaN() : h;
-      g.lo_x.s[j] = lo[0], g.hi_x.s[j] = hi[0];
-      g.lo_y.s[j] = lo[1], g.hi_y.s[j] = hi[1];
-      g.lo_z.s[j] = lo[2], g.hi_z.s[j] = hi[2];
-      return;
-    }
-    const RsRegionSplit& s = splits[k];
-    if (s.axis > 2 || !std::isfinite(s.at))
-      throw Error("hcc-region: region split " + std::to_string(k) + " (axis " + std::to_string(s.axis) + " at " +
-                  std::to_string(s.at) + ") is not a finite split on the x, y or z axis");
-    auto below = hi, above = lo;
-    below[s.axis] = std::min(hi[s.axis], s.at);
-    above[s.axis] = std::max(lo[s.axis], s.at);
-    self(self, 2 * k + 1, lo, below, level + 1);
-    self(self, 2 * k + 2, above, hi, level + 1);
+  // A cell's bounds (lo, hi) as rs_region_of's walk narrows them: the first child keeps o[axis] < at
+  // (hi = min), the second o[axis] ≥ at (lo = max).
+  using Bounds = std::pair<std::array<float, 3>, std::array<float, 3>>;
+  auto narrow = [](const Bounds& cell, RsRegionSplit s) {
+    Bounds below = cell, above = cell;
+    below.second[s.axis] = std::min(cell.second[s.axis], s.at);
+    above.first[s.axis] = std::max(cell.first[s.axis], s.at);
+    return std::pair{below, above};
   };
-  walk(walk, 0, {-none, -none, -none}, {none, none, none}, 0);
+  walk_split_tree(splits, r, Bounds{{-none, -none, -none}, {none, none, none}}, narrow,
+                  [&](std::size_t region, const Bounds& cell) {
+                    auto [lo, hi] = cell;
+                    // No upper bound: NaN, which no coordinate is ≥ (cl/keys_cut.h, RsRegionCells).
+                    for (float& h : hi) h = h == none ? std::numeric_limits<float>::quiet_NaN() : h;
+                    RsRegionCells& g = groups[region / 16];
+                    const std::size_t j = region % 16;
+                    g.lo_x.s[j] = lo[0], g.hi_x.s[j] = hi[0];
+                    g.lo_y.s[j] = lo[1], g.hi_y.s[j] = hi[1];
+                    g.lo_z.s[j] = lo[2], g.hi_z.s[j] = hi[2];
+                  });
   return groups;
 }
 
@@ -345,7 +355,7 @@ void EncodeScene::set_region_statistics(RegionStatistics stats) {
   if (!stats.empty() && (stats.splits.size() != regions - 1 || stats.visits.size() != regions))
     throw Error("region statistics for " + std::to_string(stats.visits.size()) + " regions, hcc-region has " +
                 std::to_string(regions) + " (" + std::to_string(params_.region_bits) + " region bits)");
-  if (!stats.empty()) region_cells(stats.splits, params_.region_bits);  // throws on a split that is not finite
+  if (!stats.empty()) check_region_splits(stats.splits, params_.region_bits);
   for (const auto& region : stats.visits)
     for (const auto& [node, count] : region)
       if (node >= bvh_->nodes.size())
