@@ -221,3 +221,36 @@ TEST(CliScenes, ListsPresentMissingAndDifferentFiles) {
   EXPECT_NE(help.out.find("Exit status"), std::string::npos) << help.out;
   EXPECT_NE(help.out.find("--verify"), std::string::npos) << help.out;
 }
+
+// encodebench --versus pairs every encoder's encode with the reference's in the same rounds and
+// prints the paired ratio with its interval; the reference's own row has none, and the keys checked
+// against the host twin are still each encoder's own (the reference writes to buffers of its own).
+TEST(CliEncodebench, VersusPrintsAPairedRatioPerEncoder) {
+  CliResult r = run_cli({"encodebench", "--scene", "cornell", "--batch", "primary", "--encoders", "origin,hcc,mlhcc",
+                         "--bits", "32", "--resolution", "64x64", "--reps", "6", "--warmup", "0", "--max-time", "0",
+                         "--versus", "hcc"});
+  ASSERT_EQ(r.code, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find("x hcc"), std::string::npos) << r.out;
+  std::map<std::string, std::vector<std::string>> rows;  // encoder -> the words of its row
+  std::istringstream lines(r.out);
+  for (std::string line; std::getline(lines, line);) {
+    std::istringstream words(line);
+    std::vector<std::string> w;
+    for (std::string x; words >> x;) w.push_back(x);
+    if (w.size() > 2 && w[1] == "32") rows[w[0]] = w;
+  }
+  ASSERT_EQ(rows.size(), 3u) << r.out;
+  // Columns: encoder bits ms [lo, hi] MRays/s %trace [lo, hi] then the ratio [lo, hi], distinct, host==, rounds.
+  for (const char* e : {"origin", "mlhcc"}) {
+    const auto& w = rows[e];
+    ASSERT_EQ(w.size(), 15u) << r.out;
+    const double x = std::stod(w[9]), lo = std::stod(w[10].substr(1)), hi = std::stod(w[11]);
+    EXPECT_GT(x, 0.0) << e;
+    EXPECT_LE(lo, x) << e;
+    EXPECT_LE(x, hi) << e;
+    EXPECT_EQ(w[13], "yes") << e << ": its keys are not the host twin's";
+  }
+  ASSERT_EQ(rows["hcc"].size(), 13u) << r.out;
+  EXPECT_EQ(rows["hcc"][9], "-") << r.out;
+  expect_refused({"encodebench", "--scene", "cornell", "--versus", "nope"}, {"unknown encoder 'nope'", "hcc"});
+}

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <optional>
 
 #include "app/commands.h"
 #include "app/options.h"
@@ -34,6 +35,9 @@ struct EncodeBenchArgs {
   int region_bits = -1;     // hcc-region's region bits; -1: the default
   double traffic_blend = -1;  // hcc-traffic's and hcc-region's blend; -1: the default
   int cost_bits = -1;         // mlhcc-cost's cost bits; -1: the default
+  // Each encoder's encode is also paired with this encoder's, in the same rounds (empty: none), for
+  // a cost ratio with its interval (issue 21's "encode within 1.5× HCC").
+  std::string versus;
   CommonOptions common;
 };
 
@@ -54,14 +58,23 @@ int run_encodebench(const EncodeBenchArgs& args) {
     if (b.batch.name == args.batch) rb = &b;
   }
   if (!rb) throw Error(fmt::format("scene '{}' has no batch '{}'; it has: {}", scene.name, args.batch, names));
-  const std::vector<Encoder> encoders = args.encoders.empty() ? all_encoders() : parse_encoders(args.encoders);
+  std::vector<Encoder> encoders = args.encoders.empty() ? all_encoders() : parse_encoders(args.encoders);
+  const std::optional<Encoder> versus =
+      args.versus.empty() ? std::nullopt : std::optional<Encoder>(parse_encoders({args.versus}).at(0));
+  // The reference's own preparation (hcc-traffic's traffic, hcc-region's statistics) happens below
+  // only for the encoders listed, so list it too; it is timed like the others.
+  if (versus && std::find(encoders.begin(), encoders.end(), *versus) == encoders.end()) encoders.insert(encoders.begin(), *versus);
 
   const RayBatch& batch = rb->batch;
   const auto n = static_cast<std::uint32_t>(batch.size());
   fmt::print("device   {} ({})\n", rt.info().name, rt.info().platform_name);
   fmt::print("scene    {}: {} triangles; batch {}: {} rays\n", scene.name, tris.size(), batch.name, batch.size());
   fmt::print("timing   each encode paired with a trace of the same batch in the same rounds (docs/measurement.md): "
-             "ms = median [95 % interval], % trace = paired estimate of encode / trace per round\n\n");
+             "ms = median [95 % interval], % trace = paired estimate of encode / trace per round\n");
+  if (versus)
+    fmt::print("         and with {}'s encode at the same key length: x {} = paired estimate of encode / {}'s per round\n",
+               encoder_name(*versus), encoder_name(*versus), encoder_name(*versus));
+  fmt::print("\n");
   EncoderParams params;
   if (args.direction_bits >= 0) params.direction_bits = static_cast<unsigned>(args.direction_bits);
   if (args.region_bits >= 0) params.region_bits = static_cast<unsigned>(args.region_bits);
@@ -91,12 +104,16 @@ int run_encodebench(const EncodeBenchArgs& args) {
   cl::Buffer hits = rt.buffer("hits", std::max<std::size_t>(1, n) * sizeof(RsHit));
   cl::Buffer keys = rt.buffer("keys", std::max<std::size_t>(1, n) * sizeof(std::uint64_t));
   cl::Buffer values = rt.buffer("values", std::max<std::size_t>(1, n) * sizeof(std::uint32_t));
+  // The reference's keys go to buffers of their own, so the keys checked below are the encoder's.
+  cl::Buffer versus_keys = rt.buffer("reference keys", std::max<std::size_t>(1, n) * sizeof(std::uint64_t));
+  cl::Buffer versus_values = rt.buffer("reference values", std::max<std::size_t>(1, n) * sizeof(std::uint32_t));
   auto ms_text = [](const Timing& t) {
     return std::isfinite(t.lo_ms) ? fmt::format("{:.3f} [{:.3f}, {:.3f}]", t.median_ms, t.lo_ms, t.hi_ms)
                                   : fmt::format("{:.3f}", t.median_ms);
   };
-  fmt::print("{:<11} {:>4} {:>28} {:>9} {:>24} {:>10} {:>8} {:>7}\n", "encoder", "bits", "encode ms", "MRays/s",
-             "% trace", "distinct", "host==", "rounds");
+  const std::string versus_header = versus ? fmt::format("x {}", encoder_name(*versus)) : "";
+  fmt::print("{:<11} {:>4} {:>28} {:>9} {:>24}{:>{}} {:>10} {:>8} {:>7}\n", "encoder", "bits", "encode ms", "MRays/s",
+             "% trace", versus_header, versus ? 24 : 0, "distinct", "host==", "rounds");
   int failures = 0;
   for (Encoder e : encoders)
     for (unsigned bits : args.bits) {
@@ -114,6 +131,17 @@ int run_encodebench(const EncodeBenchArgs& args) {
                    return std::vector<double>{event_ms(ev)};
                  }}};
       m.targets = {[](const Series& s) { return ratio_interval(s.at("encode"), s.at("trace")); }};
+      const bool paired = versus && *versus != e && key_bits_problem(*versus, bits, enc.scene().params()).empty();
+      if (paired) {
+        enc.prepare(*versus, bits);
+        m.arms.push_back({{"versus"}, [&] {
+                            const DeviceEncoder::Events ev =
+                                enc.enqueue(*versus, bits, rays, order, n, versus_keys, versus_values);
+                            ev.wait();
+                            return std::vector<double>{ev.ms()};
+                          }});
+        m.targets.push_back([](const Series& s) { return ratio_interval(s.at("encode"), s.at("versus")); });
+      }
       const Outcome o = measure(m, args.protocol.settings(protocol_seed(fmt::format(
                                        "{}/{}/{}/{}", scene.name, batch.name, encoder_name(e), bits))));
       const Timing encode = Timing::of(o.series.at("encode"));
@@ -140,12 +168,21 @@ int run_encodebench(const EncodeBenchArgs& args) {
       const std::string share_text =
           share.has_interval() ? fmt::format("{:.1f}% [{:.1f}, {:.1f}]", 100 * share.value, 100 * share.lo, 100 * share.hi)
                                : fmt::format("{:.1f}%", 100 * share.value);
-      fmt::print("{:<11} {:>4} {:>28} {:>9.1f} {:>24} {:>10} {:>8} {:>6}{}\n", encoder_name(e), bits, ms_text(encode),
-                 encode.median_ms > 0 ? batch.size() / (encode.median_ms * 1e3) : 0.0, share_text, distinct, check,
-                 o.rounds, o.stop == StopReason::Noise ? " " : "*");
+      std::string versus_text;
+      if (paired) {
+        const Estimate x = ratio_interval(o.series.at("encode"), o.series.at("versus"));
+        versus_text = x.has_interval() ? fmt::format("{:.3f} [{:.3f}, {:.3f}]", x.value, x.lo, x.hi)
+                                       : fmt::format("{:.3f}", x.value);
+      } else if (versus) {
+        versus_text = "-";
+      }
+      fmt::print("{:<11} {:>4} {:>28} {:>9.1f} {:>24}{:>{}} {:>10} {:>8} {:>6}{}\n", encoder_name(e), bits,
+                 ms_text(encode), encode.median_ms > 0 ? batch.size() / (encode.median_ms * 1e3) : 0.0, share_text,
+                 versus_text, versus ? 24 : 0, distinct, check, o.rounds, o.stop == StopReason::Noise ? " " : "*");
       std::fflush(stdout);
     }
-  fmt::print("rounds * = stopped by --max-time before the % trace interval was within --max-noise\n");
+  fmt::print("rounds * = stopped by --max-time before the % trace{} interval was within --max-noise\n",
+             versus ? fmt::format(" or x {}", encoder_name(*versus)) : std::string());
   if (failures) {
     fmt::print(stderr, "raysort: {} encoder runs differ from the host twin\n", failures);
     return 1;
@@ -167,6 +204,9 @@ void register_encode_command(CLI::App& app) {
   cmd->add_option("--region-bits", args->region_bits, "hcc-region region bits (as `run --region-bits`)");
   cmd->add_option("--traffic-blend", args->traffic_blend, "hcc-traffic and hcc-region blend (as `run --traffic-blend`)");
   cmd->add_option("--cost-bits", args->cost_bits, "mlhcc-cost cost bits (as `run --cost-bits`)");
+  cmd->add_option("--versus", args->versus,
+                  "also time this encoder's encode in the same rounds as each other encoder's, and print the paired "
+                  "cost ratio with its 95 % interval (e.g. --versus hcc)");
   add_protocol_options(*cmd, args->protocol);
   cmd->add_flag("!--no-verify", args->verify, "skip the comparison with the host twin");
   add_common_options(*cmd, args->common);
