@@ -59,7 +59,8 @@ def model_time(r, p, k):
     picks it (sum) or an alternative that was tried against it (results/gpu-model/README.md)."""
     scale = float(r["gpu_warps"]) / float(r["gpu_replayed_warps"])  # a sampled replay stands for all warps
     cycles = p["sms"] * p["clock_ghz"] * 1e9
-    issue = float(r["gpu_warp_steps"]) * k / cycles
+    # ww: the issued steps of a while-while kernel (GpuCounts::ww_steps) in place of lockstep's
+    issue = float(r["gpu_ww_steps" if COMBINE == "ww" else "gpu_warp_steps"]) * k / cycles
     l2_sectors = float(r["gpu_l2_hits"]) + float(r["gpu_l2_misses"])
     memory = float(r["gpu_dram_bytes"]) / (p["dram_gbps"] * 1e9) + l2_sectors * p["sector_bytes"] / (p["l2_gbps"] * 1e9)
     if COMBINE == "max":
@@ -231,10 +232,11 @@ def main():
     ap.add_argument("--out", required=True)
     ap.add_argument("--profile", default=os.path.join(ROOT, "gpu/profiles/rtx3060.toml"))
     ap.add_argument("--paper", default=os.path.join(ROOT, "results/gpu-model/paper_tables.csv"))
-    ap.add_argument("--combine", choices=("sum", "max", "sum+l1", "sum+latency"), default="sum",
+    ap.add_argument("--combine", choices=("sum", "max", "sum+l1", "sum+latency", "ww"), default="sum",
                     help="issue and memory time: sum (the model's, default); alternatives tried against it: max (a "
                          "roofline), sum+l1 (plus L1 requests at one per cycle), sum+latency (plus L2/DRAM stalls; "
-                         "needs the gpu_steps_l2/gpu_steps_dram columns)")
+                         "needs the gpu_steps_l2/gpu_steps_dram columns), ww (the sum with a while-while kernel's issued steps, "
+                         "gpu_ww_steps, in place of lockstep's)")
     ap.add_argument("--access", choices=("gather", "permute"), default="gather",
                     help="which access mode's cells to read (the 8-spp paper sets ran both; earlier ones one)")
     ap.add_argument("--baseline", choices=("pixel", "shuffled"), default="pixel",

@@ -152,6 +152,46 @@ TEST(GpuModel, LeafStepsReadTheirPacketsAndRayLoadsCoalesce) {
   EXPECT_EQ(replay.counts().requests, 1u + ray_lines);
 }
 
+// A while-while kernel's issued steps (while_while_steps): per outer iteration the longest run of
+// inner-node steps over the lanes, then the longest run of leaf steps. Lanes whose node and leaf
+// steps interleave differently wait for each other, where lockstep lets them advance together.
+TEST(GpuModel, WhileWhileStepsWaitForTheOtherKindOfStep) {
+  WideBvh wide = nodes_only();
+  wide.packets.resize(8);
+  const GpuAddressMap map(wide, 64);
+  const std::uint32_t L = RS_WIDE_LEAF;  // a leaf of one packet
+  EXPECT_TRUE(map.is_leaf(L));
+  EXPECT_FALSE(map.is_leaf(5));
+  // Coherent lanes: every step counts once, as in lockstep.
+  EXPECT_EQ(while_while_steps(warp_of({0, 1, L, 2, L}), map), 5u);
+  WarpTrails w;
+  w.lanes = {{0, L, 1, L}, {L, 0, L, 1}};
+  // Lane 0: node, leaf, node, leaf. Lane 1 starts at a leaf (a root that is a leaf), then the same.
+  // Iteration 1: inner runs 1 and 0, leaf runs 1 and 1; iteration 2: inner 1 and 1, leaf 1 and 1;
+  // iteration 3: inner 0 and 1, leaf 0 and 0. Lockstep would issue 4.
+  EXPECT_EQ(while_while_steps(w, map), 2u + 2u + 1u);
+  // One long lane and one finished: the long lane's trail alone.
+  w.lanes = {{0, 1, 2, L, L, 3}, {}};
+  EXPECT_EQ(while_while_steps(w, map), 6u);
+  // The replay adds them up over its warps.
+  GpuReplay replay(tiny_gpu(1), map);
+  std::vector<WarpTrails> warps{warp_of({0, 1, L}), w};
+  replay.replay_wave(warps);
+  EXPECT_EQ(replay.counts().ww_steps, 3u + 6u);
+  EXPECT_EQ(replay.counts().warp_steps, 3u + 6u);
+  // On the binary layout a node is a leaf when it holds primitives.
+  Bvh binary;
+  binary.nodes.resize(3);
+  binary.nodes[1].count = 2;
+  binary.triangles.resize(2);
+  const GpuAddressMap bmap(binary, 64);
+  EXPECT_FALSE(bmap.is_leaf(0));
+  EXPECT_TRUE(bmap.is_leaf(1));
+  WarpTrails b;
+  b.lanes = {{0, 1}, {0, 2, 1}};
+  EXPECT_EQ(while_while_steps(b, bmap), 2u + 1u);
+}
+
 // An any-hit ray stops in the leaf it hits, after the packet holding the hit: its last step reads
 // only those packets (WarpTrails::last_reads), where the model used to read the whole leaf.
 TEST(GpuModel, AnyHitLanesReadTheirLastLeafOnlyUpToTheHit) {

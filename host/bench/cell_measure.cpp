@@ -28,7 +28,7 @@ CellRecord::GpuModelFigures gpu_figures(const GpuProfile& p, const GpuCounts& ce
   g.warp_steps = cell.warp_steps, g.idle_lanes = cell.idle_lanes, g.l1_hits = cell.l1_hits;
   g.l1_misses = cell.l1_misses, g.l2_hits = cell.l2_hits, g.l2_misses = cell.l2_misses;
   g.dram_bytes = cell.dram_bytes, g.warps = cell.warps, g.replayed_warps = cell.replayed_warps;
-  g.steps_l2 = cell.steps_l2, g.steps_dram = cell.steps_dram;
+  g.steps_l2 = cell.steps_l2, g.steps_dram = cell.steps_dram, g.ww_steps = cell.ww_steps;
   return g;
 }
 

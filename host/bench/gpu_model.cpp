@@ -145,6 +145,34 @@ void GpuAddressMap::step_blocks(std::uint32_t ref, unsigned line, std::vector<st
                  out);
 }
 
+bool GpuAddressMap::is_leaf(std::uint32_t ref) const {
+  return binary_ ? binary_[ref].count != 0 : (ref & RS_WIDE_LEAF) != 0;
+}
+
+std::uint64_t while_while_steps(const WarpTrails& warp, const GpuAddressMap& map) {
+  std::vector<std::size_t> at(warp.lanes.size(), 0);  // each lane's next step
+  std::uint64_t steps = 0;
+  for (;;) {
+    std::size_t inner = 0, leaves = 0;  // the longest run of each kind in this iteration
+    for (std::size_t l = 0; l < warp.lanes.size(); ++l) {
+      const auto& trail = warp.lanes[l];
+      std::size_t& i = at[l];
+      const std::size_t start = i;
+      while (i < trail.size() && !map.is_leaf(trail[i])) ++i;
+      inner = std::max(inner, i - start);
+    }
+    for (std::size_t l = 0; l < warp.lanes.size(); ++l) {
+      const auto& trail = warp.lanes[l];
+      std::size_t& i = at[l];
+      const std::size_t start = i;
+      while (i < trail.size() && map.is_leaf(trail[i])) ++i;
+      leaves = std::max(leaves, i - start);
+    }
+    if (inner == 0 && leaves == 0) return steps;
+    steps += inner + leaves;
+  }
+}
+
 void GpuAddressMap::ray_blocks(std::uint32_t ray, unsigned line, std::vector<std::uint64_t>& out) const {
   range_blocks(ray_base_ + std::uint64_t{ray} * sizeof(RsRay), sizeof(RsRay), line, out);
 }
@@ -219,6 +247,7 @@ void GpuReplay::replay_wave(std::span<const WarpTrails> warps) {
     for (unsigned sm = 0; sm < profile_.sms; ++sm)
       for (std::size_t k = sm; k < warps.size(); k += profile_.sms)
         if (step < len[k]) warp_step(sm, warps[k], step);
+  for (const WarpTrails& warp : warps) counts_.ww_steps += while_while_steps(warp, map_);
   counts_.replayed_warps += warps.size();
 }
 

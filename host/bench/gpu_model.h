@@ -60,6 +60,10 @@ struct GpuCounts {
   // Warp steps by the slowest level one of their reads reached: the step waits for it (latency).
   std::uint64_t steps_l2 = 0;    // some read missed L1, none missed L2
   std::uint64_t steps_dram = 0;  // some read missed L2
+  // The issued steps of a while-while kernel (Aila and Laine 2009) on the same trails, for
+  // comparison only (gpu_model_time uses warp_steps): while_while_steps, summed over the warps.
+  // Static warps only; 0 under dynamic fetch.
+  std::uint64_t ww_steps = 0;
   std::uint64_t warps = 0, replayed_warps = 0;  // all warps; those replayed (sampling)
 };
 
@@ -85,6 +89,8 @@ class GpuAddressMap {
                    std::uint32_t leaf_reads = 0) const;
   // Appends the blocks the load of ray `ray` reads.
   void ray_blocks(std::uint32_t ray, unsigned block_bytes, std::vector<std::uint64_t>& out) const;
+  // Whether step reference `ref` is a leaf (its step tests primitives) rather than an inner node.
+  bool is_leaf(std::uint32_t ref) const;
 
  private:
   const RsBvhNode* binary_ = nullptr;  // null on the wide layout
@@ -99,6 +105,15 @@ struct WarpTrails {
   std::vector<std::uint32_t> rays;
   std::vector<std::uint32_t> last_reads;
 };
+
+// The steps a warp issues in a while-while traversal loop (Aila and Laine 2009, "Understanding the
+// efficiency of ray traversal on GPUs"): each outer iteration runs an inner-node loop until every
+// lane still tracing has reached a leaf (or ended its trail), then a leaf loop until no lane has a
+// leaf left. So per iteration the warp issues the longest run of consecutive inner-node steps over
+// its lanes, then the longest run of consecutive leaf steps. A lockstep step of warp_steps lets a
+// lane at a leaf and a lane at a node advance together; here they wait for each other. Always at
+// least the longest trail.
+std::uint64_t while_while_steps(const WarpTrails& warp, const GpuAddressMap& map);
 
 // Replays the trails through the caches, in one of two schedules (docs/gpu-model.md, "Scheduling simplification" and "Other schedules").
 // Static warps (replay_wave): warps are taken in trace order, sms · resident_warps_per_sm at a time

@@ -66,7 +66,7 @@ nlohmann::json gpu_model_json(const CellRecord::GpuModelFigures& g) {
           {"warp_steps", g.warp_steps}, {"idle_lanes", g.idle_lanes},     {"l1_hits", g.l1_hits},
           {"l1_misses", g.l1_misses},   {"l2_hits", g.l2_hits},           {"l2_misses", g.l2_misses},
           {"dram_bytes", g.dram_bytes}, {"warps", g.warps},               {"replayed_warps", g.replayed_warps},
-          {"steps_l2", g.steps_l2},     {"steps_dram", g.steps_dram}};
+          {"steps_l2", g.steps_l2},     {"steps_dram", g.steps_dram},     {"ww_steps", g.ww_steps}};
 }
 void gpu_model_from_json(const nlohmann::json& j, CellRecord::GpuModelFigures& g) {
   j.at("profile").get_to(g.profile);
@@ -80,6 +80,7 @@ void gpu_model_from_json(const nlohmann::json& j, CellRecord::GpuModelFigures& g
   // Added later within format version 3: absent in older records.
   if (j.contains("steps_l2")) count_from(j, "steps_l2", g.steps_l2);
   if (j.contains("steps_dram")) count_from(j, "steps_dram", g.steps_dram);
+  if (j.contains("ww_steps")) count_from(j, "ww_steps", g.ww_steps);
 }
 
 }  // namespace
@@ -246,7 +247,8 @@ void add_gpu_model_columns(std::vector<Col>& c) {
         {"gpu_dram_bytes", &CellRecord::GpuModelFigures::dram_bytes},
         {"gpu_replayed_warps", &CellRecord::GpuModelFigures::replayed_warps},
         {"gpu_steps_l2", &CellRecord::GpuModelFigures::steps_l2},
-        {"gpu_steps_dram", &CellRecord::GpuModelFigures::steps_dram}}) {
+        {"gpu_steps_dram", &CellRecord::GpuModelFigures::steps_dram},
+        {"gpu_ww_steps", &CellRecord::GpuModelFigures::ww_steps}}) {
     const Count field = column.second;
     c.push_back(numeric(
         column.first,

@@ -88,6 +88,7 @@ struct CellRecord {
     std::uint64_t warp_steps = 0, idle_lanes = 0, l1_hits = 0, l1_misses = 0, l2_hits = 0, l2_misses = 0;
     std::uint64_t dram_bytes = 0, warps = 0, replayed_warps = 0;
     std::uint64_t steps_l2 = 0, steps_dram = 0;  // warp steps whose slowest read reached L2 / DRAM
+    std::uint64_t ww_steps = 0;  // a while-while kernel's issued steps (GpuCounts::ww_steps)
   } gpu;
 
   // NoSort cells of a run with both trace variants: rays this variant misses that the other one
