@@ -63,7 +63,8 @@ int run_encodebench(const EncodeBenchArgs& args) {
       args.versus.empty() ? std::nullopt : std::optional<Encoder>(parse_encoders({args.versus}).at(0));
   // The reference's own preparation (hcc-traffic's traffic, hcc-region's statistics) happens below
   // only for the encoders listed, so list it too; it is timed like the others.
-  if (versus && std::find(encoders.begin(), encoders.end(), *versus) == encoders.end()) encoders.insert(encoders.begin(), *versus);
+  if (versus && std::find(encoders.begin(), encoders.end(), *versus) == encoders.end())
+    encoders.insert(encoders.begin(), *versus);
 
   const RayBatch& batch = rb->batch;
   const auto n = static_cast<std::uint32_t>(batch.size());

@@ -151,23 +151,22 @@ bool GpuAddressMap::is_leaf(std::uint32_t ref) const {
 
 std::uint64_t while_while_steps(const WarpTrails& warp, const GpuAddressMap& map) {
   std::vector<std::size_t> at(warp.lanes.size(), 0);  // each lane's next step
+  // One loop of an iteration: every lane takes its run of consecutive steps of one kind (leaves or
+  // inner nodes); the warp issues the longest.
+  auto longest_run = [&](bool leaves) {
+    std::size_t longest = 0;
+    for (std::size_t l = 0; l < warp.lanes.size(); ++l) {
+      const auto& trail = warp.lanes[l];
+      const std::size_t start = at[l];
+      while (at[l] < trail.size() && map.is_leaf(trail[at[l]]) == leaves) ++at[l];
+      longest = std::max(longest, at[l] - start);
+    }
+    return longest;
+  };
   std::uint64_t steps = 0;
   for (;;) {
-    std::size_t inner = 0, leaves = 0;  // the longest run of each kind in this iteration
-    for (std::size_t l = 0; l < warp.lanes.size(); ++l) {
-      const auto& trail = warp.lanes[l];
-      std::size_t& i = at[l];
-      const std::size_t start = i;
-      while (i < trail.size() && !map.is_leaf(trail[i])) ++i;
-      inner = std::max(inner, i - start);
-    }
-    for (std::size_t l = 0; l < warp.lanes.size(); ++l) {
-      const auto& trail = warp.lanes[l];
-      std::size_t& i = at[l];
-      const std::size_t start = i;
-      while (i < trail.size() && map.is_leaf(trail[i])) ++i;
-      leaves = std::max(leaves, i - start);
-    }
+    const std::size_t inner = longest_run(false);
+    const std::size_t leaves = longest_run(true);
     if (inner == 0 && leaves == 0) return steps;
     steps += inner + leaves;
   }
