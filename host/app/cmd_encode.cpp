@@ -108,10 +108,6 @@ int run_encodebench(const EncodeBenchArgs& args) {
   // The reference's keys go to buffers of their own, so the keys checked below are the encoder's.
   cl::Buffer versus_keys = rt.buffer("reference keys", std::max<std::size_t>(1, n) * sizeof(std::uint64_t));
   cl::Buffer versus_values = rt.buffer("reference values", std::max<std::size_t>(1, n) * sizeof(std::uint32_t));
-  auto ms_text = [](const Timing& t) {
-    return std::isfinite(t.lo_ms) ? fmt::format("{:.3f} [{:.3f}, {:.3f}]", t.median_ms, t.lo_ms, t.hi_ms)
-                                  : fmt::format("{:.3f}", t.median_ms);
-  };
   const std::string versus_header = versus ? fmt::format("x {}", encoder_name(*versus)) : "";
   fmt::print("{:<11} {:>4} {:>28} {:>9} {:>24}{:>{}} {:>10} {:>8} {:>7}\n", "encoder", "bits", "encode ms", "MRays/s",
              "% trace", versus_header, versus ? 24 : 0, "distinct", "host==", "rounds");
@@ -169,16 +165,10 @@ int run_encodebench(const EncodeBenchArgs& args) {
       const std::string share_text =
           share.has_interval() ? fmt::format("{:.1f}% [{:.1f}, {:.1f}]", 100 * share.value, 100 * share.lo, 100 * share.hi)
                                : fmt::format("{:.1f}%", 100 * share.value);
-      std::string versus_text;
-      if (paired) {
-        const Estimate x = ratio_interval(o.series.at("encode"), o.series.at("versus"));
-        versus_text = x.has_interval() ? fmt::format("{:.3f} [{:.3f}, {:.3f}]", x.value, x.lo, x.hi)
-                                       : fmt::format("{:.3f}", x.value);
-      } else if (versus) {
-        versus_text = "-";
-      }
+      const std::string versus_text =
+          paired ? interval_text(ratio_interval(o.series.at("encode"), o.series.at("versus"))) : versus ? "-" : "";
       fmt::print("{:<11} {:>4} {:>28} {:>9.1f} {:>24}{:>{}} {:>10} {:>8} {:>6}{}\n", encoder_name(e), bits,
-                 ms_text(encode), encode.median_ms > 0 ? batch.size() / (encode.median_ms * 1e3) : 0.0, share_text,
+                 interval_text(encode.estimate()), encode.median_ms > 0 ? batch.size() / (encode.median_ms * 1e3) : 0.0, share_text,
                  versus_text, versus ? 24 : 0, distinct, check, o.rounds, o.stop == StopReason::Noise ? " " : "*");
       std::fflush(stdout);
     }

@@ -117,14 +117,8 @@ BatchRun trace_batch(Runtime& rt, std::vector<Tracer>& tracers, const void* embr
 }
 
 // "12.34 [12.10, 12.60]": a median with its 95 % interval (just the median without one).
-std::string ms_text(const Timing& t) {
-  if (!std::isfinite(t.lo_ms)) return fmt::format("{:.2f}", t.median_ms);
-  return fmt::format("{:.2f} [{:.2f}, {:.2f}]", t.median_ms, t.lo_ms, t.hi_ms);
-}
-std::string ratio_text(const Estimate& e) {
-  if (!e.has_interval()) return e.has_value() ? fmt::format("{:.3f}", e.value) : "-";
-  return fmt::format("{:.3f} [{:.3f}, {:.3f}]", e.value, e.lo, e.hi);
-}
+std::string ms_text(const Timing& t) { return interval_text(t.estimate(), 2); }
+std::string ratio_text(const Estimate& e) { return e.has_value() ? interval_text(e) : "-"; }
 double mrays(std::size_t rays, const Timing& t) { return t.median_ms > 0 ? static_cast<double>(rays) / (t.median_ms * 1e3) : 0.0; }
 
 // Rays whose hit triangle (or hit/miss) differs between two runs.

@@ -8,6 +8,12 @@
 
 namespace raysort {
 
+std::string interval_text(const Estimate& e, int decimals) {
+  if (!e.has_value()) return "–";
+  if (!e.has_interval()) return fmt::format("{:.{}f}", e.value, decimals);
+  return fmt::format("{:.{}f} [{:.{}f}, {:.{}f}]", e.value, decimals, e.lo, decimals, e.hi, decimals);
+}
+
 double Estimate::relative_half_width() const {
   if (!has_interval() || !has_value() || value == 0.0) return std::numeric_limits<double>::infinity();
   return (hi - lo) / (2.0 * std::abs(value));

@@ -103,6 +103,11 @@ struct Timing {
   Estimate estimate() const { return {median_ms, lo_ms, hi_ms, n}; }
 };
 
+// An estimate as text: "value [lo, hi]", or the value alone without an interval, or "–" without a
+// value. Speedups and ratios get three decimals, so that an interval printed next to 1 says on which
+// side of 1 it lies ("0.984 [0.962, 0.996]", not "0.98 [0.96, 1.00]").
+std::string interval_text(const Estimate& e, int decimals = 3);
+
 // ---- Steps 1, 2 and 4: warm-up, rounds, stopping rule ------------------------------------------
 
 struct ProtocolSettings {

@@ -65,14 +65,6 @@ std::string header(const std::string& first, const std::vector<std::string>& col
   return h + "\n" + sep + "\n";
 }
 
-// Speedups and net speedups get three decimals, so that an interval printed next to 1 says on
-// which side of 1 it lies ("0.984 [0.962, 0.996]", not "0.98 [0.96, 1.00]").
-std::string interval_text(const Estimate& e, int decimals = 3) {
-  if (!e.has_value()) return "–";
-  if (!e.has_interval()) return fmt::format("{:.{}f}", e.value, decimals);
-  return fmt::format("{:.{}f} [{:.{}f}, {:.{}f}]", e.value, decimals, e.lo, decimals, e.hi, decimals);
-}
-
 // A speedup as the tables print it: "= NoSort" for an unchanged order, italic when its interval
 // contains 1, bold when `best`.
 std::string speedup_text(const CellRecord& c, bool best) {
