@@ -223,7 +223,8 @@ RS_INLINE float rs_intersect_box_robust(const RsRobustRay* r, RS_GLOBAL const Rs
   }
 RS_DEFINE_T_BOUND(rs_robust_t_bound, float)  /* one triangle */
 RS_DEFINE_T_BOUND(rs4_robust_t_bound, rs_f4) /* four, lane by lane (the packet test) */
-#undef RS_DEFINE_T_BOUND
+/* RS_DEFINE_T_BOUND stays defined: the ray-packet traversal (traverse_packet.h) makes its own,
+ * for the width of its build. */
 
 /* The bound above is a worst case; it grows with the vertices' ray-space extent over |det|, so on a
  * long sliver seen edge-on (a 5 m strip 7 mm tall) it reaches 0.026 for a true t of 0.001 and 13.6

@@ -177,4 +177,85 @@ RS_INLINE rs_u32 rs16_mask_bits(rs_i16 m) {
 }
 #endif
 
+/* ---------------------------------------------------------------------------------------------
+ * Lanes of any width for the host twin of the packet traversal (traverse_packet.h, whose width
+ * RS_PACKET_W is 4, 8 or 16 per kernel build; packet_lanes.h names the width's types). The device
+ * uses OpenCL's floatN/intN; the host these templates, per-lane IEEE operations in the same order,
+ * so host and kernel give the same bits. Comparisons give -1 / 0 per lane, as OpenCL's do.
+ * ------------------------------------------------------------------------------------------- */
+#ifndef __OPENCL_VERSION__
+template <int N>
+struct alignas(16) rs_lanes_f {
+  float s[N];
+};
+template <int N>
+struct alignas(16) rs_lanes_i {
+  rs_i32 s[N];
+};
+#define RS_LANES_T_BINARY(T, op)                            \
+  template <int N>                                          \
+  RS_INLINE T<N> operator op(T<N> a, T<N> b) {              \
+    T<N> r;                                                 \
+    for (int i = 0; i < N; ++i) r.s[i] = a.s[i] op b.s[i];  \
+    return r;                                               \
+  }
+#define RS_LANES_T_COMPARE(T, op)                                       \
+  template <int N>                                                      \
+  RS_INLINE rs_lanes_i<N> operator op(T<N> a, T<N> b) {                 \
+    rs_lanes_i<N> r;                                                    \
+    for (int i = 0; i < N; ++i) r.s[i] = a.s[i] op b.s[i] ? -1 : 0;     \
+    return r;                                                           \
+  }
+RS_LANES_T_BINARY(rs_lanes_f, +)
+RS_LANES_T_BINARY(rs_lanes_f, -)
+RS_LANES_T_BINARY(rs_lanes_f, *)
+RS_LANES_T_BINARY(rs_lanes_f, /)
+RS_LANES_T_BINARY(rs_lanes_i, &)
+RS_LANES_T_BINARY(rs_lanes_i, |)
+RS_LANES_T_BINARY(rs_lanes_i, -)
+RS_LANES_T_COMPARE(rs_lanes_f, <)
+RS_LANES_T_COMPARE(rs_lanes_f, >)
+RS_LANES_T_COMPARE(rs_lanes_f, <=)
+RS_LANES_T_COMPARE(rs_lanes_f, >=)
+RS_LANES_T_COMPARE(rs_lanes_f, ==)
+RS_LANES_T_COMPARE(rs_lanes_f, !=)
+RS_LANES_T_COMPARE(rs_lanes_i, ==)
+RS_LANES_T_COMPARE(rs_lanes_i, !=)
+#undef RS_LANES_T_BINARY
+#undef RS_LANES_T_COMPARE
+/* A scalar on either side is splatted first, as OpenCL does (same bits). */
+template <int N>
+RS_INLINE rs_lanes_f<N> rs_lanes_splat(float x) {
+  rs_lanes_f<N> r;
+  for (int i = 0; i < N; ++i) r.s[i] = x;
+  return r;
+}
+template <int N>
+RS_INLINE rs_lanes_f<N> operator*(float a, rs_lanes_f<N> b) {
+  return rs_lanes_splat<N>(a) * b;
+}
+template <int N>
+RS_INLINE rs_lanes_f<N> operator*(rs_lanes_f<N> a, float b) {
+  return a * rs_lanes_splat<N>(b);
+}
+template <int N>
+RS_INLINE rs_lanes_f<N> operator+(rs_lanes_f<N> a, float b) {
+  return a + rs_lanes_splat<N>(b);
+}
+template <int N>
+RS_INLINE rs_lanes_f<N> operator-(float a, rs_lanes_f<N> b) {
+  return rs_lanes_splat<N>(a) - b;
+}
+template <int N>
+RS_INLINE rs_lanes_f<N> operator/(rs_lanes_f<N> a, float b) {
+  return a / rs_lanes_splat<N>(b);
+}
+template <int N>
+RS_INLINE rs_lanes_i<N> operator~(rs_lanes_i<N> a) {
+  rs_lanes_i<N> r;
+  for (int i = 0; i < N; ++i) r.s[i] = ~a.s[i];
+  return r;
+}
+#endif
+
 #endif /* RAYSORT_LANES_H */

@@ -14,6 +14,14 @@
  */
 #include "traverse_binary.h"
 #include "traverse_wide.h"
+#ifdef RS_TRACE_PACKET
+#define RS_PACKET_W RS_TRACE_PACKET
+#include "traverse_packet.h"
+/* The hybrid classes hand a subtree to lone rays when at most this many lanes reach it (0: never). */
+#ifndef RS_PACKET_SINGLE_AT
+#define RS_PACKET_SINGLE_AT 0
+#endif
+#endif
 
 /* Each variant gets the same three kernels: closest hit, any hit (shadow rays), and an
  * instrumented closest hit that also writes the number of BVH nodes each ray fetched.
@@ -43,9 +51,9 @@
     visits[i] = v;                                                                                            \
   }
 
-/* One layout per build (host/trace/tracer.cpp passes -DRS_TRACE_BINARY for the binary one), so a
- * run compiles only the kernels it launches. */
-#ifndef RS_TRACE_BINARY
+/* One trace class per build (host/trace/tracer.cpp passes -DRS_TRACE_BINARY for the binary BVH,
+ * -DRS_TRACE_PACKET=W for packets of W rays), so a run compiles only the kernels it launches. */
+#if !defined(RS_TRACE_BINARY) && !defined(RS_TRACE_PACKET)
 /* The 4-wide BVH (the default layout). */
 #define NODE RsWideNode
 #define LEAF RsTriPacket
@@ -55,6 +63,36 @@ RS_TRACE_KERNELS(, RS_WIDE_FAST)
 RS_TRACE_KERNELS(_robust, RS_WIDE_ROBUST)
 #undef NODE
 #undef LEAF
+
+#elif defined(RS_TRACE_PACKET)
+/* Ray packets over the 4-wide BVH (traverse_packet.h): work-item p traces rays
+ * [p * RS_PACKET_W, (p + 1) * RS_PACKET_W) of the order as one packet, one ray per vector lane
+ * (the hybrid classes: down to RS_PACKET_SINGLE_AT lanes, then each alone). */
+#define RS_PACKET_KERNELS(SUFFIX, ROBUST)                                                                     \
+  __kernel void trace_closest_packet##SUFFIX(__global const RsWideNode* nodes, __global const RsTriPacket* tris, \
+                                             __global const RsRay* rays, __global const uint* order,          \
+                                             uint count, __global RsHit* hits) {                              \
+    const uint first = get_global_id(0) * RS_PACKET_W;                                                        \
+    if (first >= count) return;                                                                               \
+    rs_traverse_packet(nodes, tris, rays, order, first, count, ROBUST, 0, RS_PACKET_SINGLE_AT, hits, 0);                           \
+  }                                                                                                           \
+  __kernel void trace_any_packet##SUFFIX(__global const RsWideNode* nodes, __global const RsTriPacket* tris,     \
+                                         __global const RsRay* rays, __global const uint* order, uint count,  \
+                                         __global RsHit* hits) {                                              \
+    const uint first = get_global_id(0) * RS_PACKET_W;                                                        \
+    if (first >= count) return;                                                                               \
+    rs_traverse_packet(nodes, tris, rays, order, first, count, ROBUST, 1, RS_PACKET_SINGLE_AT, hits, 0);                           \
+  }                                                                                                           \
+  __kernel void trace_closest_counted_packet##SUFFIX(__global const RsWideNode* nodes,                         \
+                                                     __global const RsTriPacket* tris, __global const RsRay* rays, \
+                                                     __global const uint* order, uint count,                  \
+                                                     __global RsHit* hits, __global uint* visits) {           \
+    const uint first = get_global_id(0) * RS_PACKET_W;                                                        \
+    if (first >= count) return;                                                                               \
+    rs_traverse_packet(nodes, tris, rays, order, first, count, ROBUST, 0, RS_PACKET_SINGLE_AT, hits, visits);                      \
+  }
+RS_PACKET_KERNELS(, 0)
+RS_PACKET_KERNELS(_robust, 1)
 
 #else
 /* The binary BVH, kept to measure what the wide layout gains (raysort trace --layout binary). */

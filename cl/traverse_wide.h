@@ -186,18 +186,20 @@ RS_INLINE int rs_packet_intersect_robust(const RsRobustRay* r, const float* d, R
  * leaf's RS_WIDE_LEAF reference: one id space, since inner indices never carry that bit), up to
  * trail_cap entries; *trail_len gets the full step count. This is the SIMT model's trail on the
  * layout the kernels walk (host/bench/metrics.cpp; kernels pass null and the recording compiles away).
- * Stack bound: RS_WIDE_STACK_SIZE (bvh_layout.h). */
-RS_INLINE RsHit rs_traverse_wide_recorded(RS_GLOBAL const RsWideNode* nodes, RS_GLOBAL const RsTriPacket* packets,
-                                          RsRay ray, int robust, int any_hit, rs_u32* node_visits, rs_u32* trail,
-                                          rs_u32 trail_cap, rs_u32* trail_len) {
+ * Stack bound: RS_WIDE_STACK_SIZE (bvh_layout.h).
+ * The walk itself starts at `start` (a wide node or a leaf reference) with the closest hit so far
+ * `hit` (rs_miss(ray.tmax) for a whole traversal): the packet traversal's hybrid classes hand a
+ * subtree to a lone ray this way (traverse_packet.h). */
+RS_INLINE RsHit rs_traverse_wide_subtree(RS_GLOBAL const RsWideNode* nodes, RS_GLOBAL const RsTriPacket* packets,
+                                         RsRay ray, int robust, int any_hit, rs_u32 start, RsHit hit,
+                                         rs_u32* node_visits, rs_u32* trail, rs_u32 trail_cap, rs_u32* trail_len) {
   RsTraversalRay r = rs_prepare_ray(ray);
   RsRobustRay rr = rs_prepare_robust_ray(ray);
-  RsHit hit = rs_miss(ray.tmax);
   rs_u32 visits = 0;
   rs_u32 stack[RS_WIDE_STACK_SIZE];
   float stack_t[RS_WIDE_STACK_SIZE];
   int sp = 0;
-  rs_u32 ref = 0; /* the root is always an inner node */
+  rs_u32 ref = start;
   int live = !robust || rr.valid;
   while (live) {
     if (trail && visits < trail_cap) trail[visits] = ref;
@@ -286,6 +288,14 @@ RS_INLINE RsHit rs_traverse_wide_recorded(RS_GLOBAL const RsWideNode* nodes, RS_
   if (node_visits) *node_visits = visits;
   if (trail_len) *trail_len = visits;
   return hit;
+}
+
+/* A whole traversal from the root (always an inner node), with a trail. */
+RS_INLINE RsHit rs_traverse_wide_recorded(RS_GLOBAL const RsWideNode* nodes, RS_GLOBAL const RsTriPacket* packets,
+                                          RsRay ray, int robust, int any_hit, rs_u32* node_visits, rs_u32* trail,
+                                          rs_u32 trail_cap, rs_u32* trail_len) {
+  return rs_traverse_wide_subtree(nodes, packets, ray, robust, any_hit, 0, rs_miss(ray.tmax), node_visits, trail,
+                                  trail_cap, trail_len);
 }
 
 /* Without a trail: what the trace kernels call. */

@@ -207,6 +207,12 @@ void expect_watertight(const char* what, const IndexedMesh& m, const std::vector
       EXPECT_EQ(dev_leaks, 0u) << what;
       EXPECT_EQ(count_hit_mismatches(dev.hits, host), 0u) << what;
       EXPECT_EQ(exact.wrong, 0u) << what;
+      // The packet class, 16 aimed rays per packet: watertight too, and equal to its host twin.
+      const auto packet_host = trace_reference(bvh, rays, nullptr, false, nullptr, v, TraceLayout::Packet16);
+      const auto packet_dev = Tracer(testing::runtime(), bvh, v, TraceLayout::Packet16).run(rays, nullptr, false).hits;
+      EXPECT_EQ(count_hit_mismatches(packet_dev, packet_host), 0u) << what << " packet16";
+      EXPECT_EQ(count_leaks(packet_dev), 0u) << what << " packet16";
+      EXPECT_EQ(judged(tris, bvh, rays, packet_dev, false).wrong, 0u) << what << " packet16";
     }
   }
 }

@@ -2,13 +2,17 @@
 // pipelines; plus hand-checked hits on tiny scenes.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
+#include <numeric>
+#include <random>
 
 #include "bvh/bvh.h"
 #include "render/batches.h"
 #include "scene/load.h"
 #include "test_util.h"
 #include "trace/tracer.h"
+#include "util/error.h"
 
 namespace raysort {
 
@@ -176,6 +180,88 @@ TEST(Trace, WideAndBinaryLayoutsAgree) {
       }
       EXPECT_EQ(disagree, 0u) << trace_variant_name(v) << " " << b.name;
     }
+  }
+}
+// The packet and hybrid classes (cl/traverse_packet.h): each kernel equals its host twin bit for bit, hits and
+// per-ray step counts, with packets formed from a shuffled order and a batch whose size is no
+// multiple of the width (a partial last packet); and every ray's hit equals the single-ray wide
+// traversal's up to ties (another triangle at exactly the same t), as between the wide and binary
+// classes. Shadow rays: the same occluded / free answer.
+TEST(Trace, PacketKernelsEqualTheirHostTwinAndSingleRays) {
+  Scene scene = load_scene("detail-room", {"", {64, 36, 0}});
+  Scene::Flat tris = scene.flatten();
+  Bvh bvh = build_bvh(tris);
+  const auto batches = generate_batches(scene, tris, bvh, RayGenOptions{});
+  ASSERT_GE(batches.size(), 3u);
+  Runtime& rt = testing::runtime();
+  for (TraceLayout layout : {TraceLayout::Packet4, TraceLayout::Packet8, TraceLayout::Packet16, TraceLayout::Hybrid8,
+                             TraceLayout::Hybrid16}) {
+    for (TraceVariant v : {TraceVariant::Fast, TraceVariant::Robust}) {
+      Tracer packet(rt, bvh, v, layout);
+      ASSERT_EQ(packet.layout(), layout);
+      const std::string what = std::string(trace_layout_name(layout)) + " " + trace_variant_name(v);
+      for (const auto& rb : batches) {
+        const bool any = rb.batch.any_hit();
+        std::vector<RsRay> rays = rb.batch.rays;
+        rays.resize(rays.size() - 3);  // a partial last packet for every width
+        std::vector<std::uint32_t> order(rays.size());
+        std::iota(order.begin(), order.end(), 0u);
+        std::shuffle(order.begin(), order.end(), std::mt19937(7));
+        const auto dev = packet.run(rays, &order, any).hits;
+        const auto host = trace_reference(bvh, rays, order.data(), any, nullptr, v, layout);
+        EXPECT_EQ(count_hit_mismatches(dev, host), 0u) << what << " " << rb.batch.name;
+        const auto single = trace_reference(bvh, rays, order.data(), any, nullptr, v, TraceLayout::Wide);
+        std::size_t disagree = 0, hits = 0;
+        for (std::size_t i = 0; i < dev.size(); ++i) {
+          const bool p_hit = dev[i].tri != RS_NO_HIT, s_hit = single[i].tri != RS_NO_HIT;
+          hits += p_hit;
+          if (any)
+            disagree += p_hit != s_hit;
+          else
+            disagree += dev[i].tri != single[i].tri && dev[i].t != single[i].t;
+        }
+        EXPECT_EQ(disagree, 0u) << what << " " << rb.batch.name;
+        EXPECT_GT(hits, 0u) << what << " " << rb.batch.name;
+      }
+      // The counted kernel: the same hits, and per ray the steps its lane was active, as the twin.
+      const RayBatch& b = batches[0].batch;
+      const auto n = static_cast<std::uint32_t>(b.size());
+      std::vector<std::uint32_t> identity(n);
+      std::iota(identity.begin(), identity.end(), 0u);
+      cl::Buffer rays_buf = rt.upload("rays", b.rays), order_buf = rt.upload("order", identity);
+      cl::Buffer hits_buf = rt.buffer("hits", n * sizeof(RsHit)), visits_buf = rt.buffer("visits", n * sizeof(std::uint32_t));
+      packet.enqueue_counted(rays_buf, order_buf, n, hits_buf, visits_buf).wait();
+      std::vector<RsHit> dev_hits;
+      std::vector<std::uint32_t> dev_visits, host_visits;
+      rt.download("hits", hits_buf, dev_hits, n);
+      rt.download("visits", visits_buf, dev_visits, n);
+      const auto host_hits = trace_reference(bvh, b.rays, nullptr, false, &host_visits, v, layout);
+      EXPECT_EQ(count_hit_mismatches(dev_hits, host_hits), 0u) << what << " counted";
+      EXPECT_EQ(dev_visits, host_visits) << what << " counted";
+      EXPECT_GT(*std::max_element(host_visits.begin(), host_visits.end()), 1u) << what;
+    }
+  }
+}
+
+TEST(Trace, TraceClassNames) {
+  for (const std::string& name : trace_layout_names()) EXPECT_EQ(trace_layout_name(parse_trace_layout(name)), name);
+  EXPECT_EQ(packet_width(TraceLayout::Packet16), 16);
+  EXPECT_EQ(packet_width(TraceLayout::Wide), 1);
+  DeviceInfo avx512, avx, gpu;
+  avx512.preferred_float_width = 16, avx.preferred_float_width = 8, gpu.preferred_float_width = 1;
+  EXPECT_EQ(resolve_trace_layout(TraceLayout::Packet, avx512), TraceLayout::Packet16);
+  EXPECT_EQ(resolve_trace_layout(TraceLayout::Packet, avx), TraceLayout::Packet8);
+  EXPECT_EQ(resolve_trace_layout(TraceLayout::Packet, gpu), TraceLayout::Packet4);
+  EXPECT_EQ(resolve_trace_layout(TraceLayout::Binary, avx512), TraceLayout::Binary);
+  EXPECT_EQ(resolve_trace_layout(TraceLayout::Hybrid, avx512), TraceLayout::Hybrid16);
+  EXPECT_EQ(resolve_trace_layout(TraceLayout::Hybrid, gpu), TraceLayout::Hybrid8);
+  EXPECT_EQ(parse_trace_layouts("wide,packet8,wide").size(), 2u);
+  EXPECT_EQ(parse_trace_layouts("all").size(), 7u);  // every class but the unresolved packet and hybrid
+  try {
+    parse_trace_layout("packet32");
+    ADD_FAILURE() << "packet32 accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("packet16"), std::string::npos) << e.what();
   }
 }
 }  // namespace raysort

@@ -3,6 +3,7 @@
 
 #include "app/commands.h"
 #include "runtime/runtime.h"
+#include "trace/tracer.h"
 
 namespace raysort {
 
@@ -30,6 +31,9 @@ void register_devices_command(CLI::App& app) {
       fmt::print("    local memory    {}\n", human_bytes(d.local_mem_bytes));
       fmt::print("    max allocation  {}\n", human_bytes(d.max_alloc_bytes));
       fmt::print("    max work-group  {}\n", d.max_work_group_size);
+      fmt::print("    float vector    preferred {}, native {} (trace --layout packet: packets of {} rays)\n",
+                 d.preferred_float_width, d.native_float_width,
+                 packet_width(resolve_trace_layout(TraceLayout::Packet, d)));
     }
   });
 }

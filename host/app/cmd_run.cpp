@@ -128,8 +128,10 @@ void register_run_command(CLI::App& app) {
                   "(generation order, default) or shuffled (a fixed-seed permutation, as a path tracer compacting with "
                   "atomics produces), or all; shuffled cells end their id in /shuffled");
   cmd->add_option("--layout", a->layout,
-                  "BVH the trace kernels and the SIMT model walk: wide (4-wide, default) or binary; recorded in every "
-                  "cell and in meta.json");
+                  "trace class (docs/trace.md, \"Trace classes\"): wide (one ray per work-item over the 4-wide BVH, "
+                  "default), binary, packet4/packet8/packet16 (packets of consecutive rays of each order, one ray per "
+                  "vector lane) or packet (the device's preferred width); the SIMT model walks the same tree; recorded "
+                  "in every cell and in meta.json");
   cmd->add_option("--gpu-model", a->gpu_model,
                   "also replay every cell's traversal through a GPU's caches and predict its speedup (docs/gpu-model.md): "
                   "a profile in gpu/profiles/ (rtx3060, h100, h200) or a .toml path; off by default (it adds the replay's "

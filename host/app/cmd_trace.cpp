@@ -55,7 +55,14 @@ struct BatchRun {
   Outcome outcome;
 };
 
-std::string stage_of(const Tracer& t) { return std::string("ours:") + trace_variant_name(t.variant()); }
+// An arm's name in the measurement: its variant, and its trace class when several run.
+std::string stage_of(const Tracer& t) {
+  return std::string("ours:") + trace_layout_name(t.layout()) + ":" + trace_variant_name(t.variant());
+}
+// "packet16 fast": how a row names an arm when several classes run.
+std::string arm_label(const Tracer& t) {
+  return std::string(trace_layout_name(t.layout())) + " " + trace_variant_name(t.variant());
+}
 
 BatchRun trace_batch(Runtime& rt, std::vector<Tracer>& tracers, const void* embree_scene, const Bvh& bvh,
                      const ReferencedBatch& rb, const ProtocolSettings& settings) {
@@ -92,8 +99,9 @@ BatchRun trace_batch(Runtime& rt, std::vector<Tracer>& tracers, const void* embr
 #else
   (void)embree_scene;
 #endif
-  if (tracers.size() == 2)
-    m.targets.push_back([a = stage_of(tracers[0]), b2 = stage_of(tracers[1])](const Series& s) {
+  // Every other arm against the first: two variants' ratio, or each class against the first.
+  for (std::size_t i = 1; i < tracers.size(); ++i)
+    m.targets.push_back([a = stage_of(tracers[0]), b2 = stage_of(tracers[i])](const Series& s) {
       return ratio_interval(s.at(a), s.at(b2));
     });
   r.outcome = measure(m, settings);
@@ -140,14 +148,16 @@ struct TraceTotals {
 void adjudicate_batch(const ExactOracle& oracle, const BatchRun& run, const std::vector<Tracer>& tracers,
                       const RayBatch& b, nlohmann::json& saved, TraceTotals& totals) {
   std::vector<AnswerSet> answers;
-  for (std::size_t i = 0; i < tracers.size(); ++i) answers.push_back({trace_variant_name(tracers[i].variant()), &run.hits[i]});
+  const bool several_classes = tracers.front().layout() != tracers.back().layout();
+  for (std::size_t i = 0; i < tracers.size(); ++i)
+    answers.push_back({several_classes ? arm_label(tracers[i]) : trace_variant_name(tracers[i].variant()), &run.hits[i]});
   if (!run.embree_hits.empty()) answers.push_back({"embree", &run.embree_hits});
   const Adjudication a = adjudicate(oracle, b, answers);
   std::string line = fmt::format("{:<9} adjudicated {} rays where the answers differ (exact rationals):", "", a.rays.size());
   for (std::size_t k = 0; k < answers.size(); ++k) {
     line += fmt::format(" {} {} right / {} tie / {} wrong;", answers[k].name, a.counts[k].right, a.counts[k].tie,
                         a.counts[k].wrong);
-    if (answers[k].name == "robust") totals.robust_wrong += a.counts[k].wrong;
+    if (k < tracers.size() && tracers[k].variant() == TraceVariant::Robust) totals.robust_wrong += a.counts[k].wrong;
   }
   fmt::print("{}\n", line);
   for (const auto& w : a.wrong) fmt::print("{:<9} WRONG {}", "", w);
@@ -184,21 +194,57 @@ std::string embree_columns(const BatchRun& run, const std::vector<Tracer>& trace
   }
   return cols;
 }
+// Several classes: per arm, its speed over Embree's (paired) and the share of rays whose hit agrees.
+std::vector<std::string> embree_arm_columns(const BatchRun& run, const std::vector<Tracer>& tracers, const RayBatch& b) {
+  std::vector<std::string> cols;
+  for (std::size_t i = 0; i < tracers.size(); ++i) {
+    const HitAgreement a = compare_with_embree(run.hits[i], run.embree_hits, b.any_hit());
+    cols.push_back(fmt::format(" {:>16} {:>7.3f} {:>7.3f}",
+                               ratio_text(ratio_interval(run.outcome.series.at("embree"),
+                                                         run.outcome.series.at(stage_of(tracers[i])))),
+                               100.0 * a.fraction(), 100.0 * a.fraction_with_ties()));
+  }
+  return cols;
+}
 #endif
 
 void print_batch_header(const std::vector<Tracer>& tracers, TraceLayout layout, bool with_embree) {
   fmt::print("timing   every arm of a batch in the same rounds (docs/measurement.md): ms = median [95 % interval]; "
              "ratios are paired estimates of the per-round ratios\n");
   if (tracers.size() == 2) {
-    fmt::print("variant  fast and robust, in the same rounds on each batch ({} BVH)\n", trace_layout_name(layout));
+    fmt::print("variant  fast and robust, in the same rounds on each batch (trace class {})\n", trace_layout_name(layout));
     fmt::print("{:<9} {:>9} {:>24} {:>9} {:>24} {:>9} {:>24} {:>9} {:>8} {:>10} {:>7}{}\n", "batch", "rays", "fast ms",
                "fast MR/s", "robust ms", "rob MR/s", "robust/fast time", "hits", "tri diff", "mismatches", "rounds",
                with_embree ? "   emb ms  fast/emb speed  rob/emb speed  same %  +ties %" : "");
   } else {
-    fmt::print("variant  {} ({} BVH)\n", trace_variant_name(tracers[0].variant()), trace_layout_name(layout));
+    fmt::print("variant  {} (trace class {})\n", trace_variant_name(tracers[0].variant()), trace_layout_name(layout));
     fmt::print("{:<9} {:>9} {:>24} {:>9} {:>9} {:>10} {:>7}{}\n", "batch", "rays", "ms", "MRays/s", "hits",
                "mismatches", "rounds", with_embree ? "   emb ms  ours/emb speed  same %  +ties %" : "");
   }
+}
+
+// Several trace classes: one line per batch, then one per arm, each arm's speed against the first
+// arm's (paired, in the same rounds) and its mismatches against its own host twin.
+void print_class_header(const std::vector<Tracer>& tracers, bool with_embree) {
+  fmt::print("timing   every arm of a batch in the same rounds (docs/measurement.md): ms = median [95 % interval]; "
+             "ratios are paired estimates of the per-round ratios\n");
+  fmt::print("classes  {} trace arms per batch; speed = the first arm's time over the arm's ({})\n", tracers.size(),
+             arm_label(tracers[0]));
+  fmt::print("{:<9} {:<17} {:>9} {:>24} {:>9} {:>24} {:>10}{}\n", "batch", "class variant", "rays", "ms", "MRays/s",
+             "speed vs first", "mismatches", with_embree ? "   ours/emb speed  same %  +ties %" : "");
+}
+
+void print_class_rows(const BatchRun& run, const std::vector<Tracer>& tracers, const RayBatch& b,
+                      const std::vector<std::string>& emb_cols) {
+  const std::string rounds = fmt::format("{}{}", run.outcome.rounds, run.outcome.stop == StopReason::Noise ? "" : "*");
+  fmt::print("{:<9} {} rays, {} hits, {} rounds\n", b.name, b.size(), run.hit_count, rounds);
+  for (std::size_t i = 0; i < tracers.size(); ++i)
+    fmt::print("{:<9} {:<17} {:>9} {:>24} {:>9.2f} {:>24} {:>10}{}\n", "", arm_label(tracers[i]), b.size(),
+               ms_text(run.ms[i]), mrays(b.size(), run.ms[i]),
+               i == 0 ? std::string("-")
+                      : ratio_text(ratio_interval(run.outcome.series.at(stage_of(tracers[0])),
+                                                  run.outcome.series.at(stage_of(tracers[i])))),
+               run.mismatches[i], i < emb_cols.size() ? emb_cols[i] : "");
 }
 
 void print_batch_row(const BatchRun& run, const std::vector<Tracer>& tracers, const RayBatch& b, std::size_t mismatches,
@@ -231,9 +277,12 @@ void trace_scene(Runtime& rt, const std::string& scene_name, const TraceArgs& ar
   std::vector<TraceVariant> variants = parse_trace_variants(args.variant);
   if (variants.size() == 2) variants = {TraceVariant::Fast, TraceVariant::Robust};
   const double build_before = rt.build_ms();
+  // Every class with every variant, class by class: all arms of one measurement.
   std::vector<Tracer> tracers;
-  const TraceLayout layout = parse_trace_layout(args.layout);
-  for (TraceVariant v : variants) tracers.emplace_back(rt, p.bvh, v, layout);
+  const std::vector<TraceLayout> layouts = parse_trace_layouts(args.layout);
+  for (TraceLayout layout : layouts)
+    for (TraceVariant v : variants) tracers.emplace_back(rt, p.bvh, v, layout);
+  const bool several_classes = layouts.size() > 1;
   fmt::print("kernels  built in {:.0f} ms (reported apart from trace times)\n", rt.build_ms() - build_before);
   const bool with_embree = args.reference == "embree";
   const void* embree_scene = nullptr;
@@ -248,7 +297,10 @@ void trace_scene(Runtime& rt, const std::string& scene_name, const TraceArgs& ar
                embree->build_ms() > 0 ? p.bvh.build_ms / embree->build_ms() : 0.0);
   }
 #endif
-  print_batch_header(tracers, layout, with_embree);
+  if (several_classes)
+    print_class_header(tracers, with_embree);
+  else
+    print_batch_header(tracers, tracers[0].layout(), with_embree);
   std::optional<ExactOracle> oracle;
   nlohmann::json saved = {{"scene", scene_name}, {"resolution", fmt::format("{}x{}", frame.width, frame.height)},
                           {"spp", frame.spp}, {"seed", args.common.raygen_options().seed},
@@ -262,11 +314,19 @@ void trace_scene(Runtime& rt, const std::string& scene_name, const TraceArgs& ar
     std::size_t mismatches = 0;
     for (std::size_t m : run.mismatches) mismatches += m;
     std::string emb_cols;
-    std::vector<std::string> emb_notes;
+    std::vector<std::string> emb_notes, emb_arm_cols;
 #ifdef RAYSORT_HAVE_EMBREE
-    if (embree) emb_cols = embree_columns(run, tracers, b, emb_notes, totals);
+    if (embree) {
+      emb_cols = embree_columns(run, tracers, b, emb_notes, totals);
+      if (several_classes) emb_arm_cols = embree_arm_columns(run, tracers, b);
+    }
 #endif
-    print_batch_row(run, tracers, b, mismatches, emb_cols);
+    if (several_classes) {
+      print_class_rows(run, tracers, b, emb_arm_cols);
+      if (!emb_cols.empty()) fmt::print("{:<9} {:<17} {:>9} {:>24} (median ms)\n", "", "embree", b.size(), run.embree_ms.median_ms);
+    } else {
+      print_batch_row(run, tracers, b, mismatches, emb_cols);
+    }
     for (const auto& note : emb_notes) fmt::print("{}\n", note);
     if (oracle) adjudicate_batch(*oracle, run, tracers, b, saved, totals);
     std::fflush(stdout);
@@ -286,7 +346,9 @@ int run_trace(const TraceArgs& args) {
   if (args.reference == "embree") throw Error("this build has no Embree: install libembree-dev and reconfigure");
 #endif
   parse_trace_variants(args.variant);  // a bad --variant is refused before any work
-  if (args.adjudicate && parse_trace_variants(args.variant).size() < 2 && args.reference.empty())
+  parse_trace_layouts(args.layout);
+  if (args.adjudicate && parse_trace_variants(args.variant).size() < 2 && parse_trace_layouts(args.layout).size() < 2 &&
+      args.reference.empty())
     throw Error("--adjudicate judges the rays on which answers differ: give two, with --variant both and/or "
                 "--reference embree");
   if (!args.disagreements.empty() && !args.adjudicate) throw Error("--disagreements DIR goes with --adjudicate");
@@ -324,8 +386,18 @@ void register_trace_command(CLI::App& app) {
                   "(robust,fast or both)")
       ->capture_default_str();
   cmd->add_option("--layout", args->layout,
-                  "BVH the kernels walk: wide (4-wide, the default) or binary (to measure what the wide layout gains)")
-      ->check(CLI::IsMember({"wide", "binary"}))
+                  "trace class (docs/trace.md): wide (one ray over the 4-wide BVH, the default), binary (one ray over "
+                  "the binary BVH), packet4/packet8/packet16 (packets of consecutive rays over the 4-wide BVH, one "
+                  "ray per vector lane) or packet (the device's preferred vector width, `raysort devices`); several, "
+                  "comma-separated (or all), run side by side in the same rounds")
+      ->check([](const std::string& list) {
+        try {
+          parse_trace_layouts(list);
+          return std::string();
+        } catch (const Error& e) {
+          return std::string(e.what());
+        }
+      })
       ->capture_default_str();
   cmd->add_option("--reference", args->reference,
                   "also trace every batch with this CPU reference, side by side: embree (Embree 3, all host threads; "

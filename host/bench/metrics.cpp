@@ -147,7 +147,9 @@ struct TrailRecorder {
 SimtModel simt_model(const Bvh& bvh, const std::vector<RsRay>& rays, const std::uint32_t* order, bool any_hit,
                      TraceVariant variant, TraceLayout layout, const GpuProfile* gpu, GpuCounts* gpu_counts) {
   WideBvh scratch;
-  const bool wide_layout = layout == TraceLayout::Wide;
+  // Every class but binary walks the 4-wide tree (the packet classes too: the model's warp of 32
+  // lanes is their packet, at a GPU's width).
+  const bool wide_layout = walks_wide_tree(layout);
   const WideBvh& wide = wide_layout ? wide_of(bvh, scratch) : scratch;
   const std::size_t n = rays.size();
   const std::size_t warps = (n + kWarpSize - 1) / kWarpSize;

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <limits>
 
+#include "trace/tracer.h"
+
 namespace raysort {
 
 std::string CellRecord::id() const {
@@ -270,7 +272,7 @@ std::vector<Col> make_columns() {
   c.push_back(text("variant", [](const CellRecord& r) { return r.variant; }, {"robust", "fast"}));
   c.push_back(text("access", [](const CellRecord& r) { return r.access; }, {"gather", "permute"}));
   c.push_back(text("baseline", [](const CellRecord& r) { return r.baseline; }, {"pixel", "shuffled"}));
-  c.push_back(text("layout", [](const CellRecord& r) { return r.layout; }, {"wide", "binary"}));
+  c.push_back(text("layout", [](const CellRecord& r) { return r.layout; }, trace_layout_names()));
   c.push_back(numeric("rays", [](const CellRecord& r) { return static_cast<double>(r.rays); }, -1));
   c.push_back(text("status", [](const CellRecord& r) { return r.status; }, cell_statuses()));
   add_timing(c, "encode", &CellRecord::encode);

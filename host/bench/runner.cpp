@@ -77,13 +77,14 @@ std::string utc_now() {
 nlohmann::json bvh_meta(TraceLayout layout) {
   const BvhBuildOptions build;  // prepare_scene builds with the defaults
   return {{"layout", trace_layout_name(layout)},
-          {"width", layout == TraceLayout::Wide ? 4 : 2},
+          {"width", walks_wide_tree(layout) ? 4 : 2},
+          {"rays_per_work_item", packet_width(layout)},
           {"builder", "binned SAH (Wald 2007), object median past the depth bound"},
           {"bins", build.bins},
           {"max_leaf_size", build.max_leaf_size},
           {"traversal_cost", build.traversal_cost},
           {"intersection_cost", build.intersection_cost},
-          {"simt_model", "walks the same layout as the trace kernel (bench/metrics.h)"}};
+          {"simt_model", "walks the same tree as the trace kernel, one ray per lane of a 32-wide warp (bench/metrics.h)"}};
 }
 
 nlohmann::json run_meta(const MatrixSpec& spec, const RunOptions& opts, const DeviceInfo& dev) {
@@ -466,7 +467,8 @@ std::vector<PlannedCell> plan_matrix_shards(const MatrixSpec& spec, const std::s
   return plan_from(spec, scene_facts(spec, scene_root), count);
 }
 
-RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
+RunSummary run_matrix(const MatrixSpec& requested, const RunOptions& opts) {
+  MatrixSpec spec = requested;
   validate_matrix(spec);
   check_scenes_before_work(spec, opts);
 
@@ -478,6 +480,8 @@ RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts) {
     std::erase_if(plan, [&](const PlannedCell& c) { return c.shard != opts.shard.index; });
 
   Runtime rt(select_device(opts.device));
+  // --layout packet is the device's packet width: recorded (and resumed) as the width it ran.
+  spec.layout = resolve_trace_layout(spec.layout, rt.info());
   check_matrix_memory(spec, facts, rt.info());  // before the result set is written
   RunSummary summary;
   summary.out_dir = opts.out.empty() ? default_result_dir(spec, rt.info().slug(), opts.shard) : opts.out;

@@ -209,6 +209,8 @@ std::vector<DeviceInfo> list_devices() {
       i.max_work_group_size = d.getInfo<CL_DEVICE_MAX_WORK_GROUP_SIZE>();
       i.correctly_rounded_divide_sqrt =
           (d.getInfo<CL_DEVICE_SINGLE_FP_CONFIG>() & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT) != 0;
+      i.preferred_float_width = d.getInfo<CL_DEVICE_PREFERRED_VECTOR_WIDTH_FLOAT>();
+      i.native_float_width = d.getInfo<CL_DEVICE_NATIVE_VECTOR_WIDTH_FLOAT>();
       out.push_back(std::move(i));
     }
   }

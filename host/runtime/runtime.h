@@ -54,6 +54,11 @@ struct DeviceInfo {
   std::uint64_t max_alloc_bytes = 0;
   std::size_t max_work_group_size = 0;
   bool correctly_rounded_divide_sqrt = false;
+  // CL_DEVICE_PREFERRED_VECTOR_WIDTH_FLOAT / NATIVE_VECTOR_WIDTH_FLOAT: floats per vector register as
+  // the driver sees it (16 on PoCL with AVX-512, 8 with AVX, 4 with SSE, 1 on NVIDIA GPUs). The
+  // packet trace class takes its default width from the preferred one (trace/tracer.h).
+  std::uint32_t preferred_float_width = 0;
+  std::uint32_t native_float_width = 0;
   bool is_pocl() const { return platform_name.find("Portable Computing Language") != std::string::npos; }
   // Oclgrind: an interpreter that checks every memory access, for correctness, never for speed.
   // Its device type includes GPU and CPU, so it must be kept out of the default choice by name.

@@ -23,19 +23,40 @@ const char* trace_variant_name(TraceVariant v);
 // Throws Error naming an unknown variant.
 std::vector<TraceVariant> parse_trace_variants(const std::string& list);
 
-// Which tree the kernels walk: the 4-wide collapse of the BVH (the default, host/bvh/wide.cpp) or
-// the binary BVH itself (kept to measure what the wide layout gains; docs/trace.md).
-enum class TraceLayout { Wide, Binary };
+// The trace class: which tree the kernels walk, and how many rays walk it together (docs/trace.md,
+// "Trace classes"). Wide: one ray per work-item over the 4-wide collapse of the BVH (the default,
+// host/bvh/wide.cpp). Binary: one ray over the binary BVH itself (kept to measure what the wide
+// layout gains). PacketN: N consecutive rays of the order per work-item over the 4-wide tree, one
+// ray per vector lane (cl/traverse_packet.h). HybridN: the same packets, but a subtree that at most
+// N/4 lanes reach is walked by each of them alone (single rays). Packet, Hybrid: the width the device
+// prefers, resolved by resolve_trace_layout before anything runs.
+enum class TraceLayout { Wide, Binary, Packet4, Packet8, Packet16, Packet, Hybrid8, Hybrid16, Hybrid };
 
-// "wide" / "binary"; parse throws an Error naming the accepted values.
+// The classes' names, in the order help and errors list them: wide, binary, packet4, packet8,
+// packet16, packet, hybrid8, hybrid16, hybrid. parse throws an Error naming the accepted values.
+const std::vector<std::string>& trace_layout_names();
 TraceLayout parse_trace_layout(std::string_view name);
 const char* trace_layout_name(TraceLayout l);
+// A command line's class list: "wide,packet" (in that order, repeats dropped), or "all" for every
+// class but the unresolved packet. Throws Error naming an unknown class.
+std::vector<TraceLayout> parse_trace_layouts(const std::string& list);
+// Rays per work-item: 1 for the single-ray classes, N for PacketN and HybridN (0 for the unresolved
+// Packet and Hybrid).
+int packet_width(TraceLayout l);
+// The hybrid's switch: a subtree reached by at most this many lanes is walked by each alone (0: never).
+int packet_single_at(TraceLayout l);
+// Packet (Hybrid) becomes the packet (hybrid) class of the device's preferred float vector width
+// (16 on AVX-512, 8 on AVX; packets: else 4, hybrids: else 8); every other class is returned as it is.
+TraceLayout resolve_trace_layout(TraceLayout l, const DeviceInfo& device);
+// The tree a class walks: the binary BVH for Binary, the 4-wide one for every other class.
+inline bool walks_wide_tree(TraceLayout l) { return l != TraceLayout::Binary; }
 
 // The scene's BVH on one device, with the trace kernels built. Upload once per scene; trace
 // many batches and orders.
 class Tracer {
  public:
   // The default stays Fast until every caller chooses (the benchmark runner, the encoders).
+  // layout Packet is resolved for rt's device (layout() returns the resolved class).
   Tracer(Runtime& rt, const Bvh& bvh, TraceVariant variant = TraceVariant::Fast,
          TraceLayout layout = TraceLayout::Wide);
 
@@ -66,13 +87,16 @@ class Tracer {
   cl::Buffer nodes_, triangles_;
   cl::Kernel closest_, any_, counted_;
   std::size_t local_ = 64;
+  std::uint32_t width_ = 1;  // rays per work-item (packet_width of the class)
   TraceVariant variant_ = TraceVariant::Fast;
   TraceLayout layout_ = TraceLayout::Wide;
 };
 
-// Host reference: the same traversal (cl/traverse_wide.h, cl/traverse_binary.h) on host threads. order may be null
-// (identity). hits[i] belongs to rays[order[i]]. node_visits: per ray, the nodes visited (wide
-// nodes and leaves for the wide layout, boxes fetched for the binary one).
+// Host reference: the same traversal (cl/traverse_wide.h, cl/traverse_binary.h, cl/traverse_packet.h)
+// on host threads. order may be null (identity). hits[i] belongs to rays[order[i]]. node_visits: per
+// ray, the nodes visited (wide nodes and leaves for the wide layout and, for the packets, those at
+// which the ray's lane was active; boxes fetched for the binary one). layout must be resolved (not
+// Packet): the packets are formed from consecutive rays of the order, as on the device.
 std::vector<RsHit> trace_reference(const Bvh& bvh, const std::vector<RsRay>& rays, const std::uint32_t* order,
                                    bool any_hit, std::vector<std::uint32_t>* node_visits = nullptr,
                                    TraceVariant variant = TraceVariant::Fast, TraceLayout layout = TraceLayout::Wide);

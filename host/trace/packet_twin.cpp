@@ -1,0 +1,70 @@
+// The host twin of the packet kernels: cl/traverse_packet.h compiled for each packet width, each in
+// a namespace of its own (the header has no include guard for that reason; packet_lanes.h).
+#include "trace/packet_twin.h"
+
+#include <algorithm>
+#include <numeric>
+#include <thread>
+
+#include "intersect.h"
+#include "lanes.h"
+#include "traverse_wide.h"
+#include "util/error.h"
+
+namespace raysort {
+
+namespace packet4 {
+#define RS_PACKET_W 4
+#include "traverse_packet.h"
+#undef RS_PACKET_W
+}  // namespace packet4
+namespace packet8 {
+#define RS_PACKET_W 8
+#include "traverse_packet.h"
+#undef RS_PACKET_W
+}  // namespace packet8
+namespace packet16 {
+#define RS_PACKET_W 16
+#include "traverse_packet.h"
+#undef RS_PACKET_W
+}  // namespace packet16
+
+void trace_packets_on_host(int width, int single_at, const WideBvh& wide, const std::vector<RsRay>& rays,
+                           const std::uint32_t* order, int robust, int any_hit, std::vector<RsHit>& hits,
+                           std::uint32_t* visits) {
+  using Trace = void (*)(const RsWideNode*, const RsTriPacket*, const RsRay*, const rs_u32*, rs_u32, rs_u32, int, int,
+                         int, RsHit*, rs_u32*);
+  Trace trace = width == 4    ? &packet4::rs_traverse_packet
+                : width == 8  ? &packet8::rs_traverse_packet
+                : width == 16 ? &packet16::rs_traverse_packet
+                              : nullptr;
+  if (!trace) throw Error("internal: no packet traversal of width " + std::to_string(width) + " (4, 8 or 16)");
+  const auto n = static_cast<rs_u32>(rays.size());
+  hits.resize(n);
+  std::vector<rs_u32> identity;
+  if (!order) {
+    identity.resize(n);
+    std::iota(identity.begin(), identity.end(), 0u);
+    order = identity.data();
+  }
+  const std::size_t packets = (static_cast<std::size_t>(n) + width - 1) / width;
+  auto work = [&](std::size_t begin, std::size_t end) {
+    for (std::size_t p = begin; p < end; ++p)
+      trace(wide.nodes.data(), wide.packets.data(), rays.data(), order, static_cast<rs_u32>(p * width), n, robust,
+            any_hit, single_at, hits.data(), visits);
+  };
+  const unsigned threads = std::max(1u, std::min(16u, std::thread::hardware_concurrency()));
+  if (n < 4096 || threads == 1) {
+    work(0, packets);
+    return;
+  }
+  std::vector<std::thread> pool;
+  const std::size_t chunk = (packets + threads - 1) / threads;
+  for (unsigned t = 0; t < threads; ++t) {
+    const std::size_t b = t * chunk, e = std::min(packets, b + chunk);
+    if (b < e) pool.emplace_back(work, b, e);
+  }
+  for (auto& th : pool) th.join();
+}
+
+}  // namespace raysort
