@@ -105,7 +105,9 @@ TEST(Embree, HandCheckedRaysMatchOurs) {
         EXPECT_NEAR(ours[i].v, emb[i].v, 1e-6f) << "ray " << i;
       }
     }
-    EXPECT_EQ(emb[4].t, 2.0f);
+    // Within 4 ulps, not exactly: Embree 3.13.5's AVX2 kernels (the ISA it picks on an AMD EPYC
+    // without AVX-512) give 1.99999988 here, one ulp below 2.
+    EXPECT_FLOAT_EQ(emb[4].t, 2.0f);
     HitAgreement a = compare_with_embree(ours, emb, false);
     EXPECT_EQ(a.same, rays.size()) << a.describe();
     // Shadow rays: occluded or not, as ours says.
