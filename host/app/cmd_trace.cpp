@@ -322,13 +322,12 @@ void trace_scene(Runtime& rt, const std::string& scene_name, const TraceArgs& ar
   const TraceLayout layout = parse_trace_layout(args.layout);
   for (TraceVariant v : variants) tracers.emplace_back(rt, p.bvh, v, layout);
   fmt::print("kernels  built in {:.0f} ms (reported apart from trace times)\n", rt.build_ms() - build_before);
-  const bool with_embree = args.reference == "embree";
   bool embree_columns_on_row = false;  // issue 9's columns: rtcIntersect1 alone
   const EmbreeReference* embree_ref = nullptr;
 #ifdef RAYSORT_HAVE_EMBREE
   std::optional<EmbreeScene> embree_scene;
   std::optional<EmbreeReference> embree;
-  if (with_embree) {
+  if (args.reference == "embree") {
     embree_scene.emplace(p.tris);
     embree.emplace(EmbreeReference{*embree_scene, parse_embree_paths(args.embree_paths.value_or("1"))});
     embree_ref = &*embree;
