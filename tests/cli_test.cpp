@@ -11,6 +11,7 @@
 #include <map>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "bench/result_set.h"
@@ -116,6 +117,61 @@ TEST(Cli, ImpossibleCombinationsRefusedBeforeWork) {
   std::ofstream(bad) << "v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n";
   expect_refused({"run", "--scenes", "cornell," + bad.string()}, {bad.string() + ":3: vertex 3 has a non-finite"});
   fs::remove(bad);
+}
+
+// `raysort trace --reference embree --embree-paths`: every path is an arm with a line of its own
+// after the batch's row (call and flag, threads, ms, MRays/s, ours/path speed, agreement), then the
+// best path; an unknown path is refused with the valid names, before any work.
+TEST(CliTrace, EmbreePathsAllPrintsALinePerPath) {
+  expect_refused({"trace", "--scene", "cornell", "--embree-paths", "1M"}, {"--embree-paths 1M goes with --reference embree"});
+#ifdef RAYSORT_HAVE_EMBREE
+  expect_refused({"trace", "--scene", "cornell", "--reference", "embree", "--embree-paths", "1,17"},
+                 {"unknown Embree path '17' in --embree-paths", "1 (rtcIntersect1)", "1M-coherent", "16-coherent", "or all"});
+  expect_refused({"trace", "--scene", "cornell", "--reference", "embree", "--embree-paths", ""},
+                 {"--embree-paths: name at least one Embree path", "1M-coherent"});
+  // rtcIntersect1 alone, named: the columns of the batch row, as without --embree-paths.
+  CliResult one = run_cli({"trace", "--scene", "cornell", "--resolution", "16x16", "--reps", "1", "--warmup", "0",
+                           "--reference", "embree", "--embree-paths", "1"});
+  ASSERT_EQ(one.code, 0) << one.out << one.err;
+  EXPECT_NE(one.out.find("emb ms  ours/emb speed  same %  +ties %"), std::string::npos) << one.out;
+  EXPECT_EQ(one.out.find("Embree call and flag"), std::string::npos) << one.out;
+  CliResult r = run_cli({"trace", "--scene", "cornell", "--resolution", "40x24", "--variant", "both", "--reps", "6",
+                         "--warmup", "0", "--max-time", "0", "--reference", "embree", "--embree-paths", "all"});
+  ASSERT_EQ(r.code, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find("rtcIntersect1 / rtcOccluded1, rtcIntersect1M incoherent / rtcOccluded1M incoherent"),
+            std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("native packets: 4 "), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("emb ms"), std::string::npos) << "the single-path columns are off with more paths:\n" << r.out;
+  // Per batch: a line per path, whose words are: key, call and flag (2 words, or 1 for rtcIntersect1),
+  // threads, ms [lo, hi], MRays/s, fast/path [lo, hi], robust/path [lo, hi], same %, +ties %.
+  std::map<std::string, int> lines;  // key -> lines seen
+  int batches = 0, best = 0;
+  std::istringstream in(r.out);
+  for (std::string line; std::getline(in, line);) {
+    std::istringstream words(line);
+    std::vector<std::string> w;
+    for (std::string x; words >> x;) w.push_back(x);
+    if (!w.empty() && (w[0] == "primary" || w[0].rfind("shadow", 0) == 0 || w[0].rfind("bounce", 0) == 0)) ++batches;
+    if (line.rfind("  best ", 0) == 0) {
+      ++best;
+      EXPECT_NE(line.find("has the lowest median of Embree's paths"), std::string::npos) << line;
+    }
+    // Path lines are indented by two spaces (notes by more); the header's first word is "path".
+    if (line.rfind("  ", 0) != 0 || line.size() < 3 || line[2] == ' ' || w[0] == "best" || w[0] == "path") continue;
+    const bool single = w[1] == "rtcIntersect1" || w[1] == "rtcOccluded1";
+    ASSERT_EQ(w.size(), single ? 15u : 16u) << line;
+    // The threads column: EmbreeScene's default, one per hardware thread.
+    EXPECT_EQ(w[single ? 2 : 3], std::to_string(std::max(1u, std::thread::hardware_concurrency()))) << line;
+    const double same = std::stod(w[w.size() - 2]), ties = std::stod(w[w.size() - 1]);
+    EXPECT_GE(ties, 99.9) << line;
+    EXPECT_LE(same, ties) << line;
+    ++lines[w[0]];
+  }
+  EXPECT_GE(batches, 3) << r.out;
+  EXPECT_EQ(best, batches) << r.out;
+  for (const char* key : {"1", "1M", "1M-coherent", "4", "8", "16", "4-coherent", "8-coherent", "16-coherent"})
+    EXPECT_EQ(lines[key], batches) << key << "\n" << r.out;
+#endif
 }
 
 // An allocation over the device's limit (forced with the RAYSORT_TEST_MAX_ALLOC_BYTES hook, here

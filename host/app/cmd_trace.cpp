@@ -3,7 +3,8 @@
 // --variant robust|fast picks the traversal arithmetic (docs/trace.md); --variant both runs the two
 // back to back on every batch and prints the robust/fast speed ratio and how many hits differ.
 // --reference embree traces every batch with Embree 3 as well, side by side in this process, and
-// prints its MRays/s, ours/Embree, and how many hits agree (docs/trace.md, "Embree anchor").
+// prints its MRays/s, ours/Embree, and how many hits agree (docs/trace.md, "Embree anchor");
+// --embree-paths makes each of Embree's paths (single rays, streams, packets) an arm of its own.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -39,19 +40,40 @@ struct TraceArgs {
   std::string variant = "robust";
   std::string layout = "wide";
   std::string reference;  // "" or "embree"
+  std::optional<std::string> embree_paths;  // --embree-paths; none: "1" (rtcIntersect1 alone, the columns of issue 9)
   bool adjudicate = false;       // judge every ray the answers differ on, exactly (trace/adjudicate.h)
   std::string disagreements;     // with adjudicate: write those rays to DIR/<scene>.json
 };
 
-// One batch traced by each variant (and Embree), all arms of the same rounds of the measurement
-// protocol (bench/protocol.h): their times and ratios are paired.
+#ifdef RAYSORT_HAVE_EMBREE
+// Embree beside our kernels: its scene, and its paths, each an arm of every batch's rounds.
+struct EmbreeReference {
+  const EmbreeScene& scene;
+  std::vector<EmbreePath> paths;
+  // Only rtcIntersect1: the batch row keeps the Embree columns of issue 9, and no path lines follow.
+  bool single_only() const { return paths.size() == 1 && paths[0] == EmbreePath::Single; }
+};
+#else
+struct EmbreeReference {};
+#endif
+
+// One Embree path's arm on one batch.
+struct EmbreeRun {
+  std::string key;    // its --embree-paths name: "1M-coherent"
+  std::string name;   // the call it makes on this batch, with its flag: "rtcIntersect1M coherent"
+  std::string stage;  // its series in the measurement: "embree:1M-coherent"
+  Timing ms;
+  std::vector<RsHit> hits;  // ray order
+};
+
+// One batch traced by each variant (and Embree's paths), all arms of the same rounds of the
+// measurement protocol (bench/protocol.h): their times and ratios are paired.
 struct BatchRun {
   std::vector<std::vector<RsHit>> hits;  // per variant, ray order
   std::vector<Timing> ms;                // per variant
   std::vector<std::size_t> mismatches;   // per variant, against the host reference of that variant
   std::size_t hit_count = 0;             // hits of the first variant's reference
-  Timing embree_ms;
-  std::vector<RsHit> embree_hits;
+  std::vector<EmbreeRun> embree;         // per Embree path, in --embree-paths order
   Outcome outcome;
 };
 
@@ -63,8 +85,15 @@ std::string stage_of(const Tracer& t) {
 std::string arm_label(const Tracer& t) {
   return std::string(trace_layout_name(t.layout())) + " " + trace_variant_name(t.variant());
 }
+// How a ratio column names arm i: its variant, or "packet16:fast" when several classes run.
+std::string arm_name(const std::vector<Tracer>& tracers, std::size_t i) {
+  const bool several_classes = tracers.front().layout() != tracers.back().layout();
+  const Tracer& t = tracers[i];
+  return several_classes ? std::string(trace_layout_name(t.layout())) + ":" + trace_variant_name(t.variant())
+                         : trace_variant_name(t.variant());
+}
 
-BatchRun trace_batch(Runtime& rt, std::vector<Tracer>& tracers, const void* embree_scene, const Bvh& bvh,
+BatchRun trace_batch(Runtime& rt, std::vector<Tracer>& tracers, const EmbreeReference* embree, const Bvh& bvh,
                      const ReferencedBatch& rb, const ProtocolSettings& settings) {
   const RayBatch& b = rb.batch;
   const auto n = static_cast<std::uint32_t>(b.size());
@@ -85,19 +114,25 @@ BatchRun trace_batch(Runtime& rt, std::vector<Tracer>& tracers, const void* embr
   }
   BatchRun r;
 #ifdef RAYSORT_HAVE_EMBREE
-  if (embree_scene) {
-    const auto& embree = *static_cast<const EmbreeScene*>(embree_scene);
-    m.arms.push_back({{"embree"}, [&] {
-                        const auto t0 = std::chrono::steady_clock::now();
-                        r.embree_hits = embree.trace(b.rays, b.any_hit());
-                        return std::vector<double>{
-                            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count()};
-                      }});
-    for (Tracer& t : tracers)
-      m.targets.push_back([name = stage_of(t)](const Series& s) { return ratio_interval(s.at("embree"), s.at(name)); });
+  if (embree) {
+    r.embree.reserve(embree->paths.size());  // the arms hold references to their runs
+    for (EmbreePath path : embree->paths) {
+      const std::string key = embree_path_info(path).key;
+      EmbreeRun& e = r.embree.emplace_back(EmbreeRun{key, embree_path_name(path, b.any_hit()), "embree:" + key, {}, {}});
+      // Embree's time is the wall clock of the whole trace call: its threads' start and join included.
+      m.arms.push_back({{e.stage}, [&, path] {
+                          const auto t0 = std::chrono::steady_clock::now();
+                          e.hits = embree->scene.trace(b.rays, b.any_hit(), path);
+                          return std::vector<double>{
+                              std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count()};
+                        }});
+      for (Tracer& t : tracers)
+        m.targets.push_back(
+            [stage = e.stage, name = stage_of(t)](const Series& s) { return ratio_interval(s.at(stage), s.at(name)); });
+    }
   }
 #else
-  (void)embree_scene;
+  (void)embree;
 #endif
   // Every other arm against the first: two variants' ratio, or each class against the first.
   for (std::size_t i = 1; i < tracers.size(); ++i)
@@ -105,7 +140,7 @@ BatchRun trace_batch(Runtime& rt, std::vector<Tracer>& tracers, const void* embr
       return ratio_interval(s.at(a), s.at(b2));
     });
   r.outcome = measure(m, settings);
-  if (r.outcome.series.count("embree")) r.embree_ms = Timing::of(r.outcome.series.at("embree"));
+  for (EmbreeRun& e : r.embree) e.ms = Timing::of(r.outcome.series.at(e.stage));
   for (std::size_t i = 0; i < tracers.size(); ++i) {
     const Tracer& t = tracers[i];
     std::vector<RsHit> hits;
@@ -148,10 +183,10 @@ struct TraceTotals {
 void adjudicate_batch(const ExactOracle& oracle, const BatchRun& run, const std::vector<Tracer>& tracers,
                       const RayBatch& b, nlohmann::json& saved, TraceTotals& totals) {
   std::vector<AnswerSet> answers;
-  const bool several_classes = tracers.front().layout() != tracers.back().layout();
-  for (std::size_t i = 0; i < tracers.size(); ++i)
-    answers.push_back({several_classes ? arm_label(tracers[i]) : trace_variant_name(tracers[i].variant()), &run.hits[i]});
-  if (!run.embree_hits.empty()) answers.push_back({"embree", &run.embree_hits});
+  for (std::size_t i = 0; i < tracers.size(); ++i) answers.push_back({arm_name(tracers, i), &run.hits[i]});
+  // Every Embree path's answers; the single path alone keeps its name of issue 9.
+  for (const EmbreeRun& e : run.embree)
+    answers.push_back({run.embree.size() == 1 && e.key == "1" ? "embree" : "embree:" + e.key, &e.hits});
   const Adjudication a = adjudicate(oracle, b, answers);
   std::string line = fmt::format("{:<9} adjudicated {} rays where the answers differ (exact rationals):", "", a.rays.size());
   for (std::size_t k = 0; k < answers.size(); ++k) {
@@ -167,47 +202,92 @@ void adjudicate_batch(const ExactOracle& oracle, const BatchRun& run, const std:
 }
 
 #ifdef RAYSORT_HAVE_EMBREE
-// Embree's columns for one batch: its median ms, ours/Embree speed per variant (paired), the lowest
-// agreement; notes on the rays that differ.
+// One Embree path's hits against each of our variants': the lowest agreement, and a note per
+// variant whose hits differ ("... rays differ from <whom>: ...").
+struct PathAgreement {
+  double same = 1.0, with_ties = 1.0;  // lowest over our variants
+  bool below = false;                  // some variant below kEmbreeMinAgreement (same triangle or a tie)
+};
+PathAgreement agreement_of(const EmbreeRun& e, const BatchRun& run, const std::vector<Tracer>& tracers,
+                           const RayBatch& b, const std::string& whom, std::vector<std::string>& notes) {
+  PathAgreement p;
+  for (std::size_t i = 0; i < tracers.size(); ++i) {
+    const HitAgreement a = compare_with_embree(run.hits[i], e.hits, b.any_hit());
+    p.same = std::min(p.same, a.fraction());
+    p.with_ties = std::min(p.with_ties, a.fraction_with_ties());
+    p.below = p.below || a.fraction_with_ties() < kEmbreeMinAgreement;
+    if (a.differences())
+      notes.push_back(fmt::format("{:<9} {}{} of {} rays differ from {}: {}", "",
+                                  tracers.size() > 1 ? fmt::format("{}: ", trace_variant_name(tracers[i].variant())) : "",
+                                  a.differences(), a.rays, whom, a.describe()));
+  }
+  if (p.below)
+    notes.push_back(fmt::format("{:<9} below the required {:.1f} % agreement with {} (same triangle or a tie)", "",
+                                100.0 * kEmbreeMinAgreement, whom));
+  return p;
+}
+
+// The paired speed ratio of our arm `i` over an Embree arm: its time over ours per round.
+Estimate speed_over(const BatchRun& run, const std::vector<Tracer>& tracers, std::size_t i, const std::string& stage) {
+  return ratio_interval(run.outcome.series.at(stage), run.outcome.series.at(stage_of(tracers[i])));
+}
+
+// Embree's columns of the batch row when rtcIntersect1 is the only path (issue 9's layout): its
+// median ms, ours/Embree speed per variant (paired), the lowest agreement; notes on the rays that differ.
 std::string embree_columns(const BatchRun& run, const std::vector<Tracer>& tracers, const RayBatch& b,
                            std::vector<std::string>& notes, TraceTotals& totals) {
-  std::string cols = fmt::format(" {:>8.2f}", run.embree_ms.median_ms);
-  double worst = 1.0, worst_ties = 1.0;
-  bool below = false;
-  for (std::size_t i = 0; i < tracers.size(); ++i) {
-    cols += fmt::format(" {:>14}", ratio_text(ratio_interval(run.outcome.series.at("embree"),
-                                                             run.outcome.series.at(stage_of(tracers[i])))));
-    const HitAgreement a = compare_with_embree(run.hits[i], run.embree_hits, b.any_hit());
-    worst = std::min(worst, a.fraction());
-    worst_ties = std::min(worst_ties, a.fraction_with_ties());
-    below = below || a.fraction_with_ties() < kEmbreeMinAgreement;
-    if (a.differences())
-      notes.push_back(fmt::format("{:<9} {}{} of {} rays differ from Embree: {}", "",
-                                  tracers.size() > 1 ? fmt::format("{}: ", trace_variant_name(tracers[i].variant())) : "",
-                                  a.differences(), a.rays, a.describe()));
-  }
-  cols += fmt::format(" {:>7.3f} {:>7.3f}", 100.0 * worst, 100.0 * worst_ties);
-  if (below) {
-    ++totals.disagreeing_batches;
-    notes.push_back(fmt::format("{:<9} below the required {:.1f} % agreement with Embree (same triangle or a tie)", "",
-                                100.0 * kEmbreeMinAgreement));
-  }
+  const EmbreeRun& e = run.embree.at(0);
+  std::string cols = fmt::format(" {:>8.2f}", e.ms.median_ms);
+  for (std::size_t i = 0; i < tracers.size(); ++i) cols += fmt::format(" {:>14}", ratio_text(speed_over(run, tracers, i, e.stage)));
+  const PathAgreement p = agreement_of(e, run, tracers, b, "Embree", notes);
+  cols += fmt::format(" {:>7.3f} {:>7.3f}", 100.0 * p.same, 100.0 * p.with_ties);
+  if (p.below) ++totals.disagreeing_batches;
   return cols;
 }
-// Several classes: per arm, its speed over Embree's (paired) and the share of rays whose hit agrees.
-std::vector<std::string> embree_arm_columns(const BatchRun& run, const std::vector<Tracer>& tracers, const RayBatch& b) {
-  std::vector<std::string> cols;
-  for (std::size_t i = 0; i < tracers.size(); ++i) {
-    const HitAgreement a = compare_with_embree(run.hits[i], run.embree_hits, b.any_hit());
-    cols.push_back(fmt::format(" {:>16} {:>7.3f} {:>7.3f}",
-                               ratio_text(ratio_interval(run.outcome.series.at("embree"),
-                                                         run.outcome.series.at(stage_of(tracers[i])))),
-                               100.0 * a.fraction(), 100.0 * a.fraction_with_ties()));
+
+constexpr int kPathKeyWidth = 13, kPathNameWidth = 26, kRatioWidth = 26;
+
+// The header of the path lines, below the batch header.
+void print_path_header(const std::vector<Tracer>& tracers) {
+  std::string ratios;
+  for (std::size_t i = 0; i < tracers.size(); ++i)
+    ratios += fmt::format(" {:>{}}", tracers.size() > 1 ? fmt::format("{}/path speed", arm_name(tracers, i)) : "ours/path speed",
+                          kRatioWidth);
+  fmt::print("{:<{}} {:<{}} {:>7} {:>24} {:>9}{} {:>7} {:>7}\n", "  path", kPathKeyWidth, "Embree call and flag", kPathNameWidth,
+             "threads", "ms", "MRays/s", ratios, "same %", "+ties %");
+}
+
+// After a batch's row, one line per Embree path (its call and flag, threads, median ms with its
+// interval, MRays/s, each of our arms' paired speed over it, agreement), the notes on rays that
+// differ, and the path with the lowest median against our fastest arm.
+void print_path_lines(const BatchRun& run, const std::vector<Tracer>& tracers, const RayBatch& b, unsigned threads,
+                      TraceTotals& totals) {
+  bool below = false;
+  const EmbreeRun* best = nullptr;
+  for (const EmbreeRun& e : run.embree) {
+    std::vector<std::string> notes;
+    const PathAgreement p = agreement_of(e, run, tracers, b, "Embree " + e.name, notes);
+    below = below || p.below;
+    std::string ratios;
+    for (std::size_t i = 0; i < tracers.size(); ++i)
+      ratios += fmt::format(" {:>{}}", ratio_text(speed_over(run, tracers, i, e.stage)), kRatioWidth);
+    fmt::print("{:<{}} {:<{}} {:>7} {:>24} {:>9.2f}{} {:>7.3f} {:>7.3f}\n", "  " + e.key, kPathKeyWidth, e.name,
+               kPathNameWidth, threads, ms_text(e.ms), mrays(b.size(), e.ms), ratios, 100.0 * p.same, 100.0 * p.with_ties);
+    for (const auto& note : notes) fmt::print("{}\n", note);
+    if (!best || e.ms.median_ms < best->ms.median_ms) best = &e;
   }
-  return cols;
+  if (below) ++totals.disagreeing_batches;
+  if (!best) return;
+  std::size_t ours = 0;  // our fastest arm (lowest median)
+  for (std::size_t i = 1; i < tracers.size(); ++i)
+    if (run.ms[i].median_ms < run.ms[ours].median_ms) ours = i;
+  fmt::print("{:<{}} {} ({}) has the lowest median of Embree's paths; {}/{} speed {}\n", "  best", kPathKeyWidth, best->name,
+             best->key, tracers.size() > 1 ? arm_name(tracers, ours) : "ours", best->key,
+             ratio_text(speed_over(run, tracers, ours, best->stage)));
 }
 #endif
 
+// with_embree: the Embree columns of issue 9 on the batch row (rtcIntersect1 the only path).
 void print_batch_header(const std::vector<Tracer>& tracers, TraceLayout layout, bool with_embree) {
   fmt::print("timing   every arm of a batch in the same rounds (docs/measurement.md): ms = median [95 % interval]; "
              "ratios are paired estimates of the per-round ratios\n");
@@ -224,27 +304,27 @@ void print_batch_header(const std::vector<Tracer>& tracers, TraceLayout layout, 
 }
 
 // Several trace classes: one line per batch, then one per arm, each arm's speed against the first
-// arm's (paired, in the same rounds) and its mismatches against its own host twin.
-void print_class_header(const std::vector<Tracer>& tracers, bool with_embree) {
+// arm's (paired, in the same rounds) and its mismatches against its own host twin. Embree's paths
+// follow on lines of their own (print_path_lines).
+void print_class_header(const std::vector<Tracer>& tracers) {
   fmt::print("timing   every arm of a batch in the same rounds (docs/measurement.md): ms = median [95 % interval]; "
              "ratios are paired estimates of the per-round ratios\n");
   fmt::print("classes  {} trace arms per batch; speed = the first arm's time over the arm's ({})\n", tracers.size(),
              arm_label(tracers[0]));
-  fmt::print("{:<9} {:<17} {:>9} {:>24} {:>9} {:>24} {:>10}{}\n", "batch", "class variant", "rays", "ms", "MRays/s",
-             "speed vs first", "mismatches", with_embree ? "   ours/emb speed  same %  +ties %" : "");
+  fmt::print("{:<9} {:<17} {:>9} {:>24} {:>9} {:>24} {:>10}\n", "batch", "class variant", "rays", "ms", "MRays/s",
+             "speed vs first", "mismatches");
 }
 
-void print_class_rows(const BatchRun& run, const std::vector<Tracer>& tracers, const RayBatch& b,
-                      const std::vector<std::string>& emb_cols) {
+void print_class_rows(const BatchRun& run, const std::vector<Tracer>& tracers, const RayBatch& b) {
   const std::string rounds = fmt::format("{}{}", run.outcome.rounds, run.outcome.stop == StopReason::Noise ? "" : "*");
   fmt::print("{:<9} {} rays, {} hits, {} rounds\n", b.name, b.size(), run.hit_count, rounds);
   for (std::size_t i = 0; i < tracers.size(); ++i)
-    fmt::print("{:<9} {:<17} {:>9} {:>24} {:>9.2f} {:>24} {:>10}{}\n", "", arm_label(tracers[i]), b.size(),
+    fmt::print("{:<9} {:<17} {:>9} {:>24} {:>9.2f} {:>24} {:>10}\n", "", arm_label(tracers[i]), b.size(),
                ms_text(run.ms[i]), mrays(b.size(), run.ms[i]),
                i == 0 ? std::string("-")
                       : ratio_text(ratio_interval(run.outcome.series.at(stage_of(tracers[0])),
                                                   run.outcome.series.at(stage_of(tracers[i])))),
-               run.mismatches[i], i < emb_cols.size() ? emb_cols[i] : "");
+               run.mismatches[i]);
 }
 
 void print_batch_row(const BatchRun& run, const std::vector<Tracer>& tracers, const RayBatch& b, std::size_t mismatches,
@@ -284,23 +364,39 @@ void trace_scene(Runtime& rt, const std::string& scene_name, const TraceArgs& ar
     for (TraceVariant v : variants) tracers.emplace_back(rt, p.bvh, v, layout);
   const bool several_classes = layouts.size() > 1;
   fmt::print("kernels  built in {:.0f} ms (reported apart from trace times)\n", rt.build_ms() - build_before);
-  const bool with_embree = args.reference == "embree";
-  const void* embree_scene = nullptr;
+  bool embree_columns_on_row = false;  // issue 9's columns: rtcIntersect1 alone
+  const EmbreeReference* embree_ref = nullptr;
 #ifdef RAYSORT_HAVE_EMBREE
-  std::optional<EmbreeScene> embree;
-  if (with_embree) {
-    embree.emplace(p.tris);
-    embree_scene = &*embree;
-    fmt::print("embree   Embree {}, {} threads, rtcIntersect1 / rtcOccluded1, build quality high: BVH built in {:.0f} ms "
-               "(ours {:.0f} ms = {:.2f}x Embree's)\n",
-               EmbreeScene::version(), embree->threads(), embree->build_ms(), p.bvh.build_ms,
-               embree->build_ms() > 0 ? p.bvh.build_ms / embree->build_ms() : 0.0);
+  std::optional<EmbreeScene> embree_scene;
+  std::optional<EmbreeReference> embree;
+  if (args.reference == "embree") {
+    embree_scene.emplace(p.tris);
+    embree.emplace(EmbreeReference{*embree_scene, parse_embree_paths(args.embree_paths.value_or("1"))});
+    embree_ref = &*embree;
+    embree_columns_on_row = embree->single_only();
+    std::string calls, native;
+    for (EmbreePath path : embree->paths) calls += (calls.empty() ? "" : ", ") + embree_path_calls(path);
+    // Whether this CPU has each packet width timed, or Embree splits the packet (16 rays without AVX-512).
+    for (unsigned width : {4u, 8u, 16u})
+      if (std::any_of(embree->paths.begin(), embree->paths.end(),
+                      [&](EmbreePath path) { return embree_path_info(path).packet == width; }))
+        native += fmt::format("{}{} {}", native.empty() ? "" : ", ", width, embree_scene->native_packets(width) ? "yes" : "no");
+    fmt::print("embree   Embree {}, {} threads, {}, build quality high: BVH built in {:.0f} ms (ours {:.0f} ms = {:.2f}x "
+               "Embree's){}\n",
+               EmbreeScene::version(), embree_scene->threads(), calls, embree_scene->build_ms(), p.bvh.build_ms,
+               embree_scene->build_ms() > 0 ? p.bvh.build_ms / embree_scene->build_ms() : 0.0,
+               native.empty() ? "" : "; native packets: " + native);
   }
 #endif
+  // Several classes: Embree's paths always on lines of their own, each naming every arm's ratio.
+  const bool paths_on_lines = !embree_columns_on_row || several_classes;
   if (several_classes)
-    print_class_header(tracers, with_embree);
+    print_class_header(tracers);
   else
-    print_batch_header(tracers, tracers[0].layout(), with_embree);
+    print_batch_header(tracers, tracers[0].layout(), embree_columns_on_row);
+#ifdef RAYSORT_HAVE_EMBREE
+  if (embree && paths_on_lines) print_path_header(tracers);
+#endif
   std::optional<ExactOracle> oracle;
   nlohmann::json saved = {{"scene", scene_name}, {"resolution", fmt::format("{}x{}", frame.width, frame.height)},
                           {"spp", frame.spp}, {"seed", args.common.raygen_options().seed},
@@ -309,25 +405,24 @@ void trace_scene(Runtime& rt, const std::string& scene_name, const TraceArgs& ar
   // The pipeline of docs/measurement.md, as far as the scene's effects ask.
   for (const ReferencedBatch& rb : generate_batches(p.scene, p.tris, p.bvh, args.common.raygen_options())) {
     const RayBatch& b = rb.batch;
-    const BatchRun run = trace_batch(rt, tracers, embree_scene, p.bvh, rb,
+    const BatchRun run = trace_batch(rt, tracers, embree_ref, p.bvh, rb,
                                      args.protocol.settings(protocol_seed(p.scene.name + "/" + b.name)));
     std::size_t mismatches = 0;
     for (std::size_t m : run.mismatches) mismatches += m;
     std::string emb_cols;
-    std::vector<std::string> emb_notes, emb_arm_cols;
+    std::vector<std::string> emb_notes;
 #ifdef RAYSORT_HAVE_EMBREE
-    if (embree) {
-      emb_cols = embree_columns(run, tracers, b, emb_notes, totals);
-      if (several_classes) emb_arm_cols = embree_arm_columns(run, tracers, b);
-    }
+    if (!paths_on_lines) emb_cols = embree_columns(run, tracers, b, emb_notes, totals);
 #endif
     if (several_classes) {
-      print_class_rows(run, tracers, b, emb_arm_cols);
-      if (!emb_cols.empty()) fmt::print("{:<9} {:<17} {:>9} {:>24} (median ms)\n", "", "embree", b.size(), run.embree_ms.median_ms);
+      print_class_rows(run, tracers, b);
     } else {
       print_batch_row(run, tracers, b, mismatches, emb_cols);
     }
     for (const auto& note : emb_notes) fmt::print("{}\n", note);
+#ifdef RAYSORT_HAVE_EMBREE
+    if (embree && paths_on_lines) print_path_lines(run, tracers, b, embree_scene->threads(), totals);
+#endif
     if (oracle) adjudicate_batch(*oracle, run, tracers, b, saved, totals);
     std::fflush(stdout);
     totals.mismatches += mismatches;
@@ -342,8 +437,12 @@ void trace_scene(Runtime& rt, const std::string& scene_name, const TraceArgs& ar
 }
 
 int run_trace(const TraceArgs& args) {
+  if (args.embree_paths && args.reference != "embree")
+    throw Error("--embree-paths " + *args.embree_paths + " goes with --reference embree");
 #ifndef RAYSORT_HAVE_EMBREE
   if (args.reference == "embree") throw Error("this build has no Embree: install libembree-dev and reconfigure");
+#else
+  if (args.embree_paths) parse_embree_paths(*args.embree_paths);  // a bad list is refused before any work
 #endif
   parse_trace_variants(args.variant);  // a bad --variant is refused before any work
   parse_trace_layouts(args.layout);
@@ -403,6 +502,10 @@ void register_trace_command(CLI::App& app) {
                   "also trace every batch with this CPU reference, side by side: embree (Embree 3, all host threads; "
                   "needs a build with libembree-dev)")
       ->check(CLI::IsMember({"embree"}));
+  cmd->add_option("--embree-paths", args->embree_paths,
+                  "with --reference embree: Embree's paths to time, each an arm of every batch's rounds "
+                  "(comma-separated): 1 (rtcIntersect1, the default), 1M and 1M-coherent (rtcIntersect1M streams), "
+                  "4, 8, 16 and 4-coherent, 8-coherent, 16-coherent (packets of consecutive rays), or all");
   cmd->add_flag("--adjudicate", args->adjudicate,
                 "decide every ray on which the variants (and Embree) disagree with exact rational arithmetic, and "
                 "count each answer right, tie (correct up to float precision) or wrong; exits 1 if a robust answer "

@@ -1,9 +1,9 @@
 #pragma once
 // The Embree anchor (issue 9): the same triangles in an Embree 3 scene (build quality high), the
-// same rays traced with rtcIntersect1 (closest hit) / rtcOccluded1 (shadow rays, any hit) on every
-// host thread, and the agreement of its hits with ours. Compiled into raysort_core only when CMake
-// found Embree (RAYSORT_HAVE_EMBREE; option RAYSORT_EMBREE=AUTO|ON|OFF); see docs/trace.md,
-// "Embree anchor".
+// same rays traced by one of Embree's CPU paths (single rays, ray streams, ray packets: EmbreePath)
+// on every host thread, and the agreement of its hits with ours. Compiled into raysort_core only
+// when CMake found Embree (RAYSORT_HAVE_EMBREE; option RAYSORT_EMBREE=AUTO|ON|OFF); see
+// docs/trace.md, "Embree anchor".
 //
 // Ray semantics (cl/shared.h): RsRay's (o, tmin, d, tmax) become Embree's (org, tnear, dir, tfar);
 // both intersectors are two-sided (Debian's Embree is built without backface culling, and the scene
@@ -11,6 +11,7 @@
 // only on rays whose hit lies exactly on an interval end. Triangle ids: one Embree geometry holds
 // the flattened triangles in order, so Embree's primID is our RsHit::tri.
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -24,6 +25,54 @@ namespace raysort {
 
 // What rtcOccluded1 reports for an occluded shadow ray: occluded, triangle unknown.
 inline constexpr std::uint32_t kEmbreeOccluded = 0xFFFFFFFEu;
+
+// How Embree is asked to trace a batch: which API call, how many rays per call, which context
+// flag. Every path traces the same rays in the order given (a permutation, when one is given), on
+// threads() threads that each take contiguous chunks of 4096 rays; a packet is consecutive rays of
+// that order, a stream a thread's whole chunk.
+enum class EmbreePath {
+  Single,            // rtcIntersect1 / rtcOccluded1, ray by ray (the anchor since issue 9)
+  StreamIncoherent,  // rtcIntersect1M / rtcOccluded1M over the chunk, RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT
+  StreamCoherent,    // the same with RTC_INTERSECT_CONTEXT_FLAG_COHERENT (Embree's coherent stream traversal)
+  Packet4,           // rtcIntersect4/8/16 / rtcOccluded4/8/16 on consecutive rays, incoherent flag
+  Packet8,
+  Packet16,
+  Packet4Coherent,   // the same packets with the coherent flag (Embree's frustum packet traversal)
+  Packet8Coherent,
+  Packet16Coherent,
+};
+
+// One row per path: the only list of them (the parser, names and trace() all read it).
+struct EmbreePathInfo {
+  EmbreePath path;
+  const char* key;        // its name on the command line (--embree-paths)
+  const char* intersect;  // the closest-hit call
+  const char* occluded;   // the any-hit call
+  unsigned packet;        // rays per call: 1 single, 4/8/16 a packet, 0 a stream (the thread's chunk)
+  bool coherent;          // context flag RTC_INTERSECT_CONTEXT_FLAG_COHERENT, else _INCOHERENT
+};
+
+inline constexpr EmbreePathInfo kEmbreePaths[] = {
+    {EmbreePath::Single, "1", "rtcIntersect1", "rtcOccluded1", 1, false},
+    {EmbreePath::StreamIncoherent, "1M", "rtcIntersect1M", "rtcOccluded1M", 0, false},
+    {EmbreePath::StreamCoherent, "1M-coherent", "rtcIntersect1M", "rtcOccluded1M", 0, true},
+    {EmbreePath::Packet4, "4", "rtcIntersect4", "rtcOccluded4", 4, false},
+    {EmbreePath::Packet8, "8", "rtcIntersect8", "rtcOccluded8", 8, false},
+    {EmbreePath::Packet16, "16", "rtcIntersect16", "rtcOccluded16", 16, false},
+    {EmbreePath::Packet4Coherent, "4-coherent", "rtcIntersect4", "rtcOccluded4", 4, true},
+    {EmbreePath::Packet8Coherent, "8-coherent", "rtcIntersect8", "rtcOccluded8", 8, true},
+    {EmbreePath::Packet16Coherent, "16-coherent", "rtcIntersect16", "rtcOccluded16", 16, true},
+};
+
+const EmbreePathInfo& embree_path_info(EmbreePath path);
+// The call and its flag: "rtcIntersect1" (the single path keeps its name of issue 9; its context
+// has the default flag, incoherent), "rtcIntersect1M incoherent", "rtcOccluded16 coherent".
+std::string embree_path_name(EmbreePath path, bool any_hit);
+// "rtcIntersect8 incoherent / rtcOccluded8 incoherent": both calls, for a header.
+std::string embree_path_calls(EmbreePath path);
+// A comma-separated list of keys ("1,1M,16-coherent"), or "all" for every path in table order;
+// repeated keys count once. Throws Error naming the unknown key and listing the valid ones.
+std::vector<EmbreePath> parse_embree_paths(const std::string& list);
 
 // One Embree device and the scene of one triangle list. Not copyable.
 class EmbreeScene {
@@ -39,11 +88,20 @@ class EmbreeScene {
   double build_ms() const { return build_ms_; }  // rtcCommitScene (BVH build), wall clock
   static std::string version();                  // "3.13.5"
 
-  // Traces every ray (closest hit, or any hit when any_hit) on threads() threads, each taking
-  // contiguous chunks of the batch. Closest: hits[i] = (tfar, primID, u, v) or tri = RS_NO_HIT.
-  // Any hit: tri = kEmbreeOccluded (t = 0) or RS_NO_HIT.
-  // Timed traces go through the measurement protocol (bench/protocol.h), by wall clock.
+  // Traces every ray (closest hit, or any hit when any_hit) with rtcIntersect1 / rtcOccluded1 on
+  // threads() threads, each taking contiguous chunks of the batch. Closest: hits[i] = (tfar,
+  // primID, u, v), or (tmax, RS_NO_HIT, 0, 0) for a miss. Any hit: (0, kEmbreeOccluded, 0, 0) or
+  // (tmax, RS_NO_HIT, 0, 0). Timed traces go through the measurement protocol (bench/protocol.h),
+  // by wall clock.
   std::vector<RsHit> trace(const std::vector<RsRay>& rays, bool any_hit) const;
+  // The same with any path, its hits reported exactly as above. With an order (as many entries as
+  // rays, each below rays.size(); Error otherwise), hits[i] is the hit of rays[order[i]] and the
+  // rays are traced in that order: a packet or stream holds consecutive entries of it.
+  std::vector<RsHit> trace(const std::vector<RsRay>& rays, bool any_hit, EmbreePath path,
+                           std::span<const std::uint32_t> order = {}) const;
+  // Whether this CPU runs packets of `width` rays (4, 8, 16) natively; otherwise Embree splits
+  // them (16 rays without AVX-512). RTC_DEVICE_PROPERTY_NATIVE_RAY{4,8,16}_SUPPORTED.
+  bool native_packets(unsigned width) const;
 
  private:
   RTCDeviceTy* device_ = nullptr;
