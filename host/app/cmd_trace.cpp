@@ -211,16 +211,23 @@ struct PathAgreement {
 PathAgreement agreement_of(const EmbreeRun& e, const BatchRun& run, const std::vector<Tracer>& tracers,
                            const RayBatch& b, const std::string& whom, std::vector<std::string>& notes) {
   PathAgreement p;
+  // One note per distinct difference, naming every arm that has it (several classes often agree).
+  std::vector<std::pair<std::string, std::string>> differences;  // (what differs, the arms)
   for (std::size_t i = 0; i < tracers.size(); ++i) {
     const HitAgreement a = compare_with_embree(run.hits[i], e.hits, b.any_hit());
     p.same = std::min(p.same, a.fraction());
     p.with_ties = std::min(p.with_ties, a.fraction_with_ties());
     p.below = p.below || a.fraction_with_ties() < kEmbreeMinAgreement;
-    if (a.differences())
-      notes.push_back(fmt::format("{:<9} {}{} of {} rays differ from {}: {}", "",
-                                  tracers.size() > 1 ? fmt::format("{}: ", trace_variant_name(tracers[i].variant())) : "",
-                                  a.differences(), a.rays, whom, a.describe()));
+    if (!a.differences()) continue;
+    const std::string what = fmt::format("{} of {} rays differ from {}: {}", a.differences(), a.rays, whom, a.describe());
+    auto it = std::find_if(differences.begin(), differences.end(), [&](const auto& d) { return d.first == what; });
+    if (it == differences.end())
+      differences.emplace_back(what, arm_name(tracers, i));
+    else
+      it->second += ", " + arm_name(tracers, i);
   }
+  for (const auto& [what, arms] : differences)
+    notes.push_back(fmt::format("{:<9} {}{}", "", tracers.size() > 1 ? arms + ": " : "", what));
   if (p.below)
     notes.push_back(fmt::format("{:<9} below the required {:.1f} % agreement with {} (same triangle or a tie)", "",
                                 100.0 * kEmbreeMinAgreement, whom));
