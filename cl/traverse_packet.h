@@ -112,16 +112,22 @@ RS_INLINE int rs_packet_load(RS_GLOBAL const RsRay* rays, RS_GLOBAL const rs_u32
   return active;
 }
 
+/* One axis of the slab test for every lane: the distances to the lane's near plane (the box's upper
+ * bound where 1/d < 0, as rs_wide_boxes chooses it) and to its far plane. */
+RS_INLINE void rs_packet_slab(float lo, float hi, rs_pf o, rs_pf inv_d, rs_pi neg, rs_pf* t_near, rs_pf* t_far) {
+  const rs_pf bl = rsp_splat(lo), bh = rsp_splat(hi);
+  *t_near = (rsp_select(bl, bh, neg) - o) * inv_d;
+  *t_far = (rsp_select(bh, bl, neg) - o) * inv_d;
+}
+
 /* Slab test of one child box (lo/hi per axis) against every lane, fast variant: per lane the
  * operations of rs_wide_boxes. Returns the lanes hit (as a -1/0 mask) and their entry distances. */
 RS_INLINE rs_pi rs_packet_box(const RsRayPacket* p, float lo_x, float hi_x, float lo_y, float hi_y, float lo_z, float hi_z,
                               rs_pf tmax, rs_pf* tnear_out) {
-  const rs_pf bl_x = rsp_splat(lo_x), bh_x = rsp_splat(hi_x);
-  const rs_pf bl_y = rsp_splat(lo_y), bh_y = rsp_splat(hi_y);
-  const rs_pf bl_z = rsp_splat(lo_z), bh_z = rsp_splat(hi_z);
-  const rs_pf tnx = (rsp_select(bl_x, bh_x, p->neg_x) - p->ox) * p->ix, tfx = (rsp_select(bh_x, bl_x, p->neg_x) - p->ox) * p->ix;
-  const rs_pf tny = (rsp_select(bl_y, bh_y, p->neg_y) - p->oy) * p->iy, tfy = (rsp_select(bh_y, bl_y, p->neg_y) - p->oy) * p->iy;
-  const rs_pf tnz = (rsp_select(bl_z, bh_z, p->neg_z) - p->oz) * p->iz, tfz = (rsp_select(bh_z, bl_z, p->neg_z) - p->oz) * p->iz;
+  rs_pf tnx, tfx, tny, tfy, tnz, tfz;
+  rs_packet_slab(lo_x, hi_x, p->ox, p->ix, p->neg_x, &tnx, &tfx);
+  rs_packet_slab(lo_y, hi_y, p->oy, p->iy, p->neg_y, &tny, &tfy);
+  rs_packet_slab(lo_z, hi_z, p->oz, p->iz, p->neg_z, &tnz, &tfz);
   const rs_pf tnear = rsp_max(rsp_max(tnx, tny), rsp_max(tnz, p->tmin));
   const rs_pf tfar = rsp_min(rsp_min(tfx, tfy), rsp_min(tfz, tmax));
   *tnear_out = tnear;
@@ -133,12 +139,13 @@ RS_INLINE rs_pi rs_packet_box(const RsRayPacket* p, float lo_x, float hi_x, floa
  * packets without such a lane (nearly all) skip those selects. */
 RS_INLINE rs_pi rs_packet_box_robust(const RsRayPacket* p, float lo_x, float hi_x, float lo_y, float hi_y, float lo_z,
                                      float hi_z, rs_pf tmax, rs_pf* tnear_out) {
+  rs_pf t0x, t1x, t0y, t1y, t0z, t1z;
+  rs_packet_slab(lo_x, hi_x, p->ox, p->ix, p->neg_x, &t0x, &t1x);
+  rs_packet_slab(lo_y, hi_y, p->oy, p->iy, p->neg_y, &t0y, &t1y);
+  rs_packet_slab(lo_z, hi_z, p->oz, p->iz, p->neg_z, &t0z, &t1z);
   const rs_pf bl_x = rsp_splat(lo_x), bh_x = rsp_splat(hi_x);
   const rs_pf bl_y = rsp_splat(lo_y), bh_y = rsp_splat(hi_y);
   const rs_pf bl_z = rsp_splat(lo_z), bh_z = rsp_splat(hi_z);
-  const rs_pf t0x = (rsp_select(bl_x, bh_x, p->neg_x) - p->ox) * p->ix, t1x = (rsp_select(bh_x, bl_x, p->neg_x) - p->ox) * p->ix;
-  const rs_pf t0y = (rsp_select(bl_y, bh_y, p->neg_y) - p->oy) * p->iy, t1y = (rsp_select(bh_y, bl_y, p->neg_y) - p->oy) * p->iy;
-  const rs_pf t0z = (rsp_select(bl_z, bh_z, p->neg_z) - p->oz) * p->iz, t1z = (rsp_select(bh_z, bl_z, p->neg_z) - p->oz) * p->iz;
   const rs_pf scale = rsp_splat(RS_SLAB_FAR_SCALE);
   if (!p->any_parallel) {
     /* rs_wide_boxes_robust's order: x, then y, then z into (tmin, tmax). */
