@@ -396,7 +396,7 @@ void trace_scene(Runtime& rt, const std::string& scene_name, const TraceArgs& ar
   }
 #endif
   // Several classes: Embree's paths always on lines of their own, each naming every arm's ratio.
-  const bool paths_on_lines = !embree_columns_on_row || several_classes;
+  [[maybe_unused]] const bool paths_on_lines = !embree_columns_on_row || several_classes;
   if (several_classes)
     print_class_header(tracers);
   else

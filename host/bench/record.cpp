@@ -6,7 +6,7 @@
 #include <cmath>
 #include <limits>
 
-#include "trace/tracer.h"
+#include "trace/trace_class.h"
 
 namespace raysort {
 

@@ -34,84 +34,6 @@ std::vector<TraceVariant> parse_trace_variants(const std::string& list) {
   return out;
 }
 
-namespace {
-
-// The trace classes, once: name, rays per work-item, the kernel build's define and the kernels'
-// name suffix (cl/trace.cl).
-// The hybrids switch to single rays at a quarter of the packet's lanes.
-struct TraceClass {
-  TraceLayout layout;
-  const char* name;
-  int width;
-  int single_at;
-  const char* define;
-  const char* suffix;
-};
-constexpr TraceClass kTraceClasses[] = {
-    {TraceLayout::Wide, "wide", 1, 0, "", ""},
-    {TraceLayout::Binary, "binary", 1, 0, "-DRS_TRACE_BINARY", "_binary"},
-    {TraceLayout::Packet4, "packet4", 4, 0, "-DRS_TRACE_PACKET=4", "_packet"},
-    {TraceLayout::Packet8, "packet8", 8, 0, "-DRS_TRACE_PACKET=8", "_packet"},
-    {TraceLayout::Packet16, "packet16", 16, 0, "-DRS_TRACE_PACKET=16", "_packet"},
-    {TraceLayout::Packet, "packet", 0, 0, "", ""},
-    {TraceLayout::Hybrid8, "hybrid8", 8, 2, "-DRS_TRACE_PACKET=8 -DRS_PACKET_SINGLE_AT=2", "_packet"},
-    {TraceLayout::Hybrid16, "hybrid16", 16, 4, "-DRS_TRACE_PACKET=16 -DRS_PACKET_SINGLE_AT=4", "_packet"},
-    {TraceLayout::Hybrid, "hybrid", 0, 0, "", ""},
-};
-
-const TraceClass& trace_class(TraceLayout l) {
-  for (const TraceClass& c : kTraceClasses)
-    if (c.layout == l) return c;
-  throw Error("internal: a trace class without a row in kTraceClasses");
-}
-
-}  // namespace
-
-const std::vector<std::string>& trace_layout_names() {
-  static const std::vector<std::string> names = [] {
-    std::vector<std::string> v;
-    for (const TraceClass& c : kTraceClasses) v.emplace_back(c.name);
-    return v;
-  }();
-  return names;
-}
-
-TraceLayout parse_trace_layout(std::string_view name) {
-  for (const TraceClass& c : kTraceClasses)
-    if (name == c.name) return c.layout;
-  std::string names;
-  for (const std::string& n : trace_layout_names()) names += (names.empty() ? "" : ", ") + n;
-  throw Error("unknown trace class '" + std::string(name) + "' (expected " + names + ")");
-}
-
-const char* trace_layout_name(TraceLayout l) { return trace_class(l).name; }
-
-std::vector<TraceLayout> parse_trace_layouts(const std::string& list) {
-  std::vector<TraceLayout> out;
-  if (list == "all") {
-    for (const TraceClass& c : kTraceClasses)
-      if (c.width > 0) out.push_back(c.layout);
-    return out;
-  }
-  for (const auto& name : split_list(list)) {
-    const TraceLayout l = parse_trace_layout(name);
-    if (std::find(out.begin(), out.end(), l) == out.end()) out.push_back(l);
-  }
-  if (out.empty()) throw Error("--layout: name at least one trace class (" + std::string(kTraceClasses[0].name) + ", ...)");
-  return out;
-}
-
-int packet_width(TraceLayout l) { return trace_class(l).width; }
-
-int packet_single_at(TraceLayout l) { return trace_class(l).single_at; }
-
-TraceLayout resolve_trace_layout(TraceLayout l, const DeviceInfo& device) {
-  const bool wide16 = device.preferred_float_width >= 16, wide8 = device.preferred_float_width >= 8;
-  if (l == TraceLayout::Packet) return wide16 ? TraceLayout::Packet16 : wide8 ? TraceLayout::Packet8 : TraceLayout::Packet4;
-  if (l == TraceLayout::Hybrid) return wide16 ? TraceLayout::Hybrid16 : TraceLayout::Hybrid8;
-  return l;
-}
-
 Tracer::Tracer(Runtime& rt, const Bvh& bvh, TraceVariant variant, TraceLayout layout)
     : rt_(rt), variant_(variant), layout_(resolve_trace_layout(layout, rt.info())) {
   if (walks_wide_tree(layout_)) {
@@ -123,12 +45,11 @@ Tracer::Tracer(Runtime& rt, const Bvh& bvh, TraceVariant variant, TraceLayout la
     nodes_ = rt.upload("bvh nodes", bvh.nodes);
     triangles_ = rt.upload("triangles", bvh.triangles);
   }
-  const TraceClass& tc = trace_class(layout_);
-  width_ = static_cast<std::uint32_t>(tc.width);
-  cl::Program program = rt.build({"cl/trace.cl"}, tc.define);
+  width_ = static_cast<std::uint32_t>(packet_width(layout_));
+  cl::Program program = rt.build({"cl/trace.cl"}, trace_class_define(layout_));
   cl_call("creating the trace kernels", [&] {
     // Kernel names: trace_{closest,any,closest_counted}[_binary|_packet][_robust] (cl/trace.cl).
-    const std::string suffix = std::string(tc.suffix) + (variant == TraceVariant::Robust ? "_robust" : "");
+    const std::string suffix = std::string(trace_class_kernel_suffix(layout_)) + (variant == TraceVariant::Robust ? "_robust" : "");
     closest_ = cl::Kernel(program, ("trace_closest" + suffix).c_str());
     any_ = cl::Kernel(program, ("trace_any" + suffix).c_str());
     counted_ = cl::Kernel(program, ("trace_closest_counted" + suffix).c_str());

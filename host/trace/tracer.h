@@ -8,6 +8,7 @@
 
 #include "bvh/bvh.h"
 #include "runtime/runtime.h"
+#include "trace/trace_class.h"
 #include "shared.h"
 
 namespace raysort {
@@ -23,33 +24,10 @@ const char* trace_variant_name(TraceVariant v);
 // Throws Error naming an unknown variant.
 std::vector<TraceVariant> parse_trace_variants(const std::string& list);
 
-// The trace class: which tree the kernels walk, and how many rays walk it together (docs/trace.md,
-// "Trace classes"). Wide: one ray per work-item over the 4-wide collapse of the BVH (the default,
-// host/bvh/wide.cpp). Binary: one ray over the binary BVH itself (kept to measure what the wide
-// layout gains). PacketN: N consecutive rays of the order per work-item over the 4-wide tree, one
-// ray per vector lane (cl/traverse_packet.h). HybridN: the same packets, but a subtree that at most
-// N/4 lanes reach is walked by each of them alone (single rays). Packet, Hybrid: the width the device
-// prefers, resolved by resolve_trace_layout before anything runs.
-enum class TraceLayout { Wide, Binary, Packet4, Packet8, Packet16, Packet, Hybrid8, Hybrid16, Hybrid };
-
-// The classes' names, in the order help and errors list them: wide, binary, packet4, packet8,
-// packet16, packet, hybrid8, hybrid16, hybrid. parse throws an Error naming the accepted values.
-const std::vector<std::string>& trace_layout_names();
-TraceLayout parse_trace_layout(std::string_view name);
-const char* trace_layout_name(TraceLayout l);
-// A command line's class list: "wide,packet" (in that order, repeats dropped), or "all" for every
-// class but the unresolved packet. Throws Error naming an unknown class.
-std::vector<TraceLayout> parse_trace_layouts(const std::string& list);
-// Rays per work-item: 1 for the single-ray classes, N for PacketN and HybridN (0 for the unresolved
-// Packet and Hybrid).
-int packet_width(TraceLayout l);
-// The hybrid's switch: a subtree reached by at most this many lanes is walked by each alone (0: never).
-int packet_single_at(TraceLayout l);
-// Packet (Hybrid) becomes the packet (hybrid) class of the device's preferred float vector width
-// (16 on AVX-512, 8 on AVX; packets: else 4, hybrids: else 8); every other class is returned as it is.
-TraceLayout resolve_trace_layout(TraceLayout l, const DeviceInfo& device);
-// The tree a class walks: the binary BVH for Binary, the 4-wide one for every other class.
-inline bool walks_wide_tree(TraceLayout l) { return l != TraceLayout::Binary; }
+// Packet (Hybrid) resolved for this device (trace/trace_class.h).
+inline TraceLayout resolve_trace_layout(TraceLayout l, const DeviceInfo& device) {
+  return resolve_trace_layout(l, device.preferred_float_width);
+}
 
 // The scene's BVH on one device, with the trace kernels built. Upload once per scene; trace
 // many batches and orders.

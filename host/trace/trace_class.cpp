@@ -1,0 +1,92 @@
+#include "trace/trace_class.h"
+
+#include <algorithm>
+
+#include "util/error.h"
+#include "util/text.h"
+
+namespace raysort {
+
+namespace {
+
+// The trace classes, once: name, rays per work-item, the kernel build's define and the kernels'
+// name suffix (cl/trace.cl).
+// The hybrids switch to single rays at a quarter of the packet's lanes.
+struct TraceClass {
+  TraceLayout layout;
+  const char* name;
+  int width;
+  int single_at;
+  const char* define;
+  const char* suffix;
+};
+constexpr TraceClass kTraceClasses[] = {
+    {TraceLayout::Wide, "wide", 1, 0, "", ""},
+    {TraceLayout::Binary, "binary", 1, 0, "-DRS_TRACE_BINARY", "_binary"},
+    {TraceLayout::Packet4, "packet4", 4, 0, "-DRS_TRACE_PACKET=4", "_packet"},
+    {TraceLayout::Packet8, "packet8", 8, 0, "-DRS_TRACE_PACKET=8", "_packet"},
+    {TraceLayout::Packet16, "packet16", 16, 0, "-DRS_TRACE_PACKET=16", "_packet"},
+    {TraceLayout::Packet, "packet", 0, 0, "", ""},
+    {TraceLayout::Hybrid8, "hybrid8", 8, 2, "-DRS_TRACE_PACKET=8 -DRS_PACKET_SINGLE_AT=2", "_packet"},
+    {TraceLayout::Hybrid16, "hybrid16", 16, 4, "-DRS_TRACE_PACKET=16 -DRS_PACKET_SINGLE_AT=4", "_packet"},
+    {TraceLayout::Hybrid, "hybrid", 0, 0, "", ""},
+};
+
+const TraceClass& trace_class(TraceLayout l) {
+  for (const TraceClass& c : kTraceClasses)
+    if (c.layout == l) return c;
+  throw Error("internal: a trace class without a row in kTraceClasses");
+}
+
+}  // namespace
+
+const std::vector<std::string>& trace_layout_names() {
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> v;
+    for (const TraceClass& c : kTraceClasses) v.emplace_back(c.name);
+    return v;
+  }();
+  return names;
+}
+
+TraceLayout parse_trace_layout(std::string_view name) {
+  for (const TraceClass& c : kTraceClasses)
+    if (name == c.name) return c.layout;
+  std::string names;
+  for (const std::string& n : trace_layout_names()) names += (names.empty() ? "" : ", ") + n;
+  throw Error("unknown trace class '" + std::string(name) + "' (expected " + names + ")");
+}
+
+const char* trace_layout_name(TraceLayout l) { return trace_class(l).name; }
+
+std::vector<TraceLayout> parse_trace_layouts(const std::string& list) {
+  std::vector<TraceLayout> out;
+  if (list == "all") {
+    for (const TraceClass& c : kTraceClasses)
+      if (c.width > 0) out.push_back(c.layout);
+    return out;
+  }
+  for (const auto& name : split_list(list)) {
+    const TraceLayout l = parse_trace_layout(name);
+    if (std::find(out.begin(), out.end(), l) == out.end()) out.push_back(l);
+  }
+  if (out.empty()) throw Error("--layout: name at least one trace class (" + std::string(kTraceClasses[0].name) + ", ...)");
+  return out;
+}
+
+int packet_width(TraceLayout l) { return trace_class(l).width; }
+
+int packet_single_at(TraceLayout l) { return trace_class(l).single_at; }
+
+const char* trace_class_define(TraceLayout l) { return trace_class(l).define; }
+
+const char* trace_class_kernel_suffix(TraceLayout l) { return trace_class(l).suffix; }
+
+TraceLayout resolve_trace_layout(TraceLayout l, unsigned preferred_float_width) {
+  const bool wide16 = preferred_float_width >= 16, wide8 = preferred_float_width >= 8;
+  if (l == TraceLayout::Packet) return wide16 ? TraceLayout::Packet16 : wide8 ? TraceLayout::Packet8 : TraceLayout::Packet4;
+  if (l == TraceLayout::Hybrid) return wide16 ? TraceLayout::Hybrid16 : TraceLayout::Hybrid8;
+  return l;
+}
+
+}  // namespace raysort
