@@ -619,9 +619,9 @@ TEST(Matrix, EndToEndAndResume) {
   RunSummary s = run_matrix(spec, opts);
   EXPECT_FALSE(s.interrupted);
   EXPECT_EQ(s.cells_failed, 0u);
-  // 2 scenes x 3 batches x (NoSort + 13 encoders x (bits + top-k) x 2 access modes); cornell runs 3
-  // key lengths.
-  EXPECT_EQ(s.cells_run, 3u * (1 + 13 * 4 * 2) + 3u * (1 + 13 * 2 * 2));
+  // 2 trace classes (wide, packet) x 2 scenes x 3 batches x (NoSort + 13 encoders x (bits + top-k)
+  // x 2 access modes); cornell runs 3 key lengths.
+  EXPECT_EQ(s.cells_run, 2u * (3u * (1 + 13 * 4 * 2) + 3u * (1 + 13 * 2 * 2)));
   auto rs = ResultSet::load(opts.out);
   for (auto& c : rs.cells()) {
     EXPECT_TRUE(c.ok()) << c.id() << ": " << c.error;
@@ -665,6 +665,11 @@ TEST(Matrix, EndToEndAndResume) {
   EXPECT_NE(tables.find("## Noise floor"), std::string::npos);
   EXPECT_TRUE(fs::exists(opts.out + "/overhead-vs-gain-bounce1-32b.png"));
   EXPECT_TRUE(fs::exists(opts.out + "/overhead-vs-gain-bounce1-32b-permute.png"));
+  // The packet class beside it: its own section, plots and ids.
+  const std::string packet = trace_layout_name(resolve_trace_layout(TraceLayout::Packet, select_device("")));
+  EXPECT_NE(tables.find("## Trace classes"), std::string::npos);
+  EXPECT_TRUE(fs::exists(opts.out + "/overhead-vs-gain-bounce1-32b-" + packet + ".png"));
+  EXPECT_NE(rs.find("cornell/bounce1/hcc/32/" + packet + "/permute"), nullptr);
   // meta.json fingerprints every cell's keys and order.
   auto meta = nlohmann::json::parse(read_file(opts.out + "/meta.json"));
   EXPECT_EQ(meta["matrix"]["region_bits"], 4);  // the new encoders' knobs, since the matrix runs them
@@ -825,7 +830,7 @@ TEST(Matrix, LayoutIsRecordedAndModelled) {
   spec.reps = 1, spec.warmup = 0, spec.max_time_s = 0;
   std::map<std::string, ResultSet> sets;
   for (TraceLayout layout : {TraceLayout::Wide, TraceLayout::Binary}) {
-    spec.layout = layout;
+    spec.layouts = {layout};
     RunOptions opts;
     opts.out = temp_dir(std::string("layout-") + trace_layout_name(layout));
     ASSERT_EQ(run_matrix(spec, opts).cells_failed, 0u);
@@ -840,10 +845,61 @@ TEST(Matrix, LayoutIsRecordedAndModelled) {
     }
   }
   const CellRecord* wide = sets.at("wide").find("multi-instance/bounce1/nosort/0");
-  const CellRecord* binary = sets.at("binary").find("multi-instance/bounce1/nosort/0");
+  const CellRecord* binary = sets.at("binary").find("multi-instance/bounce1/nosort/0/binary");
   ASSERT_TRUE(wide && binary);
   EXPECT_NE(wide->simt_lane_efficiency, binary->simt_lane_efficiency);
   EXPECT_NE(wide->simt_distinct_per_visit, binary->simt_distinct_per_visit);
+}
+
+// The trace class is an axis (issue 40): one run traces every class, each cell names its class
+// (wide cells keep their ids, the others end in /<class>), every class's hits equal its host twin,
+// an order's keys do not depend on the class, a class named twice (packet = packet<device width>)
+// runs once, meta.json lists the classes, and tables.md sets them side by side.
+TEST(Matrix, TraceClassesAreAnAxisOfOneRun) {
+  MatrixSpec spec;
+  spec.scenes = {"multi-instance"};
+  spec.batches = {"bounce1"};
+  spec.encoders = {Encoder::HCC};
+  spec.accesses = {RayAccess::Gather, RayAccess::Permute};
+  spec.frame = {64, 36, 1};
+  spec.reps = 1, spec.warmup = 0, spec.max_time_s = 0;
+  const TraceLayout packet = resolve_trace_layout(TraceLayout::Packet, select_device(""));
+  spec.layouts = {TraceLayout::Wide, TraceLayout::Packet4, TraceLayout::Packet, TraceLayout::Hybrid8, packet};
+  std::vector<std::string> classes{"wide", "packet4"};
+  if (packet != TraceLayout::Packet4) classes.push_back(trace_layout_name(packet));
+  classes.push_back("hybrid8");
+  RunOptions opts;
+  opts.out = temp_dir("classes-axis");
+  ASSERT_EQ(run_matrix(spec, opts).cells_failed, 0u);
+  const auto meta = nlohmann::json::parse(read_file(opts.out + "/meta.json"));
+  std::string listed;
+  for (const auto& c : classes) listed += (listed.empty() ? "" : ",") + c;
+  EXPECT_EQ(meta["matrix"]["layout"], listed);
+  EXPECT_EQ(meta["bvh"]["classes"].size(), classes.size());
+  const ResultSet set = ResultSet::load(opts.out);
+  EXPECT_EQ(set.cells().size(), 3 * classes.size());  // NoSort, HCC gather, HCC permute per class
+  EXPECT_EQ(std::distance(fs::directory_iterator(opts.out + "/cells"), fs::directory_iterator()),
+            static_cast<std::ptrdiff_t>(3 * classes.size()));
+  const CellRecord* wide = set.find("multi-instance/bounce1/hcc/32");
+  ASSERT_NE(wide, nullptr);
+  EXPECT_EQ(wide->layout, "wide");
+  for (const auto& l : classes) {
+    const std::string suffix = l == "wide" ? "" : "/" + l;
+    for (const std::string cell : {"nosort/0", "hcc/32", "hcc/32/permute"}) {
+      std::string id = "multi-instance/bounce1/" + cell;
+      id.insert(id.find("/permute") == std::string::npos ? id.size() : id.find("/permute"), suffix);
+      const CellRecord* c = set.find(id);
+      ASSERT_NE(c, nullptr) << id;
+      EXPECT_EQ(c->layout, l) << id;
+      EXPECT_TRUE(c->ok() && (c->encoder == kBaselineEncoder || c->hits_match_nosort)) << id << " " << c->error;
+      if (c->encoder != kBaselineEncoder) {
+        EXPECT_EQ(c->keys_hash, wide->keys_hash) << id;
+      }
+    }
+  }
+  const std::string tables = read_file(opts.out + "/tables.md");
+  EXPECT_NE(tables.find("## Trace classes"), std::string::npos);
+  EXPECT_NE(tables.find("| multi-instance | bounce1 | hybrid8 |"), std::string::npos);
 }
 
 // A run records the SHA-256 of every scene file it traced (meta.json "scene_files"); a resume on a

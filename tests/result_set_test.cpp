@@ -131,6 +131,9 @@ TEST(CellFiles, InvalidOrStrayRecordsAreRefusedOnRead) {
        [](auto& j) { j["encoder"] = "costa"; j["id"] = "cornell/primary/costa/32"; }, "cornell__primary__costa__32.json"},
       {"bits", "16-bit keys are not among its key lengths",
        [](auto& j) { j["bits"] = 16; j["id"] = "cornell/primary/hcc/16"; }, "cornell__primary__hcc__16.json"},
+      {"class", "trace class 'packet4' is not one of its classes",
+       [](auto& j) { j["layout"] = "packet4"; j["id"] = "cornell/primary/hcc/32/packet4"; },
+       "cornell__primary__hcc__32__packet4.json"},
   };
   for (const auto& c : cases) {
     const std::string dir = temp_path("invalid-" + c.name);
@@ -142,6 +145,39 @@ TEST(CellFiles, InvalidOrStrayRecordsAreRefusedOnRead) {
     expect_one_line_error(run_cli({"compare", base, dir}), {file, c.part}, c.name);
     EXPECT_THROW(ResultSet::load(dir), Error) << c.name;
   }
+}
+
+// A cell of another class than wide written before the trace class was an axis names itself
+// without the class (one class per set then): it is read as the cell of its class, and when it is
+// rerun its new record replaces the old file (never two files for one cell). A cell whose id
+// disagrees with both names is still refused.
+TEST(CellFiles, AClassCellNamedBeforeTheClassAxisIsReadAndReplacedOnRerun) {
+  const std::string dir = finished_set("legacy-class", {"--layout", "packet4"});
+  const fs::path cells = fs::path(dir) / "cells";
+  ASSERT_TRUE(fs::exists(cells / "cornell__primary__hcc__32__packet4.json"));
+  nlohmann::json j = read_json(cells / "cornell__primary__hcc__32__packet4.json");
+  j["id"] = "cornell/primary/hcc/32";
+  j["status"] = "failed", j["error"] = "made to fail by the test";
+  fs::remove(cells / "cornell__primary__hcc__32__packet4.json");
+  write_json(cells / "cornell__primary__hcc__32.json", j);
+  {
+    const ResultSet set = ResultSet::load(dir);
+    const CellRecord* c = set.find("cornell/primary/hcc/32/packet4");
+    ASSERT_NE(c, nullptr);
+    EXPECT_EQ(c->layout, "packet4");
+    EXPECT_FALSE(c->ok());
+  }
+  std::vector<std::string> args = matrix({"--layout", "packet4", "--out", dir});
+  const CliResult r = run_cli(args);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_FALSE(fs::exists(cells / "cornell__primary__hcc__32.json"));
+  ASSERT_TRUE(fs::exists(cells / "cornell__primary__hcc__32__packet4.json"));
+  EXPECT_TRUE(ResultSet::load(dir).find("cornell/primary/hcc/32/packet4")->ok());
+  // The old name with an id that is neither the old nor the new one: refused.
+  j = read_json(cells / "cornell__primary__hcc__32__packet4.json");
+  j["id"] = "cornell/primary/origin/32";
+  write_json(cells / "cornell__primary__hcc__32__packet4.json", j);
+  EXPECT_THROW(ResultSet::load(dir), Error);
 }
 
 // Reproduction 3: compare refuses sets of different matrices unless asked, and names both sides.

@@ -63,7 +63,7 @@ MatrixSpec matrix_from(const RunArgs& a, const CLI::App& cmd) {
   if (!a.variant.empty()) spec.variants = parse_trace_variants(a.variant);
   if (!a.access.empty()) spec.accesses = parse_ray_accesses(a.access);
   if (!a.baseline.empty()) spec.baselines = parse_baseline_orders(a.baseline);
-  if (!a.layout.empty()) spec.layout = parse_trace_layout(a.layout);
+  if (!a.layout.empty()) spec.layouts = parse_trace_layouts(a.layout);
   if (!a.gpu_model.empty()) {
     (void)load_gpu_profile(a.gpu_model);  // an unknown name or a bad file fails here, before any cell
     spec.gpu_model = a.gpu_model;
@@ -128,10 +128,11 @@ void register_run_command(CLI::App& app) {
                   "(generation order, default) or shuffled (a fixed-seed permutation, as a path tracer compacting with "
                   "atomics produces), or all; shuffled cells end their id in /shuffled");
   cmd->add_option("--layout", a->layout,
-                  "trace class (docs/trace.md, \"Trace classes\"): wide (one ray per work-item over the 4-wide BVH, "
-                  "default), binary, packet4/packet8/packet16 (packets of consecutive rays of each order, one ray per "
-                  "vector lane) or packet (the device's preferred width); the SIMT model walks the same tree; recorded "
-                  "in every cell and in meta.json");
+                  "trace classes, comma-separated (docs/trace.md, \"Trace classes\"): wide (one ray per work-item "
+                  "over the 4-wide BVH, default), binary, packet4/packet8/packet16 (packets of consecutive rays of "
+                  "each order, one ray per vector lane), hybrid8/hybrid16, packet or hybrid (the device's preferred "
+                  "width), or all; the first is the tables' main one; a cell of another class than wide ends its id "
+                  "in /<class>");
   cmd->add_option("--gpu-model", a->gpu_model,
                   "also replay every cell's traversal through a GPU's caches and predict its speedup (docs/gpu-model.md): "
                   "a profile in gpu/profiles/ (rtx3060, h100, h200) or a .toml path; off by default (it adds the replay's "

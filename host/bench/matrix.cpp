@@ -50,7 +50,7 @@ nlohmann::json MatrixSpec::to_json() const {
           {"variant", joined(variants, trace_variant_name)},
           {"access", joined(accesses, ray_access_name)},
           {"baseline", joined(baselines, baseline_order_name)},
-          {"layout", trace_layout_name(layout)},
+          {"layout", joined(layouts, trace_layout_name)},
           {"twopoint_length_fraction", params.twopoint_length_fraction},
           {"had_lambda", params.had_lambda},
           {"direction_bits", params.direction_bits}};
@@ -118,6 +118,9 @@ MatrixSpec matrix_preset(const std::string& name) {
     m.key_length_bits = {16, 64};
     m.frame = {320, 180, 1};
     m.max_time_s = 0.3;
+    // Single rays beside packets of the device's width (issue 40): on a CPU the packet class is
+    // where an order changes SIMD divergence, not only cache hits.
+    m.layouts = {TraceLayout::Wide, TraceLayout::Packet};
     return m;
   }
   if (name == "paper" || name == "paper-1spp") {
@@ -181,6 +184,7 @@ void validate_matrix(const MatrixSpec& spec) {
     throw Error(fmt::format("--max-time {}: must be a number of seconds, 0 or more", spec.max_time_s));
   if (spec.accesses.empty()) throw Error("--access: name at least one access mode (gather, permute)");
   if (spec.variants.empty()) throw Error("--variant: name at least one trace variant (robust, fast)");
+  if (spec.layouts.empty()) throw Error("--layout: name at least one trace class (wide, packet, ...)");
   if (spec.baselines.empty()) throw Error("--baseline: name at least one baseline order (pixel, shuffled)");
   if (!(spec.cell_timeout_s >= 0) || !std::isfinite(spec.cell_timeout_s))
     throw Error(fmt::format("--timeout {}: must be a number of seconds, 0 (none) or more", spec.cell_timeout_s));

@@ -1,8 +1,8 @@
 #pragma once
-// The scenario matrix: axes (scenes × batches × encoders × key bits × trace variants × access
-// modes × baseline orders, plus top-k sorting), the run settings, and named presets. The axes are
+// The scenario matrix: axes (scenes × batches × encoders × key bits × trace variants × trace
+// classes × access modes × baseline orders, plus top-k sorting), the run settings, and named presets. The axes are
 // typed: the command line is parsed once, at its boundary, by each axis's own parser
-// (parse_encoders in encode/, parse_trace_variants in trace/, parse_ray_accesses in
+// (parse_encoders in encode/, parse_trace_variants and parse_trace_layouts in trace/, parse_ray_accesses in
 // sort/permute.h, parse_baseline_orders in render/batches.h, parse_resolution in scene/), and
 // everything after it reads values, not text. Every axis is narrowed on the
 // command line with one syntax: a comma-separated list, or "all".
@@ -35,9 +35,11 @@ struct MatrixSpec {
   std::vector<TraceVariant> variants{TraceVariant::Robust};  // the first is the tables' main one
   std::vector<RayAccess> accesses{RayAccess::Gather};        // the first is the tables' main one
   std::vector<BaselineOrder> baselines{BaselineOrder::Pixel};  // NoSort's order; the first is the tables' main one
-  // The BVH layout the trace kernels and the SIMT model walk: one per run (it is how the device
-  // traces, not a property of a cell); every cell records it.
-  TraceLayout layout = TraceLayout::Wide;
+  // The trace classes (docs/trace.md, "Trace classes"): which tree the kernels and the SIMT model
+  // walk and how many rays walk it together; an axis like the variants (in the cell id when not
+  // wide). The first is the tables' main one. Packet and Hybrid are resolved to the device's width
+  // before the plan is made (run_matrix), so cells and meta.json name the width that ran.
+  std::vector<TraceLayout> layouts{TraceLayout::Wide};
   // The GPU cost model's profile (bench/gpu_model.h: a name in gpu/profiles/ or a .toml path);
   // empty: the model is off.
   std::string gpu_model;

@@ -146,15 +146,18 @@ bool plotted(const CellRecord& c) {
 double low_of(const Estimate& e) { return e.has_interval() ? e.lo : e.value; }
 double high_of(const Estimate& e) { return e.has_interval() ? e.hi : e.value; }
 
-// "-fast", "-permute", "-shuffled": the parts of a cell's identity a plot file name carries beyond
-// scene, batch and bits (as CellRecord::id does: nothing for the defaults).
-std::string facet_suffix(const std::string& variant, const std::string& access, const std::string& baseline) {
-  return (variant != "robust" ? "-" + variant : std::string()) + (access != "gather" ? "-" + access : std::string()) +
-         (baseline != "pixel" ? "-" + baseline : std::string());
+// "-fast", "-packet8", "-permute", "-shuffled": the parts of a cell's identity a plot file name
+// carries beyond scene, batch and bits (as CellRecord::id does: nothing for the defaults).
+std::string facet_suffix(const std::string& variant, const std::string& layout, const std::string& access,
+                         const std::string& baseline) {
+  return (variant != "robust" ? "-" + variant : std::string()) + (layout != "wide" ? "-" + layout : std::string()) +
+         (access != "gather" ? "-" + access : std::string()) + (baseline != "pixel" ? "-" + baseline : std::string());
 }
-// ", fast, permute, shuffled": the same facets in a title.
-std::string facet_title(const std::string& variant, const std::string& access, const std::string& baseline) {
-  return (variant != "robust" ? ", " + variant : std::string()) + (access != "gather" ? ", " + access : std::string()) +
+// ", fast, packet8, permute, shuffled": the same facets in a title.
+std::string facet_title(const std::string& variant, const std::string& layout, const std::string& access,
+                        const std::string& baseline) {
+  return (variant != "robust" ? ", " + variant : std::string()) + (layout != "wide" ? ", " + layout : std::string()) +
+         (access != "gather" ? ", " + access : std::string()) +
          (baseline != "pixel" ? ", " + baseline + " baseline" : std::string());
 }
 
@@ -174,22 +177,22 @@ struct PlotLegend {
   }
 };
 
-// Speedup against key bits with 95 % intervals, per scene, batch, variant and access mode with
+// Speedup against key bits with 95 % intervals, per scene, batch, variant, class and access mode with
 // more than one key length.
 void speed_vs_bits_plots(const std::vector<CellRecord>& cells, const PlotLegend& legend, const std::string& dir,
                          std::vector<std::string>& written) {
   const auto& encoders = legend.encoders;
-  // scene, batch, variant, access, baseline
-  std::set<std::tuple<std::string, std::string, std::string, std::string, std::string>> facets;
+  // scene, batch, variant, class, access, baseline
+  std::set<std::tuple<std::string, std::string, std::string, std::string, std::string, std::string>> facets;
   for (auto& c : cells)
-    if (plotted(c)) facets.insert({c.scene, c.batch, c.variant, c.access, c.baseline});
-  for (auto& [scene, batch, variant, access, baseline] : facets) {
+    if (plotted(c)) facets.insert({c.scene, c.batch, c.variant, c.layout, c.access, c.baseline});
+  for (auto& [scene, batch, variant, layout, access, baseline] : facets) {
     std::map<std::string, std::map<unsigned, const CellRecord*>> series;
     std::set<unsigned> bits;
     double ymax = 1.0, ymin = 1.0;
     for (auto& c : cells)
-      if (plotted(c) && c.scene == scene && c.batch == batch && c.variant == variant && c.access == access &&
-          c.baseline == baseline && c.top_bits == 0) {
+      if (plotted(c) && c.scene == scene && c.batch == batch && c.variant == variant && c.layout == layout &&
+          c.access == access && c.baseline == baseline && c.top_bits == 0) {
         series[c.encoder][c.bits] = &c;
         bits.insert(c.bits);
         ymax = std::max(ymax, high_of(c.speedup));
@@ -198,7 +201,7 @@ void speed_vs_bits_plots(const std::vector<CellRecord>& cells, const PlotLegend&
     if (bits.size() < 2) continue;
     Chart ch(900, 560, *bits.begin() - 4.0, *bits.rbegin() + 4.0, std::floor(ymin * 10) / 10, std::ceil(ymax * 10) / 10 + 0.05);
     ch.axes(fmt::format("{} {}{}: trace speedup vs NoSort (95 % interval) against key bits", scene, batch,
-                        facet_title(variant, access, baseline)),
+                        facet_title(variant, layout, access, baseline)),
             "key bits", "speedup", std::vector<double>(bits.begin(), bits.end()));
     std::size_t i = 0;
     for (auto& e : encoders) {
@@ -225,28 +228,28 @@ void speed_vs_bits_plots(const std::vector<CellRecord>& cells, const PlotLegend&
     }
     std::string name =
         fmt::format("speed-vs-bits-{}-{}{}.png", file_safe(scene), file_safe(batch),
-                    facet_suffix(variant, access, baseline));
+                    facet_suffix(variant, layout, access, baseline));
     if (ch.write((std::filesystem::path(dir) / name).string())) written.push_back(name);
   }
 
 }
 
-// Overhead against gain, per batch, key length, variant and access mode: colour = encoder, shape =
+// Overhead against gain, per batch, key length, variant, class and access mode: colour = encoder, shape =
 // scene, error bar = the speedup's 95 % interval.
 void overhead_vs_gain_plots(const std::vector<CellRecord>& cells, const PlotLegend& legend, const std::string& dir,
                             std::vector<std::string>& written) {
   const auto& encoders = legend.encoders;
-  // batch, bits, variant, access, baseline
-  std::set<std::tuple<std::string, unsigned, std::string, std::string, std::string>> facets;
+  // batch, bits, variant, class, access, baseline
+  std::set<std::tuple<std::string, unsigned, std::string, std::string, std::string, std::string>> facets;
   for (auto& c : cells)
-    if (plotted(c) && c.top_bits == 0) facets.insert({c.batch, c.bits, c.variant, c.access, c.baseline});
+    if (plotted(c) && c.top_bits == 0) facets.insert({c.batch, c.bits, c.variant, c.layout, c.access, c.baseline});
   for (const auto& facet : facets) {
     // Named copies, not structured bindings: clang 14 (the fuzz build) cannot capture those.
-    const auto& [batch, bits, variant, access, baseline] = facet;
-    auto in_facet = [&, batch = batch, bits = bits, variant = variant, access = access,
+    const auto& [batch, bits, variant, layout, access, baseline] = facet;
+    auto in_facet = [&, batch = batch, bits = bits, variant = variant, layout = layout, access = access,
                      baseline = baseline](const CellRecord& c) {
       return plotted(c) && c.batch == batch && c.bits == bits && c.top_bits == 0 && c.variant == variant &&
-             c.access == access && c.baseline == baseline;
+             c.layout == layout && c.access == access && c.baseline == baseline;
     };
     // Overhead relative to the NoSort trace time: (encode + sort [+ permute]) / (trace · speedup).
     auto overhead_x = [](const CellRecord& c) { return c.speedup.value > 0 ? c.overhead_pct.value / c.speedup.value : 0; };
@@ -262,7 +265,7 @@ void overhead_vs_gain_plots(const std::vector<CellRecord>& cells, const PlotLege
     std::vector<double> xt;
     for (int k = 0; k <= 5; ++k) xt.push_back(xmax * k / 5);
     ch.axes(fmt::format("{}, {}-bit keys{}: what ordering costs (x) against what it buys (y)", batch, bits,
-                        facet_title(variant, access, baseline)),
+                        facet_title(variant, layout, access, baseline)),
             access == "permute" ? "encode + sort + permute, % of NoSort trace time" : "encode + sort, % of NoSort trace time",
             "trace speedup", xt);
     // Break-even: net speedup = 1 where overhead/T0 = 1 - 1/s, i.e. s = 1 / (1 - x/100).
@@ -297,7 +300,7 @@ void overhead_vs_gain_plots(const std::vector<CellRecord>& cells, const PlotLege
     }
     ch.text(900 - 160, legend_y + 10, "net speedup = 1", 13, grey);
     std::string name = fmt::format("overhead-vs-gain-{}-{}b{}.png", file_safe(batch), bits,
-                                   facet_suffix(variant, access, baseline));
+                                   facet_suffix(variant, layout, access, baseline));
     if (ch.write((std::filesystem::path(dir) / name).string())) written.push_back(name);
   }
 }

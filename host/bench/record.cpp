@@ -10,14 +10,23 @@
 
 namespace raysort {
 
-std::string CellRecord::id() const {
-  std::string s = fmt::format("{}/{}/{}/{}", scene, batch, encoder, bits);
-  if (top_bits) s += fmt::format("/top{}", top_bits);
-  if (variant != "robust") s += "/" + variant;
-  if (access != "gather") s += "/" + access;
-  if (baseline != "pixel") s += "/" + baseline;
+namespace {
+
+std::string cell_id(const CellRecord& c, bool with_class) {
+  std::string s = fmt::format("{}/{}/{}/{}", c.scene, c.batch, c.encoder, c.bits);
+  if (c.top_bits) s += fmt::format("/top{}", c.top_bits);
+  if (c.variant != "robust") s += "/" + c.variant;
+  if (with_class && c.layout != "wide") s += "/" + c.layout;
+  if (c.access != "gather") s += "/" + c.access;
+  if (c.baseline != "pixel") s += "/" + c.baseline;
   return s;
 }
+
+}  // namespace
+
+std::string CellRecord::id() const { return cell_id(*this, true); }
+
+std::string CellRecord::id_before_class_axis() const { return cell_id(*this, false); }
 
 namespace {
 

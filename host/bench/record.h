@@ -23,6 +23,8 @@ namespace raysort {
 //      and the BVH layout its trace and SIMT model walk (wide, binary); NoSort's ANC is null.
 //      Version 1-2 records read as pixel and wide, but their SIMT model walked the binary tree
 //      while their trace walked the wide one (docs/design.md, "SIMT model").
+//      Within version 3, the trace class became an axis (several per set): it is in the id when not
+//      wide (".../packet8"). Files written before name their cell without it and are still read.
 constexpr int kResultFormatVersion = 3;
 constexpr int kOldestReadableFormatVersion = 1;
 
@@ -37,7 +39,7 @@ struct CellRecord {
   std::string variant = "robust";  // trace variant ("robust" default, "fast")
   std::string access = "gather";   // rays read through the order (gather) or permuted first
   std::string baseline = "pixel";  // NoSort's order, the one the sort starts from (render/batches.h)
-  std::string layout = "wide";     // the BVH the trace kernel and the SIMT model walk
+  std::string layout = "wide";     // the trace class: the tree the kernel and SIMT model walk, rays per work-item
   std::uint64_t rays = 0;
 
   // Outcome.
@@ -108,7 +110,9 @@ struct CellRecord {
   std::string keys_hash;   // FNV-1a 64 of the key array (generation order), hex
   std::string order_hash;  // FNV-1a 64 of the sorted order, hex
 
-  std::string id() const;  // "scene/batch/encoder/bits[/topK][/variant][/access][/baseline]"
+  std::string id() const;  // "scene/batch/encoder/bits[/topK][/variant][/class][/access][/baseline]"
+  // The id a cell had before the trace class was an axis (one per set): without the class.
+  std::string id_before_class_axis() const;
   bool ok() const { return status == "ok"; }
 };
 

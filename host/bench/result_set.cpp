@@ -101,9 +101,12 @@ CellRecord parse_cell_record(const std::string& text, const std::string& file, c
     throw Error(fmt::format("{}: unreadable cell record ({}); {}", file, e.what(), fix));
   }
   const std::string id = r.id();
-  if (j.contains("id") && j["id"] != id)
+  // A cell of another class than wide written before the class was an axis names itself without it.
+  const std::string old_id = r.id_before_class_axis();
+  if (j.contains("id") && j["id"] != id && j["id"] != old_id)
     throw Error(fmt::format("{}: its \"id\" is {} but its fields make cell {}; {}", file, j["id"].dump(), id, fix));
-  if (fs::path(file).filename().string() != cell_file_name(id))
+  const std::string name = fs::path(file).filename().string();
+  if (name != cell_file_name(id) && !(old_id != id && name == cell_file_name(old_id) && j.value("id", old_id) == old_id))
     throw Error(fmt::format("{} holds cell {}, whose file is {}: a cell file names its cell (an edited or copied "
                             "record); {}",
                             file, id, cell_file_name(id), fix));
@@ -285,19 +288,31 @@ const CellRecord* ResultSet::find(const std::string& id) const {
   return it == cells_.end() ? nullptr : &it->second;
 }
 
-void ResultSet::add(const CellRecord& cell) {
+void ResultSet::write_cell(const CellRecord& cell) {
   nlohmann::json j = cell;
-  write_file_atomically((fs::path(dir_) / "cells" / cell_file_name(cell.id())).string(), j.dump(2) + "\n");
+  const fs::path cells = fs::path(dir_) / "cells";
+  write_file_atomically((cells / cell_file_name(cell.id())).string(), j.dump(2) + "\n");
+  // A rerun cell that was written before the trace class was an axis had a file without the class
+  // in its name: the new record replaces it (else two files would hold one cell). That name is a
+  // wide cell's too: only a record of this cell's class is removed.
+  if (const std::string old_id = cell.id_before_class_axis(); old_id != cell.id()) {
+    const fs::path old_file = cells / cell_file_name(old_id);
+    std::error_code ec;
+    if (fs::exists(old_file, ec)) {
+      const nlohmann::json old = nlohmann::json::parse(read_file(old_file.string()), nullptr, false);
+      if (old.is_object() && old.value("layout", std::string("wide")) == cell.layout) fs::remove(old_file, ec);
+    }
+  }
   cells_[cell.id()] = cell;
+}
+
+void ResultSet::add(const CellRecord& cell) {
+  write_cell(cell);
   write_views();
 }
 
 void ResultSet::add_all(const std::vector<CellRecord>& cells) {
-  for (const auto& cell : cells) {
-    nlohmann::json j = cell;
-    write_file_atomically((fs::path(dir_) / "cells" / cell_file_name(cell.id())).string(), j.dump(2) + "\n");
-    cells_[cell.id()] = cell;
-  }
+  for (const auto& cell : cells) write_cell(cell);
   write_views();
 }
 
@@ -351,6 +366,7 @@ std::string cell_outside_matrix(const CellRecord& c, const nlohmann::json& m) {
   if (m.contains("batches") && m["batches"].is_array() && !m["batches"].empty() && !listed("batches", c.batch))
     return fmt::format("batch '{}' is not one of its batches", c.batch);
   if (!listed("variant", c.variant)) return fmt::format("trace variant '{}' is not one of its variants", c.variant);
+  if (!listed("layout", c.layout)) return fmt::format("trace class '{}' is not one of its classes", c.layout);
   if (c.encoder == kBaselineEncoder) {
     if (c.bits != 0 || c.top_bits != 0 || c.access != "gather")
       return "a NoSort cell has 0 key bits, no top-k and gather access";

@@ -48,6 +48,8 @@ class ResultSet {
   void write_plots() const;
 
  private:
+  void write_cell(const CellRecord& cell);  // its file, and cells_
+
   std::string dir_;
   nlohmann::json meta_;
   std::map<std::string, CellRecord> cells_;

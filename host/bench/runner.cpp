@@ -17,6 +17,7 @@
 #include <memory>
 #include <optional>
 #include <set>
+#include <tuple>
 
 #include "bench/cell_measure.h"
 #include "bench/result_set.h"
@@ -73,12 +74,19 @@ std::string utc_now() {
   return buf;
 }
 
-// The tree every cell traced and modelled: how it was built and the layout the kernels walk.
-nlohmann::json bvh_meta(TraceLayout layout) {
+// The trees the cells traced and modelled: how they were built, and per trace class the tree's width
+// and the rays per work-item ("layout", "width" and "rays_per_work_item": the first class's).
+nlohmann::json bvh_meta(const std::vector<TraceLayout>& layouts) {
   const BvhBuildOptions build;  // prepare_scene builds with the defaults
-  return {{"layout", trace_layout_name(layout)},
-          {"width", walks_wide_tree(layout) ? 4 : 2},
-          {"rays_per_work_item", packet_width(layout)},
+  nlohmann::json classes = nlohmann::json::array();
+  for (TraceLayout l : layouts)
+    classes.push_back({{"class", trace_layout_name(l)},
+                       {"width", walks_wide_tree(l) ? 4 : 2},
+                       {"rays_per_work_item", packet_width(l)}});
+  return {{"layout", trace_layout_name(layouts.front())},
+          {"width", walks_wide_tree(layouts.front()) ? 4 : 2},
+          {"rays_per_work_item", packet_width(layouts.front())},
+          {"classes", classes},
           {"builder", "binned SAH (Wald 2007), object median past the depth bound"},
           {"bins", build.bins},
           {"max_leaf_size", build.max_leaf_size},
@@ -116,7 +124,7 @@ nlohmann::json run_meta(const MatrixSpec& spec, const RunOptions& opts, const De
       {"command", opts.command},
       {"date", utc_now()},
       {"seeds", {{"rays", spec.seed}}},
-      {"bvh", bvh_meta(spec.layout)},
+      {"bvh", bvh_meta(spec.layouts)},
       {"baseline",
        {{"orders", spec.to_json().at("baseline")},
         {"pixel", "generation order: pixel-major, terminated paths compacted out in order"},
@@ -163,14 +171,14 @@ std::string progress_text(const CellRecord& c) {
                      c.cut_ms >= 0 ? fmt::format(" (host cut {:.1f} ms)", c.cut_ms) : "", c.anc, rounds);
 }
 
-CellRecord cell_of(const PlannedCell& p, TraceLayout layout) {
+CellRecord cell_of(const PlannedCell& p) {
   CellRecord c;
   c.scene = p.scene, c.batch = p.batch, c.encoder = p.encoder, c.bits = p.bits, c.top_bits = p.top_bits;
-  c.variant = p.variant, c.access = p.access, c.baseline = p.baseline, c.layout = trace_layout_name(layout);
+  c.variant = p.variant, c.access = p.access, c.baseline = p.baseline, c.layout = p.layout;
   return c;
 }
 
-// Consecutive runs of cells that agree on key(cell): the plan is ordered scene, batch, variant,
+// Consecutive runs of cells that agree on key(cell): the plan is ordered scene, batch, variant, class,
 // then NoSort and each encoder × key length × top-k with its access modes side by side.
 template <class Key>
 std::vector<std::vector<PlannedCell>> runs_of(const std::vector<PlannedCell>& cells, Key key) {
@@ -190,9 +198,10 @@ struct SceneBench {
   const MatrixSpec& spec;
   std::vector<ReferencedBatch> batches;  // in generation (pixel) order
   std::map<std::string, ReferencedBatch> shuffled;  // by batch name, made when first asked
-  std::map<std::string, std::unique_ptr<Tracer>> tracers;  // by variant name
+  std::map<std::pair<std::string, std::string>, std::unique_ptr<Tracer>> tracers;  // by variant, class
   std::unique_ptr<DeviceEncoder> encoder;
-  std::map<std::pair<const ReferencedBatch*, std::string>, std::vector<RsHit>> references;  // by batch, variant
+  // The host twin's hits by batch, variant and class.
+  std::map<std::tuple<const ReferencedBatch*, std::string, std::string>, std::vector<RsHit>> references;
   // hcc-traffic's node visits of the batch before, and the ms their count took, by batch name.
   std::map<std::string, std::pair<std::vector<std::uint64_t>, double>> traffic;
   // mlhcc-cost's estimates and hcc-region's statistics from a previous frame, by batch name.
@@ -217,7 +226,8 @@ struct SceneBench {
     }
     batches = generate_batches(prepared.scene, prepared.tris, bvh, gen);
     for (TraceVariant v : spec.variants)
-      tracers[trace_variant_name(v)] = std::make_unique<Tracer>(rt, bvh, v, spec.layout);
+      for (TraceLayout l : spec.layouts)
+        tracers[{trace_variant_name(v), trace_layout_name(l)}] = std::make_unique<Tracer>(rt, bvh, v, l);
     encoder->warm_up();
   }
   // The batch in a baseline order (render/batches.h), or null when the frame has no such batch.
@@ -232,16 +242,17 @@ struct SceneBench {
     }
     return nullptr;
   }
-  // The host reference of a variant on the run's layout. The batch's own is the fast one on the
-  // wide tree (render/batches.h); any other is traced when a cell first needs it (on the binary
-  // tree, of two equally near triangles the other may win).
-  const std::vector<RsHit>& reference(const ReferencedBatch& b, const std::string& variant) {
-    if (variant == "fast" && spec.layout == TraceLayout::Wide) return b.reference_hits;
-    auto it = references.find({&b, variant});
+  // The host twin's hits of a variant and trace class. The batch's own is the fast one on the wide
+  // tree (render/batches.h); any other is traced when a cell first needs it (on the binary tree, or
+  // in packets, of two equally near triangles the other may win).
+  const std::vector<RsHit>& reference(const ReferencedBatch& b, const std::string& variant, const std::string& layout) {
+    if (variant == "fast" && layout == trace_layout_name(TraceLayout::Wide)) return b.reference_hits;
+    auto it = references.find({&b, variant, layout});
     if (it == references.end())
       it = references
-               .emplace(std::pair{&b, variant}, trace_reference(bvh, b.batch.rays, nullptr, b.batch.any_hit(), nullptr,
-                                                                parse_trace_variant(variant), spec.layout))
+               .emplace(std::tuple{&b, variant, layout},
+                        trace_reference(bvh, b.batch.rays, nullptr, b.batch.any_hit(), nullptr,
+                                        parse_trace_variant(variant), parse_trace_layout(layout)))
                .first;
     return it->second;
   }
@@ -277,11 +288,13 @@ struct SceneBench {
     encoder->set_cost_estimates(stats.cost_means);
     return stats.cost_ms;
   }
-  // Rays this variant misses that the other one hits, per million (-1 unless both variants run).
-  double leaks_per_million(const ReferencedBatch& b, const std::string& variant, bool both_variants) {
+  // Rays this variant misses that the other one hits in the same class, per million (-1 unless
+  // both variants run).
+  double leaks_per_million(const ReferencedBatch& b, const std::string& variant, const std::string& layout,
+                           bool both_variants) {
     if (!both_variants || b.batch.size() == 0) return -1.0;
-    const auto& mine = reference(b, variant);
-    const auto& other = reference(b, variant == "fast" ? "robust" : "fast");
+    const auto& mine = reference(b, variant, layout);
+    const auto& other = reference(b, variant == "fast" ? "robust" : "fast", layout);
     std::size_t leaks = 0;
     for (std::size_t i = 0; i < mine.size(); ++i) leaks += mine[i].tri == RS_NO_HIT && other[i].tri != RS_NO_HIT;
     return static_cast<double>(leaks) * 1e6 / static_cast<double>(b.batch.size());
@@ -472,6 +485,15 @@ RunSummary run_matrix(const MatrixSpec& requested, const RunOptions& opts) {
   validate_matrix(spec);
   check_scenes_before_work(spec, opts);
 
+  Runtime rt(select_device(opts.device));
+  // --layout packet is the device's packet width: planned, recorded (and resumed) as the width it
+  // runs; "packet,packet8" on an AVX device is one class.
+  std::vector<TraceLayout> resolved;
+  for (TraceLayout l : spec.layouts)
+    if (const TraceLayout r = resolve_trace_layout(l, rt.info()); std::find(resolved.begin(), resolved.end(), r) == resolved.end())
+      resolved.push_back(r);
+  spec.layouts = resolved;
+
   // Plan: every cell of the matrix in visiting order; a shard keeps its own (bench/shard.h).
   const std::map<std::string, SceneFacts> facts = scene_facts(spec, opts.scene_root);
   std::vector<PlannedCell> plan = plan_from(spec, facts, opts.shard.active() ? opts.shard.count : 1);
@@ -479,9 +501,6 @@ RunSummary run_matrix(const MatrixSpec& requested, const RunOptions& opts) {
   if (opts.shard.active())
     std::erase_if(plan, [&](const PlannedCell& c) { return c.shard != opts.shard.index; });
 
-  Runtime rt(select_device(opts.device));
-  // --layout packet is the device's packet width: recorded (and resumed) as the width it ran.
-  spec.layout = resolve_trace_layout(spec.layout, rt.info());
   check_matrix_memory(spec, facts, rt.info());  // before the result set is written
   RunSummary summary;
   summary.out_dir = opts.out.empty() ? default_result_dir(spec, rt.info().slug(), opts.shard) : opts.out;
@@ -534,7 +553,8 @@ RunSummary run_matrix(const MatrixSpec& requested, const RunOptions& opts) {
     if (scene_cells.empty()) continue;
     SceneBench scene(rt, scene_cells.front().scene, spec, opts.scene_root, progress);
     for (const auto& batch_cells :
-         runs_of(scene_cells, [](const PlannedCell& c) { return c.batch + "/" + c.variant + "/" + c.baseline; })) {
+         runs_of(scene_cells,
+                 [](const PlannedCell& c) { return c.batch + "/" + c.variant + "/" + c.layout + "/" + c.baseline; })) {
       if (g_interrupted) break;
       const PlannedCell& first = batch_cells.front();
       const ReferencedBatch* rb = scene.batch(first.batch, first.baseline);
@@ -545,15 +565,16 @@ RunSummary run_matrix(const MatrixSpec& requested, const RunOptions& opts) {
         progress.total -= batch_cells.size();
         continue;
       }
-      BatchBench bench({rt, *scene.encoder, sorter, permuter, *scene.tracers.at(first.variant), gpu ? &*gpu : nullptr},
-                       scene.bvh, rb->batch, scene.reference(*rb, first.variant));
+      BatchBench bench({rt, *scene.encoder, sorter, permuter, *scene.tracers.at({first.variant, first.layout}),
+                        gpu ? &*gpu : nullptr},
+                       scene.bvh, rb->batch, scene.reference(*rb, first.variant, first.layout));
       for (const auto& group : runs_of(batch_cells, round_group)) {  // → cell (bench/shard.h)
         if (g_interrupted) break;
         std::vector<CellRecord> cells;
-        for (const auto& p : group) cells.push_back(cell_of(p, spec.layout));
+        for (const auto& p : group) cells.push_back(cell_of(p));
         if (group.front().encoder == kBaselineEncoder) {
           CellRecord c = bench.measure_nosort(cells.front(), spec.protocol(cells.front().id()));
-          c.leaks_per_million = scene.leaks_per_million(*rb, first.variant, both_variants);
+          c.leaks_per_million = scene.leaks_per_million(*rb, first.variant, first.layout, both_variants);
           record(c);
           continue;
         }

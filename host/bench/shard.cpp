@@ -74,23 +74,25 @@ std::vector<PlannedCell> matrix_cells(const MatrixSpec& spec,
       const std::uint64_t rays = batch.rfind("shadow", 0) == 0 ? f.rays_per_batch * f.shadow_rays_per_bounce
                                                                : f.rays_per_batch;
       for (const TraceVariant variant : spec.variants) {
-        for (const BaselineOrder baseline : spec.baselines) {
-          auto add = [&](Encoder encoder, unsigned bits, unsigned top, RayAccess access) {
-            CellRecord c;
-            c.scene = scene, c.batch = batch, c.encoder = encoder_name(encoder), c.bits = bits, c.top_bits = top;
-            c.variant = trace_variant_name(variant), c.access = ray_access_name(access);
-            c.baseline = baseline_order_name(baseline);
-            if (!seen.insert(c.id()).second) return;  // a scene named twice runs once
-            out.push_back({c.id(), scene, batch, c.variant, rays * depth * encoder_weight_pct(encoder), 0, c.encoder,
-                           c.access, bits, top, c.baseline});
-          };
-          add(Encoder::NoSort, 0, 0, RayAccess::Gather);  // the baseline order itself: no access mode to choose
-          const std::vector<unsigned> bits = spec.bits_for(scene);
-          for (Encoder e : encoders) {
-            for (unsigned b : bits)
-              for (RayAccess a : spec.accesses) add(e, b, 0, a);
-            for (unsigned k : spec.top_bits)
-              for (RayAccess a : spec.accesses) add(e, bits.back(), k, a);
+        for (const TraceLayout layout : spec.layouts) {
+          for (const BaselineOrder baseline : spec.baselines) {
+            auto add = [&](Encoder encoder, unsigned bits, unsigned top, RayAccess access) {
+              CellRecord c;
+              c.scene = scene, c.batch = batch, c.encoder = encoder_name(encoder), c.bits = bits, c.top_bits = top;
+              c.variant = trace_variant_name(variant), c.access = ray_access_name(access);
+              c.baseline = baseline_order_name(baseline), c.layout = trace_layout_name(layout);
+              if (!seen.insert(c.id()).second) return;  // a scene named twice runs once
+              out.push_back({c.id(), scene, batch, c.variant, rays * depth * encoder_weight_pct(encoder), 0, c.encoder,
+                             c.access, bits, top, c.baseline, c.layout});
+            };
+            add(Encoder::NoSort, 0, 0, RayAccess::Gather);  // the baseline order itself: no access mode to choose
+            const std::vector<unsigned> bits = spec.bits_for(scene);
+            for (Encoder e : encoders) {
+              for (unsigned b : bits)
+                for (RayAccess a : spec.accesses) add(e, b, 0, a);
+              for (unsigned k : spec.top_bits)
+                for (RayAccess a : spec.accesses) add(e, bits.back(), k, a);
+            }
           }
         }
       }
@@ -100,7 +102,8 @@ std::vector<PlannedCell> matrix_cells(const MatrixSpec& spec,
 }
 
 std::string round_group(const PlannedCell& c) {
-  return fmt::format("{}/{}/{}/{}/{}/{}/{}", c.scene, c.batch, c.variant, c.baseline, c.encoder, c.bits, c.top_bits);
+  return fmt::format("{}/{}/{}/{}/{}/{}/{}/{}", c.scene, c.batch, c.variant, c.layout, c.baseline, c.encoder, c.bits,
+                     c.top_bits);
 }
 
 std::vector<PlannedCell> plan_shards(std::vector<PlannedCell> cells, unsigned count) {

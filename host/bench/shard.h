@@ -47,6 +47,7 @@ struct PlannedCell {
   std::string encoder, access;
   unsigned bits = 0, top_bits = 0;
   std::string baseline = "pixel";
+  std::string layout = "wide";  // the trace class
 };
 
 // Every cell the matrix can produce, in the order `raysort run` visits them. A requested batch the
@@ -62,7 +63,7 @@ std::vector<PlannedCell> matrix_cells(const MatrixSpec& spec,
                                       const std::function<SceneFacts(const std::string&)>& facts);
 
 // The cells `raysort run` measures in one set of rounds (bench/cell_measure.h): one encoder, key
-// length and top-k on one batch, variant and baseline order, with its access modes side by side
+// length and top-k on one batch, variant, trace class and baseline order, with its access modes side by side
 // (encode + sort and the NoSort arms are timed once for all of them). A shard never splits them.
 std::string round_group(const PlannedCell& c);
 

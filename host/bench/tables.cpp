@@ -41,17 +41,22 @@ std::string first_of(const nlohmann::json& meta, const char* key, const std::str
   return v.substr(0, v.find(','));
 }
 
-// Which cells a table shows: the main trace variant, access mode and baseline order unless it says
-// otherwise.
+// Which cells a table shows: the main trace variant, trace class, access mode and baseline order
+// unless it says otherwise.
 struct View {
-  std::string variant = "robust", access = "gather", baseline = "pixel";
+  std::string variant = "robust", access = "gather", baseline = "pixel", layout = "wide";
+  View with_variant(const std::string& x) const { View v = *this; v.variant = x; return v; }
+  View with_access(const std::string& a) const { View v = *this; v.access = a; return v; }
+  View with_baseline(const std::string& b) const { View v = *this; v.baseline = b; return v; }
+  View with_layout(const std::string& l) const { View v = *this; v.layout = l; return v; }
 };
 
 const CellRecord* find(const std::vector<CellRecord>& cells, const View& view, const std::string& scene,
                        const std::string& batch, const std::string& encoder, unsigned bits) {
   for (auto& c : cells)
     if (c.scene == scene && c.batch == batch && c.encoder == encoder && c.top_bits == 0 && c.variant == view.variant &&
-        c.baseline == view.baseline && (c.encoder == kBaselineEncoder || (c.bits == bits && c.access == view.access)))
+        c.baseline == view.baseline && c.layout == view.layout &&
+        (c.encoder == kBaselineEncoder || (c.bits == bits && c.access == view.access)))
       return &c;
   return nullptr;
 }
@@ -139,7 +144,8 @@ struct TableContext {
 
   TableContext(const std::vector<CellRecord>& all, const nlohmann::json& meta) : cells(all) {
     main_view = {first_of(meta, "variant", cells.empty() ? "robust" : cells.front().variant),
-                 first_of(meta, "access", "gather"), first_of(meta, "baseline", "pixel")};
+                 first_of(meta, "access", "gather"), first_of(meta, "baseline", "pixel"),
+                 first_of(meta, "layout", cells.empty() ? "wide" : cells.front().layout)};
     scenes = ordered(cells, meta, "scenes", &CellRecord::scene);
     batches = ordered(cells, meta, "batches", &CellRecord::batch);
     encoders = ordered(cells, meta, "encoders", &CellRecord::encoder);
@@ -172,7 +178,7 @@ std::string introduction(const nlohmann::json& meta) {
     std::string sampling;
     if (m.contains("shadow_rays")) sampling += fmt::format(", {} shadow rays per bounce", m["shadow_rays"].get<unsigned>());
     if (m.contains("bounces")) sampling += fmt::format(", {} bounces", m["bounces"].get<unsigned>());
-    md += fmt::format("Resolution {}, {} spp{}; trace variant {}, access {}, baseline order {}, {} BVH. Protocol: {} warm-up round(s), at least {} "
+    md += fmt::format("Resolution {}, {} spp{}; trace variant {}, access {}, baseline order {}, trace class {}. Protocol: {} warm-up round(s), at least {} "
                       "timed rounds per cell, then until the speedup interval is within ±{:.1f} % or {} s of "
                       "sampling.\n\n",
                       m.value("resolution", "?"), m.value("spp", 0), sampling, m.value("variant", "robust"),
@@ -195,7 +201,7 @@ std::string introduction(const nlohmann::json& meta) {
 std::string trace_speed_sections(const TableContext& t) {
   std::string md;
   for (auto& access : t.accesses) {
-    const View view{t.main_view.variant, access, t.main_view.baseline};
+    const View view = t.main_view.with_access(access);
     for (auto& batch : t.batches) {
       md += fmt::format("## Trace speed, {} rays, {}-bit keys, access {}: MRays/s (speedup [95 % interval])\n\n", batch,
                         t.overview_bits, access);
@@ -229,7 +235,7 @@ std::string trace_speed_sections(const TableContext& t) {
 std::string overhead_sections(const TableContext& t) {
   std::string md;
   for (auto& access : t.accesses) {
-    const View view{t.main_view.variant, access, t.main_view.baseline};
+    const View view = t.main_view.with_access(access);
     for (auto& batch : t.batches) {
       md += fmt::format("## Overhead, {} rays, {}-bit keys, access {}: encode + sort{} ms (% of trace) → net speedup "
                         "[95 % interval]\n\n",
@@ -265,7 +271,7 @@ std::string gather_permute_section(const TableContext& t) {
       "| scene | batch | encoder | speedup gather | speedup permute | permute ms (% of trace) | net gather | net "
       "permute |\n|---|---|---|---:|---:|---:|---:|---:|\n",
       t.overview_bits);
-  const View g{t.main_view.variant, "gather", t.main_view.baseline}, p{t.main_view.variant, "permute", t.main_view.baseline};
+  const View g = t.main_view.with_access("gather"), p = t.main_view.with_access("permute");
   for (auto& s : t.scenes)
     for (auto& batch : t.batches)
       for (auto& e : t.encoders) {
@@ -392,16 +398,15 @@ std::string variants_section(const TableContext& t) {
       "--variant both` times both variants in the same rounds.\n\n"
       "| scene | batch | fast MRays/s | robust MRays/s | robust/fast | fast leaks/M | robust leaks/M | best fast | best robust |\n"
       "|---|---|---:|---:|---:|---:|---:|---|---|\n";
-  const std::string access = t.main_view.access;
   for (auto& s : t.scenes)
     for (auto& batch : t.batches) {
-      auto* f = t.at({"fast", access, t.main_view.baseline}, s, batch, kBaselineEncoder, 0);
-      auto* r = t.at({"robust", access, t.main_view.baseline}, s, batch, kBaselineEncoder, 0);
+      auto* f = t.at(t.main_view.with_variant("fast"), s, batch, kBaselineEncoder, 0);
+      auto* r = t.at(t.main_view.with_variant("robust"), s, batch, kBaselineEncoder, 0);
       if (!f || !r || !f->ok() || !r->ok()) continue;
       auto best = [&](const std::string& v) {
         const CellRecord* b = nullptr;
         for (auto& e : t.encoders)
-          if (auto* c = t.at({v, access, t.main_view.baseline}, s, batch, e, t.overview_bits);
+          if (auto* c = t.at(t.main_view.with_variant(v), s, batch, e, t.overview_bits);
               c && c->ok() && e != kBaselineEncoder && !c->same_order_as_nosort)
             if (!b || c->speedup.value > b->speedup.value) b = c;
         return b ? fmt::format("{} {}", b->encoder, speedup_text(*b, false)) : std::string("–");
@@ -413,6 +418,61 @@ std::string variants_section(const TableContext& t) {
   return md + "\n";
 }
 
+// The trace classes side by side (docs/trace.md, "Trace classes"): what each makes of the same
+// rays, and how much of the ordering effect it can see. A class's speedups are against its own
+// NoSort in its own rounds; two classes' NoSort traces ran at different times, so their ratio has no
+// interval (`raysort trace --layout a,b` times classes in the same rounds).
+std::string classes_section(const TableContext& t) {
+  std::vector<std::string> classes;
+  for (auto& c : t.cells)
+    if (std::find(classes.begin(), classes.end(), c.layout) == classes.end()) classes.push_back(c.layout);
+  if (classes.size() < 2) return "";
+  // The main class first, the others in the order the cells name them.
+  std::stable_partition(classes.begin(), classes.end(), [&](const std::string& l) { return l == t.main_view.layout; });
+  std::string md = fmt::format(
+      "## Trace classes, {}-bit keys, access {}\n\n"
+      "Per scene and batch and class: NoSort MRays/s, its speed over the {} class's NoSort (ran in other rounds: no "
+      "interval), the best encoder's speedup over the class's own NoSort [95 % interval], and how many of the "
+      "class's speedup intervals contain 1 (no measurable effect of the order).\n\n"
+      "| scene | batch | class | NoSort MRays/s | × {} | best encoder | intervals containing 1 |\n"
+      "|---|---|---|---:|---:|---|---:|\n",
+      t.overview_bits, t.main_view.access, t.main_view.layout, t.main_view.layout);
+  // Per class and batch over every scene: speedup intervals, and those that contain 1.
+  std::map<std::pair<std::string, std::string>, std::pair<unsigned, unsigned>> totals;
+  for (auto& s : t.scenes)
+    for (auto& batch : t.batches) {
+      const CellRecord* main = t.at(t.main_view, s, batch, kBaselineEncoder, 0);
+      for (auto& layout : classes) {
+        const View view = t.main_view.with_layout(layout);
+        const CellRecord* nosort = t.at(view, s, batch, kBaselineEncoder, 0);
+        if (!nosort || !nosort->ok()) continue;
+        const CellRecord* best = nullptr;
+        unsigned intervals = 0, with_one = 0;
+        for (auto& e : t.encoders) {
+          const CellRecord* c = t.at(view, s, batch, e, t.overview_bits);
+          if (!c || !c->ok() || e == kBaselineEncoder || c->same_order_as_nosort) continue;
+          if (!best || c->speedup.value > best->speedup.value) best = c;
+          if (c->speedup.has_interval()) ++intervals, with_one += c->speedup.contains(1.0);
+        }
+        auto& total = totals[{layout, batch}];
+        total.first += intervals, total.second += with_one;
+        md += fmt::format("| {} | {} | {} | {:.2f} | {} | {} | {} of {} |\n", s, batch, layout, nosort->trace_mrays,
+                          main && main->ok() && main->trace_mrays > 0
+                              ? fmt::format("{:.2f}", nosort->trace_mrays / main->trace_mrays)
+                              : "–",
+                          best ? fmt::format("{} {}", best->encoder, speedup_text(*best, false)) : "–", with_one,
+                          intervals);
+      }
+    }
+  md += "\nSpeedup intervals containing 1, per class and batch over every scene:\n\n";
+  for (auto& layout : classes)
+    for (auto& batch : t.batches)
+      if (auto it = totals.find({layout, batch}); it != totals.end() && it->second.first > 0)
+        md += fmt::format("- {} {}: {} of {} ({:.0f} %)\n", layout, batch, it->second.second, it->second.first,
+                          100.0 * it->second.second / it->second.first);
+  return md + "\n";
+}
+
 // Pixel against shuffled baseline order (render/batches.h): the same rays, NoSort in generation
 // order or in a fixed-seed shuffle (as atomic compaction leaves them). The baseline decides how much
 // coherence an ordering can recover: every ratio here is against its own baseline.
@@ -420,7 +480,7 @@ std::string baselines_section(const TableContext& t) {
   std::set<std::string> baselines;
   for (auto& c : t.cells) baselines.insert(c.baseline);
   if (!baselines.count("pixel") || !baselines.count("shuffled")) return "";
-  const View pv{t.main_view.variant, t.main_view.access, "pixel"}, sv{t.main_view.variant, t.main_view.access, "shuffled"};
+  const View pv = t.main_view.with_baseline("pixel"), sv = t.main_view.with_baseline("shuffled");
   std::string md = fmt::format(
       "## Baseline order: pixel against shuffled, {}-bit keys, access {}\n\n"
       "Each cell against its own NoSort: the rays in generation (pixel) order, or shuffled by a fixed-seed "
@@ -465,7 +525,7 @@ std::string hcc_dir_section(const TableContext& t) {
   if (std::find(t.encoders.begin(), t.encoders.end(), "hcc-dir") == t.encoders.end()) return "";
   std::string md;
   for (auto& access : t.accesses) {
-    const View view{t.main_view.variant, access, t.main_view.baseline};
+    const View view = t.main_view.with_access(access);
     for (auto& batch : t.batches) {
       std::string rows;
       for (auto& s : t.scenes) {
@@ -498,7 +558,7 @@ std::string bounces_section(const TableContext& t) {
   if (bounces.size() < 2) return "";
   std::string md;
   for (auto& access : t.accesses) {
-    const View view{t.main_view.variant, access, t.main_view.baseline};
+    const View view = t.main_view.with_access(access);
     for (auto& s : t.scenes) {
       md += fmt::format("## Subsequent bounces, {}, {}-bit keys, access {}: speedup · SIMT lane-efficiency ratio "
                         "(paper appendix)\n\n",
@@ -547,7 +607,7 @@ std::string render_tables(const std::vector<CellRecord>& cells, const nlohmann::
   const TableContext t(cells, meta);
   return introduction(meta) + noise_section(cells) + trace_speed_sections(t) + overhead_sections(t) +
          gather_permute_section(t) + key_length_sections(t) + deterministic_sections(t) + hcc_dir_section(t) +
-         bounces_section(t) + top_k_section(t) + variants_section(t) + baselines_section(t) + failed_section(cells);
+         bounces_section(t) + top_k_section(t) + variants_section(t) + classes_section(t) + baselines_section(t) + failed_section(cells);
 }
 
 }  // namespace raysort
