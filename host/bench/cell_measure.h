@@ -26,6 +26,7 @@
 #include "render/rays.h"
 #include "sort/permute.h"
 #include "sort/radix_sort.h"
+#include "scene/scene.h"
 #include "trace/tracer.h"
 
 namespace raysort {
@@ -41,6 +42,9 @@ class BatchBench {
     RayPermuter& permuter;
     Tracer& tracer;
     const GpuProfile* gpu = nullptr;  // the GPU cost model's profile; null: off
+    // The scene's triangles: the exact oracle judges the rays of a packet class whose hit differs
+    // from NoSort's (null: such a ray fails the cell).
+    const Scene::Flat* tris = nullptr;
   };
   // Uploads the batch, traces it once in generation order (untimed) and checks those hits against
   // `reference` (the host traversal of the same variant). A device fault or a mismatch does not
