@@ -55,6 +55,11 @@ WideBvh collapse_to_wide(const Bvh& bvh);
 // string when all hold, else a description of the first violation.
 std::string validate_wide(const WideBvh& wide, const Bvh& bvh);
 
+// Zero area in exact arithmetic (differences and products of floats are exact in double): the
+// robust triangle test's degenerate-triangle check (cl/intersect.h), which the wide layouts decide
+// once per triangle on the host (the packets' nondegenerate lanes).
+bool exactly_degenerate(const RsTriangle& t);
+
 // bvh.wide, or a collapse of bvh when it has none (a binary tree built by hand in a test).
 const WideBvh& wide_of(const Bvh& bvh, WideBvh& scratch);
 
