@@ -77,7 +77,7 @@ std::string utc_now() {
 nlohmann::json bvh_meta(TraceLayout layout) {
   const BvhBuildOptions build;  // prepare_scene builds with the defaults
   return {{"layout", trace_layout_name(layout)},
-          {"width", walks_wide_tree(layout) ? 4 : 2},
+          {"width", tree_width(layout)},
           {"rays_per_work_item", packet_width(layout)},
           {"builder", "binned SAH (Wald 2007), object median past the depth bound"},
           {"bins", build.bins},
