@@ -1,7 +1,8 @@
 /* raysort — the BVH as the kernels read it: the binary tree (RsBvhNode, RsTriangle: the reference
- * structure, which HCC cuts, PPC and the SIMT model work on) and its 4-wide collapse (RsWideNode,
- * RsTriPacket: what the trace kernels walk), with the stack bounds that tree depth guarantees.
- * host/bvh/ builds both (build_sah.cpp, wide.cpp).
+ * structure, which HCC cuts, PPC and the SIMT model work on), its 4-wide collapse (RsWideNode,
+ * RsTriPacket: what the trace kernels walk by default) and its 8-wide collapse (RsWide8Node,
+ * RsTriPacket8: the wide8 trace class), with the stack bounds that tree depth guarantees.
+ * host/bvh/ builds them (build_sah.cpp, wide.cpp, wide8.cpp).
  */
 #ifndef RAYSORT_BVH_LAYOUT_H
 #define RAYSORT_BVH_LAYOUT_H
@@ -66,5 +67,35 @@ typedef struct {
  * tree (host/bvh/wide.cpp), so its depth is at most ceil(RS_STACK_SIZE / 2) = 32, and a node
  * pushes at most three children: 3 * 32 = 96 entries suffice. */
 #define RS_WIDE_STACK_SIZE 96
+
+/* A node of the 8-wide BVH (the wide8 trace class, traverse_wide8.h), 256 bytes (four cache
+ * lines): RsWideNode with eight lanes, so one float8 operation tests eight boxes (one ymm register
+ * on an AVX CPU). child[i] as in RsWideNode (RS_WIDE_LEAF set: packets [first, first + count) of
+ * RsTriPacket8, first = (ref & ~RS_WIDE_LEAF) >> 2, count = (ref & 3) + 1). Node 0 is the root.
+ * host/bvh/wide8.cpp collapses the binary BVH into this layout. */
+typedef struct {
+  rs_f8 lo_x, hi_x, lo_y, hi_y, lo_z, hi_z;
+  rs_i8 valid;
+  rs_u32 child[8];
+} RsWide8Node;
+
+/* Eight triangles of a leaf, 384 bytes: RsTriPacket with eight lanes (one vertex coordinate per
+ * float8), so a leaf of up to eight triangles (the SAH builder's max_leaf_size) is one pass of
+ * the intersection test. Same fields and meanings as RsTriPacket. */
+typedef struct {
+  rs_f8 v0x, v0y, v0z, v1x, v1y, v1z, v2x, v2y, v2z;
+  rs_i8 valid;
+  rs_i8 nondegenerate;
+  rs_u32 id[8];
+} RsTriPacket8;
+
+/* Traversal stack entries for the 8-wide BVH. Every inner child of an 8-wide node lies at least
+ * three binary levels below the node's binary node (host/bvh/wide8.cpp: the collapse opens every
+ * inner slot to three levels, 2^3 = 8 lanes, before it opens any further), so an inner wide node
+ * at depth d (root 1) stands for a binary inner node at depth >= 3 (d - 1); binary inner nodes lie
+ * above depth RS_STACK_SIZE - 1, so d <= 22. A node pushes at most seven children: 7 * 22 = 154
+ * entries suffice. */
+#define RS_WIDE8_MAX_DEPTH 22
+#define RS_WIDE8_STACK_SIZE (7 * RS_WIDE8_MAX_DEPTH)
 
 #endif /* RAYSORT_BVH_LAYOUT_H */

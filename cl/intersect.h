@@ -4,8 +4,8 @@
  *  - robust: watertight ray/triangle test (Woop, Benthin & Wald 2013, JCGT 2(1)) and a conservative
  *            slab test (Ize 2013, "Robust BVH Ray Traversal", JCGT 2(2)); no inf arithmetic, and
  *            zero direction components handled without a division.
- * Shared by the traversals (traverse_binary.h, traverse_wide.h, whose four-lane tests do the same
- * arithmetic per lane), the PPC key (keys_ppc.h), the cut keys' segment test (keys_cut.h) and the
+ * Shared by the traversals (traverse_binary.h; traverse_wide.h and traverse_wide8.h, whose four- and
+ * eight-lane tests do the same arithmetic per lane), the PPC key (keys_ppc.h), the cut keys' segment test (keys_cut.h) and the
  * host twin (host/trace/tracer.cpp), so host and kernel run the same operations in the same order.
  */
 #ifndef RAYSORT_INTERSECT_H
@@ -223,6 +223,7 @@ RS_INLINE float rs_intersect_box_robust(const RsRobustRay* r, RS_GLOBAL const Rs
   }
 RS_DEFINE_T_BOUND(rs_robust_t_bound, float)  /* one triangle */
 RS_DEFINE_T_BOUND(rs4_robust_t_bound, rs_f4) /* four, lane by lane (the packet test) */
+RS_DEFINE_T_BOUND(rs8_robust_t_bound, rs_f8) /* eight (the 8-wide BVH's packets, traverse_wide8.h) */
 /* RS_DEFINE_T_BOUND stays defined: the ray-packet traversal (traverse_packet.h) makes its own,
  * for the width of its build. */
 

@@ -47,7 +47,7 @@ typedef struct alignas(16) rs_i4 {
   rs_i32 s[4];
 } rs_i4;
 /* Per-lane operators of the host lane structs (N lanes; comparisons give -1 / 0 like OpenCL's).
- * Defined once here and used for the 8-lane structs below too. */
+ * Defined once here and used for the 8- and 16-lane structs below too. */
 #define RS_LANES_BINARY(T, R, N, op)                         \
   RS_INLINE R operator op(T a, T b) {                        \
     R r;                                                     \
@@ -110,9 +110,6 @@ typedef int16 rs_i16;
 RS_INLINE rs_f16 rs16_splat(float x) { return (float16)(x); }
 RS_INLINE rs_f16 rs16_min(rs_f16 a, rs_f16 b) { return select(b, a, a < b); }
 RS_INLINE rs_f16 rs16_max(rs_f16 a, rs_f16 b) { return select(b, a, a > b); }
-/* Eight-lane forms for a half-full group (device only, keys_cut.h rs_cut_bits). */
-RS_INLINE float8 rs8_min(float8 a, float8 b) { return select(b, a, a < b); }
-RS_INLINE float8 rs8_max(float8 a, float8 b) { return select(b, a, a > b); }
 /* The lanes of a sixteen- or eight-lane -1/0 mask as bits, lane i -> bit i (the cut-box tests,
  * keys_cut.h rs_cut_bits). On AVX-512 devices (PoCL on such CPUs) the compare's mask register is
  * the answer (kmovd, RS_MASK16_BITS = 1); elsewhere the lanes are ANDed with their bits and ORed
@@ -152,8 +149,6 @@ RS_LANES_BINARY(rs_i16, rs_i16, 16, |)
 RS_LANES_COMPARE(rs_f16, rs_i16, 16, <)
 RS_LANES_COMPARE(rs_f16, rs_i16, 16, >)
 RS_LANES_COMPARE(rs_f16, rs_i16, 16, <=)
-#undef RS_LANES_BINARY
-#undef RS_LANES_COMPARE
 RS_INLINE rs_f16 rs16_splat(float x) {
   rs_f16 r;
   for (int i = 0; i < 16; ++i) r.s[i] = x;
@@ -176,6 +171,86 @@ RS_INLINE rs_u32 rs16_mask_bits(rs_i16 m) {
   return b;
 }
 #endif
+
+/* ---------------------------------------------------------------------------------------------
+ * Eight-lane vectors for the 8-wide BVH (bvh_layout.h RsWide8Node, traverse_wide8.h; also the
+ * cut keys' half-full groups, keys_cut.h): OpenCL's float8/int8 on the device, which PoCL on an
+ * AVX CPU runs as one ymm operation; on the host a 32-byte struct with per-lane IEEE operations,
+ * the rs_f4 struct's twin, so the same source gives the same bits. min/max are selects.
+ * ------------------------------------------------------------------------------------------- */
+#ifdef __OPENCL_VERSION__
+typedef float8 rs_f8;
+typedef int8 rs_i8;
+RS_INLINE rs_f8 rs8_splat(float x) { return (float8)(x); }
+RS_INLINE rs_f8 rs8_min(rs_f8 a, rs_f8 b) { return select(b, a, a < b); }
+RS_INLINE rs_f8 rs8_max(rs_f8 a, rs_f8 b) { return select(b, a, a > b); }
+RS_INLINE rs_f8 rs8_select(rs_f8 if_false, rs_f8 if_true, rs_i8 m) { return select(if_false, if_true, m); }
+/* Lane i -> bit i: one vmovmskps on an AVX device (the traversal branches on it at every node, as
+ * rs4_bits), the portable AND-and-OR of rs8_mask_bits elsewhere. */
+#if defined(__x86_64__) && defined(__AVX__) && !defined(RS_PORTABLE_MASK_BITS)
+RS_INLINE int rs8_bits(rs_i8 m) { return __builtin_ia32_movmskps256(as_float8(m)); }
+#else
+RS_INLINE int rs8_bits(rs_i8 m) { return (int)rs8_mask_bits(m); }
+#endif
+RS_INLINE void rs8_store(rs_f8 a, float* p) { vstore8(a, 0, p); }
+RS_INLINE rs_f8 rs8_load(const float* p) { return vload8(0, p); }
+#else
+/* 16-byte aligned, not 32 as float8: a 32-byte-aligned struct passed by value has another x86-64
+ * calling convention with and without AVX (GCC's -Wpsabi note on every operator). The layouts
+ * holding these (RsWide8Node, RsTriPacket8) are the same, every field being a multiple of 32 bytes. */
+typedef struct alignas(16) rs_f8 {
+  float s[8];
+} rs_f8;
+typedef struct alignas(16) rs_i8 {
+  rs_i32 s[8];
+} rs_i8;
+#define RS8_COMPARE(op)                  \
+  RS_LANES_COMPARE(rs_f8, rs_i8, 8, op) \
+  RS_INLINE rs_i8 operator op(rs_f8 a, float b) { return a op rs8_splat(b); }
+RS_INLINE rs_f8 rs8_splat(float x) { return rs_f8{{x, x, x, x, x, x, x, x}}; }
+RS_LANES_BINARY(rs_f8, rs_f8, 8, +)
+RS_LANES_BINARY(rs_f8, rs_f8, 8, -)
+RS_LANES_BINARY(rs_f8, rs_f8, 8, *)
+RS_LANES_BINARY(rs_f8, rs_f8, 8, /)
+RS_LANES_BINARY(rs_i8, rs_i8, 8, &)
+RS_LANES_BINARY(rs_i8, rs_i8, 8, |)
+RS8_COMPARE(<)
+RS8_COMPARE(>)
+RS8_COMPARE(<=)
+RS8_COMPARE(>=)
+RS8_COMPARE(==)
+RS8_COMPARE(!=)
+#undef RS8_COMPARE
+RS_INLINE rs_f8 operator*(rs_f8 a, float b) { return a * rs8_splat(b); }
+RS_INLINE rs_f8 operator*(float a, rs_f8 b) { return rs8_splat(a) * b; }
+RS_INLINE rs_f8 operator-(rs_f8 a, float b) { return a - rs8_splat(b); }
+RS_INLINE rs_f8 operator-(float a, rs_f8 b) { return rs8_splat(a) - b; }
+RS_INLINE rs_f8 rs8_select(rs_f8 if_false, rs_f8 if_true, rs_i8 m) {
+  rs_f8 r;
+  for (int i = 0; i < 8; ++i) r.s[i] = m.s[i] < 0 ? if_true.s[i] : if_false.s[i];
+  return r;
+}
+RS_INLINE rs_f8 rs8_min(rs_f8 a, rs_f8 b) { return rs8_select(b, a, a < b); }
+RS_INLINE rs_f8 rs8_max(rs_f8 a, rs_f8 b) { return rs8_select(b, a, a > b); }
+RS_INLINE int rs8_bits(rs_i8 m) {
+  int b = 0;
+  for (int i = 0; i < 8; ++i) b |= (m.s[i] & 1) << i;
+  return b;
+}
+RS_INLINE void rs8_store(rs_f8 a, float* p) {
+  for (int i = 0; i < 8; ++i) p[i] = a.s[i];
+}
+RS_INLINE rs_f8 rs8_load(const float* p) {
+  rs_f8 r;
+  for (int i = 0; i < 8; ++i) r.s[i] = p[i];
+  return r;
+}
+#undef RS_LANES_BINARY
+#undef RS_LANES_COMPARE
+#endif
+
+/* |x| per lane, as rs4_abs. */
+RS_INLINE rs_f8 rs8_abs(rs_f8 x) { return rs8_max(x, 0.0f - x); }
 
 /* ---------------------------------------------------------------------------------------------
  * Lanes of any width for the host twin of the packet traversal (traverse_packet.h, whose width

@@ -8,12 +8,16 @@
  * identity order), and its hit is written to hits[i] (trace order). The host scatters hits back
  * with the same order when it compares against NoSort.
  * The traversals themselves live in traverse_wide.h (rs_traverse_wide: the 4-wide BVH of
- * host/bvh/wide.cpp, the default) and traverse_binary.h, shared with the host reference.
+ * host/bvh/wide.cpp, the default), traverse_wide8.h (the 8-wide BVH of host/bvh/wide8.cpp),
+ * traverse_packet.h and traverse_binary.h, shared with the host reference.
  * The global size is padded to a multiple of the local size (PoCL 3.1 has no non-uniform
  * work-groups), so every kernel guards on count.
  */
 #include "traverse_binary.h"
 #include "traverse_wide.h"
+#ifdef RS_TRACE_WIDE8
+#include "traverse_wide8.h"
+#endif
 #ifdef RS_TRACE_PACKET
 #define RS_PACKET_W RS_TRACE_PACKET
 #include "traverse_packet.h"
@@ -52,8 +56,10 @@
   }
 
 /* One trace class per build (host/trace/tracer.cpp passes -DRS_TRACE_BINARY for the binary BVH,
- * -DRS_TRACE_PACKET=W for packets of W rays), so a run compiles only the kernels it launches. */
-#if !defined(RS_TRACE_BINARY) && !defined(RS_TRACE_PACKET)
+ * -DRS_TRACE_WIDE8 for the 8-wide one, -DRS_TRACE_PACKET=W for packets of W rays; the define of
+ * each class is its row of host/trace/trace_class.cpp), so a run compiles only the kernels it
+ * launches. */
+#if !defined(RS_TRACE_BINARY) && !defined(RS_TRACE_PACKET) && !defined(RS_TRACE_WIDE8)
 /* The 4-wide BVH (the default layout). */
 #define NODE RsWideNode
 #define LEAF RsTriPacket
@@ -61,6 +67,17 @@
 #define RS_WIDE_ROBUST(n, t, r, any, v) rs_traverse_wide(n, t, r, 1, any, v)
 RS_TRACE_KERNELS(, RS_WIDE_FAST)
 RS_TRACE_KERNELS(_robust, RS_WIDE_ROBUST)
+#undef NODE
+#undef LEAF
+
+#elif defined(RS_TRACE_WIDE8)
+/* The 8-wide BVH (the wide8 class): eight child boxes per float8 test, leaves of eight triangles. */
+#define NODE RsWide8Node
+#define LEAF RsTriPacket8
+#define RS_WIDE8_FAST(n, t, r, any, v) rs_traverse_wide8(n, t, r, 0, any, v)
+#define RS_WIDE8_ROBUST(n, t, r, any, v) rs_traverse_wide8(n, t, r, 1, any, v)
+RS_TRACE_KERNELS(_wide8, RS_WIDE8_FAST)
+RS_TRACE_KERNELS(_wide8_robust, RS_WIDE8_ROBUST)
 #undef NODE
 #undef LEAF
 

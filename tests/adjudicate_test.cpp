@@ -85,7 +85,7 @@ TEST(ExactOracle, RaysRoundTripThroughJson) {
 }
 
 // The replay: every telling ray of the 1920×1080 adjudication of sibenik and breakfast_room, on the
-// single-ray classes and in packets of 8 and 16 of those rays.
+// single-ray classes (4-wide, 8-wide, binary) and in packets of 8 and 16 of those rays.
 TEST(ExactOracle, RobustHasNoWrongAnswerOnTheRecordedDisagreements) {
   RAYSORT_REQUIRE_REAL_SCENES();
   const fs::path dir = fs::path(RAYSORT_SOURCE_DIR) / "tests" / "data" / "disagreements";
@@ -101,7 +101,8 @@ TEST(ExactOracle, RobustHasNoWrongAnswerOnTheRecordedDisagreements) {
     for (const auto& batch : record.at("batches")) {
       const std::vector<RsRay> rays = rays_from_json(batch.at("rays"));
       const bool any_hit = batch.at("any_hit").get<bool>();
-      for (TraceLayout layout : {TraceLayout::Wide, TraceLayout::Binary, TraceLayout::Packet8, TraceLayout::Packet16}) {
+      for (TraceLayout layout :
+           {TraceLayout::Wide, TraceLayout::Wide8, TraceLayout::Binary, TraceLayout::Packet8, TraceLayout::Packet16}) {
         const auto host = trace_reference(p.bvh, rays, nullptr, any_hit, nullptr, TraceVariant::Robust, layout);
         const auto dev =
             Tracer(raysort::testing::runtime(), p.bvh, TraceVariant::Robust, layout).run(rays, nullptr, any_hit).hits;

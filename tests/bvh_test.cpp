@@ -194,3 +194,87 @@ TEST(WideBvh, ValidatorCatchesABrokenCollapse) {
 }
 
 }  // namespace raysort
+
+// The 8-wide tree of the wide8 trace class (host/bvh/wide8.cpp): every triangle in exactly one
+// packet lane, every child box inside its parent's lane and equal to a binary node's box (the
+// validator), inner children at least three binary levels down (the stack bound), and the lanes
+// mostly used.
+namespace raysort {
+
+class ProceduralWide8Bvh : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(ProceduralWide8Bvh, CollapseKeepsEveryTriangleAndBox) {
+  Scene::Flat tris = load_scene(GetParam()).flatten();
+  Bvh bvh = build_bvh(tris);
+  const Wide8Bvh w = collapse_to_wide8(bvh);
+  EXPECT_EQ(validate_wide8(w, bvh), "");
+  // Three binary levels per wide level at least: the bound the kernels' stack relies on.
+  EXPECT_LE(w.depth, (bvh.depth + 2) / 3 + 1);
+  EXPECT_LE(7 * w.depth, static_cast<std::uint32_t>(RS_WIDE8_STACK_SIZE));
+  std::size_t lanes = 0, tri_lanes = 0;
+  for (const RsWide8Node& n : w.nodes)
+    for (int k = 0; k < 8; ++k) lanes += n.valid.s[k] != 0;
+  for (const RsTriPacket8& p : w.packets)
+    for (int k = 0; k < 8; ++k) tri_lanes += p.valid.s[k] != 0;
+  EXPECT_EQ(tri_lanes, tris.v0.size());
+  const double per_node = double(lanes) / double(w.nodes.size()), per_packet = double(tri_lanes) / double(w.packets.size());
+  std::printf("[ wide8    ] %-14s %zu nodes (4-wide: %zu), depth %u (4-wide %u, binary %u), %.2f children per node, "
+              "%.2f triangles per packet\n",
+              GetParam().c_str(), w.nodes.size(), bvh.wide.nodes.size(), w.depth, bvh.wide.depth, bvh.depth, per_node,
+              per_packet);
+  EXPECT_GT(per_node, 4.0) << "the greedy fill should use more than half of the lanes";
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, ProceduralWide8Bvh,
+                         ::testing::Values("cornell", "detail-room", "landscape", "multi-instance"));
+
+TEST(Wide8Bvh, OneLeafAndEmptyTrees) {
+  Bvh one = build_bvh(flat_from({{{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}}}));
+  const Wide8Bvh w = collapse_to_wide8(one);
+  EXPECT_EQ(validate_wide8(w, one), "");
+  ASSERT_EQ(w.nodes.size(), 1u);
+  EXPECT_EQ(w.nodes[0].valid.s[0], -1);
+  for (int lane = 1; lane < 8; ++lane) EXPECT_EQ(w.nodes[0].valid.s[lane], 0);
+
+  Bvh none;
+  none.nodes.push_back({});
+  const Wide8Bvh empty = collapse_to_wide8(none);
+  ASSERT_EQ(empty.nodes.size(), 1u);
+  for (int lane = 0; lane < 8; ++lane) EXPECT_EQ(empty.nodes[0].valid.s[lane], 0);
+}
+
+TEST(Wide8Bvh, ValidatorCatchesABrokenCollapse) {
+  Scene::Flat tris = load_scene("detail-room").flatten();  // cornell's 8-wide tree is one node
+  Bvh bvh = build_bvh(tris);
+  const Wide8Bvh good = collapse_to_wide8(bvh);
+  ASSERT_EQ(validate_wide8(good, bvh), "");
+  Wide8Bvh broken = good;
+  for (auto& pk : broken.packets)
+    if (pk.valid.s[0]) {
+      pk.valid.s[0] = 0;  // drop one triangle
+      break;
+    }
+  EXPECT_NE(validate_wide8(broken, bvh), "");
+  broken = good;
+  int inner = -1;
+  for (int lane = 0; lane < 8 && inner < 0; ++lane)
+    if (good.nodes[0].valid.s[lane] && !(good.nodes[0].child[lane] & RS_WIDE_LEAF)) inner = lane;
+  ASSERT_GE(inner, 0);
+  broken.nodes[0].lo_x.s[inner] = broken.nodes[0].hi_x.s[inner];  // a box too small for its child node
+  EXPECT_NE(validate_wide8(broken, bvh), "");
+  broken = good;
+  for (RsWide8Node& n : broken.nodes)  // a leaf box that is no binary node's box
+    if (n.valid.s[0] && (n.child[0] & RS_WIDE_LEAF)) {
+      n.hi_y.s[0] += 1.0f;
+      break;
+    }
+  EXPECT_NE(validate_wide8(broken, bvh), "");
+  broken = good;
+  broken.depth = RS_WIDE8_STACK_SIZE;  // past the stack bound
+  EXPECT_NE(validate_wide8(broken, bvh), "");
+  broken = good;
+  broken.packets[0].v1x.s[0] += 1.0f;  // a vertex not copied exactly
+  EXPECT_NE(validate_wide8(broken, bvh), "");
+}
+
+}  // namespace raysort

@@ -207,12 +207,16 @@ void expect_watertight(const char* what, const IndexedMesh& m, const std::vector
       EXPECT_EQ(dev_leaks, 0u) << what;
       EXPECT_EQ(count_hit_mismatches(dev.hits, host), 0u) << what;
       EXPECT_EQ(exact.wrong, 0u) << what;
-      // The packet class, 16 aimed rays per packet: watertight too, and equal to its host twin.
-      const auto packet_host = trace_reference(bvh, rays, nullptr, false, nullptr, v, TraceLayout::Packet16);
-      const auto packet_dev = Tracer(testing::runtime(), bvh, v, TraceLayout::Packet16).run(rays, nullptr, false).hits;
-      EXPECT_EQ(count_hit_mismatches(packet_dev, packet_host), 0u) << what << " packet16";
-      EXPECT_EQ(count_leaks(packet_dev), 0u) << what << " packet16";
-      EXPECT_EQ(judged(tris, bvh, rays, packet_dev, false).wrong, 0u) << what << " packet16";
+      // The packet class, 16 aimed rays per packet, and the 8-wide tree (eight boxes and eight
+      // triangles per test): watertight too, and equal to their host twins.
+      for (TraceLayout layout : {TraceLayout::Packet16, TraceLayout::Wide8}) {
+        const char* name = trace_layout_name(layout);
+        const auto class_host = trace_reference(bvh, rays, nullptr, false, nullptr, v, layout);
+        const auto class_dev = Tracer(testing::runtime(), bvh, v, layout).run(rays, nullptr, false).hits;
+        EXPECT_EQ(count_hit_mismatches(class_dev, class_host), 0u) << what << " " << name;
+        EXPECT_EQ(count_leaks(class_dev), 0u) << what << " " << name;
+        EXPECT_EQ(judged(tris, bvh, rays, class_dev, false).wrong, 0u) << what << " " << name;
+      }
     }
   }
 }
@@ -357,7 +361,7 @@ TEST(Robust, SliverSeenEdgeOnIsHitNotSkipped) {
     const Vec3 p{-3.09547f + f * 4.90635f, 0.495951f - 0.5f * f * 0.007071f, -0.734771f - 0.5f * f * 0.002929f};
     rays.push_back(make_ray(p, {0.01f, -0.3f, -0.95f}));
   }
-  for (TraceLayout layout : {TraceLayout::Wide, TraceLayout::Binary}) {
+  for (TraceLayout layout : {TraceLayout::Wide, TraceLayout::Wide8, TraceLayout::Binary}) {
     auto host = trace_reference(bvh, rays, nullptr, false, nullptr, TraceVariant::Robust, layout);
     auto dev = Tracer(testing::runtime(), bvh, TraceVariant::Robust, layout).run(rays, nullptr, false).hits;
     EXPECT_EQ(count_hit_mismatches(dev, host), 0u) << trace_layout_name(layout);

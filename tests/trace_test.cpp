@@ -243,6 +243,82 @@ TEST(Trace, PacketKernelsEqualTheirHostTwinAndSingleRays) {
   }
 }
 
+// The wide8 class (cl/traverse_wide8.h, the 8-wide tree of host/bvh/wide8.cpp): each kernel equals
+// its host twin bit for bit, hits and per-ray visit counts, both variants, closest and any hit, with
+// the rays in a shuffled order; and every ray's hit equals the 4-wide single-ray traversal's up to
+// ties (another triangle at exactly the same t), as between the wide and binary classes. Shadow
+// rays: the same occluded / free answer. Returns the rays compared, so a caller sees it tested some.
+namespace {
+std::size_t expect_wide8_equals_twin_and_wide(const Scene& scene) {
+  Scene::Flat tris = scene.flatten();
+  Bvh bvh = build_bvh(tris);
+  const auto batches = generate_batches(scene, tris, bvh, RayGenOptions{});
+  EXPECT_GE(batches.size(), 3u) << scene.name;
+  Runtime& rt = testing::runtime();
+  std::size_t compared = 0;
+  for (TraceVariant v : {TraceVariant::Fast, TraceVariant::Robust}) {
+    Tracer wide8(rt, bvh, v, TraceLayout::Wide8);
+    EXPECT_EQ(wide8.layout(), TraceLayout::Wide8);
+    const std::string what = scene.name + " wide8 " + trace_variant_name(v);
+    for (const auto& rb : batches) {
+      const bool any = rb.batch.any_hit();
+      const std::vector<RsRay>& rays = rb.batch.rays;
+      std::vector<std::uint32_t> order(rays.size());
+      std::iota(order.begin(), order.end(), 0u);
+      std::shuffle(order.begin(), order.end(), std::mt19937(11));
+      const auto dev = wide8.run(rays, &order, any).hits;
+      const auto host = trace_reference(bvh, rays, order.data(), any, nullptr, v, TraceLayout::Wide8);
+      EXPECT_EQ(count_hit_mismatches(dev, host), 0u) << what << " " << rb.batch.name;
+      const auto single = trace_reference(bvh, rays, order.data(), any, nullptr, v, TraceLayout::Wide);
+      std::size_t disagree = 0, hits = 0;
+      for (std::size_t i = 0; i < dev.size(); ++i) {
+        const bool w8_hit = dev[i].tri != RS_NO_HIT, w_hit = single[i].tri != RS_NO_HIT;
+        hits += w8_hit;
+        if (any)
+          disagree += w8_hit != w_hit;
+        else
+          disagree += dev[i].tri != single[i].tri && dev[i].t != single[i].t;
+      }
+      EXPECT_EQ(disagree, 0u) << what << " " << rb.batch.name;
+      EXPECT_GT(hits, 0u) << what << " " << rb.batch.name;
+      compared += dev.size();
+    }
+    // The counted kernel: the same hits, and per ray the nodes and leaves visited, as the twin.
+    const RayBatch& b = batches[0].batch;
+    const auto n = static_cast<std::uint32_t>(b.size());
+    std::vector<std::uint32_t> order(n);
+    std::iota(order.begin(), order.end(), 0u);
+    std::shuffle(order.begin(), order.end(), std::mt19937(13));
+    cl::Buffer rays_buf = rt.upload("rays", b.rays), order_buf = rt.upload("order", order);
+    cl::Buffer hits_buf = rt.buffer("hits", n * sizeof(RsHit)), visits_buf = rt.buffer("visits", n * sizeof(std::uint32_t));
+    wide8.enqueue_counted(rays_buf, order_buf, n, hits_buf, visits_buf).wait();
+    std::vector<RsHit> dev_hits;
+    std::vector<std::uint32_t> dev_visits, host_visits, wide_visits;
+    rt.download("hits", hits_buf, dev_hits, n);
+    rt.download("visits", visits_buf, dev_visits, n);
+    const auto host_hits = trace_reference(bvh, b.rays, order.data(), false, &host_visits, v, TraceLayout::Wide8);
+    EXPECT_EQ(count_hit_mismatches(dev_hits, host_hits), 0u) << what << " counted";
+    EXPECT_EQ(dev_visits, host_visits) << what << " counted";
+    EXPECT_GT(*std::max_element(host_visits.begin(), host_visits.end()), 1u) << what;
+    trace_reference(bvh, b.rays, order.data(), false, &wide_visits, v, TraceLayout::Wide);
+    const double w8 = std::accumulate(host_visits.begin(), host_visits.end(), 0.0) / n;
+    const double w4 = std::accumulate(wide_visits.begin(), wide_visits.end(), 0.0) / n;
+    std::printf("[ wide8    ] %-12s %-6s %s: %.2f visits per ray (4-wide: %.2f)\n", scene.name.c_str(),
+                trace_variant_name(v), b.name.c_str(), w8, w4);
+  }
+  return compared;
+}
+}  // namespace
+
+TEST(Trace, Wide8KernelsEqualTheirHostTwinAndWideRays) {
+  EXPECT_GT(expect_wide8_equals_twin_and_wide(load_scene("detail-room", {"", {64, 36, 0}})), 0u);
+}
+
+TEST(Trace, Wide8SibenikEqualsItsHostTwinAndWideRays) {
+  RAYSORT_REQUIRE_REAL_SCENES();
+  EXPECT_GT(expect_wide8_equals_twin_and_wide(load_scene("sibenik", {"", {80, 45, 0}})), 0u);
+}
+
 TEST(Trace, TraceClassNames) {
   for (const std::string& name : trace_layout_names()) EXPECT_EQ(trace_layout_name(parse_trace_layout(name)), name);
   EXPECT_EQ(packet_width(TraceLayout::Packet16), 16);
@@ -256,7 +332,15 @@ TEST(Trace, TraceClassNames) {
   EXPECT_EQ(resolve_trace_layout(TraceLayout::Hybrid, avx512), TraceLayout::Hybrid16);
   EXPECT_EQ(resolve_trace_layout(TraceLayout::Hybrid, gpu), TraceLayout::Hybrid8);
   EXPECT_EQ(parse_trace_layouts("wide,packet8,wide").size(), 2u);
-  EXPECT_EQ(parse_trace_layouts("all").size(), 7u);  // every class but the unresolved packet and hybrid
+  EXPECT_EQ(parse_trace_layouts("all").size(), 8u);  // every class but the unresolved packet and hybrid
+  EXPECT_EQ(packet_width(TraceLayout::Wide8), 1);
+  EXPECT_EQ(tree_width(TraceLayout::Wide8), 8);
+  EXPECT_EQ(tree_width(TraceLayout::Wide), 4);
+  EXPECT_EQ(tree_width(TraceLayout::Packet16), 4);
+  EXPECT_EQ(tree_width(TraceLayout::Binary), 2);
+  EXPECT_FALSE(walks_wide_tree(TraceLayout::Wide8));
+  EXPECT_EQ(resolve_trace_layout(TraceLayout::Wide8, avx512), TraceLayout::Wide8);
+  EXPECT_STREQ(trace_class_kernel_suffix(TraceLayout::Wide8), "_wide8");
   try {
     parse_trace_layout("packet32");
     ADD_FAILURE() << "packet32 accepted";

@@ -121,6 +121,13 @@ GpuAddressMap::GpuAddressMap(const WideBvh& wide, std::size_t rays) {
   ray_base_ = prim_base_ + align_up(wide.packets.size() * sizeof(RsTriPacket), 4096);
 }
 
+GpuAddressMap::GpuAddressMap(const Wide8Bvh& wide8, std::size_t rays)
+    : wide_node_bytes_(sizeof(RsWide8Node)), wide_packet_bytes_(sizeof(RsTriPacket8)) {
+  (void)rays;
+  prim_base_ = align_up(wide8.nodes.size() * sizeof(RsWide8Node), 4096);
+  ray_base_ = prim_base_ + align_up(wide8.packets.size() * sizeof(RsTriPacket8), 4096);
+}
+
 GpuAddressMap::GpuAddressMap(const Bvh& binary, std::size_t rays) : binary_(binary.nodes.data()) {
   (void)rays;
   prim_base_ = align_up(binary.nodes.size() * sizeof(RsBvhNode), 4096);
@@ -132,9 +139,9 @@ void GpuAddressMap::step_blocks(std::uint32_t ref, unsigned line, std::vector<st
   // An any-hit ray that stops at a hit reads its leaf's packets or triangles up to that one only.
   auto read = [&](std::uint64_t count) { return leaf_reads > 0 ? std::min<std::uint64_t>(count, leaf_reads) : count; };
   if (!binary_) {
-    if (!(ref & RS_WIDE_LEAF)) return range_blocks(node_base_ + std::uint64_t{ref} * sizeof(RsWideNode), sizeof(RsWideNode), line, out);
+    if (!(ref & RS_WIDE_LEAF)) return range_blocks(node_base_ + ref * wide_node_bytes_, wide_node_bytes_, line, out);
     const std::uint64_t first = (ref & ~RS_WIDE_LEAF) >> 2, count = (ref & 3u) + 1u;
-    return range_blocks(prim_base_ + first * sizeof(RsTriPacket), read(count) * sizeof(RsTriPacket), line, out);
+    return range_blocks(prim_base_ + first * wide_packet_bytes_, read(count) * wide_packet_bytes_, line, out);
   }
   const RsBvhNode& n = binary_[ref];
   range_blocks(node_base_ + std::uint64_t{ref} * sizeof(RsBvhNode), sizeof(RsBvhNode), line, out);

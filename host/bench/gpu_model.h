@@ -76,11 +76,13 @@ GpuTime gpu_model_time(const GpuCounts& c, const GpuProfile& p);
 
 // Where the kernel's buffers lie: nodes, then leaf primitives, then rays, each 4 KB aligned.
 // Wide layout: a step on a wide node reads its 128 bytes; on a leaf, its packets (192 bytes each).
+// Wide8 layout: the same with 256-byte nodes and 384-byte packets.
 // Binary layout: a step on node k reads node k (32 bytes) and, if inner, its two children (the
 // boxes it tests), if a leaf, its triangles (48 bytes each).
 class GpuAddressMap {
  public:
   GpuAddressMap(const WideBvh& wide, std::size_t rays);
+  GpuAddressMap(const Wide8Bvh& wide8, std::size_t rays);
   GpuAddressMap(const Bvh& binary, std::size_t rays);
   // Appends the blocks (address / block_bytes: lines or sectors) step reference `ref` reads.
   // leaf_reads > 0 on a leaf: only its first leaf_reads packets (wide) or triangles (binary), where
@@ -93,7 +95,8 @@ class GpuAddressMap {
   bool is_leaf(std::uint32_t ref) const;
 
  private:
-  const RsBvhNode* binary_ = nullptr;  // null on the wide layout
+  const RsBvhNode* binary_ = nullptr;  // null on the wide layouts
+  std::uint64_t wide_node_bytes_ = sizeof(RsWideNode), wide_packet_bytes_ = sizeof(RsTriPacket);
   std::uint64_t node_base_ = 0, prim_base_ = 0, ray_base_ = 0;
 };
 

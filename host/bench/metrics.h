@@ -33,10 +33,11 @@ struct SimtModel {
 SimtModel simt_model_from_trails(const std::vector<std::vector<std::uint32_t>>& trails);
 
 // Traces rays[order[i]] with the host twin of the traversal the kernels run on `layout`
-// (cl/traverse_wide.h on the 4-wide tree, the default; cl/traverse_binary.h on the binary one),
-// recording every ray's trail, warp by warp on host threads, and returns the model. A step is one
-// node the loop fetches: on the wide tree a wide node (four child boxes) or a leaf (its packets),
-// on the binary tree a node (two child boxes) or a leaf. order null = identity.
+// (cl/traverse_wide.h on the 4-wide tree, the default; cl/traverse_wide8.h on the 8-wide one for
+// wide8; cl/traverse_binary.h on the binary one), recording every ray's trail, warp by warp on host
+// threads, and returns the model. A step is one node the loop fetches: on a wide tree a wide node
+// (four or eight child boxes) or a leaf (its packets), on the binary tree a node (two child boxes)
+// or a leaf. order null = identity.
 // With a GPU profile, the same trails are also replayed through its caches (bench/gpu_model.h)
 // and *gpu_counts receives the counts; the SIMT figures do not depend on it.
 SimtModel simt_model(const Bvh& bvh, const std::vector<RsRay>& rays, const std::uint32_t* order, bool any_hit,

@@ -81,10 +81,10 @@ nlohmann::json bvh_meta(const std::vector<TraceLayout>& layouts) {
   nlohmann::json classes = nlohmann::json::array();
   for (TraceLayout l : layouts)
     classes.push_back({{"class", trace_layout_name(l)},
-                       {"width", walks_wide_tree(l) ? 4 : 2},
+                       {"width", tree_width(l)},
                        {"rays_per_work_item", packet_width(l)}});
   return {{"layout", trace_layout_name(layouts.front())},
-          {"width", walks_wide_tree(layouts.front()) ? 4 : 2},
+          {"width", tree_width(layouts.front())},
           {"rays_per_work_item", packet_width(layouts.front())},
           {"classes", classes},
           {"builder", "binned SAH (Wald 2007), object median past the depth bound"},

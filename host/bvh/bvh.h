@@ -29,6 +29,17 @@ struct WideBvh {
   bool empty() const { return nodes.empty(); }
 };
 
+// The 8-wide form of the wide8 trace class (RsWide8Node / RsTriPacket8 in cl/bvh_layout.h), collapsed
+// from the binary tree by host/bvh/wide8.cpp: every inner child at least three binary levels below
+// its parent, leaves of up to eight triangles in one packet. Built on demand (collapse_to_wide8),
+// not with the BVH: only the wide8 class walks it.
+struct Wide8Bvh {
+  std::vector<RsWide8Node> nodes;     // node 0 is the root (always an inner node)
+  std::vector<RsTriPacket8> packets;  // leaf triangles, eight to a packet
+  std::uint32_t depth = 0;            // inner wide nodes on the longest root-to-leaf path
+  bool empty() const { return nodes.empty(); }
+};
+
 struct Bvh {
   std::vector<RsBvhNode> nodes;       // node 0 is the root
   std::vector<RsTriangle> triangles;  // leaf order; triangles[k].id = index in the scene's flat list
@@ -54,6 +65,18 @@ WideBvh collapse_to_wide(const Bvh& bvh);
 // range, every inner node reached once, and 3 * depth within RS_WIDE_STACK_SIZE. Returns an empty
 // string when all hold, else a description of the first violation.
 std::string validate_wide(const WideBvh& wide, const Bvh& bvh);
+
+// Collapses a binary BVH to the 8-wide layout (host/bvh/wide8.cpp). Throws an Error if a leaf needs
+// more than four packets (max_leaf_size > 32) or the stack bound RS_WIDE8_STACK_SIZE could be exceeded.
+Wide8Bvh collapse_to_wide8(const Bvh& bvh);
+
+// validate_wide's checks on the 8-wide tree, with its stack bound (7 * depth <= RS_WIDE8_STACK_SIZE).
+std::string validate_wide8(const Wide8Bvh& wide, const Bvh& bvh);
+
+// Zero area in exact arithmetic (differences and products of floats are exact in double): the
+// robust triangle test's degenerate-triangle check (cl/intersect.h), which the wide layouts decide
+// once per triangle on the host (the packets' nondegenerate lanes).
+bool exactly_degenerate(const RsTriangle& t);
 
 // bvh.wide, or a collapse of bvh when it has none (a binary tree built by hand in a test).
 const WideBvh& wide_of(const Bvh& bvh, WideBvh& scratch);

@@ -60,9 +60,34 @@ std::string read_kernel_file(const std::string& path) {
   return std::string(*e);
 }
 
+// Whether a kernel header opens with an include guard (its first two directives #ifndef X, #define X),
+// so that a second inclusion would add nothing.
+bool has_include_guard(const std::string& text) {
+  std::istringstream in(text);
+  std::string line, guard;
+  while (std::getline(in, line)) {
+    const auto p = line.find_first_not_of(" \t");
+    if (p == std::string::npos || line[p] != '#') continue;
+    std::istringstream words(line.substr(p + 1));
+    std::string directive, name;
+    words >> directive >> name;
+    if (guard.empty()) {
+      if (directive != "ifndef") return false;
+      guard = name;
+    } else {
+      return directive == "define" && name == guard;
+    }
+  }
+  return false;
+}
+
+// Inlines the #include "..." lines of a kernel file. A guarded header is inlined once (the rest
+// would be empty); an unguarded one wherever it is included, as a preprocessor would: the
+// width-generic traversal (traverse_wide_w.h) is included once per width in a wide8 build.
 void resolve_includes(const std::string& path, std::string& out, std::set<std::string>& seen) {
-  if (!seen.insert(path).second) return;  // every header is guarded anyway; include each once
-  std::istringstream in(read_kernel_file(path));
+  const std::string text = read_kernel_file(path);
+  if (has_include_guard(text) && !seen.insert(path).second) return;
+  std::istringstream in(text);
   std::string line;
   int line_no = 0;
   out += fmt::format("#line 1 \"{}\"\n", path);

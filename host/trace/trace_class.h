@@ -9,14 +9,15 @@ namespace raysort {
 
 // The trace class: which tree the kernels walk, and how many rays walk it together (docs/trace.md,
 // "Trace classes"). Wide: one ray per work-item over the 4-wide collapse of the BVH (the default,
-// host/bvh/wide.cpp). Binary: one ray over the binary BVH itself (kept to measure what the wide
+// host/bvh/wide.cpp). Wide8: one ray per work-item over the 8-wide collapse (host/bvh/wide8.cpp,
+// cl/traverse_wide8.h: eight boxes or triangles per float8 test). Binary: one ray over the binary BVH itself (kept to measure what the wide
 // layout gains). PacketN: N consecutive rays of the order per work-item over the 4-wide tree, one
 // ray per vector lane (cl/traverse_packet.h). HybridN: the same packets, but a subtree that at most
 // N/4 lanes reach is walked by each of them alone (single rays). Packet, Hybrid: the width the device
 // prefers, resolved by resolve_trace_layout before anything runs.
-enum class TraceLayout { Wide, Binary, Packet4, Packet8, Packet16, Packet, Hybrid8, Hybrid16, Hybrid };
+enum class TraceLayout { Wide, Wide8, Binary, Packet4, Packet8, Packet16, Packet, Hybrid8, Hybrid16, Hybrid };
 
-// The classes' names, in the order help and errors list them: wide, binary, packet4, packet8,
+// The classes' names, in the order help and errors list them: wide, wide8, binary, packet4, packet8,
 // packet16, packet, hybrid8, hybrid16, hybrid. parse throws an Error naming the accepted values.
 const std::vector<std::string>& trace_layout_names();
 TraceLayout parse_trace_layout(std::string_view name);
@@ -36,7 +37,10 @@ TraceLayout resolve_trace_layout(TraceLayout l, unsigned preferred_float_width);
 // The kernel build's define and the kernels' name suffix (cl/trace.cl) of a resolved class.
 const char* trace_class_define(TraceLayout l);
 const char* trace_class_kernel_suffix(TraceLayout l);
-// The tree a class walks: the binary BVH for Binary, the 4-wide one for every other class.
-inline bool walks_wide_tree(TraceLayout l) { return l != TraceLayout::Binary; }
+// The branching factor of the tree a class walks: 2 for Binary (the BVH itself), 8 for Wide8 (its
+// 8-wide collapse), 4 for every other class (the 4-wide collapse).
+int tree_width(TraceLayout l);
+// The class walks the 4-wide tree (bvh.wide).
+inline bool walks_wide_tree(TraceLayout l) { return tree_width(l) == 4; }
 
 }  // namespace raysort

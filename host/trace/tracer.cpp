@@ -8,6 +8,7 @@
 #include "trace/packet_twin.h"
 #include "traverse_binary.h"
 #include "traverse_wide.h"
+#include "traverse_wide8.h"
 #include "util/error.h"
 #include "util/text.h"
 
@@ -41,6 +42,10 @@ Tracer::Tracer(Runtime& rt, const Bvh& bvh, TraceVariant variant, TraceLayout la
     const WideBvh& wide = wide_of(bvh, scratch);
     nodes_ = rt.upload("4-wide bvh nodes", wide.nodes);
     triangles_ = rt.upload("triangle packets", wide.packets);
+  } else if (tree_width(layout_) == 8) {
+    const Wide8Bvh wide8 = collapse_to_wide8(bvh);
+    nodes_ = rt.upload("8-wide bvh nodes", wide8.nodes);
+    triangles_ = rt.upload("8-triangle packets", wide8.packets);
   } else {
     nodes_ = rt.upload("bvh nodes", bvh.nodes);
     triangles_ = rt.upload("triangles", bvh.triangles);
@@ -48,7 +53,7 @@ Tracer::Tracer(Runtime& rt, const Bvh& bvh, TraceVariant variant, TraceLayout la
   width_ = static_cast<std::uint32_t>(packet_width(layout_));
   cl::Program program = rt.build({"cl/trace.cl"}, trace_class_define(layout_));
   cl_call("creating the trace kernels", [&] {
-    // Kernel names: trace_{closest,any,closest_counted}[_binary|_packet][_robust] (cl/trace.cl).
+    // Kernel names: trace_{closest,any,closest_counted}[_binary|_wide8|_packet][_robust] (cl/trace.cl).
     const std::string suffix = std::string(trace_class_kernel_suffix(layout_)) + (variant == TraceVariant::Robust ? "_robust" : "");
     closest_ = cl::Kernel(program, ("trace_closest" + suffix).c_str());
     any_ = cl::Kernel(program, ("trace_any" + suffix).c_str());
@@ -129,6 +134,7 @@ std::vector<RsHit> trace_reference(const Bvh& bvh, const std::vector<RsRay>& ray
   const unsigned threads = std::max(1u, std::min(16u, std::thread::hardware_concurrency()));
   WideBvh scratch;
   const WideBvh& wide = walks_wide_tree(layout) ? wide_of(bvh, scratch) : scratch;
+  const Wide8Bvh wide8 = tree_width(layout) == 8 ? collapse_to_wide8(bvh) : Wide8Bvh{};
   const int robust = variant == TraceVariant::Robust ? 1 : 0;
   if (const int width = packet_width(layout); width > 1) {
     trace_packets_on_host(width, packet_single_at(layout), wide, rays, order, robust, any_hit ? 1 : 0, hits,
@@ -143,6 +149,8 @@ std::vector<RsHit> trace_reference(const Bvh& bvh, const std::vector<RsRay>& ray
       rs_u32* v = node_visits ? &visits : nullptr;
       if (layout == TraceLayout::Wide)
         hits[i] = rs_traverse_wide(wide.nodes.data(), wide.packets.data(), ray, robust, any_hit ? 1 : 0, v);
+      else if (layout == TraceLayout::Wide8)
+        hits[i] = rs_traverse_wide8(wide8.nodes.data(), wide8.packets.data(), ray, robust, any_hit ? 1 : 0, v);
       else
         hits[i] = robust ? rs_traverse_robust(bvh.nodes.data(), bvh.triangles.data(), ray, any_hit ? 1 : 0, v)
                          : rs_traverse(bvh.nodes.data(), bvh.triangles.data(), ray, any_hit ? 1 : 0, v);

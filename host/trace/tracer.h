@@ -1,6 +1,6 @@
 #pragma once
 // Tracing a ray batch on the device (cl/trace.cl) and on the host (the reference twin, which
-// runs the same traversal source, cl/traverse_wide.h and cl/traverse_binary.h).
+// runs the same traversal source: cl/traverse_wide.h, traverse_wide8.h, traverse_binary.h, traverse_packet.h).
 #include <cstdint>
 #include <string>
 #include <string_view>
@@ -70,9 +70,9 @@ class Tracer {
   TraceLayout layout_ = TraceLayout::Wide;
 };
 
-// Host reference: the same traversal (cl/traverse_wide.h, cl/traverse_binary.h, cl/traverse_packet.h)
-// on host threads. order may be null (identity). hits[i] belongs to rays[order[i]]. node_visits: per
-// ray, the nodes visited (wide nodes and leaves for the wide layout and, for the packets, those at
+// Host reference: the same traversal (cl/traverse_wide.h, cl/traverse_wide8.h, cl/traverse_binary.h,
+// cl/traverse_packet.h) on host threads. order may be null (identity). hits[i] belongs to rays[order[i]]. node_visits: per
+// ray, the nodes visited (wide nodes and leaves for the wide layouts and, for the packets, those at
 // which the ray's lane was active; boxes fetched for the binary one). layout must be resolved (not
 // Packet): the packets are formed from consecutive rays of the order, as on the device.
 std::vector<RsHit> trace_reference(const Bvh& bvh, const std::vector<RsRay>& rays, const std::uint32_t* order,

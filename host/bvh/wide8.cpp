@@ -1,0 +1,110 @@
+// Collapsing the binary BVH into the 8-wide layout of the wide8 trace class (cl/bvh_layout.h,
+// RsWide8Node / RsTriPacket8; cl/traverse_wide8.h walks it).
+// An 8-wide node over inner binary node n takes the binary nodes three levels below n (2^3 = 8
+// slots), stopping early at a leaf or at a small subtree that becomes one leaf packet (leafish);
+// lanes left free are then filled by opening the slot of largest surface area, as Embree's BVH8
+// collapse does (a big box is the one most rays enter). Every inner slot thus lies at least three
+// binary levels below n, which bounds the tree's depth and so the kernels' stack
+// (RS_WIDE8_STACK_SIZE): depth <= RS_WIDE8_MAX_DEPTH and at most seven pending siblings per level.
+#include <algorithm>
+#include <string>
+
+#include "bvh/bvh.h"
+#include "bvh/had.h"
+#include "bvh/wide_tree.h"
+#include "util/error.h"
+
+namespace raysort {
+
+namespace {
+
+class Collapser8 {
+ public:
+  explicit Collapser8(const Bvh& bvh) : bvh_(bvh), sub_(bvh) {}
+
+  Wide8Bvh run() {
+    if (bvh_.triangles.empty() || bvh_.nodes.empty()) {
+      out_.nodes.push_back(RsWide8Node{});  // a root with no valid child: every ray misses
+      out_.depth = 1;
+      return std::move(out_);
+    }
+    if (bvh_.is_leaf(0))
+      make_node({0u}, 1);  // a one-leaf tree still gets an inner root
+    else
+      make_node(slots_of(0), 1);
+    if (7 * out_.depth > RS_WIDE8_STACK_SIZE)
+      throw Error("8-wide BVH of depth " + std::to_string(out_.depth) + " could overflow the trace stack (" +
+                  std::to_string(RS_WIDE8_STACK_SIZE) + " entries); the binary BVH is deeper than its bound");
+    return std::move(out_);
+  }
+
+ private:
+  // A subtree of at most eight triangles becomes one leaf (one full packet) when SAH agrees: the
+  // 4-wide collapse's rule (wide.cpp) at the 8-wide packet's size. The SAH builder's leaves hold
+  // about two triangles; merged, a leaf test fills more of the eight lanes.
+  static constexpr std::uint32_t kMergeTriangles = 8;
+  bool leafish(std::uint32_t n) const { return sub_.leafish(n, kMergeTriangles); }
+
+  // The binary nodes an 8-wide node over inner binary node n holds (see the top of the file).
+  std::vector<std::uint32_t> slots_of(std::uint32_t n) const {
+    std::vector<std::uint32_t> slots{bvh_.nodes[n].first, bvh_.nodes[n].first + 1}, deeper;
+    for (int level = 2; level <= 3; ++level) {  // every inner slot down to three levels below n
+      deeper.clear();
+      for (std::uint32_t s : slots) {
+        if (leafish(s)) {
+          deeper.push_back(s);
+        } else {
+          deeper.push_back(bvh_.nodes[s].first);
+          deeper.push_back(bvh_.nodes[s].first + 1);
+        }
+      }
+      slots.swap(deeper);
+    }
+    while (slots.size() < 8) {  // free lanes: open the largest inner slot, its children in its place
+      std::size_t best = slots.size();
+      double best_area = -1.0;
+      for (std::size_t i = 0; i < slots.size(); ++i) {
+        if (leafish(slots[i])) continue;
+        const double a = node_surface_area(bvh_.nodes[slots[i]]);
+        if (a > best_area) best = i, best_area = a;
+      }
+      if (best == slots.size()) break;
+      const std::uint32_t c = bvh_.nodes[slots[best]].first;
+      slots[best] = c;
+      slots.insert(slots.begin() + static_cast<std::ptrdiff_t>(best) + 1, c + 1);
+    }
+    return slots;
+  }
+
+  std::uint32_t make_node(const std::vector<std::uint32_t>& slots, std::uint32_t depth) {
+    out_.depth = std::max(out_.depth, depth);
+    const auto index = static_cast<std::uint32_t>(out_.nodes.size());
+    out_.nodes.push_back(RsWide8Node{});
+    RsWide8Node w{};  // lanes past slots.size(): valid = 0, empty boxes, child 0 (never read)
+    for (std::size_t i = 0; i < slots.size(); ++i) {
+      wide_tree::set_box(w, static_cast<int>(i), bvh_.nodes[slots[i]]);
+      w.valid.s[i] = -1;
+      w.child[i] = leafish(slots[i]) ? wide_tree::append_leaf<8>(bvh_, sub_.as_leaf(slots[i]), out_.packets)
+                                     : make_node(slots_of(slots[i]), depth + 1);
+    }
+    out_.nodes[index] = w;  // after the children: the vector may have grown meanwhile
+    return index;
+  }
+
+  const Bvh& bvh_;
+  const wide_tree::Subtrees sub_;
+  Wide8Bvh out_;
+};
+
+}  // namespace
+
+Wide8Bvh collapse_to_wide8(const Bvh& bvh) { return Collapser8(bvh).run(); }
+
+std::string validate_wide8(const Wide8Bvh& wide, const Bvh& bvh) {
+  return wide_tree::validate<8>(wide, bvh, RS_WIDE8_STACK_SIZE);
+}
+
+static_assert(sizeof(RsWide8Node) == 256, "RsWide8Node layout (cl/bvh_layout.h)");
+static_assert(sizeof(RsTriPacket8) == 384, "RsTriPacket8 layout (cl/bvh_layout.h)");
+
+}  // namespace raysort
