@@ -271,7 +271,7 @@ RS_INLINE RsHit rsw_traverse_subtree(RS_GLOBAL const RsWNode* nodes, RS_GLOBAL c
         float dist[RS_WIDE_W];
         int k = 0;
         /* The hit lanes in lane order, insertion-sorted by entry distance. At eight lanes the loop
-         * walks the set bits (a ray enters two or three of a node's children): on sibenik 640x360,
+         * walks the set bits (a ray enters few of a node's eight children): on sibenik 640x360,
          * fast, wide8 over wide went from 1.10-1.13x to 1.18-1.28x on primary and bounce1 rays (two
          * runs each, paired). At four lanes the unrolled lane loop stays: the bit loop gained
          * nothing measurable there (primary possibly slower, within the noise). */

@@ -152,6 +152,23 @@ TEST(GpuModel, LeafStepsReadTheirPacketsAndRayLoadsCoalesce) {
   EXPECT_EQ(replay.counts().requests, 1u + ray_lines);
 }
 
+// The wide8 class's tree: a node step reads its 256 bytes (two 128-byte lines), a leaf step its
+// 384-byte packets.
+TEST(GpuModel, Wide8StepsReadTheirNodesAndPackets) {
+  Wide8Bvh wide8;
+  wide8.nodes.resize(32);  // 32 x 256 bytes = 8 KB, so packets start at 8192
+  wide8.packets.resize(4);
+  const GpuAddressMap map(wide8, 64);
+  std::vector<std::uint64_t> lines;
+  map.step_blocks(3, 128, lines);  // node 3: bytes 768-1023
+  EXPECT_EQ(lines, (std::vector<std::uint64_t>{6, 7}));
+  lines.clear();
+  map.step_blocks(RS_WIDE_LEAF | (1u << 2) | 0u, 128, lines);  // packet 1: bytes 8576-8959
+  EXPECT_EQ(lines, (std::vector<std::uint64_t>{67, 68, 69}));
+  EXPECT_TRUE(map.is_leaf(RS_WIDE_LEAF | (1u << 2)));
+  EXPECT_FALSE(map.is_leaf(3));
+}
+
 // A while-while kernel's issued steps (while_while_steps): per outer iteration the longest run of
 // inner-node steps over the lanes, then the longest run of leaf steps. Lanes whose node and leaf
 // steps interleave differently wait for each other, where lockstep lets them advance together.

@@ -82,7 +82,7 @@ TEST(SimtModel, TracedModelMatchesTrailsAndOrderMatters) {
   std::vector<std::uint32_t> sorted(rays.size());
   std::iota(sorted.begin(), sorted.end(), 0u);
   std::stable_sort(sorted.begin(), sorted.end(), [&](auto a, auto b) { return rays[a].o[0] < rays[b].o[0]; });
-  for (TraceLayout layout : {TraceLayout::Wide, TraceLayout::Binary}) {
+  for (TraceLayout layout : {TraceLayout::Wide, TraceLayout::Wide8, TraceLayout::Binary}) {
     SCOPED_TRACE(trace_layout_name(layout));
     auto interleaved_model = simt_model(bvh, rays, nullptr, false, TraceVariant::Fast, layout);
     auto sorted_model = simt_model(bvh, rays, sorted.data(), false, TraceVariant::Fast, layout);
@@ -99,6 +99,11 @@ TEST(SimtModel, TracedModelMatchesTrailsAndOrderMatters) {
   const SimtModel binary = simt_model(bvh, rays, nullptr, false, TraceVariant::Fast, TraceLayout::Binary);
   EXPECT_EQ(wide.total_steps, wide_visits);
   EXPECT_LT(wide.total_steps, binary.total_steps);
+  // The wide8 model walks the 8-wide tree: its steps are the wide8 traversal's visits.
+  (void)trace_reference(bvh, rays, nullptr, false, &visits, TraceVariant::Fast, TraceLayout::Wide8);
+  const SimtModel wide8 = simt_model(bvh, rays, nullptr, false, TraceVariant::Fast, TraceLayout::Wide8);
+  EXPECT_EQ(wide8.total_steps, std::accumulate(visits.begin(), visits.end(), std::uint64_t{0}));
+  EXPECT_LE(wide8.total_steps, wide.total_steps);
 }
 
 }  // namespace raysort
