@@ -129,7 +129,7 @@ void register_run_command(CLI::App& app) {
                   "atomics produces), or all; shuffled cells end their id in /shuffled");
   cmd->add_option("--layout", a->layout,
                   "trace classes, comma-separated (docs/trace.md, \"Trace classes\"): wide (one ray per work-item "
-                  "over the 4-wide BVH, default), binary, packet4/packet8/packet16 (packets of consecutive rays of "
+                  "over the 4-wide BVH, default), wide8 (one ray over an 8-wide BVH), binary, packet4/packet8/packet16 (packets of consecutive rays of "
                   "each order, one ray per vector lane), hybrid8/hybrid16, packet or hybrid (the device's preferred "
                   "width), or all; the first is the tables' main one; a cell of another class than wide ends its id "
                   "in /<class>");
