@@ -23,18 +23,10 @@ class Collapser8 {
   explicit Collapser8(const Bvh& bvh) : bvh_(bvh), sub_(bvh) {}
 
   Wide8Bvh run() {
-    if (bvh_.triangles.empty() || bvh_.nodes.empty()) {
-      out_.nodes.push_back(RsWide8Node{});  // a root with no valid child: every ray misses
-      out_.depth = 1;
-      return std::move(out_);
-    }
-    if (bvh_.is_leaf(0))
-      make_node({0u}, 1);  // a one-leaf tree still gets an inner root
-    else
-      make_node(slots_of(0), 1);
-    if (7 * out_.depth > RS_WIDE8_STACK_SIZE)
-      throw Error("8-wide BVH of depth " + std::to_string(out_.depth) + " could overflow the trace stack (" +
-                  std::to_string(RS_WIDE8_STACK_SIZE) + " entries); the binary BVH is deeper than its bound");
+    wide_tree::collapse_from_root<8>(
+        bvh_, out_, RS_WIDE8_STACK_SIZE,
+        [&](const std::vector<std::uint32_t>& slots, std::uint32_t depth) { make_node(slots, depth); },
+        [&](std::uint32_t n) { return slots_of(n); });
     return std::move(out_);
   }
 

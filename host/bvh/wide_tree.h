@@ -102,6 +102,24 @@ void set_box(Node& w, int lane, const RsBvhNode& b) {
   w.lo_z.s[lane] = b.bmin[2], w.hi_z.s[lane] = b.bmax[2];
 }
 
+// The collapse from the root, for both widths: an empty tree gets a root with no valid child (every
+// ray misses), a one-leaf tree still an inner root, any other the wide node over the binary root's
+// slots; a tree whose nodes, each pushing up to W - 1 children, could overflow the kernels' stack
+// of stack_size entries is refused. make_node(slots, depth) writes a node and raises out.depth.
+template <int W, class Tree, class MakeNode, class SlotsOf>
+void collapse_from_root(const Bvh& bvh, Tree& out, std::uint32_t stack_size, MakeNode make_node, SlotsOf slots_of) {
+  if (bvh.triangles.empty() || bvh.nodes.empty()) {
+    out.nodes.emplace_back();
+    out.depth = 1;
+    return;
+  }
+  make_node(bvh.is_leaf(0) ? std::vector<std::uint32_t>{0u} : slots_of(0), 1u);
+  if ((W - 1) * out.depth > stack_size)
+    throw Error(std::to_string(W) + "-wide BVH of depth " + std::to_string(out.depth) +
+                " could overflow the trace stack (" + std::to_string(stack_size) +
+                " entries); the binary BVH is deeper than its bound");
+}
+
 // The checks of validate_wide / validate_wide8 (bvh.h) on a W-wide tree whose nodes push at most
 // W - 1 children each into a stack of stack_size entries.
 template <int W, class Tree>
