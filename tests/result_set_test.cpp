@@ -3,13 +3,18 @@
 // compare refuses different matrices; outputs never land inside inputs or over files; a result
 // set has one writer (issue 23); every malformed input is one clear error, never an internal one
 // (a seeded property test mutates cell files, meta.json and rules).
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <csignal>
 #include <filesystem>
+#include <functional>
+#include <map>
 #include <fstream>
 #include <random>
+#include <thread>
 #include <string>
 #include <vector>
 
@@ -194,8 +199,9 @@ TEST(CompareSets, RefusesDifferentMatricesUnlessAllowed) {
   // Both sides' device, driver and commit, always.
   CliResult same = run_cli({"compare", a, finished_set("seed1-again")});
   EXPECT_EQ(same.code, 0) << same.err;
-  EXPECT_EQ(std::count(same.out.begin(), same.out.begin() + same.out.find("##"), ','), 4) << same.out;
+  EXPECT_EQ(std::count(same.out.begin(), same.out.begin() + same.out.find("##"), ','), 6) << same.out;
   EXPECT_TRUE(contains(same.out, "driver ")) << same.out;
+  EXPECT_TRUE(contains(same.out, "kernels embedded ")) << same.out;  // issue 44: what they were built from
   EXPECT_TRUE(contains(same.out, "raysort commit ")) << same.out;
   // Another device (the point of a cross-device comparison) and other measurement settings are fine.
   const std::string other = finished_set("other-device");
@@ -396,4 +402,255 @@ TEST(ReaderProperty, MutationsAreReadOrRefusedWithAnError) {
       ADD_FAILURE() << "rule '" << rule << "' escaped as " << e.what();
     }
   }
+}
+
+// ---- Issue 44: result sets no tool can corrupt ----------------------------------------------------
+
+// Item 1: merge takes OUT's lock before it looks at OUT, holds it to the end, and never replaces
+// a folder another writer holds; a refused merge leaves no folder behind, and the leftovers of a
+// killed merge are removed by the next one.
+TEST(Merge, TakesTheLockOfItsOutputAndCleansUpAfterAKilledMerge) {
+  std::vector<std::string> shards;
+  for (const char* s : {"1/2", "2/2"}) {
+    const std::string dir = temp_path(std::string("merge-shard-") + s[0]);
+    const CliResult r = run_cli(matrix({"--shard", s, "--out", dir}));
+    ASSERT_EQ(r.code, 0) << r.err;
+    shards.push_back(dir);
+  }
+  // A run holds OUT (an empty folder it has just created): the merge is refused, OUT untouched.
+  const std::string out = temp_path("merge-locked");
+  fs::create_directories(out);
+  {
+    auto lock = FolderLock::acquire(out, "raysort run --test-holder", "result set");
+    expect_one_line_error(run_cli({"merge", shards[0], shards[1], "-o", out}), {out, "being written by another raysort"},
+                          "merge into a folder a run holds");
+    EXPECT_FALSE(fs::exists(fs::path(out) / "meta.json"));
+    // --force into a set a run is writing: refused too.
+    const std::string busy = finished_set("merge-busy");
+    auto busy_lock = FolderLock::acquire(busy, "raysort run --test-holder", "result set");
+    const std::string before = read_file(busy + "/meta.json");
+    expect_one_line_error(run_cli({"merge", shards[0], shards[1], "-o", busy, "--force"}), {"being written"},
+                          "merge --force into a set being written");
+    EXPECT_EQ(read_file(busy + "/meta.json"), before);
+  }
+  // A refused merge (one shard only) leaves no folder it created.
+  const std::string lone = temp_path("merge-refused");
+  EXPECT_EQ(run_cli({"merge", shards[0], "-o", lone}).code, 1);
+  EXPECT_FALSE(fs::exists(lone));
+  // A killed merge's building folder beside OUT is removed by the next merge into OUT.
+  const fs::path stale = fs::path(out).parent_path() / (".merge-locked.merging-4194300");
+  fs::create_directories(stale / "cells");
+  const CliResult merged = run_cli({"merge", shards[0], shards[1], "-o", out});
+  ASSERT_EQ(merged.code, 0) << merged.err;
+  EXPECT_FALSE(fs::exists(stale));
+  EXPECT_EQ(ResultSet::load(out).cells().size(), 3u);
+}
+
+// Item 2: cell file names are collision-free and bounded; two meshes whose paths differ only in
+// "/" against "__" keep their own cells.
+TEST(CellFiles, DistinctIdsNeverShareAFileAndNamesAreBounded) {
+  std::mt19937 rng(44);
+  const std::string alphabet = "ab_/.%~-";
+  std::map<std::string, std::string> by_name;
+  for (int i = 0; i < 20000; ++i) {
+    std::string id;
+    const int len = 1 + static_cast<int>(rng() % 12);
+    for (int k = 0; k < len; ++k) id += alphabet[rng() % alphabet.size()];
+    const std::string name = cell_file_name(id);
+    EXPECT_EQ(name.find('/'), std::string::npos) << id;
+    auto [it, fresh] = by_name.emplace(name, id);
+    EXPECT_TRUE(fresh || it->second == id) << "'" << id << "' and '" << it->second << "' share " << name;
+  }
+  EXPECT_NE(cell_file_name("d/s.obj/primary/hcc/32"), cell_file_name("d__s.obj/primary/hcc/32"));
+  // The names every committed set uses are unchanged.
+  EXPECT_EQ(cell_file_name("breakfast_room/bounce1/hcc/32/packet8/permute"),
+            "breakfast_room__bounce1__hcc__32__packet8__permute.json");
+  const std::string long_id = std::string(400, 'x') + "/primary/hcc/32";
+  EXPECT_LE(cell_file_name(long_id).size(), 200u);
+  EXPECT_NE(cell_file_name(long_id), cell_file_name(std::string(400, 'x') + "/primary/hcc/16"));
+
+  // The reproduction: two OBJ files named d/s.obj and d__s.obj.
+  const fs::path root = temp_path("collide");
+  fs::create_directories(root / "d");
+  const std::string obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 3 4\nf 1 2 4\n";
+  std::ofstream((root / "d" / "s.obj").string()) << obj;
+  std::ofstream((root / "d__s.obj").string()) << obj << "v 2 2 2\nf 2 3 5\n";
+  const std::string a = (root / "d" / "s.obj").string(), b = (root / "d__s.obj").string();
+  const std::string out = (root / "set").string();
+  const CliResult r = run_cli({"run", "--scenes", a + "," + b, "--batches", "primary", "--encoders", "hcc", "--bits",
+                               "32", "--resolution", "8x8", "--reps", "1", "--warmup", "0", "--max-time", "0", "--out",
+                               out});
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::size_t files = 0;
+  for (const auto& e : fs::directory_iterator(fs::path(out) / "cells")) files += e.path().extension() == ".json";
+  EXPECT_EQ(files, 4u) << "two scenes x (NoSort, HCC)";
+  const ResultSet set = ResultSet::load(out);
+  EXPECT_EQ(set.cells().size(), 4u);
+}
+
+// Items 3 and 4: a resume refuses another device, build or kernel options, and an edited scene
+// file (or a file it extends), naming what differs.
+TEST(Resume, RefusesAnotherDeviceBuildKernelsOrSceneFile) {
+  struct Case {
+    std::string name, part;
+    std::function<void(nlohmann::json&)> edit;
+  };
+  const std::vector<Case> cases{
+      {"device", "device (name", [](auto& m) { m["device"]["name"] = "NVIDIA GeForce RTX 3060"; }},
+      {"commit", "commit (\"0123456789ab\"", [](auto& m) { m["git_commit"] = "0123456789ab"; }},
+      {"kernels", "kernels (", [](auto& m) { m["kernels"]["hash"] = "0000000000000000"; }},
+  };
+  for (const auto& c : cases) {
+    const std::string dir = finished_set("provenance-" + c.name);
+    nlohmann::json meta = read_json(fs::path(dir) / "meta.json");
+    ASSERT_TRUE(meta.contains("kernels")) << "the set records its kernels";
+    c.edit(meta);
+    write_json(fs::path(dir) / "meta.json", meta);
+    expect_one_line_error(run_cli(matrix({"--out", dir})), {dir, "differs from now", c.part}, c.name);
+  }
+  const std::string dir = finished_set("provenance-options");
+  expect_one_line_error(run_cli(matrix({"--out", dir}), {"RAYSORT_CL_OPTIONS=-DRS_UNUSED_TEST_FLAG=1"}),
+                        {"cl_options", "RS_UNUSED_TEST_FLAG"}, "RAYSORT_CL_OPTIONS");
+
+  // A scene file that extends another: editing either is noticed.
+  const fs::path root = temp_path("edited-scene");
+  fs::create_directories(root);
+  const fs::path base = root / "base.toml", scene = root / "room.toml";
+  std::ofstream(base.string()) << "extends = \"cornell\"\ndescription = \"base\"\n";
+  std::ofstream(scene.string()) << "extends = \"base.toml\"\n";
+  const std::string out = (root / "set").string();
+  std::vector<std::string> args{"run", "--scenes", scene.string(), "--batches", "primary", "--encoders", "hcc",
+                                "--bits", "32", "--resolution", "8x8", "--reps", "1", "--warmup", "0", "--max-time",
+                                "0", "--out", out};
+  ASSERT_EQ(run_cli(args).code, 0);
+  ASSERT_EQ(run_cli(args).code, 0) << "an unchanged scene resumes";
+  std::ofstream(base.string()) << "extends = \"cornell\"\ndescription = \"base, edited\"\n";
+  expect_one_line_error(run_cli(args), {"was started on other scene files", "scene:" + scene.string()},
+                        "edited base scene");
+}
+
+// Item 5: report on a set whose cells are gone refuses (naming them) instead of writing empty views.
+TEST(BrokenSets, ReportRefusesASetWhoseListedCellsAreGone) {
+  const std::string dir = finished_set("cells-gone");
+  const std::string views = read_file(dir + "/cells.json");
+  fs::remove_all(dir + "/cells");
+  expect_one_line_error(run_cli({"report", dir}), {dir, "lists 3 cell(s) whose files are missing", "no cells/ folder"},
+                        "report without cells/");
+  EXPECT_EQ(read_file(dir + "/cells.json"), views);
+  const std::string one = finished_set("cell-gone");
+  fs::remove(one + "/cells/cornell__primary__hcc__32.json");
+  expect_one_line_error(run_cli({"report", one}), {"cornell/primary/hcc/32"}, "report without one cell");
+  EXPECT_EQ(run_cli(matrix({"--out", one})).code, 0) << "a run measures it again";
+  EXPECT_EQ(run_cli({"report", one}).code, 0);
+}
+
+// Items 6 and 8: writers never write through a link, and delete only their own temporary files.
+TEST(Writers, NeverWriteThroughLinksAndDeleteOnlyTheirOwnTemporaryFiles) {
+  const fs::path root = temp_path("links");
+  fs::create_directories(root);
+  const fs::path victim = root / "victim.txt";
+  std::ofstream(victim.string()) << "precious\n";
+  // A planted lock-file link.
+  const std::string lock_link = finished_set("lock-link");
+  fs::remove(fs::path(lock_link) / FolderLock::kFileName);
+  fs::create_symlink(victim, fs::path(lock_link) / FolderLock::kFileName);
+  expect_one_line_error(run_cli(matrix({"--out", lock_link})), {"symbolic link"}, "run with a linked lock file");
+  expect_one_line_error(run_cli({"report", lock_link}), {"symbolic link"}, "report with a linked lock file");
+  // A linked cells/ folder.
+  const std::string cells_link = finished_set("cells-link");
+  const fs::path elsewhere = root / "elsewhere";
+  fs::rename(fs::path(cells_link) / "cells", elsewhere);
+  fs::create_directory_symlink(elsewhere, fs::path(cells_link) / "cells");
+  expect_one_line_error(run_cli(matrix({"--out", cells_link})), {"cells is a symbolic link"}, "linked cells/");
+  // A planted link at the temporary name of an atomic write.
+  const fs::path target = root / "out.md";
+  fs::create_symlink(victim, root / fmt::format("out.md.tmp.{}", ::getpid()));
+  write_file_atomically(target.string(), "new\n");
+  EXPECT_EQ(read_file(target.string()), "new\n");
+  EXPECT_EQ(read_file(victim.string()), "precious\n");
+  // A user's files whose names hold ".tmp." survive a writer; its own leftovers do not.
+  const std::string dir = finished_set("user-tmp");
+  std::ofstream(dir + "/analysis.tmp.notes") << "mine\n";
+  std::ofstream(dir + "/cells/README.tmp.txt") << "mine\n";
+  std::ofstream(dir + "/tables.md.tmp.12345") << "";
+  EXPECT_EQ(run_cli({"report", dir}).code, 0);
+  EXPECT_TRUE(fs::exists(dir + "/analysis.tmp.notes"));
+  EXPECT_TRUE(fs::exists(dir + "/cells/README.tmp.txt"));
+  EXPECT_FALSE(fs::exists(dir + "/tables.md.tmp.12345"));
+  for (const auto& e : fs::directory_iterator(root)) EXPECT_NE(e.path(), victim.string() + ".x");
+  EXPECT_EQ(read_file(victim.string()), "precious\n");
+}
+
+// Item 11: an "ok" cell that contradicts itself is refused by every reader; a merge checks each
+// shard's plan.
+TEST(CellFiles, SelfContradictingOkCellsAreRefused) {
+  const std::string base = finished_set("contradict");
+  struct Case {
+    std::string name, part;
+    std::function<void(nlohmann::json&)> edit;
+  };
+  const std::vector<Case> cases{
+      {"hits", "hits differ from NoSort's", [](auto& j) { j["hits_match_nosort"] = false; }},
+      {"interval", "lies outside its interval", [](auto& j) {
+         const double v = j["speedup"]["value"].template get<double>();
+         j["speedup"]["lo"] = 2.0 * v + 1.0, j["speedup"]["hi"] = 2.0 * v + 2.0;
+       }},
+      {"zero", "speedup is 0", [](auto& j) { j["speedup"] = {{"value", 0.0}, {"lo", nullptr}, {"hi", nullptr}, {"n", 2}}; }},
+      {"edited", "not the one its nosort and trace samples give", [](auto& j) {
+         const double v = j["speedup"]["value"].template get<double>() * 1.01;
+         j["speedup"] = {{"value", v}, {"lo", nullptr}, {"hi", nullptr}, {"n", 2}};
+       }},
+  };
+  for (const auto& c : cases) {
+    const std::string dir = temp_path("contradict-" + c.name);
+    fs::copy(base, dir, fs::copy_options::recursive);
+    const fs::path file = fs::path(dir) / "cells" / "cornell__primary__hcc__32.json";
+    nlohmann::json j = read_json(file);
+    ASSERT_EQ(j["status"], "ok");
+    c.edit(j);
+    write_json(file, j);
+    expect_one_line_error(run_cli({"compare", base, dir}), {file.string(), c.part}, c.name);
+  }
+}
+
+// Item 16: Ctrl-C stops a long cell at its next arm, not after its rounds; the cell in flight is
+// not recorded (a resume measures it).
+TEST(Interrupt, CtrlCStopsALongCellWithinSeconds) {
+  const std::string out = temp_path("interrupted");
+  std::vector<std::string> args{"run", "--scenes", "cornell", "--batches", "primary", "--encoders", "hcc", "--bits",
+                                "32", "--resolution", "64x36", "--reps", "100000", "--max-time", "600", "--out", out};
+  const pid_t pid = fork();
+  if (pid == 0) {
+    std::string bin = RAYSORT_BINARY;
+    std::vector<char*> argv{bin.data()};
+    for (auto& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    const int null = ::open("/dev/null", O_WRONLY);
+    ::dup2(null, 1);
+    ::dup2(null, 2);
+    ::execv(bin.c_str(), argv.data());
+    _exit(127);
+  }
+  // Until the first cell's rounds are under way (its meta.json is written before any cell).
+  const auto start = std::chrono::steady_clock::now();
+  while (!fs::exists(fs::path(out) / "meta.json") &&
+         std::chrono::steady_clock::now() - start < std::chrono::seconds(60))
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  std::this_thread::sleep_for(std::chrono::seconds(3));
+  ::kill(pid, SIGINT);
+  const auto sent = std::chrono::steady_clock::now();
+  int status = 0;
+  while (::waitpid(pid, &status, WNOHANG) == 0) {
+    if (std::chrono::steady_clock::now() - sent > std::chrono::seconds(20)) {
+      ::kill(pid, SIGKILL);
+      ::waitpid(pid, &status, 0);
+      FAIL() << "raysort run went on for 20 s after Ctrl-C";
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - sent).count();
+  EXPECT_LT(s, 10.0) << "seconds from Ctrl-C to exit";
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_NE(WEXITSTATUS(status), 0);
+  EXPECT_TRUE(ResultSet::load(out).cells().empty()) << "the NoSort cell in flight is not recorded";
 }

@@ -13,8 +13,8 @@ void register_report_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("report", "write a result set's tables, CSV/JSON and plots again from its cell files");
   cmd->add_option("DIR", *dir, "result set folder")->required();
   cmd->callback([dir] {
-    ResultSet rs = ResultSet::load(*dir);
-    rs.lock_for_writing("raysort report " + *dir);  // one writer: not while a run writes into it
+    // One writer: not while a run or merge writes into it.
+    ResultSet rs = ResultSet::load_for_writing(*dir, "raysort report " + *dir);
     rs.write_views();
     rs.write_plots();
     const NoiseSummary noise = summarize_noise(rs.cells());

@@ -94,8 +94,13 @@ const std::set<std::string>& protocol_keys() {
 std::string side_name(const ResultSet& s) {
   const nlohmann::json& m = s.meta();
   const nlohmann::json d = m.value("device", nlohmann::json::object());
-  return fmt::format("device '{}', driver {}, raysort commit {}", d.is_object() ? d.value("name", "?") : "?",
-                     d.is_object() ? d.value("driver", "?") : "?", m.value("git_commit", "?"));
+  std::string kernels;  // what the kernels were built from (not recorded before issue 44)
+  if (const nlohmann::json k = m.value("kernels", nlohmann::json()); k.is_object()) {
+    kernels = fmt::format(", kernels {} {}", k.value("source", "?"), k.value("hash", "?"));
+    if (const std::string o = k.value("cl_options", ""); !o.empty()) kernels += ", RAYSORT_CL_OPTIONS=" + o;
+  }
+  return fmt::format("device '{}', driver {}, raysort commit {}{}", d.is_object() ? d.value("name", "?") : "?",
+                     d.is_object() ? d.value("driver", "?") : "?", m.value("git_commit", "?"), kernels);
 }
 
 std::string shown(const Estimate& e) {

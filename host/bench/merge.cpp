@@ -1,7 +1,12 @@
 #include "bench/merge.h"
 
 #include <fmt/format.h>
+#include <fcntl.h>
+#include <stdio.h>
 #include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 
 #include <algorithm>
 #include <filesystem>
@@ -10,6 +15,7 @@
 #include <set>
 
 #include "bench/result_set.h"
+#include "util/folder_lock.h"
 #include "util/error.h"
 
 namespace raysort {
@@ -81,7 +87,8 @@ std::map<unsigned, std::string> check_one_run(const std::vector<Input>& sets, st
       problems.push_back(fmt::format("{} is shard {}/{} but {} is shard {}/{}; merge the shards of one --shard i/N "
                                      "split",
                                      in.dir, in.index, in.count, ref.dir, ref.index, ref.count));
-    else if (a["shard"].value("plan_hash", "") != b["shard"].value("plan_hash", ""))
+    else if (a["shard"].value("plan_hash", "") != b["shard"].value("plan_hash", "") ||
+             a["shard"].value("plan", nlohmann::json()) != b["shard"].value("plan", nlohmann::json()))
       problems.push_back(fmt::format("{} planned its shards differently from {} (the scene files differ between the "
                                      "machines that ran them); run every shard against the same scene files",
                                      in.dir, ref.dir));
@@ -95,6 +102,18 @@ std::map<unsigned, std::string> check_one_run(const std::vector<Input>& sets, st
   }
   std::map<unsigned, std::string> shard_dir;  // shard index -> input folder
   for (const auto& in : sets) {
+    // The plan is the one list of cells a merge trusts: it must hold as many cells as the shard
+    // says the whole matrix plans, each with a shard of the split.
+    const nlohmann::json& shard = in.set.meta()["shard"];
+    const nlohmann::json plan = shard.value("plan", nlohmann::json::object());
+    bool in_range = true;
+    for (const auto& [id, index] : plan.items())
+      in_range = in_range && index.get<unsigned>() >= 1 && index.get<unsigned>() <= in.count;
+    if (!in_range || plan.size() != shard.value("cells", std::size_t{0}))
+      problems.push_back(fmt::format("{}: its meta.json's shard plan holds {} cells{} but says the matrix plans {}; "
+                                     "the file was edited or damaged: rerun that shard into a new folder",
+                                     in.dir, plan.size(), in_range ? "" : " (some of another split)",
+                                     shard.value("cells", std::size_t{0})));
     auto [it, fresh] = shard_dir.emplace(in.index, in.dir);
     if (!fresh)
       problems.push_back(fmt::format("{} and {} are both shard {}/{}; pass each shard once", it->second, in.dir,
@@ -184,29 +203,90 @@ nlohmann::json merged_meta(const std::vector<Input>& sets, const std::map<unsign
   return meta;
 }
 
-// Built beside OUT (same file system, so the rename is atomic), then renamed into place.
-void write_merged(const std::string& out, const nlohmann::json& meta, const std::vector<CellRecord>& cells) {
+// OUT while a merge writes it: created when absent and locked like any result set
+// (util/folder_lock.h), so a run, report or second merge into OUT is refused until the merge ends,
+// and the merge is refused while one of them holds OUT.
+class LockedOutput {
+ public:
+  LockedOutput(const std::string& out, const std::string& command) : out_(out) {
+    std::error_code ec;
+    target_ = fs::absolute(fs::path(out).lexically_normal());
+    if (target_.filename().empty()) target_ = target_.parent_path();  // "merged/" names the folder "merged"
+    created_ = !fs::exists(fs::symlink_status(target_, ec));
+    fs::create_directories(target_, ec);
+    if (ec) throw Error(fmt::format("-o {}: cannot create the folder ({})", out, ec.message()));
+    try {
+      lock_ = FolderLock::acquire(target_.string(), command, "result set");
+    } catch (...) {
+      discard_if_created();
+      throw;
+    }
+    remove_stale_leftovers();
+  }
+  // A refused merge leaves no folder it created.
+  void discard_if_created() {
+    if (!created_) return;
+    lock_.reset();
+    std::error_code ec;
+    fs::remove(target_ / FolderLock::kFileName, ec);
+    fs::remove(target_, ec);  // only if empty
+  }
+  const fs::path& target() const { return target_; }
+  fs::path beside(const char* what) const {
+    return target_.parent_path() / fmt::format(".{}.{}-{}", target_.filename().string(), what, ::getpid());
+  }
+
+ private:
+  // ".OUT.merging-PID" and ".OUT.replaced-PID" folders of merges into OUT that were killed: with
+  // OUT locked no other merge into it is running, so every such folder is a leftover.
+  void remove_stale_leftovers() {
+    std::error_code ec;
+    const std::string name = target_.filename().string();
+    std::vector<fs::path> stale;
+    for (fs::directory_iterator it(target_.parent_path(), ec), end; !ec && it != end; it.increment(ec)) {
+      const std::string f = it->path().filename().string();
+      for (const std::string& prefix : {"." + name + ".merging-", "." + name + ".replaced-"})
+        if (f.size() > prefix.size() && f.compare(0, prefix.size(), prefix) == 0 &&
+            f.find_first_not_of("0123456789", prefix.size()) == std::string::npos &&
+            fs::is_directory(it->symlink_status()))
+          stale.push_back(it->path());
+    }
+    for (const auto& p : stale) fs::remove_all(p, ec);
+  }
+
+  std::string out_;
+  fs::path target_;
+  bool created_ = false;
+  std::shared_ptr<FolderLock> lock_;
+};
+
+// Built beside OUT (same file system), then swapped into place in one step (renameat2's
+// RENAME_EXCHANGE), so OUT is at every moment either its old content or the complete merged set.
+void write_merged(LockedOutput& out, const std::string& out_name, const nlohmann::json& meta,
+                  const std::vector<CellRecord>& cells) {
   std::error_code ec;
-  fs::path target = fs::absolute(fs::path(out).lexically_normal());
-  if (target.filename().empty()) target = target.parent_path();  // "merged/" names the folder "merged"
-  const fs::path parent = target.parent_path();
-  fs::create_directories(parent, ec);
-  if (ec) throw Error(fmt::format("-o {}: cannot create its parent folder ({})", out, ec.message()));
-  const fs::path tmp = parent / fmt::format(".{}.merging-{}", target.filename().string(), ::getpid());
+  const fs::path tmp = out.beside("merging");
   fs::remove_all(tmp, ec);
   try {
+    // Its lock is held until the swap is done: a writer that finds the merged set at OUT waits.
     ResultSet merged = ResultSet::open_for_run(tmp.string(), meta);
     merged.add_all(cells);
     merged.write_plots();
-    // An empty folder, or (with --force, checked above) a result set being replaced: moved aside
-    // first, so OUT is never half old, half new.
-    const fs::path old = parent / fmt::format(".{}.replaced-{}", target.filename().string(), ::getpid());
-    if (fs::exists(target)) fs::rename(target, old);
-    fs::rename(tmp, target);
-    fs::remove_all(old, ec);
+    if (::renameat2(AT_FDCWD, tmp.c_str(), AT_FDCWD, out.target().c_str(), RENAME_EXCHANGE) != 0) {
+      // A file system without the exchange: the old content moved aside first, then the new one in.
+      if (errno != EINVAL && errno != ENOSYS)
+        throw Error(fmt::format("-o {}: cannot move the merged result set into place ({}); nothing was written", out_name,
+                                std::strerror(errno)));
+      const fs::path old = out.beside("replaced");
+      fs::rename(out.target(), old);
+      fs::rename(tmp, out.target());
+      fs::remove_all(old, ec);
+      return;
+    }
+    fs::remove_all(tmp, ec);  // now OUT's old content: an empty folder, or the set --force replaced
   } catch (const fs::filesystem_error& e) {
     fs::remove_all(tmp, ec);
-    throw Error(fmt::format("-o {}: cannot write the merged result set ({}); nothing was written", out, e.what()));
+    throw Error(fmt::format("-o {}: cannot write the merged result set ({}); nothing was written", out_name, e.what()));
   } catch (...) {
     fs::remove_all(tmp, ec);
     throw;
@@ -225,14 +305,21 @@ MergeSummary merge_result_sets(const std::vector<std::string>& inputs, const std
     throw Error(fmt::format("-o {} --force: replaces a result set only, and {} is not one (no meta.json); choose "
                             "another folder",
                             out, out));
+  LockedOutput locked(out, command);
+  // Checked again under the lock: a writer may have filled OUT since the check above.
+  if (!force && fs::exists(locked.target() / "meta.json", ec))
+    throw Error(fmt::format("-o {}: already exists; choose a new name, or pass --force to replace it", out));
   std::vector<std::string> problems;
   const std::vector<Input> sets = load_shards(inputs, problems);
   const std::map<unsigned, std::string> shard_dir = check_one_run(sets, problems);
-  if (!problems.empty() || sets.empty()) refuse(out, problems);
   std::set<std::string> absent;
-  const std::vector<CellRecord> cells = collect_cells(sets, shard_dir, absent, problems);
-  if (!problems.empty()) refuse(out, problems);
-  write_merged(out, merged_meta(sets, shard_dir, absent, command), cells);
+  std::vector<CellRecord> cells;
+  if (problems.empty() && !sets.empty()) cells = collect_cells(sets, shard_dir, absent, problems);
+  if (!problems.empty() || sets.empty()) {
+    locked.discard_if_created();
+    refuse(out, problems);
+  }
+  write_merged(locked, out, merged_meta(sets, shard_dir, absent, command), cells);
   MergeSummary s;
   s.cells = cells.size();
   s.absent = absent.size();

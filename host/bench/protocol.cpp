@@ -231,6 +231,7 @@ Outcome measure(const Measurement& m, const ProtocolSettings& s) {
   const Clock::time_point start = Clock::now();
   Outcome out;
   auto check_hard_limit = [&] {
+    if (s.interrupted && s.interrupted->load()) throw Interrupted("interrupted");
     if (s.hard_limit_s > 0 && seconds_since(start) > s.hard_limit_s)
       throw TimedOut(fmt::format("timed out: {:.3f} s, over --timeout {} s (remaining rounds skipped)",
                                  seconds_since(start), s.hard_limit_s));

@@ -26,11 +26,13 @@
 //  4. Stopping rule (after nvbench's). At least min_rounds rounds; then stop as soon as every
 //     target figure's interval has a relative half-width of at most max_noise, or when max_time_s
 //     of sampling has passed, or at max_rounds. Which of the three stopped it is recorded.
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <functional>
 #include <limits>
 #include <map>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -123,6 +125,8 @@ struct ProtocolSettings {
   double hard_limit_s = 0.0;
   std::uint64_t seed = 1;    // of the arm order
   double confidence = kConfidence;
+  // Set by a signal handler (run's Ctrl-C): checked between arms, measure() then throws Interrupted.
+  const std::atomic<bool>* interrupted = nullptr;
 };
 
 enum class StopReason { Noise, Time, Rounds };
@@ -156,6 +160,13 @@ struct Outcome {
 // Thrown by measure() past ProtocolSettings::hard_limit_s.
 struct TimedOut : Error {
   using Error::Error;
+};
+
+// Thrown by measure() once ProtocolSettings::interrupted is set: the measurement is abandoned (its
+// cell is not recorded and runs again on resume). Not an Error, so no handler of bad input or
+// device faults turns it into a failed cell.
+struct Interrupted : std::runtime_error {
+  using std::runtime_error::runtime_error;
 };
 
 Outcome measure(const Measurement& m, const ProtocolSettings& s);

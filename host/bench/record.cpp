@@ -348,6 +348,45 @@ std::string csv_row(const CellRecord& r) {
   return s;
 }
 
+namespace {
+
+// What an "ok" cell must be to be reported: its hits checked, its intervals around their values,
+// its ratios above 0, and its estimates the ones its own samples give (an edited figure shows).
+std::string ok_cell_problem(const CellRecord& r) {
+  if (!r.order_is_permutation) return "it is \"ok\" but its order is not a permutation (order_is_permutation false)";
+  if (!r.hits_match_nosort) return "it is \"ok\" but its hits differ from NoSort's (hits_match_nosort false)";
+  const std::pair<const char*, const Estimate*> estimates[] = {
+      {"speedup", &r.speedup}, {"net_speedup", &r.net_speedup}, {"aa", &r.aa}, {"overhead_pct", &r.overhead_pct}};
+  for (const auto& [name, e] : estimates) {
+    if (std::isnan(e->value)) continue;  // not measured (a version 1 record)
+    if (std::string(name) != "overhead_pct" && !(e->value > 0))
+      return fmt::format("{} is {}; a ratio of two times is more than 0", name, e->value);
+    if (e->has_interval() && !(e->lo <= e->value && e->value <= e->hi))
+      return fmt::format("{} {} lies outside its interval [{}, {}]", name, e->value, e->lo, e->hi);
+  }
+  // The paired estimates again from the samples (bench/protocol.h), as the run computed them.
+  auto agrees = [](const Estimate& recorded, const Estimate& again) {
+    auto same = [](double a, double b) {
+      return (std::isnan(a) && std::isnan(b)) || std::abs(a - b) <= 1e-9 * std::max(std::abs(a), std::abs(b));
+    };
+    return same(recorded.value, again.value) && same(recorded.lo, again.lo) && same(recorded.hi, again.hi);
+  };
+  const auto nosort = r.samples.find("nosort"), aa = r.samples.find("aa"), trace = r.samples.find("trace");
+  if (nosort == r.samples.end()) return "";  // a record without samples (version 1)
+  for (const auto& [stage, series] : r.samples)
+    if (series.size() != nosort->second.size())
+      return fmt::format("its samples hold {} \"{}\" rounds but {} \"nosort\" ones", series.size(), stage,
+                         nosort->second.size());
+  if (aa != r.samples.end() && !agrees(r.aa, ratio_interval(nosort->second, aa->second)))
+    return "its aa figure is not the one its nosort and aa samples give (an edited record)";
+  if (trace != r.samples.end() && !r.same_order_as_nosort && r.encoder != kBaselineEncoder &&
+      !agrees(r.speedup, ratio_interval(nosort->second, trace->second)))
+    return "its speedup is not the one its nosort and trace samples give (an edited record)";
+  return "";
+}
+
+}  // namespace
+
 std::string cell_record_problem(const CellRecord& r) {
   for (const auto& c : cell_columns()) {
     if (c.kind == CellColumn::Text && !c.vocabulary.empty() &&
@@ -362,7 +401,7 @@ std::string cell_record_problem(const CellRecord& r) {
       if (std::isinf(x) || x < 0) return fmt::format("{} is {}; it must be a finite number, 0 or more", c.name, x);
     }
   }
-  return "";
+  return r.ok() ? ok_cell_problem(r) : "";
 }
 
 }  // namespace raysort

@@ -16,7 +16,48 @@ namespace raysort {
 
 namespace fs = std::filesystem;
 
+namespace {
+
+// A character that stands for itself in a cell file name; anything else is %XX. '_' stands for
+// itself only alone inside a part (never first, last or beside another '_'), so "__" always
+// separates the id's parts and no two ids share a name.
+bool plain_in_file_name(const std::string& part, std::size_t i) {
+  const char c = part[i];
+  if ((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '-' || c == '.') return true;
+  return c == '_' && i > 0 && i + 1 < part.size() && part[i - 1] != '_' && part[i + 1] != '_';
+}
+
+// File names stay well below NAME_MAX (255 bytes) with room for write_file_atomically's suffix.
+constexpr std::size_t kMaxCellFileStem = 180;
+
+}  // namespace
+
 std::string cell_file_name(const std::string& id) {
+  std::string stem;
+  std::vector<std::string> parts{""};
+  for (char c : id) {
+    if (c == '/') parts.emplace_back();
+    else parts.back().push_back(c);
+  }
+  for (std::size_t p = 0; p < parts.size(); ++p) {
+    const std::string& part = parts[p];
+    if (p > 0) stem += "__";
+    for (std::size_t i = 0; i < part.size(); ++i)
+      stem += plain_in_file_name(part, i) ? std::string(1, part[i])
+                                          : fmt::format("%{:02X}", static_cast<unsigned char>(part[i]));
+  }
+  if (stem.size() > kMaxCellFileStem) {
+    // A long id (a scene given by a long path): its start, then '~' (never plain, so no short name
+    // has one) and the FNV-1a hash of the whole id; the record inside names the cell in full.
+    std::size_t cut = kMaxCellFileStem - 17;
+    if (stem[cut - 1] == '%') cut -= 1;  // never split a %XX escape
+    else if (stem[cut - 2] == '%') cut -= 2;
+    stem = stem.substr(0, cut) + "~" + fnv1a_hex(id.data(), id.size());
+  }
+  return stem + ".json";
+}
+
+std::string legacy_cell_file_name(const std::string& id) {
   std::string s;
   for (char c : id) s += (c == '/') ? std::string("__") : std::string(1, c);
   return s + ".json";
@@ -39,8 +80,21 @@ void check_version(const nlohmann::json& meta, const std::string& path, bool for
                             path, v, kOldestReadableFormatVersion, kResultFormatVersion));
 }
 
-// A leftover of write_file_atomically ("NAME.tmp.<pid>") from a writer that was killed mid-write.
-bool is_temporary_file(const fs::path& p) { return p.filename().string().find(".tmp.") != std::string::npos; }
+// The files a result set's writer writes at its top level (util/atomic_file.h).
+constexpr const char* kSetFiles[] = {"meta.json", "cells.json", "cells.csv", "tables.md"};
+
+// A leftover of write_file_atomically (util/atomic_file.h: "meta.json.tmp.<pid>") from a writer that
+// was killed mid-write: of one of the set's own files, or in cells/ of a cell file. A user's file
+// ("analysis.tmp.notes") is never one.
+bool is_temporary_file(const fs::path& p, bool in_cells) {
+  const std::string name = p.filename().string();
+  const std::size_t at = name.rfind(".tmp.");
+  if (at == std::string::npos) return false;
+  const std::string target = name.substr(0, at);
+  if (!is_temporary_file_of(name, target)) return false;
+  if (in_cells) return target.size() > 5 && target.ends_with(".json");
+  return std::find(std::begin(kSetFiles), std::end(kSetFiles), target) != std::end(kSetFiles);
+}
 
 // meta.json is read by resume, compare, merge and the views: every entry they read must have the
 // type they read it as, or one Error names the entry (not a json exception deep in a reader).
@@ -67,6 +121,9 @@ void check_meta_shape(const nlohmann::json& meta, const std::string& path) {
   expect(meta, "", "absent_cells", List);
   expect(meta, "", "merged_from", List);
   expect(meta, "", "resumed", Count);
+  expect(meta, "", "kernels", Object);
+  if (meta.contains("kernels"))
+    for (const char* key : {"source", "hash", "cl_options"}) expect(meta["kernels"], "kernels.", key, Text);
   for (const char* key : {"git_commit", "raysort_version", "command", "date", "host_cpu"}) expect(meta, "", key, Text);
   if (meta.contains("device"))
     for (const char* key : {"name", "type", "platform", "platform_version", "opencl", "opencl_c", "driver", "slug"})
@@ -106,7 +163,10 @@ CellRecord parse_cell_record(const std::string& text, const std::string& file, c
   if (j.contains("id") && j["id"] != id && j["id"] != old_id)
     throw Error(fmt::format("{}: its \"id\" is {} but its fields make cell {}; {}", file, j["id"].dump(), id, fix));
   const std::string name = fs::path(file).filename().string();
-  if (name != cell_file_name(id) && !(old_id != id && name == cell_file_name(old_id) && j.value("id", old_id) == old_id))
+  // Its own name, or the name an older raysort gave it: before ids were escaped ("/" became "__"
+  // and nothing else changed), or before the trace class was an axis.
+  auto named = [&](const std::string& cell) { return name == cell_file_name(cell) || name == legacy_cell_file_name(cell); };
+  if (!named(id) && !(old_id != id && named(old_id) && j.value("id", old_id) == old_id))
     throw Error(fmt::format("{} holds cell {}, whose file is {}: a cell file names its cell (an edited or copied "
                             "record); {}",
                             file, id, cell_file_name(id), fix));
@@ -188,6 +248,30 @@ void check_same_shard(const nlohmann::json& old, const nlohmann::json& meta, con
                           was, now));
 }
 
+// A resumed set's new cells must be measured as its first ones were: on the same device and driver,
+// by the same raysort build, from the same kernels with the same build options. A set started
+// before an entry was recorded is not checked on it.
+void check_same_build(const nlohmann::json& old, const nlohmann::json& meta, const std::string& dir) {
+  std::vector<std::string> diffs;
+  auto compare = [&](const char* key, const char* what) {
+    if (!old.contains(key) || !meta.contains(key) || old[key] == meta[key]) return;
+    const std::string d = old[key].is_object() && meta[key].is_object() ? json_differences(old[key], meta[key])
+                                                                         : fmt::format("{} vs {}", old[key].dump(), meta[key].dump());
+    diffs.push_back(fmt::format("{} ({})", what, d));
+  };
+  compare("device", "device");
+  compare("raysort_version", "raysort version");
+  compare("git_commit", "commit");
+  compare("kernels", "kernels");
+  if (diffs.empty()) return;
+  std::string list;
+  for (const auto& d : diffs) list += (list.empty() ? "" : "; ") + d;
+  throw Error(fmt::format("{}: what it was started with differs from now: {} (then vs now); its cells and new ones "
+                          "would not be comparable: resume it with the same device, build, kernels and "
+                          "RAYSORT_CL_OPTIONS, or choose another --out folder",
+                          dir, list));
+}
+
 }  // namespace
 
 namespace {
@@ -196,8 +280,17 @@ namespace {
 bool has_user_entries(const fs::path& dir) {
   std::error_code ec;
   for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec))
-    if (it->path().filename() != FolderLock::kFileName && !is_temporary_file(it->path())) return true;
+    if (it->path().filename() != FolderLock::kFileName && !is_temporary_file(it->path(), false)) return true;
   return false;
+}
+
+// cells/ must be the set's own folder: a link would send a resume's cells somewhere else.
+void check_no_linked_cells(const std::string& dir) {
+  std::error_code ec;
+  if (fs::is_symlink(fs::symlink_status(fs::path(dir) / "cells", ec)))
+    throw Error(fmt::format("{}/cells is a symbolic link; a result set keeps its cells in a folder of its own (raysort "
+                            "never writes through a link): replace the link by the folder it points to",
+                            dir));
 }
 
 bool has_cell_files(const fs::path& cdir) {
@@ -212,7 +305,7 @@ void remove_temporary_files(const fs::path& dir) {
   std::vector<fs::path> leftovers;
   for (const fs::path& d : {dir, dir / "cells"})
     for (fs::directory_iterator it(d, ec), end; !ec && it != end; it.increment(ec))
-      if (is_temporary_file(it->path())) leftovers.push_back(it->path());
+      if (is_temporary_file(it->path(), d != dir) && fs::is_regular_file(it->symlink_status())) leftovers.push_back(it->path());
   for (const auto& p : leftovers) fs::remove(p, ec);
 }
 
@@ -232,6 +325,7 @@ ResultSet ResultSet::open_for_run(const std::string& dir, const nlohmann::json& 
     throw Error(fmt::format("--out {}: the folder is not empty and is not a result set (no meta.json); choose a new "
                             "or empty folder (raysort never writes among other files)",
                             dir));
+  check_no_linked_cells(dir);
   fs::create_directories(fs::path(dir) / "cells", ec);
   if (ec) throw Error(fmt::format("cannot create result folder '{}': {}", dir, ec.message()));
   rs.lock_ = FolderLock::acquire(dir, meta.value("command", "raysort"), "result set");
@@ -250,6 +344,7 @@ ResultSet ResultSet::open_for_run(const std::string& dir, const nlohmann::json& 
                               dir, json_differences(meta.value("matrix", nlohmann::json::object()),
                                                     old.value("matrix", nlohmann::json::object()))));
     check_same_shard(old, meta, dir);
+    check_same_build(old, meta, dir);
     // A scene file changed since the set was started: resumed cells would trace another file.
     if (old.contains("scene_files") && meta.contains("scene_files"))
       if (const auto diff = scene_file_differences(old, meta); !diff.empty())
@@ -266,6 +361,28 @@ ResultSet ResultSet::open_for_run(const std::string& dir, const nlohmann::json& 
   return rs;
 }
 
+namespace {
+
+// meta.json's fingerprints name every cell whose views were written (a cell's file is written
+// before them): a listed cell without its file was deleted or lost, and views written now would
+// silently drop it.
+void check_listed_cells_present(const std::string& dir, const nlohmann::json& meta,
+                                const std::map<std::string, CellRecord>& cells) {
+  const auto it = meta.find("fingerprints");
+  if (it == meta.end() || !it->is_object()) return;
+  std::vector<std::string> lost;
+  for (const auto& [id, fp] : it->items())
+    if (!cells.count(id)) lost.push_back(id);
+  if (lost.empty()) return;
+  std::error_code ec;
+  const bool no_folder = !fs::exists(fs::path(dir) / "cells", ec);
+  throw Error(fmt::format("{}: meta.json lists {} cell(s) whose files are missing{} (e.g. {}); restore them, or run "
+                          "the set's command again to measure them (meta.json \"command\")",
+                          dir, lost.size(), no_folder ? " (there is no cells/ folder)" : " from cells/", lost.front()));
+}
+
+}  // namespace
+
 ResultSet ResultSet::load(const std::string& dir) {
   fs::path meta_path = fs::path(dir) / "meta.json";
   std::error_code ec;
@@ -275,12 +392,21 @@ ResultSet ResultSet::load(const std::string& dir) {
   rs.meta_ = parse_meta(read_file(meta_path.string()), meta_path.string());
   check_version(rs.meta_, meta_path.string(), false);
   read_cells(dir, rs.meta_, rs.cells_);
+  check_listed_cells_present(dir, rs.meta_, rs.cells_);
   return rs;
 }
 
-void ResultSet::lock_for_writing(const std::string& command) {
-  if (!lock_) lock_ = FolderLock::acquire(dir_, command, "result set");
-  remove_temporary_files(dir_);
+ResultSet ResultSet::load_for_writing(const std::string& dir, const std::string& command) {
+  std::error_code ec;
+  if (!fs::is_regular_file(fs::path(dir) / "meta.json", ec))
+    throw Error(fmt::format("'{}' is not a result set (no meta.json)", dir));
+  // The lock first: a run writing into the set is refused before anything is read.
+  check_no_linked_cells(dir);
+  std::shared_ptr<FolderLock> lock = FolderLock::acquire(dir, command, "result set");
+  remove_temporary_files(dir);
+  ResultSet rs = load(dir);
+  rs.lock_ = std::move(lock);
+  return rs;
 }
 
 const CellRecord* ResultSet::find(const std::string& id) const {
@@ -291,17 +417,26 @@ const CellRecord* ResultSet::find(const std::string& id) const {
 void ResultSet::write_cell(const CellRecord& cell) {
   nlohmann::json j = cell;
   const fs::path cells = fs::path(dir_) / "cells";
-  write_file_atomically((cells / cell_file_name(cell.id())).string(), j.dump(2) + "\n");
-  // A rerun cell that was written before the trace class was an axis had a file without the class
-  // in its name: the new record replaces it (else two files would hold one cell). That name is a
-  // wide cell's too: only a record of this cell's class is removed.
-  if (const std::string old_id = cell.id_before_class_axis(); old_id != cell.id()) {
-    const fs::path old_file = cells / cell_file_name(old_id);
+  const std::string name = cell_file_name(cell.id());
+  write_file_atomically((cells / name).string(), j.dump(2) + "\n");
+  // A rerun cell whose file an older raysort named differently (see parse_cell_record): the new
+  // record replaces it, or two files would hold one cell. Such a name may be another cell's (a wide
+  // cell's, or a colliding id's under the old "__" names): only a record of this very cell goes.
+  const std::string old_id = cell.id_before_class_axis();
+  for (const std::string& old_name : {legacy_cell_file_name(cell.id()), cell_file_name(old_id), legacy_cell_file_name(old_id)}) {
+    if (old_name == name) continue;
+    const fs::path old_file = cells / old_name;
     std::error_code ec;
-    if (fs::exists(old_file, ec)) {
-      const nlohmann::json old = nlohmann::json::parse(read_file(old_file.string()), nullptr, false);
-      if (old.is_object() && old.value("layout", std::string("wide")) == cell.layout) fs::remove(old_file, ec);
+    if (!fs::is_regular_file(fs::symlink_status(old_file, ec))) continue;
+    const nlohmann::json old = nlohmann::json::parse(read_file(old_file.string()), nullptr, false);
+    if (!old.is_object()) continue;
+    CellRecord held;
+    try {
+      held = old.get<CellRecord>();
+    } catch (const std::exception&) {
+      continue;
     }
+    if (held.id() == cell.id()) fs::remove(old_file, ec);
   }
   cells_[cell.id()] = cell;
 }
@@ -418,7 +553,8 @@ void check_output_path(const std::string& out, const std::vector<std::string>& i
       throw Error(fmt::format("{} {}: holds the input {}; write the output to a folder of its own", option, out, in));
   }
   if (!fs::exists(target, ec) || force) return;
-  if (fs::is_directory(target, ec) && fs::is_empty(target, ec)) return;
+  // A folder holding nothing but a writer's lock file is empty: whoever holds it is found by the lock.
+  if (fs::is_directory(target, ec) && !has_user_entries(target)) return;
   throw Error(fmt::format("{} {}: already exists; choose a new name, or pass --force to replace it", option, out));
 }
 

@@ -27,10 +27,12 @@ class ResultSet {
   // whose meta.json is missing, is refused before anything is written.
   static ResultSet open_for_run(const std::string& dir, const nlohmann::json& meta);
   // Reads a finished (or partial) result set, lock-free. Throws Error for a missing set, another
-  // format, or a cell file that is not what its name says (validate_cell_file).
+  // format, a cell file that is not what its name says (validate_cell_file), or a cell meta.json
+  // lists (its fingerprints) whose file is gone.
   static ResultSet load(const std::string& dir);
-  // Takes the writer's lock of a loaded set (raysort report rewrites its views).
-  void lock_for_writing(const std::string& command);
+  // The same under the writer's lock, taken before anything is read (raysort report rewrites the
+  // views): a set being written is refused.
+  static ResultSet load_for_writing(const std::string& dir, const std::string& command);
 
   bool has(const std::string& cell_id) const { return cells_.count(cell_id) > 0; }
   const CellRecord* find(const std::string& cell_id) const;
@@ -56,8 +58,14 @@ class ResultSet {
   std::shared_ptr<FolderLock> lock_;
 };
 
-// The file name of a cell in DIR/cells ("/" in the id becomes "__").
+// The file name of a cell in DIR/cells: the id's parts joined by "__", each character other than
+// letters, digits, '-', '.' and a lone inner '_' written %XX, so two ids never share a name
+// ("d/s.obj/..." is "d%2Fs.obj__...", "d__s.obj/..." is "d%5F%5Fs.obj__..."); an id whose name
+// would pass 180 characters keeps its start and ends in '~' and the FNV-1a hash of the id.
 std::string cell_file_name(const std::string& cell_id);
+// The name raysort gave a cell file before (every "/" became "__", nothing else): still read, and
+// replaced when that cell is written again.
+std::string legacy_cell_file_name(const std::string& cell_id);
 
 // The readers behind ResultSet::load and open_for_run, on text (the fuzz target calls them):
 // a cell record as read from `file`, checked against its name, the status vocabulary, its figures

@@ -36,7 +36,8 @@ namespace {
 std::atomic<bool> g_interrupted{false};
 extern "C" void on_sigint(int) { g_interrupted = true; }
 
-// SIGINT/SIGTERM end the run after the cell in flight (its rounds finish), restored on exit.
+// SIGINT/SIGTERM end the run at the next arm of the cell in flight (that cell is not recorded; a
+// resume measures it), restored on exit.
 struct InterruptGuard {
   using Handler = void (*)(int);
   Handler previous_int = std::signal(SIGINT, on_sigint);
@@ -95,6 +96,12 @@ nlohmann::json bvh_meta(const std::vector<TraceLayout>& layouts) {
           {"simt_model", "walks the same tree as the trace kernel, one ray per lane of a 32-wide warp (bench/metrics.h)"}};
 }
 
+// What the kernels were built from (runtime/runtime.h): a resume and compare check it.
+nlohmann::json kernels_meta() {
+  const KernelProvenance k = kernel_provenance();
+  return {{"source", k.source}, {"hash", k.hash}, {"cl_options", k.cl_options}};
+}
+
 nlohmann::json run_meta(const MatrixSpec& spec, const RunOptions& opts, const DeviceInfo& dev) {
   return {
       {"format_version", kResultFormatVersion},
@@ -121,6 +128,7 @@ nlohmann::json run_meta(const MatrixSpec& spec, const RunOptions& opts, const De
         {"slug", dev.slug()}}},
       {"host_cpu", host_cpu()},
       {"git_commit", git_commit()},
+      {"kernels", kernels_meta()},
       {"command", opts.command},
       {"date", utc_now()},
       {"seeds", {{"rays", spec.seed}}},
@@ -572,15 +580,20 @@ RunSummary run_matrix(const MatrixSpec& requested, const RunOptions& opts) {
         if (g_interrupted) break;
         std::vector<CellRecord> cells;
         for (const auto& p : group) cells.push_back(cell_of(p));
-        if (group.front().encoder == kBaselineEncoder) {
-          CellRecord c = bench.measure_nosort(cells.front(), spec.protocol(cells.front().id()));
-          c.leaks_per_million = scene.leaks_per_million(*rb, first.variant, first.layout, both_variants);
-          record(c);
-          continue;
+        ProtocolSettings settings = spec.protocol(cells.front().id());
+        settings.interrupted = &g_interrupted;  // Ctrl-C stops the rounds between two arms
+        try {
+          if (group.front().encoder == kBaselineEncoder) {
+            CellRecord c = bench.measure_nosort(cells.front(), settings);
+            c.leaks_per_million = scene.leaks_per_million(*rb, first.variant, first.layout, both_variants);
+            record(c);
+            continue;
+          }
+          const Encoder e = *parse_encoder(group.front().encoder);
+          for (const CellRecord& c : measure_encoder(bench, scene, std::move(cells), e, settings)) record(c);
+        } catch (const Interrupted&) {
+          break;  // the cells in flight are not recorded: a resume measures them
         }
-        const Encoder e = *parse_encoder(group.front().encoder);
-        const ProtocolSettings settings = spec.protocol(cells.front().id());
-        for (const CellRecord& c : measure_encoder(bench, scene, std::move(cells), e, settings)) record(c);
       }
     }
   }

@@ -596,7 +596,14 @@ std::string failed_section(const std::vector<CellRecord>& cells) {
   for (auto& c : cells)
     if (!c.ok()) failed.push_back(&c);
   std::string md = fmt::format("## Failed cells: {}\n\n", failed.size());
-  for (auto* c : failed) md += fmt::format("- `{}`: {} — {}\n", c->id(), c->status, c->error);
+  // An error is free text (a device's message, a path): one line, its '|' escaped, so it cannot
+  // end the list item or be read as a table by a markdown viewer.
+  auto one_line = [](const std::string& text) {
+    std::string out;
+    for (char ch : text) out += ch == '|' ? std::string("\\|") : ch == '\n' || ch == '\r' ? std::string(" ") : std::string(1, ch);
+    return out;
+  };
+  for (auto* c : failed) md += fmt::format("- `{}`: {} — {}\n", c->id(), c->status, one_line(c->error));
   if (!failed.empty()) md += "\n";
   return md;
 }

@@ -404,4 +404,23 @@ cl::Buffer Runtime::buffer(const std::string& name, std::size_t bytes, cl_mem_fl
   return cl_call(doing, [&] { return cl::Buffer(context_, flags, bytes, const_cast<void*>(host_data)); });
 }
 
+KernelProvenance kernel_provenance() {
+  KernelProvenance k;
+  k.source = kernel_dir().empty() ? "embedded" : kernel_dir();
+  if (const char* env = std::getenv("RAYSORT_CL_OPTIONS")) k.cl_options = env;
+  // The embedded list names every kernel file; with --kernels each is read from the folder instead.
+  std::uint64_t h = 0xcbf29ce484222325ull;
+  auto mix = [&h](std::string_view bytes) {
+    for (unsigned char c : bytes) h = (h ^ c) * 0x100000001b3ull;
+    h = (h ^ 0xff) * 0x100000001b3ull;  // a separator, so "ab" + "c" differs from "a" + "bc"
+  };
+  for (const EmbeddedFile& f : embedded_files()) {
+    if (f.path.rfind("cl/", 0) != 0) continue;
+    mix(f.path);
+    mix(read_kernel_file(std::string(f.path)));
+  }
+  k.hash = fmt::format("{:016x}", h);
+  return k;
+}
+
 }  // namespace raysort

@@ -84,6 +84,15 @@ DeviceInfo select_device(std::string spec);
 // Reads kernels from DIR instead of the embedded copies (kernel development: --kernels DIR).
 void set_kernel_dir(std::string dir);
 
+// What the kernels are built from, for a result set's meta.json ("kernels"): a run resumes, and
+// compare reads two sets as one build, only when these agree.
+struct KernelProvenance {
+  std::string source;      // "embedded", or the --kernels folder
+  std::string hash;        // FNV-1a 64 (hex) over every cl/ file's path and text as this binary reads them
+  std::string cl_options;  // RAYSORT_CL_OPTIONS ("" when unset)
+};
+KernelProvenance kernel_provenance();
+
 // The source of a kernel file ("cl/trace.cl") with its #include "x.h" lines replaced by the
 // contents of cl/x.h, so programs build from one string with no include path.
 std::string kernel_source(const std::string& path);

@@ -90,4 +90,8 @@ std::vector<SceneListing> list_scenes();
 // is its own file). Throws Error as check_scene_reference does, or for a .toml that is not TOML.
 std::vector<std::string> scene_file_obj_files(const std::string& name_or_path);
 
+// What a scene file says, its `extends` resolved, as TOML text in a fixed layout (so its SHA-256
+// changes exactly when the scene does: meta.json "scene_files"); "" for a bare .obj path.
+std::string scene_description(const std::string& name_or_path);
+
 }  // namespace raysort

@@ -152,27 +152,53 @@ struct FileCloser {
 };
 }  // namespace
 
+namespace {
+
+// A SHA-256 digest fed in pieces (OpenSSL's EVP interface), as 64 lowercase hex digits at the end.
+class Sha256 {
+ public:
+  Sha256() {
+    if (!ctx_ || EVP_DigestInit_ex(ctx_.get(), EVP_sha256(), nullptr) != 1)
+      throw Error("OpenSSL could not start a SHA-256 digest; check the libcrypto installation (scripts/install-deps.sh)");
+  }
+  void update(const void* data, std::size_t n) {
+    if (n > 0 && EVP_DigestUpdate(ctx_.get(), data, n) != 1) throw Error("OpenSSL SHA-256 update failed");
+  }
+  std::string hex() {
+    unsigned char digest[EVP_MAX_MD_SIZE];
+    unsigned int len = 0;
+    if (EVP_DigestFinal_ex(ctx_.get(), digest, &len) != 1) throw Error("OpenSSL SHA-256 final step failed");
+    std::string out;
+    for (unsigned int i = 0; i < len; ++i) out += fmt::format("{:02x}", digest[i]);
+    return out;
+  }
+
+ private:
+  std::unique_ptr<EVP_MD_CTX, void (*)(EVP_MD_CTX*)> ctx_{EVP_MD_CTX_new(), &EVP_MD_CTX_free};
+};
+
+}  // namespace
+
 std::string sha256_file(const std::string& path) {
   std::unique_ptr<std::FILE, FileCloser> file(std::fopen(path.c_str(), "rb"));
   if (!file) throw Error(fmt::format("cannot read {}: {}; check the path and its permissions", path, std::strerror(errno)));
-  std::unique_ptr<EVP_MD_CTX, void (*)(EVP_MD_CTX*)> ctx(EVP_MD_CTX_new(), &EVP_MD_CTX_free);
-  if (!ctx || EVP_DigestInit_ex(ctx.get(), EVP_sha256(), nullptr) != 1)
-    throw Error("OpenSSL could not start a SHA-256 digest; check the libcrypto installation (scripts/install-deps.sh)");
+  Sha256 digest;
   // 256 KiB at a time: the largest scene files are tens of MB and need not be held whole.
   std::vector<unsigned char> chunk(256 * 1024);
   while (true) {
     const std::size_t n = std::fread(chunk.data(), 1, chunk.size(), file.get());
-    if (n > 0 && EVP_DigestUpdate(ctx.get(), chunk.data(), n) != 1) throw Error("OpenSSL SHA-256 update failed");
+    digest.update(chunk.data(), n);
     if (n < chunk.size()) break;
   }
   if (std::ferror(file.get()))
     throw Error(fmt::format("cannot read {}: {}; check that it is a readable file", path, std::strerror(errno)));
-  unsigned char digest[EVP_MAX_MD_SIZE];
-  unsigned int len = 0;
-  if (EVP_DigestFinal_ex(ctx.get(), digest, &len) != 1) throw Error("OpenSSL SHA-256 final step failed");
-  std::string hex;
-  for (unsigned int i = 0; i < len; ++i) hex += fmt::format("{:02x}", digest[i]);
-  return hex;
+  return digest.hex();
+}
+
+std::string sha256_text(std::string_view text) {
+  Sha256 digest;
+  digest.update(text.data(), text.size());
+  return digest.hex();
 }
 
 std::string_view status_name(FileStatus s) {
@@ -234,6 +260,11 @@ nlohmann::json scene_file_checksums(const std::vector<std::string>& scene_names,
   };
   for (const auto& name : scene_names) {
     std::vector<std::string> objs = scene_file_obj_files(name);  // checks the reference, as load_scene does
+    // The scene file itself, with every file it extends: what it says (camera, lights, effects,
+    // meshes) as one resolved table, so an edited TOML (or a base it extends) is noticed.
+    if (const std::string description = scene_description(name); !description.empty())
+      out[std::string(kSceneDescriptionPrefix) + name] = {{"status", "scene file"},
+                                                          {"sha256", sha256_text(description)}};
     if (objs.empty() && !find_embedded_scene(name) && !name.ends_with(".toml")) {
       record(name, fs::path(name));  // a bare .obj path: the file as given
       continue;
@@ -277,6 +308,15 @@ std::vector<std::string> scene_file_differences(const nlohmann::json& meta_a, co
   std::set<std::string> paths;
   for (auto it = a->begin(); it != a->end(); ++it) paths.insert(it.key());
   for (auto it = b->begin(); it != b->end(); ++it) paths.insert(it.key());
+  // A set made before scene files were recorded by their resolved text has no "scene:" entries;
+  // then those of the other set cannot differ from anything.
+  auto describes_scenes = [](const nlohmann::json& files) {
+    for (auto it = files.begin(); it != files.end(); ++it)
+      if (it.key().rfind(kSceneDescriptionPrefix, 0) == 0) return true;
+    return false;
+  };
+  if (!describes_scenes(*a) || !describes_scenes(*b))
+    std::erase_if(paths, [](const std::string& p) { return p.rfind(kSceneDescriptionPrefix, 0) == 0; });
   std::vector<std::string> lines;
   for (const auto& p : paths) {
     auto ia = a->find(p), ib = b->find(p);

@@ -55,6 +55,13 @@ std::vector<std::string> files_with_materials(const std::vector<std::string>& ob
 // Throws Error naming the file when it cannot be read.
 std::string sha256_file(const std::string& path);
 
+// SHA-256 of bytes in memory, as 64 lowercase hex digits.
+std::string sha256_text(std::string_view text);
+
+// The key prefix of a scene file's own entry in "scene_files" ("scene:cornell": the SHA-256 of its
+// resolved text, extends included; scene_description in scene/load.h).
+inline constexpr std::string_view kSceneDescriptionPrefix = "scene:";
+
 enum class FileStatus { Present, Missing, Different, Uncatalogued };
 std::string_view status_name(FileStatus s);  // "present", "missing", "different", "uncatalogued"
 
@@ -71,7 +78,8 @@ FileCheck check_scene_file(const std::string& relative_path, const std::string& 
 // One line for a check: "present", "missing", "different: expected fc498ed67bff, found 0123456789ab".
 std::string describe_check(const FileCheck& check);
 
-// For result-set metadata (meta.json "scene_files"): every file that the named scenes use (embedded
+// For result-set metadata (meta.json "scene_files"): each scene's own file as "scene:<name>" (the
+// SHA-256 of its resolved text, with what it extends; embedded scenes too), and every file that the named scenes use (embedded
 // scene names: the OBJ files their scene file names plus catalogued material files; a .toml path:
 // the OBJ files it names; an .obj path: that file), as
 //   {"<path>": {"sha256": "<hex>", "status": "present|different|uncatalogued"}}

@@ -638,4 +638,18 @@ std::vector<std::string> scene_file_obj_files(const std::string& name_or_path) {
   return {};
 }
 
+std::string scene_description(const std::string& name_or_path) {
+  check_scene_reference(name_or_path);
+  toml::table t;
+  if (auto text = find_embedded_scene(name_or_path))
+    t = read_scene_table(std::string(*text), "embedded:scenes/" + name_or_path + ".toml");
+  else if (ends_with(name_or_path, ".toml"))
+    t = read_scene_table(read_text_file(name_or_path), name_or_path);
+  else
+    return "";
+  std::ostringstream out;
+  out << toml::toml_formatter(t);
+  return out.str();
+}
+
 }  // namespace raysort

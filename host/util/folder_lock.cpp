@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <fmt/format.h>
 #include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -17,8 +18,19 @@ namespace raysort {
 std::shared_ptr<FolderLock> FolderLock::acquire(const std::string& dir, const std::string& command,
                                                 const std::string& what) {
   const std::string path = (std::filesystem::path(dir) / kFileName).string();
-  const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  // Never through a link (a planted .raysort-lock link would have its target truncated) and only
+  // a regular file (a FIFO or device is not a lock).
+  const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC, 0644);
+  if (fd < 0 && errno == ELOOP)
+    throw Error(fmt::format("{} is a symbolic link, not raysort's lock file; remove the link (raysort never writes "
+                            "through one)",
+                            path));
   if (fd < 0) throw Error(fmt::format("cannot open the lock file '{}': {}", path, std::strerror(errno)));
+  struct stat st {};
+  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+    ::close(fd);
+    throw Error(fmt::format("{} is not a regular file, so it is not raysort's lock file; remove it", path));
+  }
   if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
     const int e = errno;
     std::string holder;
