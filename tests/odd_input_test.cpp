@@ -5,6 +5,7 @@
 // indices and a 1 GB line.
 #include <gtest/gtest.h>
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -258,4 +259,66 @@ TEST(OddObj, GigabyteLineRefusedQuickly) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("memory.obj:2: line longer"), std::string::npos) << e.what();
   }
+}
+
+namespace {
+const std::string kBoxWithMtl(const std::string& mtllib) {
+  return "mtllib " + mtllib + "\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl red\nf 1 2 3\n";
+}
+}  // namespace
+
+// Issue 44, item 15: an MTL file is read through the same bounded reader as every input: a FIFO
+// (read, it blocked forever), a device (/dev/zero read without end, then "out of host memory") and
+// a 1 GiB sparse file are refused by type or size, naming the OBJ and the MTL file.
+TEST(OddObj, MtlFilesMustBeRegularFilesWithinTheBound) {
+  const fs::path dir = temp_dir("mtl_inputs");
+  ASSERT_EQ(::mkfifo((dir / "pipe.mtl").c_str(), 0600), 0);
+  write_file(dir / "fifo.obj", kBoxWithMtl("pipe.mtl"));
+  std::string msg;
+  EXPECT_FALSE(load_or_error(dir / "fifo.obj", &msg));
+  EXPECT_EQ(msg, "OBJ file " + (dir / "fifo.obj").string() + ": mtllib pipe.mtl: MTL file " +
+                     (dir / "pipe.mtl").string() +
+                     " is a FIFO (named pipe), not a regular file; give the path of the .mtl file, or remove the "
+                     "mtllib line");
+  write_file(dir / "zero.obj", kBoxWithMtl("/dev/zero"));
+  EXPECT_FALSE(load_or_error(dir / "zero.obj", &msg));
+  EXPECT_NE(msg.find("MTL file /dev/zero is a character device, not a regular file"), std::string::npos) << msg;
+  write_file(dir / "big.mtl", "");
+  ASSERT_EQ(::truncate((dir / "big.mtl").c_str(), off_t(1) << 30), 0);
+  write_file(dir / "big.obj", kBoxWithMtl("big.mtl"));
+  EXPECT_FALSE(load_or_error(dir / "big.obj", &msg));
+  EXPECT_NE(msg.find("big.mtl is 1.0 GiB, over the 64.0 MiB bound for MTL files; it is corrupt or the wrong file"), std::string::npos) << msg;
+  fs::remove(dir / "big.mtl");
+  // A real MTL still gives its Kd.
+  write_file(dir / "red.mtl", "newmtl red\nKd 0.8 0.1 0.1\n");
+  write_file(dir / "red.obj", kBoxWithMtl("red.mtl"));
+  std::vector<Material> mats;
+  const Mesh m = load_obj((dir / "red.obj").string(), mats);
+  ASSERT_EQ(mats.size(), 1u);
+  EXPECT_FLOAT_EQ(mats[0].albedo[0], 0.8f);
+  EXPECT_EQ(m.material, std::vector<std::int32_t>{0});
+}
+
+// A missing MTL file is no error (downloaded OBJs often lack theirs) but no longer silent: one
+// warning line on stderr names the OBJ and the MTL path tried.
+TEST(OddObj, MissingMtlFileIsAWarningNamingIt) {
+  const fs::path dir = temp_dir("mtl_missing");
+  write_file(dir / "lonely.obj", kBoxWithMtl("gone.mtl"));
+  ::testing::internal::CaptureStderr();
+  const auto triangles = load_or_error(dir / "lonely.obj");
+  const std::string err = ::testing::internal::GetCapturedStderr();
+  EXPECT_EQ(triangles, std::optional<std::size_t>(1));
+  EXPECT_EQ(err, "raysort: warning: OBJ file " + (dir / "lonely.obj").string() + " names the MTL file " +
+                     (dir / "gone.mtl").string() +
+                     " (mtllib), which does not exist; its materials get the default 0.7 grey albedo\n");
+}
+
+// An OBJ path that is a FIFO is refused by its type (opening it for reading blocked forever).
+TEST(OddObj, FifoObjIsRefusedNotRead) {
+  const fs::path dir = temp_dir("obj_fifo");
+  ASSERT_EQ(::mkfifo((dir / "pipe.obj").c_str(), 0600), 0);
+  std::string msg;
+  EXPECT_FALSE(load_or_error(dir / "pipe.obj", &msg));
+  EXPECT_EQ(msg, "OBJ file " + (dir / "pipe.obj").string() +
+                     " is a FIFO (named pipe), not a regular file; give the path of the .obj file");
 }

@@ -3,9 +3,12 @@
 // the device against the host twin bit for bit. Scenes are built in the tests from TOML text with
 // procedural meshes, at small resolutions.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <cmath>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
 
 #include "bvh/bvh.h"
 #include "render/batches.h"
@@ -497,3 +500,56 @@ TEST(PathTracer, SamplePassesPartitionTheFrame) {
 }
 
 }  // namespace raysort
+
+// Issue 44, item 7: `render` names its files after the scene, and a scene's name comes from its
+// input (a scene file's `name`, a bare OBJ's file name): it is made one plain file name, so the
+// files land in the current folder, not hidden and not elsewhere. A bare ".hidden.obj" wrote the
+// hidden ".hidden.png" before.
+TEST(RenderOutput, FilesNamedAfterTheSceneStayPlainNamesInTheCurrentFolder) {
+  namespace fs = std::filesystem;
+  const fs::path dir = raysort::testing::temp_path("render_names");
+  fs::create_directories(dir);
+  std::ofstream(dir / ".hidden.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+  const fs::path before = fs::current_path();
+  fs::current_path(dir);
+  const auto r = raysort::testing::run_cli({"render", "--scene", (dir / ".hidden.obj").string(), "--host",
+                                            "--resolution", "8x8"});
+  fs::current_path(before);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(fs::exists(dir / "_hidden.png")) << r.out;
+  EXPECT_TRUE(fs::exists(dir / "_hidden.exr")) << r.out;
+  EXPECT_FALSE(fs::exists(dir / ".hidden.png"));
+}
+
+// Issue 44, item 15/17: kernel files read from --kernels DIR go through the bounded input reader:
+// an empty file is named (OpenCL said only CL_INVALID_KERNEL_NAME), a FIFO is refused by its type
+// (it blocked the read forever).
+TEST(KernelFiles, EmptyOrFifoKernelFilesUnderKernelsDirAreNamed) {
+  namespace fs = std::filesystem;
+  const fs::path cl = fs::path(__FILE__).parent_path().parent_path() / "cl";
+  ASSERT_TRUE(fs::is_directory(cl)) << cl;
+  const fs::path empty = raysort::testing::temp_path("kernels_empty"), fifo = raysort::testing::temp_path("kernels_fifo");
+  fs::create_directories(empty);
+  fs::create_directories(fifo);
+  for (const auto& e : fs::directory_iterator(cl)) {
+    const std::string name = e.path().filename().string();
+    fs::copy_file(e.path(), empty / name);
+    ASSERT_EQ(::mkfifo((fifo / name).c_str(), 0600), 0);
+  }
+  std::ofstream(empty / "shade.cl", std::ios::trunc);  // render's kernels
+  const fs::path out = raysort::testing::temp_path("kernels_out");
+  auto r = raysort::testing::run_cli({"--kernels", empty.string(), "render", "--scene", "cornell", "--resolution",
+                                      "8x8", "--out", (out / "x.png").string()});
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find("raysort: error: kernel file " + empty.string() + "/shade.cl (for cl/shade.cl) is empty; point "
+                       "--kernels at the repository's cl/ folder, or restore the file"),
+            std::string::npos)
+      << r.err;
+  r = raysort::testing::run_cli({"--kernels", fifo.string(), "render", "--scene", "cornell", "--resolution", "8x8",
+                                 "--out", (out / "x.png").string()});
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find("raysort: error: kernel file " + fifo.string() + "/"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(" is a FIFO (named pipe), not a regular file; point --kernels at the repository's cl/ folder"),
+            std::string::npos)
+      << r.err;
+}

@@ -1,6 +1,9 @@
 // Scene loading: the TOML parser's error messages, OBJ checks, procedural determinism and sizes,
 // bare OBJ paths, and the real scenes when the scene root is there.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -425,11 +428,11 @@ TEST(SceneToml, ExtendsTakesTheBaseAndReplacesWholeTables) {
   EXPECT_NE(msg.find("chain of more than 8"), std::string::npos) << msg;
   msg.clear();
   try { parse_scene_toml("extends = \"no_such_scene\"\n", "x.toml", {}); } catch (const Error& e) { msg = e.what(); }
-  EXPECT_NE(msg.find("x.toml: extends = \"no_such_scene\": no scene of that name"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("x.toml:1: extends = \"no_such_scene\": no scene of that name"), std::string::npos) << msg;
   EXPECT_NE(msg.find("cornell"), std::string::npos) << msg;
   msg.clear();
   try { parse_scene_toml("extends = 3\n", "y.toml", {}); } catch (const Error& e) { msg = e.what(); }
-  EXPECT_NE(msg.find("y.toml: 'extends' must be a scene name"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("y.toml:1: 'extends' must be a scene name"), std::string::npos) << msg;
   fs::remove_all(dir);
 }
 
@@ -759,4 +762,161 @@ TEST(SceneProvenance, FileDifferencesBetweenResultSets) {
   EXPECT_NO_THROW(lines = scene_file_differences(a, bad));
   EXPECT_EQ(lines.size(), 3u);
   EXPECT_NO_THROW(scene_file_differences(nlohmann::json::array(), "text"));
+}
+
+// Issue 44, item 7: a scene's name is the base of output files (render's <name>.png, trace's
+// <name>.json), so a name that is a path, hidden, empty or overlong is refused with its line.
+TEST(SceneToml, SceneNameMustBeAPlainFileName) {
+  EXPECT_EQ(parse_error(replace(kValid, "name = \"t\"", "name = \"\"")),
+            "bad.toml:1: 'name' is empty; give a plain name such as \"bad\"");
+  EXPECT_EQ(parse_error(replace(kValid, "name = \"t\"", "name = \"../../evil/x\"")),
+            "bad.toml:1: 'name' holds a '/': it names output files, so it must be a name, not a path; give a plain "
+            "name such as \"_._.._evil_x\"");
+  EXPECT_NE(parse_error(replace(kValid, "name = \"t\"", "name = \"/tmp/x\"")).find("bad.toml:1: 'name' holds a '/'"),
+            std::string::npos);
+  EXPECT_NE(parse_error(replace(kValid, "name = \"t\"", "name = \"..\"")).find("bad.toml:1: 'name' starts with '.'"),
+            std::string::npos);
+  EXPECT_NE(parse_error(replace(kValid, "name = \"t\"", "name = \"a\\\\b\"")).find("holds a '\\'"),
+            std::string::npos);
+  EXPECT_NE(parse_error(replace(kValid, "name = \"t\"", "name = \"" + std::string(101, 'n') + "\""))
+                .find("is 101 bytes long"),
+            std::string::npos);
+  EXPECT_EQ(parse_error(replace(kValid, "name = \"t\"", "name = \"cornell box (v2)\"")), "");
+}
+
+// Issue 44, item 9: a camera whose view direction or up cannot be normalised in float is refused
+// where the scene is parsed, naming the key and why (it rendered NaN rays or one direction).
+TEST(SceneToml, CameraVectorsTooSmallForFloatAreRefused) {
+  const std::string tiny_view = parse_error(replace(kValid, "look_at = [0.0, 1.0, 0.0]", "look_at = [1e-38, 1.0, 3.0]"));
+  EXPECT_NE(tiny_view.find("bad.toml:4: 'camera.look_at' is 1e-38 from the camera position, too close to normalise"),
+            std::string::npos)
+      << tiny_view;
+  const std::string tiny_up = parse_error(replace(kValid, "fov_y = 40.0", "up = [0.0, 1e-40, 0.0]\nfov_y = 40.0"));
+  EXPECT_NE(tiny_up.find("bad.toml:5: 'camera.up' is 1e-40 long; it must be between 1e-12 and 1e+18 long"),
+            std::string::npos)
+      << tiny_up;
+  const std::string parallel = parse_error(replace(kValid, "fov_y = 40.0", "up = [0.0, 0.0, 2.0]\nfov_y = 40.0"));
+  EXPECT_NE(parallel.find("bad.toml:5: 'camera.up' is parallel to the view direction"), std::string::npos) << parallel;
+  const std::string far = parse_error(replace(kValid, "position = [0.0, 1.0, 3.0]", "position = [0.0, 1.0, 3e30]"));
+  EXPECT_NE(far.find("bad.toml:3: 'camera.position' has a coordinate 3e+30, outside the ±1e+18"), std::string::npos)
+      << far;
+  EXPECT_EQ(parse_error(replace(kValid, "fov_y = 40.0", "up = [0.0, 1e-3, 0.0]\nfov_y = 40.0")), "");
+}
+
+// Issue 44, item 9: a scene whose box is too large or too small for float ray tracing is refused
+// with the file, the box and the supported range, both from a scene file and as a bare OBJ.
+TEST(SceneToml, SceneExtentOutsideTheFloatRangeIsRefused) {
+  const std::string box = "[[mesh]]\nname = \"floor\"\ngenerator = \"plane\"\n[mesh.params]\nsize_x = 4.0\nsize_z = 4.0\n";
+  const std::string huge = parse_error(replace(
+      kValid, box, "[[mesh]]\nname = \"b\"\ngenerator = \"box\"\n[mesh.params]\nmin = [-3.4e38, -3.4e38, -3.4e38]\n"
+                   "max = [3.4e38, 3.4e38, 3.4e38]\n"));
+  EXPECT_NE(huge.find("bad.toml: the scene's bounding box [-3.4e+38, -3.4e+38, -3.4e+38] – [3.4e+38, 3.4e+38, 3.4e+38] "
+                      "reaches 3.4e+38, outside the ±1e+18"),
+            std::string::npos)
+      << huge;
+  const std::string tiny = parse_error(replace(
+      kValid, box, "[[mesh]]\nname = \"b\"\ngenerator = \"box\"\n[mesh.params]\nmin = [0.0, 0.0, 0.0]\n"
+                   "max = [1e-38, 1e-38, 1e-38]\n"));
+  EXPECT_NE(tiny.find("across, below the 1e-18 that ray tracing in float resolves"), std::string::npos) << tiny;
+  // A flat scene (a plane: no extent in y) is fine; only the largest extent counts.
+  EXPECT_EQ(parse_error(kValid), "");
+
+  const fs::path dir = temp_dir("scene_extent");
+  for (const char* scale : {"1e38", "1e-38", "1e19"}) {
+    const fs::path obj = dir / (std::string("at_") + scale + ".obj");
+    write_file(obj, fmt::format("v 0 0 0\nv {0} 0 0\nv 0 {0} 0\nf 1 2 3\n", scale));
+    std::string msg;
+    try {
+      load_scene(obj.string());
+    } catch (const Error& e) {
+      msg = e.what();
+    }
+    EXPECT_NE(msg.find(obj.string() + ": the scene's bounding box"), std::string::npos) << scale << ": " << msg;
+  }
+  write_file(dir / "ok.obj", "v 0 0 0\nv 1e15 0 0\nv 0 1e-15 0\nf 1 2 3\n");
+  EXPECT_NO_THROW(load_scene((dir / "ok.obj").string()));
+}
+
+// Issue 44, item 17: with `extends`, an error names the file and line the bad key was written in:
+// the extending file's own keys (they pointed at line 1), and the base file's (they named the
+// extending file).
+TEST(SceneToml, ExtendsErrorsNameTheirFileAndLine) {
+  std::string msg = parse_error("extends = \"cornell\"\ndescription = \"d\"\n\n[camera]\nposition = [0.0, 1.0, 3.0]\n"
+                                "look_at = [0.0, 1.0, 0.0]\nfovy = 10.0\n");
+  EXPECT_EQ(msg.rfind("bad.toml:7: unknown key 'camera.fovy' in [camera]", 0), 0u) << msg;
+  msg = parse_error("extends = \"cornell\"\n\n[camera]\nposition = [0.0, 1.0, 3.0]\nlook_at = [0.0, 1.0, 0.0]\n"
+                    "fov_y = \"wide\"\n");
+  EXPECT_EQ(msg, "bad.toml:6: 'camera.fov_y' must be a number, not a string");
+  const fs::path dir = temp_dir("extends_lines");
+  write_file(dir / "base.toml", replace(kValid, "fov_y = 40.0", "fov_y = 400.0"));
+  write_file(dir / "top.toml", "extends = \"base.toml\"\ndescription = \"top\"\n");
+  msg.clear();
+  try {
+    load_scene((dir / "top.toml").string());
+  } catch (const Error& e) {
+    msg = e.what();
+  }
+  EXPECT_EQ(msg.rfind((dir / "base.toml").string() + ":5: 'camera.fov_y' = 400", 0), 0u) << msg;
+  msg = parse_error("\n\nextends = 3\n");
+  EXPECT_EQ(msg.rfind("bad.toml:3: 'extends' must be a scene name", 0), 0u) << msg;
+}
+
+// Issue 44, item 15: a scene path that is a FIFO is named as such (it was "file not found"; read, it
+// would block), and a scene file larger than the bound is refused before it is read.
+TEST(SceneLookup, ScenePathsMustBeRegularFilesWithinTheBound) {
+  const fs::path dir = temp_dir("scene_fifo");
+  const fs::path fifo = dir / "pipe.toml";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  std::string msg;
+  try {
+    load_scene(fifo.string());
+  } catch (const Error& e) {
+    msg = e.what();
+  }
+  EXPECT_EQ(msg, "scene file " + fifo.string() +
+                     " is a FIFO (named pipe), not a regular file; give the path of a .toml scene file");
+  const fs::path obj_fifo = dir / "pipe.obj";
+  ASSERT_EQ(::mkfifo(obj_fifo.c_str(), 0600), 0);
+  msg.clear();
+  try {
+    check_scene_reference(obj_fifo.string());
+  } catch (const Error& e) {
+    msg = e.what();
+  }
+  EXPECT_NE(msg.find("OBJ file " + obj_fifo.string() + " is a FIFO (named pipe), not a regular file"),
+            std::string::npos)
+      << msg;
+  // A FIFO as a mesh's obj or an extends base: refused by type, not read.
+  write_file(dir / "mesh.toml", replace(kValid, "generator = \"plane\"\n[mesh.params]\nsize_x = 4.0\nsize_z = 4.0\n",
+                                        "obj = \"" + obj_fifo.string() + "\"\n"));
+  msg.clear();
+  try {
+    load_scene((dir / "mesh.toml").string());
+  } catch (const Error& e) {
+    msg = e.what();
+  }
+  EXPECT_NE(msg.find("mesh.toml:9: mesh 'floor': OBJ file " + obj_fifo.string() + " is a FIFO"), std::string::npos)
+      << msg;
+  write_file(dir / "ext.toml", "extends = \"pipe.toml\"\n");
+  msg.clear();
+  try {
+    load_scene((dir / "ext.toml").string());
+  } catch (const Error& e) {
+    msg = e.what();
+  }
+  EXPECT_NE(msg.find("ext.toml:1: extends = \"pipe.toml\": scene file " + fifo.string() + " is a FIFO"),
+            std::string::npos)
+      << msg;
+  // 17 MiB of holes: over the 16 MiB a scene file may have; refused by its size, not parsed.
+  const fs::path big = dir / "big.toml";
+  write_file(big, "");
+  ASSERT_EQ(::truncate(big.c_str(), 17 << 20), 0);
+  msg.clear();
+  try {
+    load_scene(big.string());
+  } catch (const Error& e) {
+    msg = e.what();
+  }
+  EXPECT_EQ(msg, "scene file " + big.string() +
+                     " is 17.0 MiB, over the 16.0 MiB bound for scene files; it is corrupt or the wrong file");
 }

@@ -25,6 +25,7 @@
 #include "render/preview.h"
 #include "util/error.h"
 #include "util/image.h"
+#include "util/output_name.h"
 
 namespace raysort {
 
@@ -90,7 +91,7 @@ std::vector<Aabb> key_boxes(Encoder e, unsigned bits, const Bvh& bvh) {
 
 // Output names: <base>.png / .exr / -cost.png [/ -<overlay>.png], base = --out without extension.
 std::string output_base(const std::string& out, const std::string& scene_name) {
-  if (out.empty()) return scene_name;
+  if (out.empty()) return safe_file_name(scene_name);  // a scene's name is no path (util/output_name.h)
   const std::filesystem::path path(out), dir = path.parent_path();
   std::error_code ec;
   if (!dir.empty()) std::filesystem::create_directories(dir, ec);

@@ -28,6 +28,7 @@
 #include "trace/tracer.h"
 #include "util/atomic_file.h"
 #include "util/error.h"
+#include "util/output_name.h"
 
 namespace raysort {
 
@@ -437,7 +438,7 @@ void trace_scene(Runtime& rt, const std::string& scene_name, const TraceArgs& ar
   fmt::print("rounds   * = stopped by --max-time before every interval was within --max-noise\n");
   if (oracle && !args.disagreements.empty()) {
     std::filesystem::create_directories(args.disagreements);
-    const std::string file = (std::filesystem::path(args.disagreements) / (p.scene.name + ".json")).string();
+    const std::string file = (std::filesystem::path(args.disagreements) / (safe_file_name(p.scene.name) + ".json")).string();
     write_file_atomically(file, saved.dump(1) + "\n");
     fmt::print("saved    the adjudicated rays to {}\n", file);
   }

@@ -6,11 +6,13 @@
 #include <cctype>
 #include <chrono>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <set>
 #include <sstream>
 
 #include "util/embedded.h"
+#include "util/input_file.h"
 
 namespace raysort {
 
@@ -43,14 +45,19 @@ std::string& kernel_dir() {
 std::string read_kernel_file(const std::string& path) {
   if (!kernel_dir().empty()) {
     // --kernels DIR points at a cl/ folder (or the repository root holding one).
+    // Read through the shared input reader (util/input_file.h): a FIFO under DIR would block the
+    // read forever, a device read without end. An empty file is refused naming it: OpenCL would
+    // only say CL_INVALID_KERNEL_NAME later, without the file.
     for (const std::string& candidate :
          {kernel_dir() + "/" + path.substr(path.find('/') + 1), kernel_dir() + "/" + path}) {
-      std::ifstream in(candidate, std::ios::binary);
-      if (in) {
-        std::stringstream ss;
-        ss << in.rdbuf();
-        return ss.str();
-      }
+      std::error_code ec;
+      if (!std::filesystem::exists(candidate, ec)) continue;
+      std::string text = read_input_file(candidate, kKernelFile);
+      if (text.find_first_not_of(" \t\r\n") == std::string::npos)
+        throw Error(fmt::format("kernel file {} (for {}) is empty; point --kernels at the repository's cl/ folder, or "
+                                "restore the file",
+                                candidate, path));
+      return text;
     }
     throw Error(fmt::format("kernel file '{}' not found under --kernels {}; point it at the repository's cl/ folder",
                             path, kernel_dir()));

@@ -44,6 +44,23 @@ struct SceneOptions {
 // (PoCL); rounded up for the wide BVH and the matrix's caches.
 inline constexpr std::uint64_t kHostBytesPerTriangle = 512;
 
+// The range of coordinates and lengths that ray tracing in float keeps finite (issue 44). Scene files
+// and bare OBJs outside it are refused where they are loaded, naming the file and the range:
+// - Coordinates within ±kMaxSceneCoordinate (the scene's box, the camera): the difference of two
+//   points (a ray's origin to a box or a vertex) is then at most 3.5e18 and its square (distances to
+//   lights, box areas for the SAH, the encoders' extents squared) at most 1.2e37, 30× below the
+//   float maximum 3.4e38. A box at ±3.4e38 has an infinite extent in float (the grid encoder failed).
+// - A largest extent of at least kMinSceneExtent: its square (1e-36) is still a normal float, 85×
+//   above FLT_MIN, so 1/extent (the encoders quantise in the box) and directions between points
+//   stay finite; a mesh at 1e-38 underflowed to 0 there and traced no hits at all.
+// - The camera's view direction (look_at − position) and up between kMinCameraVector and
+//   kMaxSceneCoordinate long, and not parallel (sine above 1e-6): the camera basis is normalised in
+//   float (render/rays.cpp), and |up| · sine ≥ 1e-18 keeps the squared length of forward × up a
+//   normal float too (a direction of 1e-38 or an up of 1e-40 made every ray NaN or one direction).
+inline constexpr double kMaxSceneCoordinate = 1e18;
+inline constexpr double kMinSceneExtent = 1e-18;
+inline constexpr double kMinCameraVector = 1e-12;
+
 // The scene root in effect for these options (see SceneOptions::scene_root).
 std::string resolve_scene_root(const SceneOptions& opts);
 

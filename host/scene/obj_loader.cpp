@@ -11,12 +11,13 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
+#include <map>
 #include <sstream>
 #include <vector>
 
 #include "scene/load.h"
 #include "util/error.h"
+#include "util/input_file.h"
 
 namespace raysort {
 
@@ -61,27 +62,46 @@ class TextCheck {
   std::size_t offset_ = 0, line_ = 1, line_bytes_ = 0;
 };
 
+// Read through the shared input reader (util/input_file.h: a regular file, at most 4 GiB), with
+// the byte checks run on each 64 KiB chunk as it arrives: a file with an overlong line is refused
+// after its first MiB, before it is read whole.
 std::string read_file(const std::string& path) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec))
-    throw Error(fmt::format("OBJ file {} is a directory, not a file; give the path of the .obj file", path));
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(fmt::format("cannot open OBJ file {}: {}", path, std::strerror(errno)));
-  // Stream through a bounded buffer first: a file with an overlong line is refused before it is
-  // read whole.
   TextCheck check(path);
-  std::vector<char> chunk(std::size_t(1) << 16);
-  while (in) {
-    in.read(chunk.data(), static_cast<std::streamsize>(chunk.size()));
-    check.feed(chunk.data(), static_cast<std::size_t>(in.gcount()));
-  }
-  if (in.bad()) throw Error(fmt::format("cannot read OBJ file {}: {}", path, std::strerror(errno)));
-  in.clear();
-  in.seekg(0);
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return std::move(ss).str();
+  return read_input_file(path, kObjFile, [&](const char* data, std::size_t n) { check.feed(data, n); });
 }
+
+// Reads the MTL files an OBJ names (mtllib) through the same input reader as every other file: a
+// FIFO or /dev/zero named as an mtllib would otherwise block or read without end (tinyobjloader's
+// own reader opens any path). A missing file is no error (many downloaded OBJs lack theirs; the
+// faces get the default grey), but it is reported: see parse_obj.
+class BoundedMtlReader : public tinyobj::MaterialReader {
+ public:
+  BoundedMtlReader(std::string dir, const std::string& obj) : dir_(std::move(dir)), obj_(obj) {}
+  bool operator()(const std::string& name, std::vector<tinyobj::material_t>* materials,
+                  std::map<std::string, int>* names, std::string* warn, std::string* err) override {
+    const std::string path = (std::filesystem::path(dir_) / name).lexically_normal().string();
+    std::error_code ec;
+    if (!std::filesystem::exists(path, ec)) {
+      missing_.push_back(path);
+      return false;
+    }
+    std::string text;
+    try {
+      text = read_input_file(path, kMtlFile);
+    } catch (const Error& e) {
+      throw Error(fmt::format("OBJ file {}: mtllib {}: {}", obj_, name, e.what()));
+    }
+    std::istringstream in(text);
+    tinyobj::LoadMtl(names, materials, &in, warn, err);
+    return true;
+  }
+  const std::vector<std::string>& missing() const { return missing_; }
+
+ private:
+  std::string dir_;
+  const std::string& obj_;  // the OBJ file, for messages
+  std::vector<std::string> missing_;
+};
 
 // Checks the vertex index of every corner of an `f` line (p..e, after the "f"): an integer that
 // parses completely, not 0, and (when negative) not counting back past the first vertex defined so
@@ -206,7 +226,7 @@ Mesh parse_obj(const std::string& text, const std::string& path, const std::stri
   std::vector<tinyobj::material_t> obj_materials;
   std::string warn, err;
   std::istringstream stream(without_ignored_statements(text));
-  tinyobj::MaterialFileReader mtl_reader(mtl_dir + "/");
+  BoundedMtlReader mtl_reader(mtl_dir, path);
   bool ok = tinyobj::LoadObj(&attrib, &shapes, &obj_materials, &warn, &err, &stream, &mtl_reader,
                              /*triangulate=*/false);
   if (!ok || !err.empty()) {
@@ -216,6 +236,9 @@ Mesh parse_obj(const std::string& text, const std::string& path, const std::stri
   }
   if (warn.find("Degenerated face") != std::string::npos)
     throw Error(fmt::format("OBJ file {} has a face with fewer than 3 vertices; remove or fix it", path));
+  for (const std::string& mtl : mtl_reader.missing())
+    fmt::print(stderr, "raysort: warning: OBJ file {} names the MTL file {} (mtllib), which does not exist; its "
+               "materials get the default 0.7 grey albedo\n", path, mtl);
 
   std::size_t nverts = attrib.vertices.size() / 3;
   if (nverts != vertex_lines)

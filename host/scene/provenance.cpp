@@ -180,6 +180,12 @@ class Sha256 {
 }  // namespace
 
 std::string sha256_file(const std::string& path) {
+  // A FIFO would block the read forever and a device never end it (issue 44): regular files only.
+  std::error_code ec;
+  if (std::filesystem::exists(path, ec) && !std::filesystem::is_regular_file(path, ec))
+    throw Error(fmt::format("cannot read {}: not a regular file (a directory, FIFO or device); give the scene file "
+                            "itself",
+                            path));
   std::unique_ptr<std::FILE, FileCloser> file(std::fopen(path.c_str(), "rb"));
   if (!file) throw Error(fmt::format("cannot read {}: {}; check the path and its permissions", path, std::strerror(errno)));
   Sha256 digest;

@@ -7,10 +7,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <optional>
-#include <sstream>
 
 #include "scene/ground.h"
 #include "scene/load.h"
@@ -21,6 +19,8 @@
 #include "util/embedded.h"
 #include "util/error.h"
 #include "util/host_memory.h"
+#include "util/input_file.h"
+#include "util/output_name.h"
 
 namespace fs = std::filesystem;
 
@@ -30,13 +30,7 @@ namespace {
 
 constexpr std::uint32_t kDefaultWidth = 1920, kDefaultHeight = 1080;
 
-std::string read_text_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(fmt::format("cannot open scene file {}", path));
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return std::move(ss).str();
-}
+std::string read_text_file(const std::string& path) { return read_input_file(path, kSceneFile); }
 
 bool ends_with(const std::string& s, std::string_view suffix) {
   return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
@@ -65,10 +59,11 @@ toml::table resolve_extends(toml::table root, const std::string& origin, int dep
   if (!ext) return root;
   const auto name = ext->value<std::string>();
   if (!name || name->empty())
-    throw Error(fmt::format("{}: 'extends' must be a scene name or a .toml path, e.g. extends = \"sibenik\"", origin));
+    throw Error(fmt::format("{}: 'extends' must be a scene name or a .toml path, e.g. extends = \"sibenik\"",
+                            toml_location(*ext, origin)));
   if (depth >= 8)
     throw Error(fmt::format("{}: extends = \"{}\": chain of more than 8 scene files (a cycle?); extend a scene that "
-                            "does not extend this one", origin, *name));
+                            "does not extend this one", toml_location(*ext, origin), *name));
   std::string text, base_origin;
   if (auto embedded = find_embedded_scene(*name)) {
     text = std::string(*embedded);
@@ -78,16 +73,23 @@ toml::table resolve_extends(toml::table root, const std::string& origin, int dep
     if (p.is_relative() && origin.rfind("embedded:", 0) != 0) p = fs::path(origin).parent_path() / p;
     base_origin = p.string();
     std::error_code ec;
-    if (!fs::is_regular_file(p, ec))
-      throw Error(fmt::format("{}: extends = \"{}\": scene file not found: {}", origin, *name, base_origin));
-    text = read_text_file(base_origin);
+    if (!fs::exists(p, ec))  // anything else that is no regular file is refused by the read, by its type
+      throw Error(fmt::format("{}: extends = \"{}\": scene file not found: {}", toml_location(*ext, origin), *name,
+                              base_origin));
+    try {
+      text = read_text_file(base_origin);
+    } catch (const Error& e) {
+      throw Error(fmt::format("{}: extends = \"{}\": {}", toml_location(*ext, origin), *name, e.what()));
+    }
   } else {
     throw Error(fmt::format("{}: extends = \"{}\": no scene of that name; name an embedded scene ({}) or a .toml path",
-                            origin, *name, fmt::join(embedded_scene_names(), ", ")));
+                            toml_location(*ext, origin), *name, fmt::join(embedded_scene_names(), ", ")));
   }
   toml::table merged = resolve_extends(parse_toml_text(text, base_origin), base_origin, depth + 1);
+  // Moved, not copied: toml++ drops a node's file and line when it is copied, and every later
+  // message about a key of the extending file would point at line 1.
   for (auto&& [key, value] : root)
-    if (key.str() != "extends") merged.insert_or_assign(key.str(), value);
+    if (key.str() != "extends") merged.insert_or_assign(key, std::move(value));
   return merged;
 }
 
@@ -114,13 +116,32 @@ Camera read_camera(const TomlTable& t) {
     c.width = static_cast<std::uint32_t>(r[0]);
     c.height = static_cast<std::uint32_t>(r[1]);
   }
+  // The basis make_camera (render/rays.cpp) normalises in float must be normalisable: see load.h.
+  for (const char* key : {"position", "look_at"})
+    for (float x : key[0] == 'p' ? c.position : c.look_at)
+      if (std::fabs(x) > kMaxSceneCoordinate)
+        t.fail(key, fmt::format("has a coordinate {:g}, outside the ±{:g} that ray tracing in float keeps finite; "
+                                "scale the scene down", x, kMaxSceneCoordinate));
   Vec3 d{c.look_at[0] - c.position[0], c.look_at[1] - c.position[1], c.look_at[2] - c.position[2]};
-  double len = std::sqrt(double(d[0]) * d[0] + double(d[1]) * d[1] + double(d[2]) * d[2]);
-  if (len == 0.0) t.fail("look_at", "equals the camera position; look at another point");
-  double ul = std::sqrt(double(c.up[0]) * c.up[0] + double(c.up[1]) * c.up[1] + double(c.up[2]) * c.up[2]);
-  Vec3 cr{d[1] * c.up[2] - d[2] * c.up[1], d[2] * c.up[0] - d[0] * c.up[2], d[0] * c.up[1] - d[1] * c.up[0]};
-  double cl = std::sqrt(double(cr[0]) * cr[0] + double(cr[1]) * cr[1] + double(cr[2]) * cr[2]);
-  if (ul == 0.0 || cl <= 1e-6 * len * ul) t.fail("up", "is zero or parallel to the view direction; use another up vector");
+  const auto length = [](const Vec3& v) {
+    return std::sqrt(double(v[0]) * v[0] + double(v[1]) * v[1] + double(v[2]) * v[2]);
+  };
+  const double len = length(d);
+  if (len == 0.0) t.fail("look_at", "equals the camera position (in float); look at another point");
+  if (len < kMinCameraVector)
+    t.fail("look_at", fmt::format("is {:.3g} from the camera position, too close to normalise the view direction in "
+                                  "float (at least {:g}); look at a point farther away",
+                                  len, kMinCameraVector));
+  const double ul = length(c.up);
+  if (!(ul >= kMinCameraVector && ul <= kMaxSceneCoordinate))
+    t.fail("up", fmt::format("is {:.3g} long; it must be between {:g} and {:g} long to normalise in float, e.g. up = "
+                             "[0.0, 1.0, 0.0]",
+                             ul, kMinCameraVector, kMaxSceneCoordinate));
+  const double cross[3] = {double(d[1]) * c.up[2] - double(d[2]) * c.up[1],
+                           double(d[2]) * c.up[0] - double(d[0]) * c.up[2],
+                           double(d[0]) * c.up[1] - double(d[1]) * c.up[0]};
+  const double cl = std::sqrt(cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]);
+  if (cl <= 1e-6 * len * ul) t.fail("up", "is parallel to the view direction (look_at − position); use another up vector");
   return c;
 }
 
@@ -155,7 +176,12 @@ class SceneBuilder {
                    "effects"});
     Scene s;
     s.file = origin_;
-    s.name = top.string("name", fs::path(origin_).stem().string());
+    // The name becomes the base of output files (render's <name>.png, trace's <name>.json): a name
+    // that is no plain file name is refused here, with its line, rather than silently renamed.
+    const std::string stem = safe_file_name(fs::path(origin_).stem().string());
+    s.name = top.string("name", stem);
+    if (const std::string problem = file_name_problem(s.name); !problem.empty())
+      top.fail("name", fmt::format("{}; give a plain name such as \"{}\"", problem, safe_file_name(s.name, stem)));
     s.description = top.string("description", "");
 
     // Named materials first, so meshes can refer to them.
@@ -190,7 +216,7 @@ class SceneBuilder {
       TomlTable t(origin_, *instances[i], fmt::format("instance[{}]", i), {"mesh", "translate", "rotate", "scale"});
       s.instances.push_back({mesh_index(t, "mesh"), read_transform(t)});
     }
-    check_triangles(placed_triangles(s), 1, "its placed meshes", "place fewer instances or lighter meshes");
+    check_triangles(placed_triangles(s), origin_ + ":1", "its placed meshes", "place fewer instances or lighter meshes");
     check_finite_placements(s, 0, "a drawn mesh or an [[instance]]");
     std::size_t placed_before_scatter = s.instances.size();
     auto scatters = top.table_array("scatter");
@@ -279,14 +305,14 @@ class SceneBuilder {
       std::error_code ec;
       if (fs::is_directory(p, ec))
         t.fail("obj", fmt::format("names a directory, not an OBJ file: {}", p.lexically_normal().string()));
-      if (!fs::is_regular_file(p, ec))
+      if (!fs::exists(p, ec))  // a FIFO or device is refused by load_obj, naming its type
         t.fail("obj", fmt::format("names an OBJ file that does not exist: {} (scene root: {}); pass --scene-root DIR "
                                   "or set RAYSORT_SCENE_ROOT to the folder that holds '{}'",
                                   p.lexically_normal().string(), root, rel));
       try {
         mesh = load_obj(p.lexically_normal().string(), s.materials);
       } catch (const Error& e) {
-        throw Error(fmt::format("{}:{}: mesh '{}': {}", origin_, t.line("obj"), name, e.what()));
+        throw Error(fmt::format("{}: mesh '{}': {}", t.location("obj"), name, e.what()));
       }
     } else {
       std::string gen = t.string("generator");
@@ -295,7 +321,7 @@ class SceneBuilder {
       if (auto pt = t.subtable("params")) {
         for (auto&& [k, v] : *pt) {
           std::string key(k.str());
-          std::uint32_t line = v.source().begin.line;
+          const std::string at = toml_location(v, origin_);
           if (v.is_number()) {
             params.numbers[key] = toml_number(v);
           } else if (auto arr = v.as_array(); arr && arr->size() == 3 &&
@@ -306,15 +332,15 @@ class SceneBuilder {
               const auto& e = (*arr)[i];
               const double x = toml_number(e);
               if (!fits_scene_float(x))
-                throw Error(fmt::format("{}:{}: '{}.params.{}' = {:g} is not a finite number within the float range "
+                throw Error(fmt::format("{}: '{}.params.{}' = {:g} is not a finite number within the float range "
                                         "scenes are stored in (|x| <= 3.4e38)",
-                                        origin_, line, t.path(), key, x));
+                                        at, t.path(), key, x));
               vec[i] = static_cast<float>(x);
             }
             params.vectors[key] = vec;
           } else {
-            throw Error(fmt::format("{}:{}: '{}.params.{}' must be a number or an array of 3 numbers, not {}", origin_,
-                                    line, t.path(), key, toml_type_name(v)));
+            throw Error(fmt::format("{}: '{}.params.{}' must be a number or an array of 3 numbers, not {}", at,
+                                    t.path(), key, toml_type_name(v)));
           }
         }
       }
@@ -325,7 +351,7 @@ class SceneBuilder {
         std::string_view key = gen_known(gen) ? "params" : "generator";
         t.fail(key, fmt::format("(mesh '{}'): {}", name, e.what()));
       }
-      check_triangles(saturating_add(mesh_triangles(s), triangles), t.line("generator"),
+      check_triangles(saturating_add(mesh_triangles(s), triangles), t.location("generator"),
                       fmt::format("mesh '{}' ({}, {} triangles)", name, gen, triangles),
                       "lower its params (resolution, segments, subdivisions, sides)");
       try {
@@ -414,7 +440,7 @@ class SceneBuilder {
       ground.emplace(s.meshes[g], xfs);
     }
     check_triangles(saturating_add(placed_triangles(s), saturating_mul(count, s.meshes[mesh].triangles.size())),
-                    t.line("count"), fmt::format("scatter[{}] ({} × mesh '{}')", index, count, s.meshes[mesh].name),
+                    t.location("count"), fmt::format("scatter[{}] ({} × mesh '{}')", index, count, s.meshes[mesh].name),
                     "lower its count or scatter a mesh with fewer triangles");
     SceneRng rng(seed ^ 0x5CA77E5ull);
     Affine base = Affine::rotation_deg(rotate);
@@ -481,7 +507,8 @@ class SceneBuilder {
 
   // Refuses (ResourceError, exit 2) a scene whose triangles would pass SceneOptions::max_triangles,
   // or else the host memory available at kHostBytesPerTriangle each, before they are made.
-  void check_triangles(std::uint64_t triangles, std::uint32_t line, const std::string& what, const std::string& fix) const {
+  void check_triangles(std::uint64_t triangles, const std::string& at, const std::string& what,
+                       const std::string& fix) const {
     const std::uint64_t bytes = saturating_mul(triangles, kHostBytesPerTriangle);
     std::string limit;
     if (opts_.max_triangles != 0) {
@@ -493,9 +520,9 @@ class SceneBuilder {
       if (bytes <= available) return;
       limit = fmt::format("the {} of host memory available", format_bytes(available));
     }
-    throw ResourceError(fmt::format("{}:{}: the scene would hold {} triangles with {}, about {} of host memory at {} B "
+    throw ResourceError(fmt::format("{}: the scene would hold {} triangles with {}, about {} of host memory at {} B "
                                     "each from load to trace, over {}; {}",
-                                    origin_, line, triangles, what, format_bytes(bytes), kHostBytesPerTriangle, limit,
+                                    at, triangles, what, format_bytes(bytes), kHostBytesPerTriangle, limit,
                                     fix));
   }
 
@@ -518,13 +545,52 @@ std::vector<std::string> embedded_scene_names() {
   return names;
 }
 
+// Refuses a scene whose bounding box lies outside what ray tracing in float keeps finite (load.h:
+// coordinates within ±1e18, a largest extent of at least 1e-18). The box is the placed meshes' own
+// boxes carried through their transforms (corners), so no vertex of a large scatter is walked twice.
+void check_scene_extent(const Scene& s, const std::string& origin) {
+  std::vector<Aabb> own(s.meshes.size());
+  for (std::size_t m = 0; m < s.meshes.size(); ++m)
+    for (const auto& tri : s.meshes[m].triangles)
+      for (auto idx : tri) own[m].grow(s.meshes[m].positions[idx]);
+  Aabb box;
+  if (s.instances.empty()) {
+    for (const Aabb& b : own) box.grow(b);
+  } else {
+    for (const Instance& inst : s.instances) {
+      const Aabb& b = own[inst.mesh];
+      if (b.empty()) continue;
+      for (int corner = 0; corner < 8; ++corner)
+        box.grow(inst.transform.apply({(corner & 1 ? b.max : b.min)[0], (corner & 2 ? b.max : b.min)[1],
+                                       (corner & 4 ? b.max : b.min)[2]}));
+    }
+  }
+  if (box.empty()) return;  // no triangles: refused elsewhere
+  double largest = 0.0, farthest = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    largest = std::max(largest, double(box.max[a]) - double(box.min[a]));
+    farthest = std::max({farthest, std::fabs(double(box.min[a])), std::fabs(double(box.max[a]))});
+  }
+  const std::string where = fmt::format("{}: the scene's bounding box [{:g}, {:g}, {:g}] – [{:g}, {:g}, {:g}]", origin,
+                                        box.min[0], box.min[1], box.min[2], box.max[0], box.max[1], box.max[2]);
+  if (farthest > kMaxSceneCoordinate)
+    throw Error(fmt::format("{} reaches {:g}, outside the ±{:g} that ray tracing in float keeps finite; scale or move "
+                            "the geometry (docs/scene-format.md, \"Float range\")",
+                            where, farthest, kMaxSceneCoordinate));
+  if (largest < kMinSceneExtent)
+    throw Error(fmt::format("{} is {:g} across, below the {:g} that ray tracing in float resolves; scale the geometry "
+                            "up (docs/scene-format.md, \"Float range\")",
+                            where, largest, kMinSceneExtent));
+}
+
 // A bare OBJ: one mesh, a camera looking at its bounding box from a 3/4 view, and a sky light.
 Scene load_bare_obj(const std::string& path) {
   Scene s;
-  s.name = fs::path(path).stem().string();
+  s.name = safe_file_name(fs::path(path).stem().string());  // the base of output files: a plain name
   s.description = "bare OBJ " + path;
   s.file = path;
   s.meshes.push_back(load_obj(path, s.materials));
+  check_scene_extent(s, path);
   Aabb b = s.bounds();
   Vec3 c = b.center(), e = b.extent();
   double radius = 0.5 * std::sqrt(double(e[0]) * e[0] + double(e[1]) * e[1] + double(e[2]) * e[2]);
@@ -572,6 +638,7 @@ void apply_frame_size(Scene& scene, const FrameSize& frame) {
 Scene parse_scene_toml(const std::string& text, const std::string& origin, const SceneOptions& opts) {
   toml::table root = read_scene_table(text, origin);
   Scene s = SceneBuilder(origin, opts).build(root);
+  check_scene_extent(s, origin);
   apply_frame_size(s, opts.frame);
   return s;
 }
@@ -589,13 +656,17 @@ void check_scene_reference(const std::string& name_or_path) {
   if (fs::is_directory(name_or_path, ec))
     throw Error(fmt::format("scene '{}' is a directory; give a scene name, or the path of a .toml or .obj file",
                             name_or_path));
-  bool exists = fs::is_regular_file(name_or_path, ec);
+  // A FIFO, a device or a socket exists but is no scene: it is named as such (a FIFO was "not found"
+  // before, and would have blocked the read).
+  const bool exists = fs::exists(name_or_path, ec);
   if (ends_with(name_or_path, ".toml")) {
     if (!exists) throw Error(fmt::format("scene file not found: {}", name_or_path));
+    check_input_file(name_or_path, kSceneFile);
     return;
   }
   if (ends_with(name_or_path, ".obj") || ends_with(name_or_path, ".OBJ")) {
     if (!exists) throw Error(fmt::format("OBJ file not found: {}", name_or_path));
+    check_input_file(name_or_path, kObjFile);
     return;
   }
   throw Error(fmt::format("unknown scene '{}'; the known scenes are: {} (or give a path to a .toml or .obj file)",

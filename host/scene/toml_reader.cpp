@@ -41,10 +41,9 @@ TomlTable::TomlTable(const std::string& origin, const toml::table& table, std::s
     bool known = false;
     for (auto allowed : keys) known = known || k.str() == allowed;
     if (known) continue;
-    std::uint32_t at = k.source().begin.line ? k.source().begin.line : v.source().begin.line;
-    throw Error(fmt::format("{}:{}: unknown key '{}'{}; the keys allowed here are: {} (docs/scene-format.md)", origin_,
-                            at, full_key(k.str()), path_.empty() ? "" : fmt::format(" in [{}]", path_),
-                            fmt::join(keys, ", ")));
+    throw Error(fmt::format("{}: unknown key '{}'{}; the keys allowed here are: {} (docs/scene-format.md)",
+                            toml_location(v, origin_), full_key(k.str()),
+                            path_.empty() ? "" : fmt::format(" in [{}]", path_), fmt::join(keys, ", ")));
   }
 }
 
@@ -55,23 +54,36 @@ std::uint32_t TomlTable::line(std::string_view key) const {
   return n && n->source().begin.line ? n->source().begin.line : line();
 }
 
+std::string toml_location(const toml::node& n, const std::string& fallback_origin) {
+  const auto& src = n.source();
+  const std::string& file = src.path && !src.path->empty() ? *src.path : fallback_origin;
+  return fmt::format("{}:{}", file, src.begin.line ? src.begin.line : 1);
+}
+
+std::string TomlTable::location() const { return toml_location(table_, origin_); }
+
+std::string TomlTable::location(std::string_view key) const {
+  const toml::node* n = table_.get(key);
+  return n && n->source().begin.line ? toml_location(*n, origin_) : location();
+}
+
 std::string TomlTable::full_key(std::string_view key) const {
   return path_.empty() ? std::string(key) : fmt::format("{}.{}", path_, key);
 }
 
 void TomlTable::fail(std::string_view key, const std::string& message) const {
-  throw Error(fmt::format("{}:{}: '{}' {}", origin_, line(key), full_key(key), message));
+  throw Error(fmt::format("{}: '{}' {}", location(key), full_key(key), message));
 }
 
 void TomlTable::fail_table(const std::string& message) const {
-  throw Error(fmt::format("{}:{}: [{}] {}", origin_, line(), path_, message));
+  throw Error(fmt::format("{}: [{}] {}", location(), path_, message));
 }
 
 const toml::node& TomlTable::required(std::string_view key, std::string_view example) const {
   const toml::node* n = table_.get(key);
   if (!n)
-    throw Error(fmt::format("{}:{}: [{}] is missing the required key '{}'; add it, e.g. {} = {}", origin_, line(),
-                            path_, key, key, example));
+    throw Error(fmt::format("{}: [{}] is missing the required key '{}'; add it, e.g. {} = {}", location(), path_,
+                            key, key, example));
   return *n;
 }
 

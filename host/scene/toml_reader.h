@@ -28,6 +28,10 @@ class TomlTable {
   const std::string& origin() const { return origin_; }
   std::uint32_t line() const;                       // the table's own line (its header)
   std::uint32_t line(std::string_view key) const;   // the line of a key's value
+  // "file:line" of the table's header, or of a key's value. The file is the one the node was parsed
+  // from: with `extends`, a table can come from the base scene's file, not from `origin`.
+  std::string location() const;
+  std::string location(std::string_view key) const;
   std::string full_key(std::string_view key) const;  // "camera.fov_y"
 
   double number(std::string_view key, double fallback) const;
@@ -57,6 +61,11 @@ class TomlTable {
   const toml::table& table_;
   std::string path_;
 };
+
+// "file:line" of a node as parsed (toml++ keeps each node's file and line; a copied node loses them,
+// so scene tables are moved, never copied, when `extends` merges them). `fallback_origin` names the
+// file when the node has none.
+std::string toml_location(const toml::node& n, const std::string& fallback_origin);
 
 // Name of a TOML value's type for messages ("a string", "an array").
 std::string toml_type_name(const toml::node& n);
