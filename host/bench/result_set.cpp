@@ -365,7 +365,8 @@ namespace {
 
 // meta.json's fingerprints name every cell whose views were written (a cell's file is written
 // before them): a listed cell without its file was deleted or lost, and views written now would
-// silently drop it.
+// silently drop it. (Readers go on: compare counts such a cell as missing, merge as a shard that
+// did not finish, and a run measures it again.)
 void check_listed_cells_present(const std::string& dir, const nlohmann::json& meta,
                                 const std::map<std::string, CellRecord>& cells) {
   const auto it = meta.find("fingerprints");
@@ -392,7 +393,6 @@ ResultSet ResultSet::load(const std::string& dir) {
   rs.meta_ = parse_meta(read_file(meta_path.string()), meta_path.string());
   check_version(rs.meta_, meta_path.string(), false);
   read_cells(dir, rs.meta_, rs.cells_);
-  check_listed_cells_present(dir, rs.meta_, rs.cells_);
   return rs;
 }
 
@@ -405,6 +405,7 @@ ResultSet ResultSet::load_for_writing(const std::string& dir, const std::string&
   std::shared_ptr<FolderLock> lock = FolderLock::acquire(dir, command, "result set");
   remove_temporary_files(dir);
   ResultSet rs = load(dir);
+  check_listed_cells_present(dir, rs.meta_, rs.cells_);
   rs.lock_ = std::move(lock);
   return rs;
 }

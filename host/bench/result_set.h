@@ -27,11 +27,11 @@ class ResultSet {
   // whose meta.json is missing, is refused before anything is written.
   static ResultSet open_for_run(const std::string& dir, const nlohmann::json& meta);
   // Reads a finished (or partial) result set, lock-free. Throws Error for a missing set, another
-  // format, a cell file that is not what its name says (validate_cell_file), or a cell meta.json
-  // lists (its fingerprints) whose file is gone.
+  // format, or a cell file that is not what its name says (validate_cell_file).
   static ResultSet load(const std::string& dir);
   // The same under the writer's lock, taken before anything is read (raysort report rewrites the
-  // views): a set being written is refused.
+  // views): a set being written is refused, and so is one whose meta.json lists cells (its
+  // fingerprints) whose files are gone, whose views would silently lose them.
   static ResultSet load_for_writing(const std::string& dir, const std::string& command);
 
   bool has(const std::string& cell_id) const { return cells_.count(cell_id) > 0; }
