@@ -53,4 +53,11 @@ FrameMemory estimate_render_memory(const Scene& scene);
 void check_frame_memory(const FrameMemory& m, const DeviceInfo* device, const std::string& what,
                         const std::string& fix = "lower --resolution or --spp (or the scene's bounces)");
 
+// The same check for a radix sort of `pairs` key/value pairs held in host vectors (`raysort
+// sortcheck`): the keys and values, the host twin's copies, the device's input and scratch buffers;
+// over 2^32 - 1 pairs the sort's 32-bit positions cannot address them. Throws ResourceError naming
+// `what` ("sortcheck of 4294967295 pairs with 64-bit keys") and the fix.
+void check_sort_memory(std::uint64_t pairs, unsigned key_bytes, const DeviceInfo* device, const std::string& what,
+                       const std::string& fix);
+
 }  // namespace raysort
