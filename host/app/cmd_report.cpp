@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include "app/commands.h"
+#include "bench/matrix.h"
 #include "bench/result_set.h"
 
 namespace raysort {
@@ -14,6 +15,8 @@ void register_report_command(CLI::App& app) {
   cmd->add_option("DIR", *dir, "result set folder")->required();
   cmd->callback([dir] {
     ResultSet rs = ResultSet::load(*dir);
+    // The tables read the matrix's entries by type; a damaged entry is named, not a JSON type error.
+    if (rs.meta().contains("matrix")) check_matrix_json(rs.meta()["matrix"], *dir + "/meta.json");
     rs.lock_for_writing("raysort report " + *dir);  // one writer: not while a run writes into it
     rs.write_views();
     rs.write_plots();

@@ -1,7 +1,8 @@
 #pragma once
 // What a frame's rays cost in memory, estimated before anything is allocated, and the refusal when
 // it does not fit (issue 23): every command that allocates per ray (trace, run, render,
-// encodebench) checks its scenes here first, so a size a user can type ends in one line that names
+// encodebench, scenes --describe) checks its scenes here first, and sortcheck its pairs (issue 44),
+// so a size a user can type ends in one line that names
 // the estimate, the limits and the fix, not in std::bad_alloc or a machine driven into swap.
 //
 // The model is an upper bound from the batches the scene's effects imply (render/batches.h): every
