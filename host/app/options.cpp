@@ -65,7 +65,8 @@ CLI::Option* finite_number(CLI::Option* opt, double lo, double hi, bool above_lo
             !(v <= hi))
           refuse(name, text, valid);
       },
-      std::isinf(hi) ? fmt::format("{}{:g}", above_lo ? ">" : ">=", lo) : fmt::format("{:g}..{:g}", lo, hi));
+      std::isinf(hi) ? fmt::format("{}{:g}", above_lo ? ">" : ">=", lo)
+                     : fmt::format("{}{:g}..{:g}", above_lo ? ">" : "", lo, hi));
 }
 
 void check_resolution_text(const std::string& option, const std::string& text) {
