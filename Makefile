@@ -41,7 +41,8 @@ bench: deps
 	$(BUILD)/raysort run --preset quick --resolution $(BENCH_RESOLUTION) --out $(BENCH_OUT)
 	@echo "tables: $(BENCH_OUT)/tables.md"
 
-# libFuzzer targets (fuzz/) for the OBJ loader and the scene parser, FUZZ_SECONDS each (default 60),
+# libFuzzer targets (fuzz/) for the OBJ loader, the scene parser, the result-set reader and the command
+# line, FUZZ_SECONDS each (default 60),
 # in build-fuzz with clang (installed from Debian when missing). Findings fail the target.
 FUZZ_SECONDS ?= 60
 fuzz:

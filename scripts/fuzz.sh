@@ -26,11 +26,11 @@ fi
 
 cmake -S . -B "$BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ -DRAYSORT_FUZZ=ON \
   -DBUILD_TESTING=OFF >/dev/null
-cmake --build "$BUILD" -j "$JOBS" --target obj_fuzzer scene_fuzzer result_set_fuzzer
+cmake --build "$BUILD" -j "$JOBS" --target obj_fuzzer scene_fuzzer result_set_fuzzer cli_fuzzer
 
 # Seeds: the scene files, and every OBJ of the odd-obj folder under 256 KiB (when it is there).
 mkdir -p "$BUILD/seeds/scene" "$BUILD/seeds/obj" "$BUILD/seeds/result_set" "$BUILD/corpus/scene" "$BUILD/corpus/obj" \
-  "$BUILD/corpus/result_set"
+  "$BUILD/corpus/result_set" "$BUILD/seeds/cli" "$BUILD/corpus/cli"
 cp scenes/*.toml "$BUILD/seeds/scene/"
 if [ -d "$ODD_OBJ" ]; then
   find "$ODD_OBJ" -name '*.obj' -size -256k -exec cp {} "$BUILD/seeds/obj/" \;
@@ -47,6 +47,28 @@ for rule in 'speedup<-5%' 'overhead_pct>+10%' 'anc!=' 'anc!=0.01' 'status!=ok' '
   printf '\002%s' "$rule" > "$BUILD/seeds/result_set/rule-$(printf '%s' "$rule" | tr -c 'a-z0-9' '_')"
 done
 
+# Command-line seeds: one command line per file, its arguments separated by NUL bytes.
+i=0
+while IFS= read -r line; do
+  i=$((i + 1))
+  printf '%s' "$line" | tr ' ' '\000' > "$BUILD/seeds/cli/line-$i"
+done <<'LINES'
+run --scenes cornell --encoders hcc,origin --bits 16,32 --resolution 48x27 --reps 3 --warmup 0 --max-time 0.5
+run --preset quick --lambda 0.25 --twopoint-length 0.5 --direction-bits 2 --region-bits 4 --traffic-blend 0.5
+run --scenes cornell --cost-bits 3 --timeout 10 --shard-plan 4 --seed 7 --spp 2 --shadow-rays 2 --bounces 3
+run --scenes cornell --shard 1/2 --out r --top-bits 8 --max-noise 2 --access all --variant both --layout all
+trace --scene cornell --resolution 64x64 --reps 1 --layout wide,packet --variant both --adjudicate
+encodebench --scene cornell --bits 16,32,64 --versus hcc --direction-bits 2 --cost-bits 4
+sortcheck --sizes 1,255,4097 --bits 32,64 --work-group 1 --items 8 --radix-bits 8 --scan-work-group 64
+sortbench --reps 3 --ref-reps 2 --no-large
+render --scene cornell --bits 16 --exposure -1.5 --host --overlay hcc
+scenes --describe cornell --resolution 8x8 --spp 1
+compare a b --fail-if speedup<-5% --out x.md
+merge a b -o c --force
+--kernels cl report r
+sweep a b --out s.md
+LINES
+
 # Corpora grown by long runs (minimized with -merge=1), committed as one tarball per target.
 for grown in fuzz/corpus/*-grown.tar.gz; do
   [ -e "$grown" ] || continue
@@ -55,7 +77,7 @@ for grown in fuzz/corpus/*-grown.tar.gz; do
 done
 
 status=0
-for target in obj scene result_set; do
+for target in obj scene result_set cli; do
   budget=(-max_total_time="$SECONDS_EACH")
   [ -n "$RUNS" ] && budget=(-runs="$RUNS")
   echo "fuzz: ${target}_fuzzer for ${RUNS:+$RUNS runs}${RUNS:-${SECONDS_EACH}s}"

@@ -94,20 +94,22 @@ TEST(Cli, DefaultDeviceIsNeverTheSimulatorOrPoclBasic) {
 TEST(Cli, ImpossibleCombinationsRefusedBeforeWork) {
   expect_refused({"run", "--scenes", "cornell", "--resolution", "0x100"}, {"resolution '0x100'"});
   expect_refused({"run", "--scenes", "cornell", "--resolution", "wide"}, {"resolution 'wide'"});
-  expect_refused({"run", "--scenes", "cornell", "--encoders", "origin", "--bits", "0"}, {"origin keys have 1 to 64 bits, not 0"});
-  expect_refused({"run", "--scenes", "cornell", "--bits", "65"}, {"65-bit keys", "not 65"});
+  // Key lengths outside 1..64 are refused where --bits is parsed (issue 44), for every encoder.
+  expect_refused({"run", "--scenes", "cornell", "--encoders", "origin", "--bits", "0"},
+                 {"--bits 0 is not valid: give a whole number from 1 to 64"});
+  expect_refused({"run", "--scenes", "cornell", "--bits", "65"}, {"--bits 65 is not valid"});
   expect_refused({"run", "--scenes", "cornell", "--encoders", "MLHCC", "--bits", "31"},
                  {"encoder mlhcc with 31-bit keys", "even number of bits"});
   expect_refused({"run", "--scenes", "cornell", "--top-bits", "40", "--bits", "32"}, {"--top-bits 40"});
   expect_refused({"run", "--scenes", "cornell", "--reps", "0"}, {"--reps"});
   expect_refused({"run", "--scenes", "cornell", "--timeout", "-1"}, {"--timeout -1"});
   // The knobs of the encoders beyond the paper (issue 21).
-  expect_refused({"run", "--scenes", "cornell", "--region-bits", "9"}, {"--region-bits 9", "0 to 8 region bits"});
+  expect_refused({"run", "--scenes", "cornell", "--region-bits", "9"}, {"--region-bits 9 is not valid", "from 0 to 8"});
   expect_refused({"run", "--scenes", "cornell", "--encoders", "hcc-region", "--region-bits", "4", "--bits", "4"},
                  {"encoder hcc-region with 4-bit keys", "more than 4 bits"});
   expect_refused({"run", "--scenes", "cornell", "--traffic-blend", "1.5"},
-                 {"--traffic-blend 1.5", "from 0 (HAD only) to 1"});
-  expect_refused({"run", "--scenes", "cornell", "--cost-bits", "0"}, {"--cost-bits 0", "1 to 31 cost bits"});
+                 {"--traffic-blend 1.5 is not valid", "from 0 to 1"});
+  expect_refused({"run", "--scenes", "cornell", "--cost-bits", "0"}, {"--cost-bits 0 is not valid", "from 1 to 31"});
   expect_refused({"run", "--scenes", "cornell", "--encoders", "mlhcc-cost", "--cost-bits", "8", "--bits", "16"},
                  {"encoder mlhcc-cost with 16-bit keys", "leaves no low-level cut"});
   expect_refused({"trace", "--scene", "cornell", "--adjudicate"}, {"--adjudicate judges", "--variant both"});
@@ -309,4 +311,122 @@ TEST(CliEncodebench, VersusPrintsAPairedRatioPerEncoder) {
   ASSERT_EQ(rows["hcc"].size(), 13u) << r.out;
   EXPECT_EQ(rows["hcc"][9], "-") << r.out;
   expect_refused({"encodebench", "--scene", "cornell", "--versus", "nope"}, {"unknown encoder 'nope'", "hcc"});
+}
+
+namespace {
+
+// Expects exactly exit code `code` and one line on stderr that starts with "raysort: error: " and
+// contains every one of `parts` (issue 44: one scheme for every error, the parser's included).
+void expect_exit(std::vector<std::string> args, int code, const std::vector<std::string>& parts,
+                 const std::vector<std::string>& env = {}) {
+  CliResult r = run_cli(args, env);
+  std::string cmd;
+  for (auto& a : args) cmd += a + " ";
+  EXPECT_EQ(r.code, code) << cmd << "\n" << r.err;
+  EXPECT_EQ(r.err.rfind("raysort: error: ", 0), 0u) << cmd << ": no 'raysort: error: ' prefix in " << r.err;
+  EXPECT_EQ(r.err.find('\n'), r.err.size() - 1) << cmd << ": not one line:\n" << r.err;
+  EXPECT_EQ(r.err.find("internal error"), std::string::npos) << cmd << ": " << r.err;
+  for (const auto& p : parts) EXPECT_NE(r.err.find(p), std::string::npos) << cmd << ": no '" << p << "' in " << r.err;
+}
+
+}  // namespace
+
+// Issue 44, item 10: a numeric option out of its range, NaN or infinite is refused where it is
+// parsed, naming the option, the value and the range; none is silently replaced by its default
+// (a run given --lambda inf stored null in meta.json and never resumed). `--shard-plan 1` keeps the
+// old behaviour (the value accepted) quick: it prints a plan and exits 0.
+TEST(CliNumbers, OutOfRangeNonFiniteAndMalformedNumbersAreRefusedWhereParsed) {
+  const std::vector<std::string> run = {"run", "--scenes", "cornell", "--shard-plan", "1"};
+  auto with = [](std::vector<std::string> base, std::vector<std::string> more) {
+    base.insert(base.end(), more.begin(), more.end());
+    return base;
+  };
+  expect_exit(with(run, {"--lambda", "-1"}), 1, {"--lambda -1 is not valid", "finite number", "0 or more"});
+  expect_exit(with(run, {"--lambda", "nan"}), 1, {"--lambda nan is not valid", "finite number"});
+  expect_exit(with(run, {"--lambda", "inf"}), 1, {"--lambda inf is not valid", "finite number"});
+  expect_exit(with(run, {"--twopoint-length", "-1"}), 1, {"--twopoint-length -1 is not valid"});
+  expect_exit(with(run, {"--direction-bits", "-7"}), 1, {"--direction-bits -7 is not valid", "whole number from 0 to"});
+  expect_exit(with(run, {"--traffic-blend", "nan"}), 1, {"--traffic-blend nan is not valid", "from 0 to 1"});
+  expect_exit(with(run, {"--timeout", "inf"}), 1, {"--timeout inf is not valid"});
+  expect_exit(with(run, {"--max-noise", "0"}), 1, {"--max-noise 0 is not valid", "above 0"});
+  expect_exit(with(run, {"--seed", "4294967296"}), 1, {"--seed 4294967296 is not valid", "from 0 to 4294967295"});
+  expect_exit(with(run, {"--bits", "32,x"}), 1, {"--bits x is not valid", "whole number from 1 to 64"});
+  // Item 16: counts have an upper bound.
+  expect_exit(with(run, {"--reps", "4000000000"}), 1, {"--reps 4000000000 is not valid", "from 1 to 100000"});
+  expect_exit(with(run, {"--warmup", "4000000000"}), 1, {"--warmup 4000000000 is not valid"});
+  // encodebench measured nothing (exit 0, an empty table) for key lengths no encoder has.
+  const std::vector<std::string> enc = {"encodebench", "--scene", "cornell", "--resolution", "16x16", "--encoders",
+                                        "hcc-traffic", "--reps", "1", "--warmup", "0", "--max-time", "0"};
+  expect_exit(with(enc, {"--bits", "65"}), 1, {"--bits 65 is not valid", "whole number from 1 to 64"});
+  expect_exit(with(enc, {"--bits", "0"}), 1, {"--bits 0 is not valid"});
+  expect_exit(with(enc, {"--traffic-blend", "nan"}), 1, {"--traffic-blend nan is not valid", "from 0 to 1"});
+  expect_exit({"sortcheck", "--sizes", "-1"}, 1, {"--sizes -1 is not valid"});
+  const std::string render_out = raysort::testing::temp_path("render-nan");
+  expect_exit({"render", "--scene", "cornell", "--exposure", "nan", "--host", "--resolution", "8x8", "--out", render_out},
+              1, {"--exposure nan is not valid"});
+}
+
+// Item 17: the parser's own errors (CLI11's 104-114 before) exit 1 with the prefix and a usage
+// hint, like every other bad input; an unknown command is named; help and version still exit 0.
+TEST(CliExitCodes, ParserErrorsAreBadInputWithThePrefix) {
+  expect_exit({"run", "--spp", "-1"}, 1, {"--spp -1 is not valid"});
+  expect_exit({"run", "--scenes", "cornell", "--out", "a", "--out", "b"}, 1, {"--out", "raysort run --help"});
+  expect_exit({"run", "--no-such-option"}, 1, {"--no-such-option", "raysort run --help"});
+  expect_exit({"frobnicate"}, 1, {"unknown command 'frobnicate'", "run", "encodebench", "raysort --help"});
+  expect_exit({}, 1, {"raysort --help"});
+  for (const std::vector<std::string>& ok : {std::vector<std::string>{"--help"}, {"run", "--help"}, {"--version"}}) {
+    CliResult r = run_cli(ok);
+    EXPECT_EQ(r.code, 0) << ok.back() << r.err;
+    EXPECT_FALSE(r.out.empty()) << ok.back();
+  }
+  // Resolutions: no wrap-around of negative or overflowing numbers.
+  expect_exit({"run", "--scenes", "cornell", "--resolution", "-48x27", "--shard-plan", "1"}, 1,
+              {"--resolution '-48x27'", "WIDTHxHEIGHT"});
+  expect_exit({"run", "--scenes", "cornell", "--resolution", "4294967344x27", "--shard-plan", "1"}, 1,
+              {"--resolution '4294967344x27'"});
+  expect_exit({"trace", "--scene", "cornell", "--resolution", "48x-27"}, 1, {"--resolution '48x-27'"});
+  expect_exit({"run", "--scenes", "cornell", "--shard-plan", "4294967295"}, 1, {"--shard-plan 4294967295 is not valid"});
+}
+
+// Item 13: no OpenCL driver, or a device index past the list, is a one-line error with the fix.
+TEST(CliDevices, NoDriverAndHugeIndexAreClearErrors) {
+  const fs::path empty = raysort::testing::temp_path("no-icd");
+  fs::create_directories(empty);
+  expect_exit({"devices"}, 1, {"no OpenCL", "pocl-opencl-icd"}, {"OCL_ICD_VENDORS=" + empty.string()});
+  expect_exit({"sortcheck", "--sizes", "1"}, 1, {"no OpenCL", "pocl-opencl-icd"},
+              {"OCL_ICD_VENDORS=" + empty.string(), "RAYSORT_DEVICE="});
+  expect_exit({"sortcheck", "--sizes", "1", "--device", "99999999999999999999"}, 1,
+              {"--device 99999999999999999999", "no device with that index", "[0]"});
+}
+
+// Item 14: commands outside trace/run/render/encodebench estimate their memory too and refuse
+// with exit 2 before allocating (the sort check's pairs, a scene description's host frame); a
+// forced scan work-group over the device's limit is refused before a kernel is enqueued (it
+// crashed the process at exit after the failed launch).
+TEST(CliMemory, SortcheckAndScenesDescribeRefuseWhatDoesNotFit) {
+  expect_exit({"sortcheck", "--sizes", "4294967295", "--bits", "64"}, 2, {"4294967295 pairs", "lower --sizes"});
+  expect_exit({"scenes", "--describe", "cornell", "--resolution", "20000x20000"}, 2, {"20000x20000", "lower --resolution"});
+  expect_exit({"sortcheck", "--scan-work-group", "8192", "--sizes", "1000"}, 1, {"8192", "work-group"});
+}
+
+// Item 12: report reads a meta.json whose matrix entries have the wrong JSON type as bad input
+// naming the file and the key (compare and merge did; report ended in an internal error).
+TEST(CliReport, BadlyTypedMatrixEntriesNameTheFileAndKey) {
+  const fs::path golden = fs::path(RAYSORT_SOURCE_DIR) / "tests/golden/quick-tiny";
+  const std::vector<std::pair<std::string, std::string>> edits = {
+      {"spp", "\"eight\""}, {"scenes", "{\"a\": 1}"}, {"resolution", "48"}, {"shadow_rays", "\"two\""},
+      // Written by `run --lambda inf` before issue 44 (a non-finite double is JSON null): reported
+      // as damaged, as resume and sweep cannot read it either.
+      {"had_lambda", "null"}};
+  for (const auto& [key, value] : edits) {
+    const fs::path dir = raysort::testing::temp_path("typed-" + key);
+    fs::copy(golden, dir, fs::copy_options::recursive);
+    std::ifstream in(dir / "meta.json");
+    nlohmann::json meta = nlohmann::json::parse(in);
+    in.close();
+    meta["matrix"][key] = nlohmann::json::parse(value);
+    std::ofstream(dir / "meta.json") << meta.dump(1);
+    expect_exit({"report", dir.string()}, 1, {"meta.json", "matrix." + key});
+    fs::remove_all(dir);
+  }
 }

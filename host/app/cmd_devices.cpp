@@ -10,13 +10,9 @@ namespace raysort {
 void register_devices_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("devices", "list OpenCL platforms and devices");
   cmd->callback([] {
-    auto devices = list_devices();
-    if (devices.empty()) {
-      fmt::print("no OpenCL devices found (install PoCL with scripts/install-deps.sh, or a GPU driver)\n");
-      set_command_exit_code(1);
-      return;
-    }
+    // With no device, select_device throws the one message that says what to install.
     auto def = select_device("");
+    auto devices = list_devices();
     for (auto& d : devices) {
       fmt::print("[{}] {}{}\n", d.index, d.name, d.index == def.index ? "   (default)" : "");
       fmt::print("    platform        {} ({})\n", d.platform_name, d.platform_version);

@@ -189,12 +189,18 @@ void register_encode_command(CLI::App& app) {
   cmd->add_option("--scene,--scenes", args->scene, "scene name, .toml or .obj path (one)")->required();
   cmd->add_option("--batch", args->batch, "batch name: primary, shadow<k>, bounce<k>")->capture_default_str();
   cmd->add_option("--encoders", args->encoders, "comma-separated encoders (default: all)")->delimiter(',');
-  cmd->add_option("--bits", args->bits, "comma-separated key lengths")->delimiter(',')->capture_default_str();
-  cmd->add_option("--direction-bits", args->direction_bits,
-                  "HCC_DIR direction bits (more than 1 runs its two-pass kernels, as `run --direction-bits` does)");
-  cmd->add_option("--region-bits", args->region_bits, "hcc-region region bits (as `run --region-bits`)");
-  cmd->add_option("--traffic-blend", args->traffic_blend, "hcc-traffic and hcc-region blend (as `run --traffic-blend`)");
-  cmd->add_option("--cost-bits", args->cost_bits, "mlhcc-cost cost bits (as `run --cost-bits`)");
+  // The same ranges as run's options of the same names.
+  whole_number(cmd->add_option("--bits", args->bits, "comma-separated key lengths")->delimiter(',')->capture_default_str(),
+               1, 64);
+  whole_number(cmd->add_option("--direction-bits", args->direction_bits,
+                               "HCC_DIR direction bits (more than 1 runs its two-pass kernels, as `run --direction-bits` does)"),
+               0, 64);
+  whole_number(cmd->add_option("--region-bits", args->region_bits, "hcc-region region bits (as `run --region-bits`)"), 0,
+               kMaxRegionBits);
+  finite_number(cmd->add_option("--traffic-blend", args->traffic_blend,
+                                "hcc-traffic and hcc-region blend (as `run --traffic-blend`)"),
+                0, 1);
+  whole_number(cmd->add_option("--cost-bits", args->cost_bits, "mlhcc-cost cost bits (as `run --cost-bits`)"), 1, 31);
   cmd->add_option("--versus", args->versus,
                   "also time this encoder's encode in the same rounds as each other encoder's, and print the paired "
                   "cost ratio with its 95 % interval (e.g. --versus hcc)");

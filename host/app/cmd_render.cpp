@@ -158,12 +158,15 @@ void register_render_command(CLI::App& app) {
   cmd->add_option("--overlay", args->overlay,
                   "boxes to draw on <base>-<overlay>.png: none, hcc (cut nodes), mlhcc (top-level), grid")
       ->capture_default_str();
-  cmd->add_option("--bits", args->bits, "key length the cut is chosen for (one box per bit)")
-      ->capture_default_str()
-      ->check(CLI::Range(1u, 64u));
+  whole_number(cmd->add_option("--bits", args->bits, "key length the cut is chosen for (one box per bit)")
+                   ->capture_default_str(),
+               1, 64);
   cmd->add_option("--out", args->out,
                   "base of the output names: <base>.png, <base>.exr, <base>-cost.png (default: the scene's name)");
-  cmd->add_option("--exposure", args->exposure, "PNG exposure in stops (radiance x 2^exposure)")->capture_default_str();
+  // 2^1000 and beyond overflow a float's radiance scale.
+  finite_number(cmd->add_option("--exposure", args->exposure, "PNG exposure in stops (radiance x 2^exposure)")
+                    ->capture_default_str(),
+                -100, 100);
   cmd->add_flag("--host", args->host, "run the host twin of the path tracer instead of the OpenCL device");
   add_common_options(*cmd, args->common);
   cmd->callback([args] { set_command_exit_code(run_render(*args)); });

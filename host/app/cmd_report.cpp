@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include "app/commands.h"
+#include "bench/matrix.h"
 #include "bench/result_set.h"
 
 namespace raysort {
@@ -15,6 +16,8 @@ void register_report_command(CLI::App& app) {
   cmd->callback([dir] {
     // One writer: not while a run or merge writes into it.
     ResultSet rs = ResultSet::load_for_writing(*dir, "raysort report " + *dir);
+    // The tables read the matrix's entries by type; a damaged entry is named, not a JSON type error.
+    if (rs.meta().contains("matrix")) check_matrix_json(rs.meta()["matrix"], *dir + "/meta.json");
     rs.write_views();
     rs.write_plots();
     const NoiseSummary noise = summarize_noise(rs.cells());

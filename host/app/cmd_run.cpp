@@ -1,6 +1,8 @@
 // raysort run: a scenario matrix into a result set (host/bench/runner.h).
 #include <fmt/format.h>
 
+#include <limits>
+
 #include "app/commands.h"
 #include "app/options.h"
 #include "bench/gpu_model.h"
@@ -13,6 +15,10 @@
 namespace raysort {
 
 namespace {
+constexpr double kInf = std::numeric_limits<double>::infinity();
+// The largest N of --shard i/N (ShardSpec::parse reads up to six digits).
+constexpr std::uint64_t kMaxShards = 999999;
+
 struct RunArgs {
   std::string preset;
   std::vector<std::string> scenes, batches, encoders;
@@ -21,8 +27,8 @@ struct RunArgs {
   std::string variant, access, baseline, layout, gpu_model;
   unsigned reps = 0, warmup = 0;
   double max_noise_pct = 0, max_time_s = 0;
-  bool warmup_set = false;
-  float lambda = -1, twopoint = -1;
+  double lambda = -1;
+  float twopoint = -1;
   int direction_bits = -1;
   int region_bits = -1;
   double traffic_blend = -1;
@@ -69,29 +75,17 @@ MatrixSpec matrix_from(const RunArgs& a, const CLI::App& cmd) {
     spec.gpu_model = a.gpu_model;
   }
   if (cmd.count("--reps")) spec.reps = a.reps;
-  if (a.warmup_set) spec.warmup = a.warmup;
+  if (cmd.count("--warmup")) spec.warmup = a.warmup;
   if (cmd.count("--max-noise")) spec.max_noise = a.max_noise_pct / 100.0;
   if (cmd.count("--max-time")) spec.max_time_s = a.max_time_s;
-  if (a.lambda >= 0) spec.params.had_lambda = a.lambda;
-  if (a.twopoint >= 0) spec.params.twopoint_length_fraction = a.twopoint;
-  if (a.direction_bits >= 0) spec.params.direction_bits = static_cast<unsigned>(a.direction_bits);
-  if (cmd.count("--region-bits")) {
-    if (a.region_bits < 0 || a.region_bits > static_cast<int>(kMaxRegionBits))
-      throw Error(fmt::format("--region-bits {}: hcc-region takes 0 to {} region bits", a.region_bits, kMaxRegionBits));
-    spec.params.region_bits = static_cast<unsigned>(a.region_bits);
-  }
-  if (cmd.count("--traffic-blend")) {
-    if (!(a.traffic_blend >= 0.0 && a.traffic_blend <= 1.0))
-      throw Error(fmt::format("--traffic-blend {}: the blend is a number from 0 (HAD only) to 1 (traffic only)",
-                              a.traffic_blend));
-    spec.params.traffic_blend = a.traffic_blend;
-  }
-  if (cmd.count("--cost-bits")) {
-    if (a.cost_bits < 1 || a.cost_bits > 31)
-      throw Error(fmt::format("--cost-bits {}: mlhcc-cost takes 1 to 31 cost bits (and fewer than half the key)",
-                              a.cost_bits));
-    spec.params.cost_bits = static_cast<unsigned>(a.cost_bits);
-  }
+  // The encoder knobs were checked where they were parsed (register_run_command's ranges): a given
+  // value is taken, none is replaced by the default.
+  if (cmd.count("--lambda")) spec.params.had_lambda = a.lambda;
+  if (cmd.count("--twopoint-length")) spec.params.twopoint_length_fraction = a.twopoint;
+  if (cmd.count("--direction-bits")) spec.params.direction_bits = static_cast<unsigned>(a.direction_bits);
+  if (cmd.count("--region-bits")) spec.params.region_bits = static_cast<unsigned>(a.region_bits);
+  if (cmd.count("--traffic-blend")) spec.params.traffic_blend = a.traffic_blend;
+  if (cmd.count("--cost-bits")) spec.params.cost_bits = static_cast<unsigned>(a.cost_bits);
   spec.cell_timeout_s = a.timeout_s;
   return spec;
 }
@@ -106,18 +100,17 @@ void register_run_command(CLI::App& app) {
   add_scene_list_option(*cmd, a->scenes, "scenes (names, .toml or .obj paths, comma-separated)");
   cmd->add_option("--batches", a->batches, "batches: primary, shadow<k>, bounce<k>, or all")->delimiter(',');
   cmd->add_option("--encoders", a->encoders, "encoders, or all")->delimiter(',');
-  cmd->add_option("--bits", a->bits, "key bits, e.g. 16,32,64")->delimiter(',');
-  cmd->add_option("--top-bits", a->top_bits, "also sort by only the highest k bits (top-k cells)")->delimiter(',');
+  whole_number(cmd->add_option("--bits", a->bits, "key bits, e.g. 16,32,64")->delimiter(','), 1, 64);
+  whole_number(cmd->add_option("--top-bits", a->top_bits, "also sort by only the highest k bits (top-k cells)")->delimiter(','),
+               1, 64);
   add_common_options(*cmd, a->common);
-  cmd->add_option("--reps", a->reps,
-                  "the fewest timed rounds per cell (default 7: from 7 on the 95 % interval leaves out the extremes); "
-                  "more follow until --max-noise or --max-time is reached (docs/measurement.md)");
-  cmd->add_option("--warmup", a->warmup, "untimed rounds before timing")->each([a](const std::string&) { a->warmup_set = true; });
-  cmd->add_option("--max-noise", a->max_noise_pct,
-                  "stop sampling a cell once its speedup's 95 % interval is within +-this many percent (default 2)");
-  cmd->add_option("--max-time", a->max_time_s,
-                  "stop sampling a cell after this many seconds of rounds (past --reps) even if --max-noise is not "
-                  "reached; the cell records that it stopped on time (default 5; quick preset 0.3)");
+  add_protocol_number_options(
+      *cmd, a->reps, a->warmup, a->max_noise_pct, a->max_time_s,
+      "the fewest timed rounds per cell (default 7: from 7 on the 95 % interval leaves out the extremes); "
+      "more follow until --max-noise or --max-time is reached (docs/measurement.md)",
+      "stop sampling a cell once its speedup's 95 % interval is within +-this many percent (default 2)",
+      "stop sampling a cell after this many seconds of rounds (past --reps) even if --max-noise is not "
+      "reached; the cell records that it stopped on time (default 5; quick preset 0.3)");
   cmd->add_option("--access", a->access,
                   "ray access modes, comma-separated: gather (trace through the sorted order), permute (move the "
                   "rays into sorted order first, timed as a stage), or all");
@@ -137,22 +130,31 @@ void register_run_command(CLI::App& app) {
                   "also replay every cell's traversal through a GPU's caches and predict its speedup (docs/gpu-model.md): "
                   "a profile in gpu/profiles/ (rtx3060, h100, h200) or a .toml path; off by default (it adds the replay's "
                   "time to each cell's SIMT model)");
-  cmd->add_option("--lambda", a->lambda, "HAD lambda (paper Eq. 1; default 0.125)");
-  cmd->add_option("--twopoint-length", a->twopoint, "TwoPoint ray length as a fraction of the largest extent (0.25)");
-  cmd->add_option("--direction-bits", a->direction_bits, "HCC_DIR direction bits");
-  cmd->add_option("--region-bits", a->region_bits,
+  finite_number(cmd->add_option("--lambda", a->lambda, "HAD lambda (paper Eq. 1; default 0.125)"), 0, kInf);
+  // Stored as a float (EncoderParams), so bounded by the float range.
+  finite_number(cmd->add_option("--twopoint-length", a->twopoint,
+                                "TwoPoint ray length as a fraction of the largest extent (0.25)"),
+                0, std::numeric_limits<float>::max());
+  whole_number(cmd->add_option("--direction-bits", a->direction_bits,
+                               "HCC_DIR direction bits (fewer than the key's; at most 42)"),
+               0, 64);
+  whole_number(cmd->add_option("--region-bits", a->region_bits,
                   "hcc-region: key bits that pick the ray origin's region, 2^N regions split at a previous frame's "
-                  "median origins (0-8, default 4; docs/encoders.md)");
-  cmd->add_option("--traffic-blend", a->traffic_blend,
+                  "median origins (0-8, default 4; docs/encoders.md)"),
+               0, kMaxRegionBits);
+  finite_number(cmd->add_option("--traffic-blend", a->traffic_blend,
                   "hcc-traffic and hcc-region: beta of the cut priority (1 - beta) HAD + beta traffic (hcc-traffic: of "
                   "the previous batch; hcc-region: of the region's rays in a previous frame; 0-1, default 0.5; "
-                  "docs/encoders.md)");
-  cmd->add_option("--cost-bits", a->cost_bits,
-                  "mlhcc-cost: key bits of the traversal-cost estimate from a previous frame (1-31 and fewer than half "
-                  "the key; default an eighth of the key; docs/encoders.md)");
-  cmd->add_option("--timeout", a->timeout_s,
-                  "per-cell wall-clock limit in seconds (0: none); a cell over it is recorded as \"timeout\" "
-                  "(checked between the arms of a round: a kernel in flight runs to completion)");
+                  "docs/encoders.md)"),
+                0, 1);
+  whole_number(cmd->add_option("--cost-bits", a->cost_bits,
+                               "mlhcc-cost: key bits of the traversal-cost estimate from a previous frame (1-31 and fewer "
+                               "than half the key; default an eighth of the key; docs/encoders.md)"),
+               1, 31);
+  finite_number(cmd->add_option("--timeout", a->timeout_s,
+                                "per-cell wall-clock limit in seconds (0: none); a cell over it is recorded as \"timeout\" "
+                                "(checked between the arms of a round: a kernel in flight runs to completion)"),
+                0, kMaxSeconds);
   cmd->add_flag("--no-retry", a->opts.no_retry,
                 "when resuming, keep cells recorded as failed or timeout as they are (by default they run again); "
                 "the exit code still says whether every cell is ok");
@@ -160,9 +162,11 @@ void register_run_command(CLI::App& app) {
   auto* shard_opt = cmd->add_option("--shard", a->shard,
                                     "run only shard i of N (i/N, numbered from 1: 1/4 ... 4/4), a deterministic share "
                                     "of the cells balanced by estimated cost; merge the shards with raysort merge");
-  cmd->add_option("--shard-plan", a->shard_plan,
-                  "print which cells each of N shards would run, with their estimated costs, and exit")
-      ->excludes(shard_opt);
+  // As many shards as --shard i/N can name.
+  whole_number(cmd->add_option("--shard-plan", a->shard_plan,
+                               "print which cells each of N shards would run, with their estimated costs, and exit")
+                   ->excludes(shard_opt),
+               1, kMaxShards);
   cmd->callback([a, cmd] {
     MatrixSpec spec = matrix_from(*a, *cmd);
     a->opts.device = a->common.device;
@@ -175,7 +179,6 @@ void register_run_command(CLI::App& app) {
     a->opts.command = line;
     if (!a->shard.empty()) a->opts.shard = ShardSpec::parse(a->shard);
     if (cmd->count("--shard-plan")) {
-      if (a->shard_plan == 0) throw Error("--shard-plan N: the number of shards must be at least 1");
       validate_matrix(spec);
       fmt::print("{}", format_plan(plan_matrix_shards(spec, a->opts.scene_root, a->shard_plan), a->shard_plan));
       return;
@@ -194,13 +197,13 @@ void register_run_command(CLI::App& app) {
     fmt::print("tables: {}/tables.md\n", s.out_dir);
     if (s.interrupted) {
       fmt::print(stderr, "interrupted: finished cells are saved; rerun the same command to resume\n");
-      set_command_exit_code(130);
+      set_command_exit_code(kExitInterrupted);
     } else if (s.cells_not_ok > 0 || s.cells_missing > 0) {
       // The exit code is the state of the whole set, not of this run's cells: a resumed run that
       // kept failed cells (--no-retry) or failed again does not report success.
       fmt::print(stderr, "raysort run: {} has {} cell(s) not ok (failed or timeout) and {} missing; rerun the command "
                  "to retry them\n", s.out_dir, s.cells_not_ok, s.cells_missing);
-      set_command_exit_code(1);
+      set_command_exit_code(kExitBadInput);
     }
   });
 }

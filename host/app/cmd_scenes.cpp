@@ -11,6 +11,7 @@
 
 #include "app/commands.h"
 #include "app/options.h"
+#include "render/frame_memory.h"
 #include "bvh/prepared_scene.h"
 #include "render/batches.h"
 #include "render/pathtrace.h"
@@ -61,6 +62,11 @@ int print_light_table(const ScenesArgs& args) {
 int describe_scene(const ScenesArgs& args) {
   const auto t0 = std::chrono::steady_clock::now();
   const PreparedScene p = prepare_scene(args.describe, args.common.scene_options());
+  // The frame traced below on the host (its batches and hits), sized before anything is printed or
+  // allocated, as trace sizes its frame.
+  check_frame_memory(estimate_frame_memory(p.scene), nullptr,
+                     fmt::format("scene {} at {}x{}, {} spp", p.scene.name, p.scene.camera.width, p.scene.camera.height,
+                                 p.scene.effects.samples_per_pixel));
   const ShadeInputs in = make_shade_inputs(p.scene, p.tris, args.common.raygen_options());
   const Effects& e = p.scene.effects;
   fmt::print("scene    {} ({}): {} triangles\n", p.scene.name, p.scene.file, p.tris.size());

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "app/commands.h"
+#include "app/options.h"
 #include "runtime/runtime.h"
 #include "sort/radix_sort.h"
 
@@ -228,9 +229,9 @@ void register_sortbench_command(CLI::App& app) {
   static Options opt;
   auto* cmd = app.add_subcommand("sortbench", "benchmark the radix sort against host sorts and Boost.Compute");
   cmd->add_option("--device", opt.device, "OpenCL device: index, cpu, gpu or a name substring (default: first GPU)");
-  cmd->add_option("--reps", opt.reps, "timed repetitions of our sort per case (median)")->check(CLI::Range(1, 1000));
-  cmd->add_option("--ref-reps", opt.ref_reps, "repetitions of the host sorts and Boost.Compute per case")
-      ->check(CLI::Range(1, 100));
+  whole_number(cmd->add_option("--reps", opt.reps, "timed repetitions of our sort per case (median)"), 1, 1000);
+  whole_number(cmd->add_option("--ref-reps", opt.ref_reps, "repetitions of the host sorts and Boost.Compute per case"), 1,
+               100);
   cmd->add_flag("!--no-large", opt.large, "skip the 16 M pair cases");
   cmd->callback([] { run_sortbench(opt); });
 }

@@ -7,12 +7,15 @@
 #include <fmt/format.h>
 
 #include <cstdint>
+#include <limits>
 #include <numeric>
 #include <random>
 #include <string>
 #include <vector>
 
 #include "app/commands.h"
+#include "app/options.h"
+#include "render/frame_memory.h"
 #include "runtime/runtime.h"
 #include "sort/radix_sort.h"
 
@@ -54,6 +57,11 @@ void run_sortcheck(const SortCheckOptions& opt) {
   if (opt.items) t.items = opt.items;
   if (opt.radix_bits) t.radix_bits = opt.radix_bits;
   if (opt.scan_work_group) t.scan_work_group = opt.scan_work_group;
+  // The pairs, their host twin's copies and the device's buffers, before any is allocated.
+  for (unsigned bits : opt.bits)
+    for (std::size_t n : opt.sizes)
+      check_sort_memory(n, bits > 32 ? 8 : 4, &rt.info(),
+                        fmt::format("sortcheck of {} pairs with {}-bit keys", n, bits > 32 ? 64 : 32), "lower --sizes");
   RadixSort sorter(rt, t);
   fmt::print("device: {} ({})\nradix sort: {}-bit digits, work-group {}, {} keys per work-item, scan work-group {}\n",
              rt.info().name, rt.info().platform_name, t.radix_bits, t.work_group, t.items, t.scan_work_group);
@@ -74,15 +82,20 @@ void register_sortcheck_command(CLI::App& app) {
   static SortCheckOptions opt;
   auto* cmd = app.add_subcommand("sortcheck", "check the radix sort against its host twin at a few sizes (any shape)");
   cmd->add_option("--device", opt.device, "OpenCL device: index, cpu, gpu or a name substring");
-  cmd->add_option("--sizes", opt.sizes, "comma-separated pair counts")->delimiter(',')->capture_default_str();
-  cmd->add_option("--bits", opt.bits, "comma-separated key widths (1..64)")
-      ->delimiter(',')
-      ->check(CLI::Range(1u, 64u))
-      ->capture_default_str();
-  cmd->add_option("--work-group", opt.work_group, "force the tile's work-items (1: the CPU shape; > 1: the GPU shape)");
-  cmd->add_option("--items", opt.items, "force keys per work-item (GPU shape)");
-  cmd->add_option("--radix-bits", opt.radix_bits, "force the digit width");
-  cmd->add_option("--scan-work-group", opt.scan_work_group, "force the scan's work-items (a power of two)");
+  // At most the 2^32 - 1 pairs the sort's 32-bit positions address; the memory they take is
+  // checked against the machine once the device is known (check_sort_memory).
+  whole_number(cmd->add_option("--sizes", opt.sizes, "comma-separated pair counts")->delimiter(',')->capture_default_str(),
+               1, std::numeric_limits<std::uint32_t>::max());
+  whole_number(cmd->add_option("--bits", opt.bits, "comma-separated key widths (1..64)")->delimiter(',')->capture_default_str(),
+               1, 64);
+  // 0 keeps the device's own value; a shape the device cannot run is refused by RadixSort.
+  whole_number(cmd->add_option("--work-group", opt.work_group,
+                               "force the tile's work-items (1: the CPU shape; > 1: the GPU shape; a power of two)"),
+               0, 65536);
+  whole_number(cmd->add_option("--items", opt.items, "force keys per work-item (GPU shape)"), 0, 65536);
+  whole_number(cmd->add_option("--radix-bits", opt.radix_bits, "force the digit width (1 to 12)"), 0, 12);
+  whole_number(cmd->add_option("--scan-work-group", opt.scan_work_group, "force the scan's work-items (a power of two)"), 0,
+               65536);
   cmd->callback([] { run_sortcheck(opt); });
 }
 

@@ -5,6 +5,7 @@
 // boundary, into typed values.
 #include <CLI/CLI.hpp>
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -28,6 +29,18 @@ struct CommonOptions {
   RayGenOptions raygen_options() const;
 };
 
+// Numbers on the command line (issue 44). Every numeric option is checked as text where it is
+// parsed, before CLI11 converts it: a negative count would otherwise wrap (-1 as 4294967295), a
+// NaN or an out-of-range value was replaced by a default or stored as null, and CLI11's own
+// conversion errors named neither the range nor the fix. A value outside the range throws Error
+// "--lambda -1 is not valid: give a finite number, 0 or more".
+// A whole number from lo to hi (digits only: no sign, no exponent); each item of a list option.
+CLI::Option* whole_number(CLI::Option* opt, std::uint64_t lo, std::uint64_t hi);
+// A finite number from lo to hi (above lo, when above_lo); hi infinite: no upper bound.
+CLI::Option* finite_number(CLI::Option* opt, double lo, double hi, bool above_lo = false);
+// Checks a WIDTHxHEIGHT text: two whole numbers from 1 to 4294967295 (throws Error naming `option`).
+void check_resolution_text(const std::string& option, const std::string& text);
+
 // --scene-root, --resolution, --spp, --shadow-rays, --bounces, --seed.
 void add_scene_options(CLI::App& cmd, CommonOptions& o);
 // --device.
@@ -49,5 +62,15 @@ struct ProtocolOptions {
 };
 
 void add_protocol_options(CLI::App& cmd, ProtocolOptions& o);
+
+// The bounds of the protocol's numbers, shared with `run`: at most 100000 rounds (timed or
+// warm-up), at most a day (86400 s) of sampling per batch or cell.
+inline constexpr std::uint64_t kMaxRounds = 100000;
+inline constexpr double kMaxSeconds = 86400;
+// --reps, --warmup, --max-noise (percent, above 0, at most 100) and --max-time, checked as above,
+// with each command's help text.
+void add_protocol_number_options(CLI::App& cmd, unsigned& reps, unsigned& warmup, double& max_noise_pct,
+                                 double& max_time_s, const std::string& reps_help, const std::string& noise_help,
+                                 const std::string& time_help);
 
 }  // namespace raysort

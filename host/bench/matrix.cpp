@@ -68,6 +68,50 @@ nlohmann::json MatrixSpec::to_json() const {
   return j;
 }
 
+void check_matrix_json(const nlohmann::json& matrix, const std::string& file) {
+  // Every entry to_json writes, by the type it is written (and read) as. A value to_json writes as a
+  // float (max_noise, had_lambda, ...) is written as null when it is not finite, so null is refused
+  // as well: such a set can be neither resumed nor swept.
+  enum Kind { Text, Count, Number, TextList, CountList };
+  static const std::vector<std::pair<const char*, Kind>> kKeys = {
+      {"preset", Text},       {"scenes", TextList},      {"batches", TextList},        {"encoders", TextList},
+      {"bits", CountList},    {"key_length_scenes", TextList}, {"key_length_bits", CountList}, {"top_bits", CountList},
+      {"resolution", Text},   {"spp", Count},            {"reps", Count},              {"warmup", Count},
+      {"max_noise", Number},  {"max_time_s", Number},    {"seed", Count},              {"variant", Text},
+      {"access", Text},       {"baseline", Text},        {"layout", Text},             {"twopoint_length_fraction", Number},
+      {"had_lambda", Number}, {"direction_bits", Count}, {"gpu_model", Text},          {"region_bits", Count},
+      {"traffic_blend", Number}, {"cost_bits", Count},   {"shadow_rays", Count},       {"bounces", Count}};
+  auto is = [](const nlohmann::json& v, Kind k) {
+    switch (k) {
+      case Text: return v.is_string();
+      case Count: return v.is_number_unsigned();
+      case Number: return v.is_number();
+      case TextList: return v.is_array() && std::all_of(v.begin(), v.end(), [](const auto& x) { return x.is_string(); });
+      case CountList:
+        return v.is_array() && std::all_of(v.begin(), v.end(), [](const auto& x) { return x.is_number_unsigned(); });
+    }
+    return false;
+  };
+  static const char* const kNames[] = {"a string", "a count (a whole number, 0 or more)", "a number",
+                                       "a list of strings", "a list of counts"};
+  if (!matrix.is_object())
+    throw Error(fmt::format("{}: \"matrix\" is a JSON {}, not an object; restore the file (it was edited or damaged)",
+                            file, matrix.type_name()));
+  for (const auto& [key, kind] : kKeys) {
+    if (!matrix.contains(key) || is(matrix[key], kind)) continue;
+    const nlohmann::json& v = matrix[key];
+    std::string what = fmt::format("a JSON {}", v.type_name());
+    if (v.is_array())  // a list of the wrong items: name the first
+      for (std::size_t i = 0; i < v.size(); ++i)
+        if (!is(nlohmann::json::array({v[i]}), kind)) {
+          what = fmt::format("a list whose item {} is a JSON {}", i, v[i].type_name());
+          break;
+        }
+    throw Error(fmt::format("{}: matrix.{} is {}, not {}; restore the file (it was edited or damaged)", file, key, what,
+                            kNames[kind]));
+  }
+}
+
 ProtocolSettings MatrixSpec::protocol(const std::string& cell_id) const {
   ProtocolSettings p;
   p.warmup = warmup;

@@ -70,6 +70,12 @@ struct MatrixSpec {
 MatrixSpec matrix_preset(const std::string& name);
 std::vector<std::string> preset_names();
 
+// Checks that the entries of a meta.json "matrix" (as to_json spells them) have the JSON types the
+// readers of a result set take them as (a string, a count, a number, a list of strings or of
+// counts); throws Error naming `file`, the key and the fix otherwise. Unknown keys are left alone (a
+// set written by another version). The readers (tables, plots, sweep) then call get<T>() safely.
+void check_matrix_json(const nlohmann::json& matrix, const std::string& file);
+
 // Checks what parsing cannot: key bits valid per encoder, batch names well formed, resolution and
 // spp non-zero, axes non-empty, protocol settings in range. Throws Error naming the offending value.
 void validate_matrix(const MatrixSpec& spec);

@@ -8,6 +8,7 @@
 #include <map>
 #include <set>
 
+#include "bench/matrix.h"
 #include "bench/result_set.h"
 #include "util/error.h"
 
@@ -37,6 +38,9 @@ Sweep load_sweep(const std::vector<std::string>& dirs) {
   for (const auto& dir : dirs) {
     ResultSet rs = ResultSet::load(dir);
     if (!rs.meta().contains("matrix")) throw Error(fmt::format("{}: meta.json has no matrix", dir));
+    // Its entries are read below as numbers; a null (a non-finite value written by an older raysort)
+    // or a string is named here instead of ending in a JSON type error.
+    check_matrix_json(rs.meta()["matrix"], dir + "/meta.json");
     matrices.push_back(rs.meta()["matrix"]);
     sweep.points.push_back({dir, 0.0, rs.cells()});
   }

@@ -1,7 +1,8 @@
 #pragma once
 // What a frame's rays cost in memory, estimated before anything is allocated, and the refusal when
 // it does not fit (issue 23): every command that allocates per ray (trace, run, render,
-// encodebench) checks its scenes here first, so a size a user can type ends in one line that names
+// encodebench, scenes --describe) checks its scenes here first, and sortcheck its pairs (issue 44),
+// so a size a user can type ends in one line that names
 // the estimate, the limits and the fix, not in std::bad_alloc or a machine driven into swap.
 //
 // The model is an upper bound from the batches the scene's effects imply (render/batches.h): every
@@ -52,5 +53,12 @@ FrameMemory estimate_render_memory(const Scene& scene);
 // the global memory size the driver reports) and the fix. `device` may be null (the host twin).
 void check_frame_memory(const FrameMemory& m, const DeviceInfo* device, const std::string& what,
                         const std::string& fix = "lower --resolution or --spp (or the scene's bounces)");
+
+// The same check for a radix sort of `pairs` key/value pairs held in host vectors (`raysort
+// sortcheck`): the keys and values, the host twin's copies, the device's input and scratch buffers;
+// over 2^32 - 1 pairs the sort's 32-bit positions cannot address them. Throws ResourceError naming
+// `what` ("sortcheck of 4294967295 pairs with 64-bit keys") and the fix.
+void check_sort_memory(std::uint64_t pairs, unsigned key_bytes, const DeviceInfo* device, const std::string& what,
+                       const std::string& fix);
 
 }  // namespace raysort

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <charconv>
 #include <cctype>
 #include <chrono>
 #include <cstdlib>
@@ -212,8 +213,14 @@ std::string DeviceInfo::slug() const {
 
 std::vector<DeviceInfo> list_devices() {
   std::vector<cl::Platform> platforms;
-  cl_int err = cl::Platform::get(&platforms);  // no exception: zero platforms is an answer
-  (void)err;
+  // Zero platforms is an answer (select_device says what to install), not a fault: the ICD loader
+  // returns CL_PLATFORM_NOT_FOUND_KHR when no driver is registered (or OCL_ICD_VENDORS names an
+  // empty folder), which the C++ bindings throw as cl::Error "clGetPlatformIDs".
+  try {
+    cl::Platform::get(&platforms);
+  } catch (const cl::Error&) {
+    platforms.clear();
+  }
   std::vector<DeviceInfo> out;
   for (auto& p : platforms) {
     std::vector<cl::Device> devices;
@@ -255,11 +262,13 @@ DeviceInfo select_device(std::string spec) {
   auto devices = list_devices();
   if (devices.empty())
     throw Error(
-        "no OpenCL device found: install an OpenCL driver (PoCL for CPUs: scripts/install-deps.sh; "
-        "NVIDIA's driver for GPUs) and check with `clinfo -l`");
+        "no OpenCL device found: no OpenCL driver (ICD) is installed, or none has a device; install PoCL for CPUs "
+        "(`apt-get install pocl-opencl-icd`, or scripts/install-deps.sh) or a GPU vendor's driver, and check with "
+        "`clinfo -l` (OCL_ICD_VENDORS, when set, must name the folder of the .icd files)");
   auto listing = [&] {
     std::string s;
-    for (auto& d : devices) s += fmt::format("\n  [{}] {} / {} ({})", d.index, d.platform_name, d.name, d.type);
+    // On one line, as every error is (docs/errors.md).
+    for (auto& d : devices) s += fmt::format("{} [{}] {} / {} ({})", s.empty() ? "" : ";", d.index, d.platform_name, d.name, d.type);
     return s;
   };
   // The first device of `type` ("" for any), real hardware before simulators and single-threaded ones.
@@ -276,9 +285,14 @@ DeviceInfo select_device(std::string spec) {
   }
   std::string ls = lower(spec);
   if (std::all_of(spec.begin(), spec.end(), [](char c) { return std::isdigit(static_cast<unsigned char>(c)); })) {
-    std::size_t idx = std::stoul(spec);
-    if (idx < devices.size()) return devices[idx];
-    throw Error(fmt::format("--device {}: no device with that index; devices are:{}", spec, listing()));
+    // Any run of digits is an index; one too long for a number is as much past the list as 12 is.
+    std::size_t idx = 0;
+    const auto [end, ec] = std::from_chars(spec.data(), spec.data() + spec.size(), idx);
+    if (ec == std::errc() && end == spec.data() + spec.size() && idx < devices.size()) return devices[idx];
+    throw Error(fmt::format("--device {}: no device with that index; {}:{}", spec,
+                            devices.size() == 1 ? std::string("the one device is [0]")
+                                                : fmt::format("the {} devices are [0] to [{}]", devices.size(), devices.size() - 1),
+                            listing()));
   }
   if (ls == "gpu" || ls == "cpu") {
     if (const DeviceInfo* d = first_of(ls == "gpu" ? "GPU" : "CPU")) return *d;

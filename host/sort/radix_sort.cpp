@@ -99,6 +99,29 @@ RadixSort::RadixSort(Runtime& rt, const RadixSortTuning& tuning) : rt_(rt), tuni
       k.scatter = cl::Kernel(program, "rs_scatter");
       if (tuning_.hybrid()) k.bucket_sort = cl::Kernel(program, "rs_bucket_sort");
     });
+    // Every launch's work-group must fit what the kernel takes on this device: a launch over it
+    // fails with CL_INVALID_WORK_GROUP_SIZE in the middle of a sort, and PoCL then aborted the
+    // process at exit (sortcheck --scan-work-group 8192). A forced tuning is refused here instead.
+    struct Launch {
+      cl::Kernel* kernel;
+      const char* name;
+      unsigned local;
+    };
+    const Launch launches[] = {{&k.count_bounds, "rs_count_bounds", tuning_.work_group},
+                               {&k.count, "rs_count", tuning_.work_group},
+                               {&k.scatter, "rs_scatter", tuning_.work_group},
+                               {&k.scan, "rs_scan", tuning_.scan_work_group},
+                               {&k.reduce_bounds, "rs_reduce_bounds", tuning_.scan_work_group}};
+    for (const Launch& l : launches) {
+      const std::size_t most = cl_call("querying a radix sort kernel's work-group size", [&] {
+        return l.kernel->getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(rt.info().device);
+      });
+      if (l.local > most)
+        throw Error(fmt::format("radix sort: a work-group of {} work-items (work_group {}, scan_work_group {}) is more "
+                                "than kernel {} takes on device '{}' ({}); force {} or fewer",
+                                l.local, tuning_.work_group, tuning_.scan_work_group, l.name, rt.info().name, most,
+                                most));
+    }
   }
 }
 
