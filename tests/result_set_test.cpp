@@ -616,43 +616,45 @@ TEST(CellFiles, SelfContradictingOkCellsAreRefused) {
 // Item 16: Ctrl-C stops a long cell at its next arm, not after its rounds; the cell in flight is
 // not recorded (a resume measures it).
 TEST(Interrupt, CtrlCStopsALongCellWithinSeconds) {
-  const std::string out = temp_path("interrupted");
-  std::vector<std::string> args{"run", "--scenes", "cornell", "--batches", "primary", "--encoders", "hcc", "--bits",
-                                "32", "--resolution", "64x36", "--reps", "100000", "--max-time", "600", "--out", out};
-  const pid_t pid = fork();
-  if (pid == 0) {
-    std::string bin = RAYSORT_BINARY;
-    std::vector<char*> argv{bin.data()};
-    for (auto& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    const int null = ::open("/dev/null", O_WRONLY);
-    ::dup2(null, 1);
-    ::dup2(null, 2);
-    ::execv(bin.c_str(), argv.data());
-    _exit(127);
-  }
-  // Until the first cell's rounds are under way (its meta.json is written before any cell).
-  const auto start = std::chrono::steady_clock::now();
-  while (!fs::exists(fs::path(out) / "meta.json") &&
-         std::chrono::steady_clock::now() - start < std::chrono::seconds(60))
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  std::this_thread::sleep_for(std::chrono::seconds(3));
-  ::kill(pid, SIGINT);
-  const auto sent = std::chrono::steady_clock::now();
-  int status = 0;
-  while (::waitpid(pid, &status, WNOHANG) == 0) {
-    if (std::chrono::steady_clock::now() - sent > std::chrono::seconds(20)) {
-      ::kill(pid, SIGKILL);
-      ::waitpid(pid, &status, 0);
-      FAIL() << "raysort run went on for 20 s after Ctrl-C";
+  for (const auto& [sig, code] : {std::pair{SIGINT, 130}, std::pair{SIGTERM, 143}}) {
+    const std::string out = temp_path(fmt::format("interrupted-{}", sig));
+    std::vector<std::string> args{"run", "--scenes", "cornell", "--batches", "primary", "--encoders", "hcc", "--bits",
+                                  "32", "--resolution", "64x36", "--reps", "100000", "--max-time", "600", "--out", out};
+    const pid_t pid = fork();
+    if (pid == 0) {
+      std::string bin = RAYSORT_BINARY;
+      std::vector<char*> argv{bin.data()};
+      for (auto& a : args) argv.push_back(a.data());
+      argv.push_back(nullptr);
+      const int null = ::open("/dev/null", O_WRONLY);
+      ::dup2(null, 1);
+      ::dup2(null, 2);
+      ::execv(bin.c_str(), argv.data());
+      _exit(127);
     }
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    // Until the first cell's rounds are under way (its meta.json is written before any cell).
+    const auto start = std::chrono::steady_clock::now();
+    while (!fs::exists(fs::path(out) / "meta.json") &&
+           std::chrono::steady_clock::now() - start < std::chrono::seconds(60))
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    std::this_thread::sleep_for(std::chrono::seconds(3));
+    ::kill(pid, sig);
+    const auto sent = std::chrono::steady_clock::now();
+    int status = 0;
+    while (::waitpid(pid, &status, WNOHANG) == 0) {
+      if (std::chrono::steady_clock::now() - sent > std::chrono::seconds(20)) {
+        ::kill(pid, SIGKILL);
+        ::waitpid(pid, &status, 0);
+        FAIL() << "raysort run went on for 20 s after signal " << sig;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - sent).count();
+    EXPECT_LT(s, 10.0) << "seconds from signal " << sig << " to exit";
+    ASSERT_TRUE(WIFEXITED(status)) << "signal " << sig;
+    EXPECT_EQ(WEXITSTATUS(status), code) << "128 + the signal, as a shell reports it";
+    EXPECT_TRUE(ResultSet::load(out).cells().empty()) << "the NoSort cell in flight is not recorded";
   }
-  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - sent).count();
-  EXPECT_LT(s, 10.0) << "seconds from Ctrl-C to exit";
-  ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_NE(WEXITSTATUS(status), 0);
-  EXPECT_TRUE(ResultSet::load(out).cells().empty()) << "the NoSort cell in flight is not recorded";
 }
 
 // The property of issue 44: random interleavings of run / report / merge / compare / kill on one
@@ -739,4 +741,15 @@ TEST(WriterProperty, InterleavedWritersAndKillsNeverCorruptASet) {
   }
   EXPECT_GT(killed, kInterleavings / 10);
   EXPECT_GT(sets_seen, kInterleavings / 2);
+}
+
+// Item 17: the order in which a list axis is written does not make another matrix.
+TEST(Resume, ListsInAnotherOrderAreTheSameMatrix) {
+  const std::string dir = finished_set("reordered");
+  std::vector<std::string> args = matrix({"--out", dir});
+  std::replace(args.begin(), args.end(), std::string("hcc,origin"), std::string("origin,hcc"));
+  const CliResult r = run_cli(args);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(contains(r.out, "0 cells run, 3 already done")) << r.out;
+  EXPECT_EQ(run_cli({"compare", dir, finished_set("reordered-b")}).code, 0);
 }

@@ -197,7 +197,7 @@ void register_run_command(CLI::App& app) {
     fmt::print("tables: {}/tables.md\n", s.out_dir);
     if (s.interrupted) {
       fmt::print(stderr, "interrupted: finished cells are saved; rerun the same command to resume\n");
-      set_command_exit_code(kExitInterrupted);
+      set_command_exit_code(s.signal > 0 ? 128 + s.signal : kExitInterrupted);
     } else if (s.cells_not_ok > 0 || s.cells_missing > 0) {
       // The exit code is the state of the whole set, not of this run's cells: a resumed run that
       // kept failed cells (--no-retry) or failed again does not report success.

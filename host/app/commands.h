@@ -25,7 +25,7 @@ inline constexpr int kExitOk = 0;
 inline constexpr int kExitBadInput = 1;     // bad input or a failed check: the message says what to change
 inline constexpr int kExitDoesNotFit = 2;   // the request does not fit this machine (ResourceError, bad_alloc)
 inline constexpr int kExitInternal = 3;     // a bug: please report it
-inline constexpr int kExitInterrupted = 130;  // `run` stopped by SIGINT or SIGTERM after its cell in flight; rerun to resume
+inline constexpr int kExitInterrupted = 130;  // `run` stopped by SIGINT (130) or SIGTERM (143) at its next arm; rerun to resume
 
 void set_command_exit_code(int code);
 int command_exit_code();

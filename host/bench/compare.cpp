@@ -268,8 +268,8 @@ void check_rules(const std::vector<FailRule>& rules, const CellsById& ma, CellsB
 }  // namespace
 
 std::string matrix_mismatch(const ResultSet& a, const ResultSet& b) {
-  const nlohmann::json ma = a.meta().value("matrix", nlohmann::json::object()),
-                       mb = b.meta().value("matrix", nlohmann::json::object());
+  const nlohmann::json ma = canonical_matrix(a.meta().value("matrix", nlohmann::json::object())),
+                       mb = canonical_matrix(b.meta().value("matrix", nlohmann::json::object()));
   std::vector<std::string> keys;
   for (const auto* m : {&ma, &mb})
     if (m->is_object())

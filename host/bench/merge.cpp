@@ -79,7 +79,7 @@ std::map<unsigned, std::string> check_one_run(const std::vector<Input>& sets, st
     const Input& ref = sets[0];
     const Input& in = sets[i];
     const nlohmann::json &a = ref.set.meta(), &b = in.set.meta();
-    if (a.value("matrix", nlohmann::json()) != b.value("matrix", nlohmann::json()))
+    if (canonical_matrix(a.value("matrix", nlohmann::json())) != canonical_matrix(b.value("matrix", nlohmann::json())))
       problems.push_back(fmt::format("{} ran another matrix than {} ({}); merge only the shards of one `raysort run` "
                                      "command (the same options, each with its own --shard i/N)",
                                      in.dir, ref.dir, json_differences(b["matrix"], a["matrix"])));

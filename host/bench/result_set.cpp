@@ -338,7 +338,7 @@ ResultSet ResultSet::open_for_run(const std::string& dir, const nlohmann::json& 
   if (fs::exists(meta_path, ec)) {
     const nlohmann::json old = parse_meta(read_file(meta_path.string()), meta_path.string());
     check_version(old, meta_path.string(), true);
-    if (old.value("matrix", nlohmann::json()) != meta.value("matrix", nlohmann::json()))
+    if (canonical_matrix(old.value("matrix", nlohmann::json())) != canonical_matrix(meta.value("matrix", nlohmann::json())))
       throw Error(fmt::format("{} holds results of a different matrix configuration ({}); choose another --out folder "
                               "(or delete it to start over)",
                               dir, json_differences(meta.value("matrix", nlohmann::json::object()),
@@ -516,6 +516,24 @@ std::string cell_outside_matrix(const CellRecord& c, const nlohmann::json& m) {
   if (c.top_bits != 0 && !listed("top_bits", c.top_bits)) return fmt::format("top-{} is not one of its top-k", c.top_bits);
   if (!listed("access", c.access)) return fmt::format("access mode '{}' is not one of its access modes", c.access);
   return "";
+}
+
+nlohmann::json canonical_matrix(const nlohmann::json& matrix) {
+  if (!matrix.is_object()) return matrix;
+  nlohmann::json m = matrix;
+  // Axes whose order is only the visiting order: "--encoders hcc,mlhcc" and "mlhcc,hcc" measure the
+  // same cells. The trace classes keep theirs (the first is the tables' main class).
+  for (const char* key : {"scenes", "batches", "encoders", "bits", "key_length_scenes", "key_length_bits", "top_bits"})
+    if (m.contains(key) && m[key].is_array()) std::sort(m[key].begin(), m[key].end());
+  for (const char* key : {"variant", "access", "baseline"})
+    if (m.contains(key) && m[key].is_string()) {
+      std::vector<std::string> items = split_list(m[key].get<std::string>());
+      std::sort(items.begin(), items.end());
+      std::string joined;
+      for (const auto& item : items) joined += (joined.empty() ? "" : ",") + item;
+      m[key] = joined;
+    }
+  return m;
 }
 
 std::string json_differences(const nlohmann::json& a, const nlohmann::json& b, const std::vector<std::string>& only) {

@@ -79,6 +79,11 @@ nlohmann::json parse_meta(const std::string& text, const std::string& path);
 // variants, access modes); `raysort run` also checks its plan.
 std::string cell_outside_matrix(const CellRecord& cell, const nlohmann::json& matrix);
 
+// A meta.json "matrix" with the order of its list axes (scenes, batches, encoders, key lengths,
+// top-k, variants, access modes, baselines) made canonical: two matrices that plan the same cells
+// compare equal however their lists were written. The trace classes keep their order.
+nlohmann::json canonical_matrix(const nlohmann::json& matrix);
+
 // "resolution \"48x27\" vs \"320x180\"; reps 1 vs 3": the entries of two JSON objects that differ,
 // restricted to `keys` when it is not empty.
 std::string json_differences(const nlohmann::json& a, const nlohmann::json& b,

@@ -34,7 +34,11 @@ namespace raysort {
 namespace {
 
 std::atomic<bool> g_interrupted{false};
-extern "C" void on_sigint(int) { g_interrupted = true; }
+std::atomic<int> g_signal{0};  // which signal: the exit code is 128 + it, as the shell's would be
+extern "C" void on_sigint(int sig) {
+  g_signal = sig;
+  g_interrupted = true;
+}
 
 // SIGINT/SIGTERM end the run at the next arm of the cell in flight (that cell is not recorded; a
 // resume measures it), restored on exit.
@@ -478,7 +482,8 @@ std::map<std::string, PreviousBatchStatistics> previous_frame_statistics(const P
 }
 
 std::string default_result_dir(const MatrixSpec& spec, const std::string& device_slug, const ShardSpec& shard) {
-  const std::string matrix = spec.to_json().dump();
+  // The same cells give the same folder however the lists were written (canonical_matrix).
+  const std::string matrix = canonical_matrix(spec.to_json()).dump();
   std::string hash = fnv1a_hex(matrix.data(), matrix.size()).substr(0, 8);
   std::string dir = fmt::format("results/{}/{}-{}", device_slug, spec.preset.empty() ? "run" : spec.preset, hash);
   return shard.active() ? fmt::format("{}-shard{}of{}", dir, shard.index, shard.count) : dir;
@@ -600,6 +605,7 @@ RunSummary run_matrix(const MatrixSpec& requested, const RunOptions& opts) {
 
   finish_run(results, plan, absent, opts, summary);
   summary.interrupted = g_interrupted;
+  summary.signal = g_signal;
   return summary;
 }
 

@@ -37,6 +37,7 @@ struct RunSummary {
   // cells it lacks (an interrupted run; absent batches not counted). 0 and 0: the set is whole.
   std::size_t cells_not_ok = 0, cells_missing = 0;
   bool interrupted = false;
+  int signal = 0;  // the signal that interrupted it (SIGINT 2, SIGTERM 15), 0 when none
 };
 
 RunSummary run_matrix(const MatrixSpec& spec, const RunOptions& opts);
