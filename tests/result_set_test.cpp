@@ -69,6 +69,24 @@ void expect_one_line_error(const CliResult& r, const std::vector<std::string>& p
   for (const auto& p : parts) EXPECT_TRUE(contains(r.err, p)) << what << ": no '" << p << "' in " << r.err;
 }
 
+// Starts raysort with `args` in the background, its output thrown away (the tests that signal it
+// or run two at once); returns its pid.
+pid_t spawn_raysort(std::vector<std::string> args) {
+  const pid_t pid = fork();
+  if (pid == 0) {
+    std::string bin = RAYSORT_BINARY;
+    std::vector<char*> argv{bin.data()};
+    for (auto& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    const int null = ::open("/dev/null", O_WRONLY);
+    ::dup2(null, 1);
+    ::dup2(null, 2);
+    ::execv(bin.c_str(), argv.data());
+    _exit(127);
+  }
+  return pid;
+}
+
 nlohmann::json read_json(const fs::path& p) { return nlohmann::json::parse(read_file(p.string())); }
 void write_json(const fs::path& p, const nlohmann::json& j) { write_file_atomically(p.string(), j.dump(2)); }
 
@@ -620,18 +638,7 @@ TEST(Interrupt, CtrlCStopsALongCellWithinSeconds) {
     const std::string out = temp_path(fmt::format("interrupted-{}", sig));
     std::vector<std::string> args{"run", "--scenes", "cornell", "--batches", "primary", "--encoders", "hcc", "--bits",
                                   "32", "--resolution", "64x36", "--reps", "100000", "--max-time", "600", "--out", out};
-    const pid_t pid = fork();
-    if (pid == 0) {
-      std::string bin = RAYSORT_BINARY;
-      std::vector<char*> argv{bin.data()};
-      for (auto& a : args) argv.push_back(a.data());
-      argv.push_back(nullptr);
-      const int null = ::open("/dev/null", O_WRONLY);
-      ::dup2(null, 1);
-      ::dup2(null, 2);
-      ::execv(bin.c_str(), argv.data());
-      _exit(127);
-    }
+    const pid_t pid = spawn_raysort(args);
     // Until the first cell's rounds are under way (its meta.json is written before any cell).
     const auto start = std::chrono::steady_clock::now();
     while (!fs::exists(fs::path(out) / "meta.json") &&
@@ -684,22 +691,6 @@ TEST(WriterProperty, InterleavedWritersAndKillsNeverCorruptASet) {
       {"merge", s1, s2, "-o", f, "--force"},   // 4
       {"compare", ref, f},                     // 5
   };
-  auto spawn = [](const std::vector<std::string>& args) {
-    const pid_t pid = fork();
-    if (pid == 0) {
-      std::string bin = RAYSORT_BINARY;
-      std::vector<std::string> copy = args;
-      std::vector<char*> argv{bin.data()};
-      for (auto& a : copy) argv.push_back(a.data());
-      argv.push_back(nullptr);
-      const int null = ::open("/dev/null", O_WRONLY);
-      ::dup2(null, 1);
-      ::dup2(null, 2);
-      ::execv(bin.c_str(), argv.data());
-      _exit(127);
-    }
-    return pid;
-  };
   std::mt19937 rng(4444);
   // 100 in the default suite (about 1.5 min: every raysort process starts in about 0.3 s); the
   // issue's 500 or more with RAYSORT_TEST_INTERLEAVINGS=500 (about 7 min on 2 loaded cores).
@@ -708,8 +699,8 @@ TEST(WriterProperty, InterleavedWritersAndKillsNeverCorruptASet) {
   int killed = 0, sets_seen = 0;
   for (int i = 0; i < kInterleavings; ++i) {
     const std::size_t a = rng() % ops.size(), b = rng() % ops.size();
-    const pid_t pa = spawn(ops[a]);
-    const pid_t pb = spawn(ops[b]);
+    const pid_t pa = spawn_raysort(ops[a]);
+    const pid_t pb = spawn_raysort(ops[b]);
     // A run is killed at a random moment in two of three rounds that hold one (SIGKILL: no handler
     // runs), often while it writes: a run here lasts about a second.
     if ((a <= 1 || b <= 1) && rng() % 3 != 0) {

@@ -710,7 +710,13 @@ TEST(SceneProvenance, ChecksumsUnderASceneRootRecordStatus) {
   const std::string bare = (root / "gems/diamond.obj").string();
   nlohmann::json j = scene_file_checksums({"multi-instance-real", "cornell", (root / "mine.toml").string(), bare},
                                           root.string());
-  ASSERT_EQ(j.size(), 6u) << j.dump(1);
+  // Six files, and each TOML scene's own resolved text (issue 44: an edited scene file is noticed).
+  ASSERT_EQ(j.size(), 9u) << j.dump(1);
+  for (const std::string& s : {std::string("multi-instance-real"), std::string("cornell"), (root / "mine.toml").string()}) {
+    EXPECT_EQ(j["scene:" + s].value("status", ""), "scene file") << s;
+    EXPECT_EQ(j["scene:" + s].value("sha256", "").size(), 64u) << s;
+  }
+  EXPECT_FALSE(j.contains("scene:" + bare)) << "a bare OBJ is its own file";
   EXPECT_EQ(j["gems/diamond.obj"], (nlohmann::json{{"sha256", found}, {"status", "different"}}));
   for (const char* f : {"cornell_box/CornellBox-Original.obj", "cornell_box/CornellBox-Original.mtl",
                         "dragon/dragon_100k.obj", "gems/emerald.obj"})

@@ -65,7 +65,7 @@ int main(int argc, char** argv) {
   });
   register_commands(app);
   app.footer("Exit status: 0 ok; 1 bad input or a failed check; 2 the request does not fit this machine; 3 an "
-             "internal error (a bug); 130 a run interrupted (SIGINT or SIGTERM), resumable (docs/errors.md)");
+             "internal error (a bug); 130 or 143 a run interrupted by SIGINT or SIGTERM, resumable (docs/errors.md)");
   try {
     check_command_word(app, argc, argv);
     app.parse(argc, argv);
