@@ -29,7 +29,7 @@ build: configure
 
 test: deps
 	$(MAKE) build
-	ctest --test-dir $(BUILD) --output-on-failure -j 1
+	ctest --test-dir $(BUILD) --output-on-failure -j $(JOBS)
 
 bench: deps
 	$(MAKE) build

@@ -29,7 +29,7 @@ done
 echo "test-sanitize: bench_test (device-free tests)"
 "$BUILD/bench_test" --gtest_brief=1 --gtest_filter='ResultSet.*:Compare.*:Matrix.RefusesImpossibleCombinationsBeforeWork'
 echo "test-sanitize: cli_test (refusals)"
-"$BUILD/cli_test" --gtest_brief=1 --gtest_filter='Cli.UnknownNamesListTheValidOnes:Cli.ImpossibleCombinationsRefusedBeforeWork'
+"$BUILD/cli_test" --gtest_brief=1 --gtest_filter='Cli.UnknownNamesListTheValidOnes:Cli.ImpossibleCombinationsRefusedBeforeWork:CliNumbers.*:CliExitCodes.*'
 echo "test-sanitize: adjudicate_test and frame_memory_test (the exact oracle, the memory model)"
 "$BUILD/adjudicate_test" --gtest_brief=1 --gtest_filter='ExactOracle.HandMadeTruths:ExactOracle.RaysRoundTripThroughJson'
 "$BUILD/frame_memory_test" --gtest_brief=1 --gtest_filter='FrameMemory.ModelCountsEveryBatchTheEffectsImply:FrameMemory.RenderIsSizedByItsPassesNotItsSamples'
