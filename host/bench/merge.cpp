@@ -186,7 +186,10 @@ nlohmann::json merged_meta(const std::vector<Input>& sets, const std::map<unsign
   nlohmann::json meta = sets[0].set.meta();
   nlohmann::json from = nlohmann::json::array();
   for (const auto& [index, dir] : shard_dir) {
-    const auto& m = std::find_if(sets.begin(), sets.end(), [&](const Input& s) { return s.dir == dir; })->set.meta();
+    // Captured through a plain reference: clang before 16 cannot capture a structured binding.
+    const std::string& shard_folder = dir;
+    const auto& m =
+        std::find_if(sets.begin(), sets.end(), [&](const Input& s) { return s.dir == shard_folder; })->set.meta();
     from.push_back({{"dir", dir},
                     {"shard", fmt::format("{}/{}", index, count)},
                     {"command", m.value("command", "")},
