@@ -430,3 +430,12 @@ TEST(CliReport, BadlyTypedMatrixEntriesNameTheFileAndKey) {
     fs::remove_all(dir);
   }
 }
+
+// Found by fuzz/cli_fuzzer.cpp: CLI11 converts a flag's value with std::stoll and its out_of_range
+// escaped as "internal error: stoll" (exit 3). It is bad input.
+TEST(CliExitCodes, AFlagValueOutOfRangeIsBadInput) {
+  const CliResult r = run_cli({"sortbench", "--no-large=99999999999999999999999"});
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_EQ(r.err.find("internal error"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("raysort: error: a value on the command line is out of range"), std::string::npos) << r.err;
+}

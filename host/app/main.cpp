@@ -60,7 +60,9 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", RAYSORT_VERSION);
   std::string kernels;
   app.add_option("--kernels", kernels, "read OpenCL kernels from this cl/ folder instead of the embedded copies");
+  bool parsed = false;  // past the command line: from here on a std::logic_error is a bug of ours
   app.parse_complete_callback([&] {
+    parsed = true;
     if (!kernels.empty()) set_kernel_dir(kernels);
   });
   register_commands(app);
@@ -78,6 +80,16 @@ int main(int argc, char** argv) {
     return kExitDoesNotFit;
   } catch (const Error& e) {
     std::fprintf(stderr, "raysort: error: %s\n", e.what());
+    return kExitBadInput;
+  } catch (const std::logic_error& e) {
+    // CLI11 converts a flag's value with std::stoll and lets its out_of_range escape
+    // (`--no-large=99999999999999999999`, found by fuzz/cli_fuzzer.cpp): bad input, not a bug.
+    if (parsed) {
+      std::fprintf(stderr, "raysort: internal error: %s\n", e.what());
+      return kExitInternal;
+    }
+    std::fprintf(stderr, "raysort: error: a value on the command line is out of range or malformed (%s); see `raysort "
+                 "--help`\n", e.what());
     return kExitBadInput;
   } catch (const std::bad_alloc&) {  // past the estimate of render/frame_memory.h: a safety net
     std::fprintf(stderr, "raysort: error: out of host memory; lower --resolution or --spp\n");
