@@ -235,6 +235,7 @@ class LockedOutput {
     fs::remove(target_, ec);  // only if empty
   }
   const fs::path& target() const { return target_; }
+  const std::string& name() const { return out_; }  // as the user wrote it, for messages
   fs::path beside(const char* what) const {
     return target_.parent_path() / fmt::format(".{}.{}-{}", target_.filename().string(), what, ::getpid());
   }
@@ -265,8 +266,7 @@ class LockedOutput {
 
 // Built beside OUT (same file system), then swapped into place in one step (renameat2's
 // RENAME_EXCHANGE), so OUT is at every moment either its old content or the complete merged set.
-void write_merged(LockedOutput& out, const std::string& out_name, const nlohmann::json& meta,
-                  const std::vector<CellRecord>& cells) {
+void write_merged(LockedOutput& out, const nlohmann::json& meta, const std::vector<CellRecord>& cells) {
   std::error_code ec;
   const fs::path tmp = out.beside("merging");
   fs::remove_all(tmp, ec);
@@ -278,7 +278,7 @@ void write_merged(LockedOutput& out, const std::string& out_name, const nlohmann
     if (::renameat2(AT_FDCWD, tmp.c_str(), AT_FDCWD, out.target().c_str(), RENAME_EXCHANGE) != 0) {
       // A file system without the exchange: the old content moved aside first, then the new one in.
       if (errno != EINVAL && errno != ENOSYS)
-        throw Error(fmt::format("-o {}: cannot move the merged result set into place ({}); nothing was written", out_name,
+        throw Error(fmt::format("-o {}: cannot move the merged result set into place ({}); nothing was written", out.name(),
                                 std::strerror(errno)));
       const fs::path old = out.beside("replaced");
       fs::rename(out.target(), old);
@@ -289,7 +289,7 @@ void write_merged(LockedOutput& out, const std::string& out_name, const nlohmann
     fs::remove_all(tmp, ec);  // now OUT's old content: an empty folder, or the set --force replaced
   } catch (const fs::filesystem_error& e) {
     fs::remove_all(tmp, ec);
-    throw Error(fmt::format("-o {}: cannot write the merged result set ({}); nothing was written", out_name, e.what()));
+    throw Error(fmt::format("-o {}: cannot write the merged result set ({}); nothing was written", out.name(), e.what()));
   } catch (...) {
     fs::remove_all(tmp, ec);
     throw;
@@ -322,7 +322,7 @@ MergeSummary merge_result_sets(const std::vector<std::string>& inputs, const std
     locked.discard_if_created();
     refuse(out, problems);
   }
-  write_merged(locked, out, merged_meta(sets, shard_dir, absent, command), cells);
+  write_merged(locked, merged_meta(sets, shard_dir, absent, command), cells);
   MergeSummary s;
   s.cells = cells.size();
   s.absent = absent.size();
