@@ -243,6 +243,8 @@ const std::vector<RsRay>& BatchBench::embree_permuted_rays() {
   if (!embree_permuted_ready_) {
     const std::vector<std::uint32_t>& order = embree_order();
     embree_permuted_.resize(n_);
+    // An entry past the rays (an order that is no permutation, which fails the cell after the
+    // rounds) must not be read past the batch.
     for (std::uint32_t i = 0; i < n_; ++i) embree_permuted_[i] = batch_.rays[order[i] < n_ ? order[i] : 0];
     embree_permuted_ready_ = true;
   }
