@@ -3,7 +3,11 @@
 // the procedural scenes, for both traversal variants, and `raysort trace --reference embree` runs.
 // Every Embree path (streams, packets; EmbreePath) reports the hits rtcIntersect1 does, up to ties,
 // in the batch's order or through a permutation, including a last packet with padding lanes.
-// Without it: `--reference embree` fails with one clear message and a non-zero exit.
+// `raysort run --embree-paths` (issue 40, item 2): every cell carries each path's figures on its
+// order, read back by report and compare; a resume with other paths is refused.
+// Without it: `--reference embree` and `run --embree-paths` fail with one clear message and a
+// non-zero exit.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <fcntl.h>
 #include <sys/wait.h>
@@ -18,11 +22,15 @@
 #include <string>
 #include <vector>
 
+#include "bench/compare.h"
+#include "bench/matrix.h"
+#include "bench/result_set.h"
 #include "bvh/bvh.h"
 #include "render/batches.h"
 #include "scene/load.h"
 #include "test_util.h"
 #include "trace/tracer.h"
+#include "util/atomic_file.h"
 #ifdef RAYSORT_HAVE_EMBREE
 #include "embree/embree_reference.h"
 #endif
@@ -35,6 +43,18 @@ namespace {
 
 using raysort::testing::CliResult;
 using raysort::testing::run_cli;
+
+// `raysort run` on detail-room's bounce and shadow rays at 64x36 with HCC and Origin, both access
+// modes, and `extra` (e.g. --embree-paths): 10 cells, seconds. Seven rounds each (then intervals).
+std::vector<std::string> tiny_run(const std::string& out, std::vector<std::string> extra = {},
+                                  const std::string& reps = "7") {
+  std::vector<std::string> args{"run",     "--scenes", "detail-room",    "--resolution", "64x36",  "--batches",
+                                "bounce1,shadow0", "--encoders", "hcc,origin", "--access", "gather,permute",
+                                "--reps",  reps,       "--warmup",       "1",            "--max-time", "0",
+                                "--out",   out};
+  args.insert(args.end(), extra.begin(), extra.end());
+  return args;
+}
 
 }  // namespace
 
@@ -309,6 +329,122 @@ TEST(Embree, TraceCommandComparesWithEmbree) {
   EXPECT_NE(r.out.find("+ties %"), std::string::npos) << r.out;
 }
 
+// run --embree-paths (issue 40, item 2): every cell's rounds hold each path's NoSort-order arm,
+// every sorted cell its sorted-order arm too; the cells carry each path's figures (paired speedup
+// with an interval around it, both arms' medians, the calls, flags and threads), reproduced from
+// their own samples; cells.csv, tables.md and meta.json show them; report and compare read them.
+TEST(EmbreeRun, CellsCarryEachPathsFiguresReadByReportAndCompare) {
+  const std::string out = testing::temp_path("embree-run");
+  CliResult r = run_cli(tiny_run(out, {"--embree-paths", "1,16-coherent"}));
+  ASSERT_EQ(r.code, 0) << r.out << r.err;
+  const ResultSet set = ResultSet::load(out);
+  ASSERT_EQ(set.cells().size(), 10u);
+  const std::vector<std::string> paths{"1", "16-coherent"};
+  std::size_t sorted_cells = 0;
+  for (const CellRecord& c : set.cells()) {
+    ASSERT_TRUE(c.ok()) << c.id() << ": " << c.error;
+    ASSERT_EQ(c.embree.size(), paths.size()) << c.id();
+    const bool nosort = c.encoder == kBaselineEncoder;
+    sorted_cells += !nosort;
+    for (std::size_t k = 0; k < paths.size(); ++k) {
+      const CellRecord::EmbreeFigures& e = c.embree[k];
+      const std::string what = c.id() + " Embree " + paths[k];
+      EXPECT_EQ(e.path, paths[k]) << what;
+      EXPECT_EQ(e.call.rfind(c.batch == "shadow0" ? "rtcOccluded" : "rtcIntersect", 0), 0u) << what << ": " << e.call;
+      EXPECT_EQ(e.call.find("coherent") != std::string::npos, paths[k] == "16-coherent") << what << ": " << e.call;
+      EXPECT_GE(e.threads, 1u) << what;
+      EXPECT_EQ(e.nosort.n, c.rounds) << what;
+      EXPECT_GT(e.nosort.median_ms, 0.0) << what;
+      EXPECT_GE(e.agreement_with_ours, kEmbreeMinAgreement) << what;
+      EXPECT_EQ(c.samples.at("embree:" + paths[k] + ":nosort").size(), c.rounds) << what;
+      if (nosort) {
+        EXPECT_EQ(e.trace.n, 0u) << what;
+        EXPECT_FALSE(e.speedup.has_value()) << what;
+        continue;
+      }
+      EXPECT_EQ(e.trace.n, c.rounds) << what;
+      EXPECT_EQ(e.differ, 0u) << what;
+      EXPECT_EQ(c.samples.at("embree:" + paths[k] + ":trace").size(), c.rounds) << what;
+      ASSERT_TRUE(e.speedup.has_interval()) << what;
+      EXPECT_LE(e.speedup.lo, e.speedup.value) << what;
+      EXPECT_LE(e.speedup.value, e.speedup.hi) << what;
+      if (!c.same_order_as_nosort) {
+        const Estimate again =
+            ratio_interval(c.samples.at("embree:" + paths[k] + ":nosort"), c.samples.at("embree:" + paths[k] + ":trace"));
+        EXPECT_DOUBLE_EQ(e.speedup.value, again.value) << what;
+      }
+    }
+  }
+  EXPECT_EQ(sorted_cells, 8u);
+  // meta.json: the paths are part of the matrix; each path's calls, flag and threads beside it.
+  const nlohmann::json meta = nlohmann::json::parse(read_file(out + "/meta.json"));
+  EXPECT_EQ(meta["matrix"]["embree_paths"], nlohmann::json(paths));
+  ASSERT_TRUE(meta.contains("embree")) << meta.dump(1);
+  EXPECT_GE(meta["embree"]["threads"].get<unsigned>(), 1u);
+  EXPECT_EQ(meta["embree"]["paths"][1]["closest_hit"], "rtcIntersect16 coherent");
+  EXPECT_EQ(meta["embree"]["paths"][1]["context_flag"], "RTC_INTERSECT_CONTEXT_FLAG_COHERENT");
+  // cells.csv: each path's columns, the values the records hold.
+  const std::string csv = read_file(out + "/cells.csv");
+  const std::string header = csv.substr(0, csv.find('\n')) + ",";
+  for (const std::string column : {"embree_1_speedup", "embree_1_speedup_lo", "embree_1_speedup_hi", "embree_1_ms",
+                                   "embree_1_nosort_ms", "embree_16-coherent_speedup", "embree_16-coherent_mrays",
+                                   "embree_16-coherent_nosort_mrays"})
+    EXPECT_NE(header.find("," + column + ","), std::string::npos) << column << " not in " << header;
+  const CellRecord* hcc = set.find("detail-room/bounce1/hcc/32/permute");
+  ASSERT_NE(hcc, nullptr);
+  EXPECT_NE(csv.find(fmt::format("{:.4f}", hcc->embree_path("16-coherent")->speedup.value)), std::string::npos);
+  // tables.md: the section, per access mode, a row per scene, batch and path.
+  const std::string tables = read_file(out + "/tables.md");
+  EXPECT_NE(tables.find("## Embree on sorted orders, 32-bit keys, access gather"), std::string::npos) << tables;
+  EXPECT_NE(tables.find("## Embree on sorted orders, 32-bit keys, access permute"), std::string::npos) << tables;
+  EXPECT_NE(tables.find("| detail-room bounce1 | 16-coherent |"), std::string::npos) << tables;
+  EXPECT_NE(tables.find("rtcOccluded16 coherent"), std::string::npos) << tables;
+  // report writes the same views from the cell files alone.
+  std::filesystem::remove(out + "/tables.md");
+  std::filesystem::remove(out + "/cells.csv");
+  ASSERT_EQ(run_cli({"report", out}).code, 0);
+  EXPECT_EQ(read_file(out + "/tables.md"), tables);
+  EXPECT_EQ(read_file(out + "/cells.csv"), csv);
+  // compare tabulates a path's speedup with its interval and checks rules on it.
+  const std::string copy = testing::temp_path("embree-run-copy");
+  std::filesystem::copy(out, copy, std::filesystem::copy_options::recursive);
+  CliResult cmp = run_cli({"compare", out, copy, "--metrics", "embree_16-coherent_speedup,embree_1_nosort_ms",
+                           "--fail-if", "embree_16-coherent_speedup<-5%", "--fail-if", "embree_1_ms!="});
+  EXPECT_EQ(cmp.code, 0) << cmp.out << cmp.err;
+  EXPECT_NE(cmp.out.find("## embree_16-coherent_speedup"), std::string::npos) << cmp.out;
+  EXPECT_NE(cmp.out.find(fmt::format("| detail-room/bounce1/hcc/32/permute | {:.4g} [", hcc->embree_path("16-coherent")->speedup.value)),
+            std::string::npos)
+      << cmp.out;
+}
+
+// The paths are part of the matrix: a resume with other paths, or none, is refused as another
+// matrix; the same paths in another order are the same matrix (nothing to run again).
+TEST(EmbreeRun, ResumeWithOtherPathsIsRefused) {
+  const std::string out = testing::temp_path("embree-resume");
+  ASSERT_EQ(run_cli(tiny_run(out, {"--embree-paths", "1,16-coherent"}, "1")).code, 0);
+  for (const std::vector<std::string>& other :
+       {std::vector<std::string>{"--embree-paths", "1"}, std::vector<std::string>{},
+        std::vector<std::string>{"--embree-paths", "1,16-coherent,8"}}) {
+    CliResult r = run_cli(tiny_run(out, other, "1"));
+    EXPECT_EQ(r.code, 1) << r.out << r.err;
+    EXPECT_NE(r.err.find("different matrix configuration (embree_paths"), std::string::npos) << r.err;
+  }
+  CliResult same = run_cli(tiny_run(out, {"--embree-paths", "16-coherent,1"}, "1"));
+  EXPECT_EQ(same.code, 0) << same.err;
+  EXPECT_NE(same.out.find("0 cells run, 10 already done"), std::string::npos) << same.out;
+}
+
+// An unknown path is refused before any work, naming the paths; the NoSort-only default adds no
+// entry to the matrix (sets written without the option resume).
+TEST(EmbreeRun, UnknownPathsAreRefusedBeforeWork) {
+  const std::string out = testing::temp_path("embree-bad");
+  CliResult r = run_cli(tiny_run(out, {"--embree-paths", "1,17"}));
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("unknown Embree path '17' in --embree-paths; the paths are 1 (rtcIntersect1)"), std::string::npos)
+      << r.err;
+  EXPECT_FALSE(std::filesystem::exists(out)) << "refused before the result set was made";
+}
+
 #else  // no Embree in this build
 
 TEST(Embree, TraceRefusesWithoutEmbree) {
@@ -316,6 +452,21 @@ TEST(Embree, TraceRefusesWithoutEmbree) {
   EXPECT_NE(r.code, 0);
   EXPECT_NE(r.err.find("this build has no Embree: install libembree-dev and reconfigure"), std::string::npos) << r.err;
   EXPECT_EQ(r.out.find("batch"), std::string::npos) << "refused before any tracing:\n" << r.out;
+}
+
+TEST(EmbreeRun, RunRefusesEmbreePathsWithoutEmbree) {
+  const std::string out = testing::temp_path("embree-none");
+  CliResult r = run_cli(tiny_run(out, {"--embree-paths", "1"}));
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("--embree-paths: this build has no Embree: install libembree-dev and reconfigure"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(std::filesystem::exists(out)) << "refused before the result set was made";
+  // The same for a matrix made in code (run_matrix's own check).
+  MatrixSpec spec;
+  spec.scenes = {"cornell"};
+  spec.embree_paths = {"1"};
+  EXPECT_THROW(validate_matrix(spec), Error);
 }
 
 #endif

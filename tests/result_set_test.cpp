@@ -631,6 +631,90 @@ TEST(CellFiles, SelfContradictingOkCellsAreRefused) {
   }
 }
 
+// Embree's figures (run --embree-paths, issue 40): a record with them reads back field for field
+// and passes every check; one without them (every older set) reads with none, and its CSV has
+// exactly the columns it always had; each path's columns exist whichever set a rule checks; an
+// edited, unknown, disagreeing or unplanned path is refused.
+TEST(CellFiles, EmbreeFiguresReadBackAndOlderRecordsHaveNone) {
+  CellRecord r;
+  r.scene = std::string("s"), r.batch = std::string("bounce1"), r.encoder = std::string("hcc"), r.bits = 32;
+  r.rays = 1000, r.rounds = 7, r.stopped_by = std::string("time");
+  r.hits_match_nosort = r.order_is_permutation = true;
+  r.keys_hash = std::string("00000000000000aa"), r.order_hash = std::string("00000000000000bb");
+  const std::vector<double> nosort{2.0, 2.1, 2.2, 2.0, 2.3, 2.1, 2.2}, aa{2.1, 2.0, 2.2, 2.1, 2.2, 2.0, 2.2},
+      trace{1.5, 1.6, 1.7, 1.5, 1.8, 1.6, 1.6}, e_nosort{1.0, 1.1, 1.0, 1.2, 1.1, 1.0, 1.1},
+      e_trace{0.8, 0.9, 0.8, 0.9, 0.8, 0.9, 0.85};
+  r.samples = {{"nosort", nosort}, {"aa", aa}, {"trace", trace}};
+  r.speedup = r.net_speedup = ratio_interval(nosort, trace);
+  r.aa = ratio_interval(nosort, aa);
+  r.overhead_pct = Estimate::exact(10.0);
+  r.trace = Timing::of(trace), r.nosort_trace = Timing::of(nosort);
+  for (const std::string path : {"16-coherent", "1M"}) {
+    CellRecord::EmbreeFigures e;
+    e.path = path, e.call = std::string("rtcIntersect16 coherent"), e.threads = 2, e.ties = 3;
+    e.nosort = Timing::of(e_nosort), e.trace = Timing::of(e_trace), e.speedup = ratio_interval(e_nosort, e_trace);
+    e.agreement_with_ours = 0.9995;
+    r.samples["embree:" + path + ":nosort"] = e_nosort;
+    r.samples["embree:" + path + ":trace"] = e_trace;
+    r.embree.push_back(e);
+  }
+  EXPECT_EQ(cell_record_problem(r), "");
+  const nlohmann::json j = nlohmann::json::parse(nlohmann::json(r).dump());  // as a file holds it
+  ASSERT_TRUE(j.contains("embree"));
+  EXPECT_EQ(j["embree"][0]["path"], "16-coherent");
+  EXPECT_DOUBLE_EQ(j["embree"][0]["trace_mrays"].get<double>(), 1000 / (r.embree[0].trace.median_ms * 1e3));
+  const CellRecord back = j.get<CellRecord>();
+  ASSERT_EQ(back.embree.size(), 2u);
+  for (std::size_t k = 0; k < 2; ++k) {
+    const auto &a = r.embree[k], &b = back.embree[k];
+    EXPECT_EQ(b.path, a.path);
+    EXPECT_EQ(b.call, a.call);
+    EXPECT_EQ(b.threads, a.threads);
+    EXPECT_EQ(b.ties, a.ties);
+    EXPECT_EQ(b.differ, a.differ);
+    EXPECT_DOUBLE_EQ(b.nosort.median_ms, a.nosort.median_ms);
+    EXPECT_DOUBLE_EQ(b.trace.hi_ms, a.trace.hi_ms);
+    EXPECT_DOUBLE_EQ(b.speedup.lo, a.speedup.lo);
+    EXPECT_DOUBLE_EQ(b.agreement_with_ours, a.agreement_with_ours);
+  }
+  EXPECT_EQ(cell_record_problem(back), "");
+  // Columns: 7 per path, only for the paths a set holds; none for a set without them.
+  const std::vector<CellColumn> columns = cell_columns_for({back});
+  ASSERT_EQ(columns.size(), cell_columns().size() + 14);
+  EXPECT_EQ(columns[cell_columns().size()].name, "embree_16-coherent_speedup");
+  EXPECT_EQ(columns.back().name, "embree_1M_nosort_mrays");
+  EXPECT_NE(csv_row(back, columns).find(fmt::format(",{:.4f},", r.embree[0].speedup.value)), std::string::npos);
+  nlohmann::json older = j;
+  older.erase("embree");
+  const CellRecord old = older.get<CellRecord>();
+  EXPECT_TRUE(old.embree.empty());
+  EXPECT_EQ(csv_header(cell_columns_for({old})), csv_header());
+  EXPECT_TRUE(std::isnan(find_cell_column("embree_16-coherent_speedup")->value(old))) << "absent, not zero";
+  // Every path's columns are rules, on any set.
+  ASSERT_NE(find_cell_column("embree_1M-coherent_nosort_ms"), nullptr);
+  EXPECT_NO_THROW(FailRule::parse("embree_1M-coherent_speedup<-5%"));
+  EXPECT_NO_THROW(FailRule::parse("embree_16_mrays >+10%"));
+  EXPECT_THROW(FailRule::parse("embree_17_speedup<-5%"), Error);
+  // A path the matrix did not name is outside it; so is any in a matrix that named none.
+  EXPECT_EQ(cell_outside_matrix(back, {{"embree_paths", {"1M", "16-coherent"}}}), "");
+  EXPECT_NE(cell_outside_matrix(back, {{"embree_paths", {"1M"}}}).find("Embree path '16-coherent'"), std::string::npos);
+  EXPECT_NE(cell_outside_matrix(back, {{"scenes", {"s"}}}), "");
+  // Edited, unknown, twice, disagreeing.
+  CellRecord edited = back;
+  edited.embree[1].speedup.value *= 1.01;
+  EXPECT_NE(cell_record_problem(edited).find("Embree path 1M's speedup is not the one its samples give"), std::string::npos)
+      << cell_record_problem(edited);
+  CellRecord unknown = back;
+  unknown.embree[1].path = std::string("17");
+  EXPECT_NE(cell_record_problem(unknown).find("Embree path \"17\" is not one raysort knows"), std::string::npos);
+  CellRecord twice = back;
+  twice.embree[1].path = std::string("16-coherent");
+  EXPECT_NE(cell_record_problem(twice).find("recorded twice"), std::string::npos);
+  CellRecord differ = back;
+  differ.embree[0].differ = 1;
+  EXPECT_NE(cell_record_problem(differ).find("differ from its NoSort-order trace beyond ties"), std::string::npos);
+}
+
 // Item 16: Ctrl-C stops a long cell at its next arm, not after its rounds; the cell in flight is
 // not recorded (a resume measures it).
 TEST(Interrupt, CtrlCStopsALongCellWithinSeconds) {

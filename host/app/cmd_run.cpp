@@ -10,6 +10,9 @@
 #include "bench/runner.h"
 #include "bench/shard.h"
 #include "encode/encode.h"
+#ifdef RAYSORT_HAVE_EMBREE
+#include "embree/embree_reference.h"
+#endif
 #include "util/error.h"
 
 namespace raysort {
@@ -24,7 +27,7 @@ struct RunArgs {
   std::vector<std::string> scenes, batches, encoders;
   std::vector<unsigned> bits, top_bits;
   CommonOptions common;  // --device, --scene-root, --resolution, --spp, --seed
-  std::string variant, access, baseline, layout, gpu_model;
+  std::string variant, access, baseline, layout, gpu_model, embree_paths;
   unsigned reps = 0, warmup = 0;
   double max_noise_pct = 0, max_time_s = 0;
   double lambda = -1;
@@ -73,6 +76,14 @@ MatrixSpec matrix_from(const RunArgs& a, const CLI::App& cmd) {
   if (!a.gpu_model.empty()) {
     (void)load_gpu_profile(a.gpu_model);  // an unknown name or a bad file fails here, before any cell
     spec.gpu_model = a.gpu_model;
+  }
+  if (cmd.count("--embree-paths")) {
+#ifdef RAYSORT_HAVE_EMBREE
+    // The keys as the table spells them, each once ("all": every path in table order).
+    for (EmbreePath path : parse_embree_paths(a.embree_paths)) spec.embree_paths.emplace_back(embree_path_info(path).key);
+#else
+    throw Error("--embree-paths: this build has no Embree: install libembree-dev and reconfigure");
+#endif
   }
   if (cmd.count("--reps")) spec.reps = a.reps;
   if (cmd.count("--warmup")) spec.warmup = a.warmup;
@@ -126,6 +137,12 @@ void register_run_command(CLI::App& app) {
                   "each order, one ray per vector lane), hybrid8/hybrid16, packet or hybrid (the device's preferred "
                   "width), or all; the first is the tables' main one; a cell of another class than wide ends its id "
                   "in /<class>");
+  cmd->add_option("--embree-paths", a->embree_paths,
+                  "also trace every cell's rays with these Embree paths, each in NoSort order and in the cell's sorted "
+                  "order, as arms of the cell's rounds (docs/measurement.md, \"Embree on sorted orders\"; needs a build "
+                  "with libembree-dev): 1 (rtcIntersect1), 1M and 1M-coherent (rtcIntersect1M streams), 4, 8, 16 and "
+                  "4-coherent, 8-coherent, 16-coherent (packets of consecutive rays), comma-separated, or all; off by "
+                  "default");
   cmd->add_option("--gpu-model", a->gpu_model,
                   "also replay every cell's traversal through a GPU's caches and predict its speedup (docs/gpu-model.md): "
                   "a profile in gpu/profiles/ (rtx3060, h100, h200) or a .toml path; off by default (it adds the replay's "

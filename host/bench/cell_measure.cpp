@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstring>
 #include <limits>
 #include <numeric>
@@ -124,6 +125,7 @@ CellRecord BatchBench::measure_nosort(CellRecord c, const ProtocolSettings& sett
     Measurement m;
     m.arms = baseline_arms();
     m.targets = {[](const Series& s) { return ratio_interval(s.at("nosort"), s.at("aa")); }};
+    add_embree_arms(m, {});
     const Outcome o = measure(m, settings);
     const auto &nosort = o.series.at("nosort"), &aa = o.series.at("aa");
     c.trace = c.nosort_trace = Timing::of(nosort);
@@ -137,6 +139,10 @@ CellRecord BatchBench::measure_nosort(CellRecord c, const ProtocolSettings& sett
     c.stopped_by = stop_reason_name(o.stop);
     c.noise = c.aa.relative_half_width();
     c.samples = {{"nosort", nosort}, {"aa", aa}};
+    if (const std::string why = fill_embree(c, o, nullptr, settings); !why.empty()) {
+      c.status = "failed";
+      c.error = why;
+    }
   } catch (const TimedOut& t) {
     c.status = "timeout";
     c.error = t.what();
@@ -175,7 +181,127 @@ Measurement BatchBench::sorted_measurement(const std::vector<CellRecord>& cells,
     }
     m.targets.push_back([trace = "trace:" + c.access](const Series& s) { return ratio_interval(s.at("nosort"), s.at(trace)); });
   }
+  add_embree_arms(m, cells);
   return m;
+}
+
+void BatchBench::add_embree_arms(Measurement& m, const std::vector<CellRecord>& sorted_cells) {
+  embree_arms_.clear();
+  embree_order_ready_ = embree_permuted_ready_ = false;
+  if (!s_.embree) return;
+#ifdef RAYSORT_HAVE_EMBREE
+  for (EmbreePath path : s_.embree_paths) embree_arms_.push_back({path, embree_path_info(path).key, {}, {}});
+  // Embree's time is the wall clock of its whole trace call (threads started and joined inside),
+  // as in `trace --reference embree`; the hits are kept after the clock stops.
+  using Clock = std::chrono::steady_clock;
+  auto ms_since = [](Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); };
+  for (std::size_t i = 0; i < embree_arms_.size(); ++i) {
+    const std::string stage = "embree:" + embree_arms_[i].key + ":";
+    m.arms.push_back({{stage + "nosort"}, [this, i, ms_since] {
+                        EmbreeArm& arm = embree_arms_[i];
+                        const auto t0 = Clock::now();
+                        std::vector<RsHit> hits = s_.embree->trace(batch_.rays, batch_.any_hit(), arm.path);
+                        const double ms = ms_since(t0);
+                        arm.nosort_hits = std::move(hits);
+                        return std::vector<double>{ms};
+                      }});
+    for (const CellRecord& c : sorted_cells) {
+      const bool permute = c.access == "permute";
+      m.arms.push_back({{stage + c.access}, [this, i, permute, access = c.access, ms_since] {
+                          EmbreeArm& arm = embree_arms_[i];
+                          // Untimed: the round's order on the host (gather), the rays in it (permute).
+                          const std::vector<std::uint32_t>& order = embree_order();
+                          if (permute) (void)embree_permuted_rays();
+                          const auto t0 = Clock::now();
+                          std::vector<RsHit> hits = permute ? s_.embree->trace(embree_permuted_, batch_.any_hit(), arm.path)
+                                                            : s_.embree->trace(batch_.rays, batch_.any_hit(), arm.path, order);
+                          const double ms = ms_since(t0);
+                          arm.sorted_hits[access] = std::move(hits);
+                          return std::vector<double>{ms};
+                        }});
+      m.targets.push_back([nosort = stage + "nosort", sorted = stage + c.access](const Series& s) {
+        return ratio_interval(s.at(nosort), s.at(sorted));
+      });
+    }
+  }
+#else
+  (void)m, (void)sorted_cells;
+#endif
+}
+
+const std::vector<std::uint32_t>& BatchBench::embree_order() {
+  // Every round sorts the same keys the same way (the checks after the rounds compare this order
+  // with the last round's), so one download serves every round.
+  if (!embree_order_ready_) {
+    s_.rt.download("sorted order (for Embree)", values_, embree_order_, n_);
+    embree_order_ready_ = true;
+  }
+  return embree_order_;
+}
+
+const std::vector<RsRay>& BatchBench::embree_permuted_rays() {
+  if (!embree_permuted_ready_) {
+    const std::vector<std::uint32_t>& order = embree_order();
+    embree_permuted_.resize(n_);
+    // An entry past the rays (an order that is no permutation, which fails the cell after the
+    // rounds) must not be read past the batch.
+    for (std::uint32_t i = 0; i < n_; ++i) embree_permuted_[i] = batch_.rays[order[i] < n_ ? order[i] : 0];
+    embree_permuted_ready_ = true;
+  }
+  return embree_permuted_;
+}
+
+std::string BatchBench::fill_embree(CellRecord& c, const Outcome& o, const SortedOrder* so,
+                                    const ProtocolSettings& settings) {
+  if (embree_arms_.empty()) return "";
+#ifdef RAYSORT_HAVE_EMBREE
+  if (so && so->order != embree_order_)
+    return "Embree traced another sorted order than the one checked (the sort's order changed between rounds)";
+  const bool any_hit = batch_.any_hit();
+  for (const EmbreeArm& arm : embree_arms_) {
+    CellRecord::EmbreeFigures e;
+    e.path = arm.key;
+    e.call = embree_path_name(arm.path, any_hit);
+    e.threads = s_.embree->threads();
+    const std::vector<double>& nosort = o.series.at("embree:" + arm.key + ":nosort");
+    e.nosort = Timing::of(nosort);
+    c.samples["embree:" + arm.key + ":nosort"] = nosort;
+    // The anchor: Embree traced the rays we traced (same triangle or a tie, trace's rule).
+    const HitAgreement ours = compare_with_embree(nosort_hits_host_, arm.nosort_hits, any_hit);
+    e.agreement_with_ours = ours.fraction_with_ties();
+    if (e.agreement_with_ours < kEmbreeMinAgreement)
+      return fmt::format("Embree {} ({}) agrees with our NoSort hits on {:.3f} % of rays (same triangle or a tie), below "
+                         "the required {:.1f} %: {}",
+                         arm.key, e.call, 100.0 * e.agreement_with_ours, 100.0 * kEmbreeMinAgreement, ours.describe());
+    if (so) {
+      const std::vector<double>& trace = o.series.at("embree:" + arm.key + ":" + c.access);
+      e.trace = Timing::of(trace);
+      c.samples["embree:" + arm.key + ":trace"] = trace;
+      const Estimate measured = ratio_interval(nosort, trace, settings.confidence);
+      // The same rays in the same order: whatever the clock says is noise (as our own speedup).
+      e.speedup = so->identity ? Estimate{1.0, 1.0, 1.0, measured.n} : measured;
+      // The sorted-order hits back in ray order, against the NoSort-order ones: an order may give
+      // a ray the other triangle of a tie (a packet's companions decide which is met first), and
+      // nothing else.
+      const std::vector<RsHit>& sorted = arm.sorted_hits.at(c.access);
+      std::vector<RsHit> back(n_);
+      for (std::uint32_t i = 0; i < n_; ++i) back[so->order[i]] = sorted[i];
+      const HitAgreement a = compare_with_embree(arm.nosort_hits, back, any_hit);
+      e.ties = a.ties();
+      e.differ = a.differences() - a.ties();
+      if (e.differ > 0)
+        return fmt::format("Embree {} ({}): {} of {} rays traced in the sorted order ({}) differ from the NoSort order "
+                           "beyond ties ({} another triangle farther apart, {} hit only in NoSort order, {} hit only "
+                           "in the sorted order)",
+                           arm.key, e.call, e.differ, n_, c.access, a.other_tri, a.ours_only, a.embree_only);
+    }
+    c.embree.push_back(std::move(e));
+  }
+  return "";
+#else
+  (void)c, (void)o, (void)so, (void)settings;
+  return "";
+#endif
 }
 
 BatchBench::SortedOrder BatchBench::check_order(const cl::Buffer& keys, unsigned bits, unsigned top) {
@@ -285,6 +411,10 @@ std::vector<CellRecord> BatchBench::measure_sorted(std::vector<CellRecord> cells
       c.order_hash = fnv1a_hex(so.order.data(), so.order.size() * sizeof(std::uint32_t));
       if (c.hits_match_nosort) {
         fill_sorted_cell(c, o, so, settings);
+        if (const std::string why = fill_embree(c, o, &so, settings); !why.empty()) {
+          c.status = "failed";
+          c.error = why;
+        }
       } else {
         c.status = "failed";
         c.error = so.permutation

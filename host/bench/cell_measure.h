@@ -10,10 +10,17 @@
 //   trace:gather    the rays traced through the sorted order (access mode gather)
 //   permute         the rays moved into sorted order, then traced (access mode permute; stages
 //                   "permute" and "trace:permute")
+//   embree:<path>:nosort   Embree tracing the batch in generation order (run --embree-paths,
+//                   one per path, in NoSort cells too)
+//   embree:<path>:gather   Embree tracing the rays through the sorted order (a packet or stream
+//                   holds consecutive entries of it)
+//   embree:<path>:permute  Embree tracing the rays moved into sorted order (on the host, once,
+//                   outside the timed arm) in identity order
 // When a matrix asks for both access modes, the gather and permute cells of one encoder and key
 // length share their rounds: one encode + sort feeds both, and both are paired with the same
-// NoSort traces.
+// NoSort traces (ours and Embree's).
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -22,6 +29,7 @@
 #include "bench/record.h"
 #include "bvh/bvh.h"
 #include "runtime/runtime.h"
+#include "embree/embree_reference.h"
 #include "encode/encode.h"
 #include "render/rays.h"
 #include "sort/permute.h"
@@ -45,6 +53,10 @@ class BatchBench {
     // The scene's triangles: the exact oracle judges the rays of a packet class whose hit differs
     // from NoSort's (null: such a ray fails the cell).
     const Scene::Flat* tris = nullptr;
+    // Embree's scene of the same triangles and the paths that trace every cell's rays as well
+    // (run --embree-paths; null or no path: none). Only a build with Embree sets it.
+    const EmbreeScene* embree = nullptr;
+    std::vector<EmbreePath> embree_paths;
   };
   // Uploads the batch, traces it once in generation order (untimed) and checks those hits against
   // `reference` (the host traversal of the same variant). A device fault or a mismatch does not
@@ -86,6 +98,24 @@ class BatchBench {
   // The figures of a checked cell from its rounds.
   void fill_sorted_cell(CellRecord& c, const Outcome& o, const SortedOrder& so, const ProtocolSettings& settings);
 
+  // Embree's arms (Stages::embree_paths): per path, the NoSort-order arm, and in sorted rounds one
+  // sorted-order arm per access mode. Each keeps the hits of its last run, for the checks.
+  struct EmbreeArm {
+    EmbreePath path;
+    std::string key;
+    std::vector<RsHit> nosort_hits;                      // ray order
+    std::map<std::string, std::vector<RsHit>> sorted_hits;  // by access mode, sorted order
+  };
+  void add_embree_arms(Measurement& m, const std::vector<CellRecord>& sorted_cells);
+  // The sorted order on the host and the rays in it, made by the first sorted Embree arm of a
+  // measurement (after its round's sort, before its clock starts) and kept for the others.
+  const std::vector<std::uint32_t>& embree_order();
+  const std::vector<RsRay>& embree_permuted_rays();
+  // Each path's figures of cell `c` from the rounds, and the checks: Embree's NoSort hits agree
+  // with ours (as `trace --reference embree` requires), and its sorted-order hits, scattered back,
+  // with its NoSort-order ones up to ties. "" or why the cell fails.
+  std::string fill_embree(CellRecord& c, const Outcome& o, const SortedOrder* so, const ProtocolSettings& settings);
+
   Stages s_;
   const Bvh& bvh_;
   const RayBatch& batch_;
@@ -93,6 +123,10 @@ class BatchBench {
   std::string setup_error_;
   cl::Buffer rays_, identity_, values_, keys32_, keys64_, nosort_hits_, gather_hits_, permute_hits_, permuted_;
   std::vector<RsHit> nosort_hits_host_;
+  std::vector<EmbreeArm> embree_arms_;
+  std::vector<std::uint32_t> embree_order_;
+  std::vector<RsRay> embree_permuted_;
+  bool embree_order_ready_ = false, embree_permuted_ready_ = false;
   SimtModel nosort_simt_;
   GpuCounts nosort_gpu_;
 };

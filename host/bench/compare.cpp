@@ -20,13 +20,14 @@ using Getter = std::function<std::string(const CellRecord&)>;
 using Number = std::function<Estimate(const CellRecord&)>;
 
 // rays / time: the interval of a rate is the rate at the time interval's ends.
-Estimate mrays(const CellRecord& c) {
-  const Estimate t = c.trace.estimate();
-  const double r = static_cast<double>(c.rays) * 1e-3;
-  Estimate e{c.trace_mrays, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN(), t.n};
+Estimate mrays_of(std::uint64_t rays, const Timing& timing, double value) {
+  const Estimate t = timing.estimate();
+  const double r = static_cast<double>(rays) * 1e-3;
+  Estimate e{value, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN(), t.n};
   if (t.has_interval() && t.lo > 0) e.lo = r / t.hi, e.hi = r / t.lo;
   return e;
 }
+Estimate mrays(const CellRecord& c) { return mrays_of(c.rays, c.trace, c.trace_mrays); }
 Estimate exact(double v) { return {v, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN(), 0}; }
 
 const std::map<std::string, Number>& numeric_metrics() {
@@ -53,8 +54,30 @@ struct Metric {
   Getter text;
   const std::vector<std::string>* vocabulary = nullptr;
 };
+// An Embree path's timed figures with their intervals (record.h, embree_columns): the speedup,
+// each arm's median ms and MRays/s. Null for any other name.
+Number embree_metric(const std::string& name) {
+  if (!name.starts_with("embree_") || !find_cell_column(name)) return nullptr;
+  for (const char* field : {"_speedup", "_nosort_ms", "_ms", "_nosort_mrays", "_mrays"}) {
+    if (!name.ends_with(field)) continue;
+    const std::string path = name.substr(7, name.size() - 7 - std::string(field).size()), f = field;
+    return [path, f](const CellRecord& c) {
+      const CellRecord::EmbreeFigures* e = c.embree_path(path);
+      if (!e) return exact(std::numeric_limits<double>::quiet_NaN());
+      if (f == "_speedup") return e->trace.n > 0 ? e->speedup : exact(std::numeric_limits<double>::quiet_NaN());
+      const bool nosort = f.starts_with("_nosort");
+      const Timing& t = nosort ? e->nosort : e->trace;
+      if (t.n == 0) return exact(std::numeric_limits<double>::quiet_NaN());
+      if (f.ends_with("_ms")) return t.estimate();
+      return mrays_of(c.rays, t, t.median_ms > 0 ? static_cast<double>(c.rays) / (t.median_ms * 1e3) : 0.0);
+    };
+  }
+  return nullptr;
+}
+
 std::optional<Metric> find_metric(const std::string& name) {
   if (auto it = numeric_metrics().find(name); it != numeric_metrics().end()) return Metric{true, it->second, {}, nullptr};
+  if (Number embree = embree_metric(name)) return Metric{true, embree, {}, nullptr};
   const CellColumn* col = find_cell_column(name);
   if (!col) return std::nullopt;
   if (col->kind == CellColumn::Number) {
@@ -67,7 +90,9 @@ std::optional<Metric> find_metric(const std::string& name) {
 std::string metric_names() {
   std::string names;
   for (auto& n : comparable_metrics()) names += (names.empty() ? "" : ", ") + n;
-  return names;
+  // Embree's columns, one set per path (run --embree-paths), by pattern rather than 63 names.
+  return names + ", and per Embree path embree_<path>_{speedup,speedup_lo,speedup_hi,ms,nosort_ms,mrays,nosort_mrays} "
+                 "(e.g. embree_16-coherent_speedup)";
 }
 
 // A number as a rule writes it: digits with at most one point ("5", "0.5", ".5", "5."), nothing else.
@@ -132,10 +157,12 @@ FailRule FailRule::parse(const std::string& text) {
   // METRIC, blanks, one of <- >+ != ==, blanks, the rest (trimmed). Scanned by hand (see rule_number).
   auto blank = [](char c) { return c == ' ' || c == '\t'; };
   std::size_t i = 0;
-  // Digits after the first character: the GPU model's columns (gpu_l1_hits, gpu_l2_misses).
+  // Digits after the first character: the GPU model's columns (gpu_l1_hits, gpu_l2_misses); '-' and
+  // capitals inside too: Embree's columns name their path as written (embree_1M-coherent_ms). No
+  // operator starts with '-' or a capital, so the name still ends where the operator begins.
   auto name_char = [&](std::size_t k) {
     const char c = text[k];
-    return (c >= 'a' && c <= 'z') || c == '_' || (k > 0 && c >= '0' && c <= '9');
+    return (c >= 'a' && c <= 'z') || c == '_' || (k > 0 && ((c >= '0' && c <= '9') || (c >= 'A' && c <= 'Z') || c == '-'));
   };
   while (i < text.size() && name_char(i)) ++i;
   r.metric = text.substr(0, i);

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <regex>
 
+#include "embree/embree_reference.h"  // kEmbreePaths only: the keys a matrix may name
 #include "scene/load.h"
 #include "util/error.h"
 
@@ -56,6 +57,8 @@ nlohmann::json MatrixSpec::to_json() const {
           {"direction_bits", params.direction_bits}};
   // Only when on, so a set without the model keeps the entry it was written with (and resumes).
   if (!gpu_model.empty()) j["gpu_model"] = gpu_model;
+  // Likewise Embree's paths: part of the matrix (a resume with other paths is another matrix).
+  if (!embree_paths.empty()) j["embree_paths"] = embree_paths;
   // The knobs of the encoders beyond the paper (issue 21), only in a matrix that runs them: a set
   // written before they existed keeps its entry (and resumes).
   auto runs = [&](Encoder e) { return std::find(encoders.begin(), encoders.end(), e) != encoders.end(); };
@@ -80,7 +83,8 @@ void check_matrix_json(const nlohmann::json& matrix, const std::string& file) {
       {"max_noise", Number},  {"max_time_s", Number},    {"seed", Count},              {"variant", Text},
       {"access", Text},       {"baseline", Text},        {"layout", Text},             {"twopoint_length_fraction", Number},
       {"had_lambda", Number}, {"direction_bits", Count}, {"gpu_model", Text},          {"region_bits", Count},
-      {"traffic_blend", Number}, {"cost_bits", Count},   {"shadow_rays", Count},       {"bounces", Count}};
+      {"traffic_blend", Number}, {"cost_bits", Count},   {"shadow_rays", Count},       {"bounces", Count},
+      {"embree_paths", TextList}};
   auto is = [](const nlohmann::json& v, Kind k) {
     switch (k) {
       case Text: return v.is_string();
@@ -232,6 +236,21 @@ void validate_matrix(const MatrixSpec& spec) {
   if (spec.baselines.empty()) throw Error("--baseline: name at least one baseline order (pixel, shuffled)");
   if (!(spec.cell_timeout_s >= 0) || !std::isfinite(spec.cell_timeout_s))
     throw Error(fmt::format("--timeout {}: must be a number of seconds, 0 (none) or more", spec.cell_timeout_s));
+#ifdef RAYSORT_HAVE_EMBREE
+  constexpr bool have_embree = true;
+#else
+  constexpr bool have_embree = false;
+#endif
+  if (!have_embree && !spec.embree_paths.empty())
+    throw Error("--embree-paths: this build has no Embree: install libembree-dev and reconfigure");
+  for (const std::string& path : spec.embree_paths) {
+    if (std::none_of(std::begin(kEmbreePaths), std::end(kEmbreePaths),
+                     [&](const EmbreePathInfo& info) { return path == info.key; })) {
+      std::string keys;
+      for (const EmbreePathInfo& info : kEmbreePaths) keys += fmt::format("{}{}", keys.empty() ? "" : ", ", info.key);
+      throw Error(fmt::format("unknown Embree path '{}' in --embree-paths; the paths are {}, or all", path, keys));
+    }
+  }
   std::regex batch_re("^(primary|shadow[0-9]+|bounce[1-9][0-9]*)$");
   for (auto& b : spec.batches)
     if (!std::regex_match(b, batch_re))

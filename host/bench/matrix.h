@@ -43,6 +43,11 @@ struct MatrixSpec {
   // The GPU cost model's profile (bench/gpu_model.h: a name in gpu/profiles/ or a .toml path);
   // empty: the model is off.
   std::string gpu_model;
+  // Embree's paths (run --embree-paths: kEmbreePaths keys, embree/embree_reference.h), each two more
+  // arms of every cell's rounds: Embree tracing the batch in NoSort order and in the cell's sorted
+  // order (docs/measurement.md, "Embree on sorted orders"). Empty: none (no arm, no entry in
+  // meta.json's matrix, so sets written without it resume).
+  std::vector<std::string> embree_paths;
   EncoderParams params;
 
   // The measurement protocol of every cell (bench/protocol.h): warm-up rounds, the fewest timed

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 
+#include "embree/embree_reference.h"  // kEmbreePaths only (a table, no Embree call): every build has it
 #include "trace/trace_class.h"
 
 namespace raysort {
@@ -25,6 +26,12 @@ std::string cell_id(const CellRecord& c, bool with_class) {
 }  // namespace
 
 std::string CellRecord::id() const { return cell_id(*this, true); }
+
+const CellRecord::EmbreeFigures* CellRecord::embree_path(const std::string& key) const {
+  for (const EmbreeFigures& e : embree)
+    if (e.path == key) return &e;
+  return nullptr;
+}
 
 std::string CellRecord::id_before_class_axis() const { return cell_id(*this, false); }
 
@@ -94,6 +101,44 @@ void gpu_model_from_json(const nlohmann::json& j, CellRecord::GpuModelFigures& g
   if (j.contains("ww_steps")) count_from(j, "ww_steps", g.ww_steps);
 }
 
+// MRays/s of `rays` at a median time (NaN without one).
+double mrays_at(std::uint64_t rays, const Timing& t) {
+  return t.n > 0 && t.median_ms > 0 ? static_cast<double>(rays) / (t.median_ms * 1e3) : kNaN;
+}
+
+// One Embree path's figures. The MRays/s are written for a reader of the file and computed again
+// from rays and the median when read (one truth); the sorted arm's figures only in a sorted cell.
+nlohmann::json embree_json(const CellRecord::EmbreeFigures& e, std::uint64_t rays) {
+  nlohmann::json j = {{"path", e.path}, {"call", e.call}, {"threads", e.threads}};
+  timing_to_json(j, "nosort", e.nosort);
+  j["nosort_mrays"] = number(mrays_at(rays, e.nosort));
+  if (e.trace.n > 0) {
+    timing_to_json(j, "trace", e.trace);
+    j["trace_mrays"] = number(mrays_at(rays, e.trace));
+    j["speedup"] = estimate_json(e.speedup);
+    j["ties"] = e.ties;
+    j["differ"] = e.differ;
+  }
+  j["agreement_with_ours"] = number(e.agreement_with_ours);
+  return j;
+}
+CellRecord::EmbreeFigures embree_from_json(const nlohmann::json& j) {
+  CellRecord::EmbreeFigures e;
+  j.at("path").get_to(e.path);
+  j.at("call").get_to(e.call);
+  count_from(j, "threads", e.threads);
+  if (!j.contains("nosort_ms")) throw std::runtime_error(fmt::format("Embree path {} has no \"nosort_ms\"", e.path));
+  timing_from_json(j, "nosort", e.nosort);
+  if (j.contains("trace_ms")) {
+    timing_from_json(j, "trace", e.trace);
+    e.speedup = estimate_from(j.at("speedup"));
+    count_from(j, "ties", e.ties);
+    count_from(j, "differ", e.differ);
+  }
+  e.agreement_with_ours = number_from(j.at("agreement_with_ours"));
+  return e;
+}
+
 }  // namespace
 
 void to_json(nlohmann::json& j, const CellRecord& r) {
@@ -133,6 +178,10 @@ void to_json(nlohmann::json& j, const CellRecord& r) {
                      {"leaks_per_million", r.leaks_per_million}};
   if (!r.gpu.profile.empty()) j["gpu_model"] = gpu_model_json(r.gpu);
   if (r.cut_ms >= 0) j["cut_ms"] = r.cut_ms;  // the encoders with per-batch input (added within format version 3)
+  if (!r.embree.empty()) {  // run --embree-paths (added within format version 3)
+    nlohmann::json& paths = j["embree"] = nlohmann::json::array();
+    for (const auto& e : r.embree) paths.push_back(embree_json(e, r.rays));
+  }
   timing_to_json(j, "encode", r.encode);
   timing_to_json(j, "sort", r.sort);
   timing_to_json(j, "permute", r.permute);
@@ -186,6 +235,10 @@ void from_json(const nlohmann::json& j, CellRecord& r) {
   r.leaks_per_million = j.value("leaks_per_million", -1.0);  // added within format version 1
   if (j.contains("gpu_model")) gpu_model_from_json(j.at("gpu_model"), r.gpu);  // added within format version 3
   if (j.contains("cut_ms")) r.cut_ms = number_from(j.at("cut_ms"));
+  if (j.contains("embree")) {  // run --embree-paths (added within format version 3); absent: none
+    if (!j.at("embree").is_array()) throw std::runtime_error("\"embree\" is not a list of Embree paths");
+    for (const auto& e : j.at("embree")) r.embree.push_back(embree_from_json(e));
+  }
   timing_from_json(j, "encode", r.encode);
   timing_from_json(j, "sort", r.sort);
   timing_from_json(j, "permute", r.permute);
@@ -270,6 +323,18 @@ void add_gpu_model_columns(std::vector<Col>& c) {
   }
 }
 
+// An Embree path's figure of a cell, NaN when the cell lacks the path (or the figure).
+using EmbreeValue = std::function<double(const CellRecord&, const CellRecord::EmbreeFigures&)>;
+Col embree_numeric(const std::string& path, const std::string& name, EmbreeValue f, int decimals) {
+  return numeric(
+      "embree_" + path + "_" + name,
+      [path, f](const CellRecord& r) {
+        const CellRecord::EmbreeFigures* e = r.embree_path(path);
+        return e ? f(r, *e) : kNaN;
+      },
+      decimals);
+}
+
 std::vector<Col> make_columns() {
   std::vector<Col> c;
   c.push_back(text("id", [](const CellRecord& r) { return r.id(); }));
@@ -327,23 +392,63 @@ const std::vector<CellColumn>& cell_columns() {
   return columns;
 }
 
+std::vector<CellColumn> embree_columns(const std::string& path) {
+  using E = CellRecord::EmbreeFigures;
+  auto sorted = [](const E& e) { return e.trace.n > 0; };
+  std::vector<Col> c;
+  c.push_back(embree_numeric(path, "speedup", [](const CellRecord&, const E& e) { return e.speedup.value; }, 4));
+  c.push_back(embree_numeric(path, "speedup_lo", [](const CellRecord&, const E& e) { return e.speedup.lo; }, 4));
+  c.push_back(embree_numeric(path, "speedup_hi", [](const CellRecord&, const E& e) { return e.speedup.hi; }, 4));
+  c.push_back(embree_numeric(
+      path, "ms", [sorted](const CellRecord&, const E& e) { return sorted(e) ? e.trace.median_ms : kNaN; }, 4));
+  c.push_back(embree_numeric(path, "nosort_ms", [](const CellRecord&, const E& e) { return e.nosort.median_ms; }, 4));
+  c.push_back(embree_numeric(path, "mrays", [](const CellRecord& r, const E& e) { return mrays_at(r.rays, e.trace); }, 4));
+  c.push_back(
+      embree_numeric(path, "nosort_mrays", [](const CellRecord& r, const E& e) { return mrays_at(r.rays, e.nosort); }, 4));
+  return c;
+}
+
+std::vector<CellColumn> cell_columns_for(const std::vector<CellRecord>& cells) {
+  std::vector<CellColumn> columns = cell_columns();
+  std::vector<std::string> paths;
+  for (const CellRecord& r : cells)
+    for (const auto& e : r.embree)
+      if (std::find(paths.begin(), paths.end(), e.path) == paths.end()) paths.push_back(e.path);
+  for (const std::string& path : paths)
+    for (CellColumn& c : embree_columns(path)) columns.push_back(std::move(c));
+  return columns;
+}
+
 const CellColumn* find_cell_column(const std::string& name) {
   for (const auto& c : cell_columns())
+    if (c.name == name) return &c;
+  // Every path's columns, made once: a rule may name a path whichever set it is checked on.
+  static const std::vector<CellColumn> embree = [] {
+    std::vector<CellColumn> all;
+    for (const EmbreePathInfo& info : kEmbreePaths)
+      for (CellColumn& c : embree_columns(info.key)) all.push_back(std::move(c));
+    return all;
+  }();
+  for (const auto& c : embree)
     if (c.name == name) return &c;
   return nullptr;
 }
 
-std::string csv_header() {
+std::string csv_header() { return csv_header(cell_columns()); }
+
+std::string csv_row(const CellRecord& r) { return csv_row(r, cell_columns()); }
+
+std::string csv_header(const std::vector<CellColumn>& columns) {
   std::string s;
-  for (const auto& c : cell_columns()) s += (s.empty() ? "" : ",") + c.name;
+  for (const auto& c : columns) s += (s.empty() ? "" : ",") + c.name;
   return s;
 }
 
-std::string csv_row(const CellRecord& r) {
+std::string csv_row(const CellRecord& r, const std::vector<CellColumn>& columns) {
   std::string s;
-  for (const auto& c : cell_columns()) {
-    if (&c != &cell_columns().front()) s += ',';
-    s += c.csv(r);
+  for (std::size_t i = 0; i < columns.size(); ++i) {
+    if (i > 0) s += ',';
+    s += columns[i].csv(r);
   }
   return s;
 }
@@ -382,13 +487,37 @@ std::string ok_cell_problem(const CellRecord& r) {
   if (trace != r.samples.end() && !r.same_order_as_nosort && r.encoder != kBaselineEncoder &&
       !agrees(r.speedup, ratio_interval(nosort->second, trace->second)))
     return "its speedup is not the one its nosort and trace samples give (an edited record)";
+  for (const auto& e : r.embree) {
+    const std::string what = "Embree path " + e.path;
+    if (e.trace.n == 0) continue;  // a NoSort cell: no sorted arm
+    if (e.differ > 0)
+      return fmt::format("it is \"ok\" but {} rays of {}'s sorted-order trace differ from its NoSort-order trace "
+                         "beyond ties", e.differ, what);
+    if (!(e.speedup.value > 0)) return fmt::format("{}'s speedup is {}; a ratio of two times is more than 0", what, e.speedup.value);
+    if (e.speedup.has_interval() && !(e.speedup.lo <= e.speedup.value && e.speedup.value <= e.speedup.hi))
+      return fmt::format("{}'s speedup {} lies outside its interval [{}, {}]", what, e.speedup.value, e.speedup.lo,
+                         e.speedup.hi);
+    const auto en = r.samples.find("embree:" + e.path + ":nosort"), et = r.samples.find("embree:" + e.path + ":trace");
+    if (en == r.samples.end() || et == r.samples.end())
+      return fmt::format("its samples lack {}'s arms (\"embree:{}:nosort\", \"embree:{}:trace\")", what, e.path, e.path);
+    if (!r.same_order_as_nosort && !agrees(e.speedup, ratio_interval(en->second, et->second)))
+      return fmt::format("{}'s speedup is not the one its samples give (an edited record)", what);
+  }
   return "";
 }
 
 }  // namespace
 
 std::string cell_record_problem(const CellRecord& r) {
-  for (const auto& c : cell_columns()) {
+  std::vector<std::string> paths;
+  for (const auto& e : r.embree) {
+    if (std::none_of(std::begin(kEmbreePaths), std::end(kEmbreePaths), [&](const EmbreePathInfo& info) { return e.path == info.key; }))
+      return fmt::format("Embree path \"{}\" is not one raysort knows (--embree-paths)", e.path);
+    if (std::find(paths.begin(), paths.end(), e.path) != paths.end())
+      return fmt::format("Embree path {} is recorded twice", e.path);
+    paths.push_back(e.path);
+  }
+  for (const auto& c : cell_columns_for({r})) {
     if (c.kind == CellColumn::Text && !c.vocabulary.empty() &&
         std::find(c.vocabulary.begin(), c.vocabulary.end(), c.csv(r)) == c.vocabulary.end()) {
       std::string known;

@@ -104,6 +104,31 @@ struct CellRecord {
   // net_speedup. -1 (absent in JSON) for other cells.
   double cut_ms = -1.0;
 
+  // Embree's paths on this cell's rays (`run --embree-paths`, docs/measurement.md "Embree on
+  // sorted orders"): per path, Embree tracing the batch in NoSort order and, in a sorted cell, in
+  // the cell's sorted order (gather: through the order; permute: the rays moved into sorted order
+  // on the host first, outside the timed arm), both arms of the cell's own rounds, by wall clock.
+  // Empty (absent in JSON and CSV) when the run named no path: every older set reads so.
+  struct EmbreeFigures {
+    std::string path;      // its --embree-paths key: "16-coherent"
+    std::string call;      // the call and flag it made on this batch: "rtcIntersect16 coherent"
+    unsigned threads = 0;  // EmbreeScene::threads(): each arm's threads, the calling one included
+    Timing nosort;         // the NoSort-order arm (samples "embree:<path>:nosort")
+    Timing trace;          // the sorted-order arm (samples "embree:<path>:trace"); n == 0 in a NoSort cell
+    // nosort / trace, per round (Hodges-Lehmann, signed-rank interval): what the cell's order buys
+    // this path. Exactly 1 when same_order_as_nosort; no value (NaN) in a NoSort cell.
+    Estimate speedup;
+    // The sorted-order hits scattered back against the NoSort-order ones, ray by ray: rays with
+    // another triangle at the same t (a tie), and rays that differ otherwise (a cell with any of
+    // these fails). Both 0 in a NoSort cell.
+    std::uint64_t ties = 0, differ = 0;
+    // Embree's NoSort hits against our NoSort hits (same triangle or a tie, as `trace --reference
+    // embree` counts them): the anchor that both traced the same rays.
+    double agreement_with_ours = std::numeric_limits<double>::quiet_NaN();
+  };
+  std::vector<EmbreeFigures> embree;
+  const EmbreeFigures* embree_path(const std::string& key) const;
+
   // Checks and fingerprints (deterministic: equal on every device for the same command).
   bool hits_match_nosort = false;  // sorted trace scattered back == NoSort hits, bit for bit
   bool order_is_permutation = false;
@@ -143,10 +168,22 @@ struct CellColumn {
   std::vector<std::string> vocabulary;
 };
 const std::vector<CellColumn>& cell_columns();
+// The columns of one Embree path's figures (CellRecord::embree), empty fields in a cell without
+// that path: embree_<path>_speedup, _speedup_lo, _speedup_hi (the sorted order's speedup of the
+// path), _ms and _nosort_ms (each arm's median), _mrays and _nosort_mrays. <path> is the
+// --embree-paths key as written ("embree_16-coherent_speedup", "embree_1M_ms").
+std::vector<CellColumn> embree_columns(const std::string& path);
+// The columns of a set of cells: cell_columns(), then embree_columns() of every Embree path the
+// cells hold, in the order the cells name them. Without Embree figures: cell_columns() exactly.
+std::vector<CellColumn> cell_columns_for(const std::vector<CellRecord>& cells);
+// A column by name: one of cell_columns(), or an Embree path's column of any path raysort knows
+// (kEmbreePaths), whether or not a set holds it.
 const CellColumn* find_cell_column(const std::string& name);
 
-// CSV header and row, in the order of cell_columns().
+// CSV header and row, in the order of `columns` (default: cell_columns()).
 std::string csv_header();
 std::string csv_row(const CellRecord& r);
+std::string csv_header(const std::vector<CellColumn>& columns);
+std::string csv_row(const CellRecord& r, const std::vector<CellColumn>& columns);
 
 }  // namespace raysort

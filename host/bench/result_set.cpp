@@ -339,10 +339,11 @@ ResultSet ResultSet::open_for_run(const std::string& dir, const nlohmann::json& 
     const nlohmann::json old = parse_meta(read_file(meta_path.string()), meta_path.string());
     check_version(old, meta_path.string(), true);
     if (canonical_matrix(old.value("matrix", nlohmann::json())) != canonical_matrix(meta.value("matrix", nlohmann::json())))
+      // The canonical entries differ: name only those (lists written in another order are no difference).
       throw Error(fmt::format("{} holds results of a different matrix configuration ({}); choose another --out folder "
                               "(or delete it to start over)",
-                              dir, json_differences(meta.value("matrix", nlohmann::json::object()),
-                                                    old.value("matrix", nlohmann::json::object()))));
+                              dir, json_differences(canonical_matrix(meta.value("matrix", nlohmann::json::object())),
+                                                    canonical_matrix(old.value("matrix", nlohmann::json::object())))));
     check_same_shard(old, meta, dir);
     check_same_build(old, meta, dir);
     // A scene file changed since the set was started: resumed cells would trace another file.
@@ -466,10 +467,12 @@ std::vector<CellRecord> ResultSet::cells() const {
 void ResultSet::write_views() const {
   auto all = cells();
   nlohmann::json arr = nlohmann::json::array();
-  std::string csv = csv_header() + "\n";
+  // Embree's columns only for the paths the cells hold: a set without them keeps its columns.
+  const std::vector<CellColumn> columns = cell_columns_for(all);
+  std::string csv = csv_header(columns) + "\n";
   for (auto& c : all) {
     arr.push_back(c);
-    csv += csv_row(c) + "\n";
+    csv += csv_row(c, columns) + "\n";
   }
   write_file_atomically((fs::path(dir_) / "cells.json").string(), arr.dump(2) + "\n");
   // meta.json carries a fingerprint of every cell's keys and order, so two devices (or commits) can
@@ -503,6 +506,10 @@ std::string cell_outside_matrix(const CellRecord& c, const nlohmann::json& m) {
     return fmt::format("batch '{}' is not one of its batches", c.batch);
   if (!listed("variant", c.variant)) return fmt::format("trace variant '{}' is not one of its variants", c.variant);
   if (!listed("layout", c.layout)) return fmt::format("trace class '{}' is not one of its classes", c.layout);
+  // Embree's figures only for the paths the matrix named (none when it named none).
+  for (const auto& e : c.embree)
+    if (!m.contains("embree_paths") || !listed("embree_paths", e.path))
+      return fmt::format("Embree path '{}' is not one of its --embree-paths", e.path);
   if (c.encoder == kBaselineEncoder) {
     if (c.bits != 0 || c.top_bits != 0 || c.access != "gather")
       return "a NoSort cell has 0 key bits, no top-k and gather access";
@@ -523,7 +530,8 @@ nlohmann::json canonical_matrix(const nlohmann::json& matrix) {
   nlohmann::json m = matrix;
   // Axes whose order is only the visiting order: "--encoders hcc,mlhcc" and "mlhcc,hcc" measure the
   // same cells. The trace classes keep theirs (the first is the tables' main class).
-  for (const char* key : {"scenes", "batches", "encoders", "bits", "key_length_scenes", "key_length_bits", "top_bits"})
+  for (const char* key :
+       {"scenes", "batches", "encoders", "bits", "key_length_scenes", "key_length_bits", "top_bits", "embree_paths"})
     if (m.contains(key) && m[key].is_array()) std::sort(m[key].begin(), m[key].end());
   for (const char* key : {"variant", "access", "baseline"})
     if (m.contains(key) && m[key].is_string()) {

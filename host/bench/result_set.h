@@ -80,7 +80,7 @@ nlohmann::json parse_meta(const std::string& text, const std::string& path);
 std::string cell_outside_matrix(const CellRecord& cell, const nlohmann::json& matrix);
 
 // A meta.json "matrix" with the order of its list axes (scenes, batches, encoders, key lengths,
-// top-k, variants, access modes, baselines) made canonical: two matrices that plan the same cells
+// top-k, variants, access modes, baselines, Embree paths) made canonical: two matrices that plan the same cells
 // compare equal however their lists were written. The trace classes keep their order.
 nlohmann::json canonical_matrix(const nlohmann::json& matrix);
 

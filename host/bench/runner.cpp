@@ -22,6 +22,7 @@
 #include "bench/cell_measure.h"
 #include "bench/result_set.h"
 #include "bvh/prepared_scene.h"
+#include "embree/embree_reference.h"
 #include "render/batches.h"
 #include "render/frame_memory.h"
 #include "runtime/runtime.h"
@@ -106,8 +107,46 @@ nlohmann::json kernels_meta() {
   return {{"source", k.source}, {"hash", k.hash}, {"cl_options", k.cl_options}};
 }
 
+// Embree's arms (run --embree-paths): which call and context flag each path makes, on how many
+// threads, and how an arm is timed. Empty without paths (and in a build without Embree, which
+// refuses them in validate_matrix).
+nlohmann::json embree_meta(const std::vector<std::string>& keys) {
+#ifdef RAYSORT_HAVE_EMBREE
+  if (keys.empty()) return nullptr;
+  const EmbreeScene probe(Scene::Flat{});  // the device each scene's EmbreeScene gets: its threads, native widths
+  nlohmann::json paths = nlohmann::json::array();
+  for (const std::string& key : keys) {
+    const EmbreePath path = parse_embree_paths(key).front();
+    const EmbreePathInfo& info = embree_path_info(path);
+    paths.push_back({{"path", key},
+                     {"closest_hit", embree_path_name(path, false)},
+                     {"any_hit", embree_path_name(path, true)},
+                     {"rays_per_call", info.packet == 0 ? "a thread's chunk of up to 4096 (a stream)" : std::to_string(info.packet)},
+                     {"context_flag", path == EmbreePath::Single ? "default (RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT)"
+                                      : info.coherent            ? "RTC_INTERSECT_CONTEXT_FLAG_COHERENT"
+                                                                 : "RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT"},
+                     {"native", info.packet >= 4 ? nlohmann::json(probe.native_packets(info.packet)) : nlohmann::json(nullptr)}});
+  }
+  return {{"doc", "docs/measurement.md, \"Embree on sorted orders\"; docs/trace.md, \"Embree anchor\""},
+          {"version", EmbreeScene::version()},
+          {"threads", probe.threads()},
+          {"paths", paths},
+          {"scene", "one triangle geometry per scene (built once), RTC_SCENE_FLAG_NONE, RTC_BUILD_QUALITY_HIGH"},
+          {"chunks", "each thread takes contiguous chunks of 4096 rays of the order traced; a packet is consecutive rays"},
+          {"arms", "per round and path: embree:<path>:nosort (the batch in NoSort order) and, in a sorted cell, "
+                   "embree:<path>:trace (gather: rays[order[i]]; permute: the rays moved into sorted order on the "
+                   "host before the rounds, untimed, traced in identity order)"},
+          {"timing", "wall clock of the whole trace call (threads started and joined inside, rays copied into "
+                     "Embree's layout and hits back inside it)"},
+          {"speedup", "paired: embree:<path>:nosort / embree:<path>:trace per round, as the cell's own speedup"}};
+#else
+  (void)keys;
+  return nullptr;
+#endif
+}
+
 nlohmann::json run_meta(const MatrixSpec& spec, const RunOptions& opts, const DeviceInfo& dev) {
-  return {
+  nlohmann::json meta = {
       {"format_version", kResultFormatVersion},
       {"raysort_version", RAYSORT_VERSION},
       {"matrix", spec.to_json()},
@@ -143,6 +182,8 @@ nlohmann::json run_meta(const MatrixSpec& spec, const RunOptions& opts, const De
         {"shuffled", "Fisher-Yates over the generation order; j = (mt19937_64() * (i + 1)) >> 64, the engine seeded "
                      "with FNV-1a(batch name) ^ seed * 0x9e3779b97f4a7c15 (render/batches.h)"}}},
   };
+  if (!spec.embree_paths.empty()) meta["embree"] = embree_meta(spec.embree_paths);
+  return meta;
 }
 
 struct Progress {
@@ -167,20 +208,35 @@ std::string with_interval(const Estimate& e) {
   return fmt::format("{:.2f} [{:.2f}, {:.2f}]", e.value, e.lo, e.hi);
 }
 
+// "; Embree 1 12.3 MRays/s, 16-coherent 20.1 MRays/s" (NoSort) or "; Embree 1 1.05 [1.01, 1.09], ..."
+// (each path's speedup on the cell's order): nothing without Embree's arms.
+std::string embree_progress(const CellRecord& c) {
+  std::string s;
+  for (const auto& e : c.embree) {
+    const std::string figure =
+        e.trace.n == 0 ? fmt::format("{:.2f} MRays/s", e.nosort.median_ms > 0 ? c.rays / (e.nosort.median_ms * 1e3) : 0.0)
+                       : with_interval(e.speedup);
+    s += fmt::format("{} {} {}", s.empty() ? "; Embree" : ",", e.path, figure);
+  }
+  return s;
+}
+
 std::string progress_text(const CellRecord& c) {
   if (!c.ok()) return fmt::format("{}: {}: {}", c.id(), c.status == "timeout" ? "TIMEOUT" : "FAILED", c.error);
   const std::string rounds = fmt::format("{} rounds, stopped by {}", c.rounds, c.stopped_by);
   if (c.encoder == kBaselineEncoder)
-    return fmt::format("{}: NoSort {:.2f} MRays/s, A/A {}  ({})", c.id(), c.trace_mrays, with_interval(c.aa), rounds);
+    return fmt::format("{}: NoSort {:.2f} MRays/s, A/A {}{}  ({})", c.id(), c.trace_mrays, with_interval(c.aa),
+                       embree_progress(c), rounds);
   const std::string speed =
       c.same_order_as_nosort
           ? fmt::format("same order as NoSort, no speedup (measured {})",
                         with_interval(ratio_interval(c.samples.at("nosort"), c.samples.at("trace"))))
           : fmt::format("speedup {}", with_interval(c.speedup));
-  return fmt::format("{}: {:.2f} MRays/s, {}, net {}, encode {:.2f} + sort {:.2f}{} ms{}, ANC {:.2f}  ({})", c.id(),
+  return fmt::format("{}: {:.2f} MRays/s, {}, net {}, encode {:.2f} + sort {:.2f}{} ms{}, ANC {:.2f}{}  ({})", c.id(),
                      c.trace_mrays, speed, with_interval(c.net_speedup), c.encode.median_ms, c.sort.median_ms,
                      c.access == "permute" ? fmt::format(" + permute {:.2f}", c.permute.median_ms) : "",
-                     c.cut_ms >= 0 ? fmt::format(" (host cut {:.1f} ms)", c.cut_ms) : "", c.anc, rounds);
+                     c.cut_ms >= 0 ? fmt::format(" (host cut {:.1f} ms)", c.cut_ms) : "", c.anc, embree_progress(c),
+                     rounds);
 }
 
 CellRecord cell_of(const PlannedCell& p) {
@@ -218,6 +274,12 @@ struct SceneBench {
   std::map<std::string, std::pair<std::vector<std::uint64_t>, double>> traffic;
   // mlhcc-cost's estimates and hcc-region's statistics from a previous frame, by batch name.
   std::map<std::string, PreviousBatchStatistics> previous;
+#ifdef RAYSORT_HAVE_EMBREE
+  // Embree's scene of the same triangles (run --embree-paths): built once per scene, its paths
+  // arms of every cell's rounds (bench/cell_measure.h).
+  std::optional<EmbreeScene> embree;
+#endif
+  std::vector<EmbreePath> embree_paths;
 
   SceneBench(Runtime& rt, const std::string& name, const MatrixSpec& matrix, const std::string& scene_root,
              Progress& progress)
@@ -237,10 +299,26 @@ struct SceneBench {
                                            runs(Encoder::HCC_REGION), spec.batches);
     }
     batches = generate_batches(prepared.scene, prepared.tris, bvh, gen);
+#ifdef RAYSORT_HAVE_EMBREE
+    if (!spec.embree_paths.empty()) {
+      embree.emplace(prepared.tris);
+      for (const std::string& key : spec.embree_paths) embree_paths.push_back(parse_embree_paths(key).front());
+      progress.line(fmt::format("{}: Embree {} BVH built in {:.0f} ms ({} threads)", name, EmbreeScene::version(),
+                                embree->build_ms(), embree->threads()));
+    }
+#endif
     for (TraceVariant v : spec.variants)
       for (TraceLayout l : spec.layouts)
         tracers[{trace_variant_name(v), trace_layout_name(l)}] = std::make_unique<Tracer>(rt, bvh, v, l);
     encoder->warm_up();
+  }
+  // Embree's scene for the cells' stages (null without --embree-paths).
+  const EmbreeScene* embree_scene() const {
+#ifdef RAYSORT_HAVE_EMBREE
+    return embree ? &*embree : nullptr;
+#else
+    return nullptr;
+#endif
   }
   // The batch in a baseline order (render/batches.h), or null when the frame has no such batch.
   const ReferencedBatch* batch(const std::string& name, const std::string& baseline) {
@@ -579,7 +657,7 @@ RunSummary run_matrix(const MatrixSpec& requested, const RunOptions& opts) {
         continue;
       }
       BatchBench bench({rt, *scene.encoder, sorter, permuter, *scene.tracers.at({first.variant, first.layout}),
-                        gpu ? &*gpu : nullptr, &scene.prepared.tris},
+                        gpu ? &*gpu : nullptr, &scene.prepared.tris, scene.embree_scene(), scene.embree_paths},
                        scene.bvh, rb->batch, scene.reference(*rb, first.variant, first.layout));
       for (const auto& group : runs_of(batch_cells, round_group)) {  // → cell (bench/shard.h)
         if (g_interrupted) break;

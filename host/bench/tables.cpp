@@ -4,7 +4,8 @@
 //   overhead: encode/sort[/permute] ms, share of trace time and net speedup (Table 5);
 //   gather against permute; key length: speed and ANC against key bits (Tables 6-7); the SIMT
 //   model (a column's best lane-efficiency ratio in bold); HCC with direction bits (appendix Table
-//   8); subsequent bounces (appendix); robust against fast; failed cells.
+//   8); subsequent bounces (appendix); robust against fast; trace classes; Embree's paths on the
+//   cells' orders (run --embree-paths); pixel against shuffled baseline; failed cells.
 // Marks: **bold** is a column's best speedup only when its interval does not overlap the second
 // best's; *italic* is a speedup whose interval contains 1; "= NoSort" is an order equal to the
 // generation order (no speedup is reported for it).
@@ -473,6 +474,83 @@ std::string classes_section(const TableContext& t) {
   return md + "\n";
 }
 
+// Embree's paths on the cells' orders (run --embree-paths; docs/measurement.md, "Embree on sorted
+// orders"): per scene, batch and path, Embree's NoSort speed and what each encoder's order buys
+// that path (paired, in the cell's own rounds), beside what it buys our trace class on the same
+// cell. Shown when the cells hold Embree figures.
+std::string embree_section(const TableContext& t, const nlohmann::json& meta) {
+  std::vector<std::string> paths;
+  for (auto& c : t.cells)
+    for (auto& e : c.embree)
+      if (std::find(paths.begin(), paths.end(), e.path) == paths.end()) paths.push_back(e.path);
+  if (paths.empty()) return "";
+  // What each arm ran: the calls, flags and threads meta.json records (the cells record them too).
+  std::string how;
+  const nlohmann::json em = meta.value("embree", nlohmann::json());
+  if (em.is_object() && em.contains("paths") && em["paths"].is_array()) {
+    for (const auto& p : em["paths"])
+      if (p.is_object())
+        how += fmt::format("{}`{}` {} / {} (context flag {})", how.empty() ? "" : "; ", p.value("path", "?"),
+                           p.value("closest_hit", "?"), p.value("any_hit", "?"), p.value("context_flag", "?"));
+    how = fmt::format("Embree {} on {} threads: {}.", em.value("version", "?"), em.value("threads", 0u), how);
+  } else {
+    for (auto& c : t.cells)
+      for (auto& e : c.embree)
+        if (how.find("`" + e.path + "`") == std::string::npos)
+          how += fmt::format("{}`{}` {} ({} threads)", how.empty() ? "" : "; ", e.path, e.call, e.threads);
+    how += ".";
+  }
+  std::string md;
+  for (auto& access : t.accesses) {
+    const View view = t.main_view.with_access(access);
+    md += fmt::format(
+        "## Embree on sorted orders, {}-bit keys, access {}\n\n"
+        "Every cell's rounds also held, per Embree path, Embree tracing the batch in NoSort order and in the cell's "
+        "sorted order ({}), each timed by its wall clock. Per encoder: the path's speedup on that order (NoSort / "
+        "sorted, paired, [95 % interval]) · our trace class's ({}, {}) speedup on the same cell. *Italic*: the interval "
+        "contains 1; \"= NoSort\": the sorted order is the NoSort order. {}\n\n",
+        t.overview_bits, access,
+        access == "permute" ? "the rays moved into sorted order on the host before the timed arm, then traced in "
+                              "order"
+                            : "traced through the order, so a packet or stream holds consecutive rays of it",
+        view.layout, view.variant, how);
+    std::vector<std::string> cols{"path", "Embree NoSort MRays/s"};
+    for (auto& e : t.encoders)
+      if (e != kBaselineEncoder) cols.push_back(e);
+    md += header("scene / batch", cols);
+    for (auto& s : t.scenes)
+      for (auto& batch : t.batches)
+        for (auto& path : paths) {
+          // Embree's NoSort speed: the NoSort cell's arm, else the first sorted cell's.
+          const CellRecord::EmbreeFigures* base = nullptr;
+          std::uint64_t rays = 0;
+          if (const CellRecord* n = t.at(view, s, batch, kBaselineEncoder, 0); n && n->ok())
+            if ((base = n->embree_path(path))) rays = n->rays;
+          std::string row;
+          bool any = false;
+          for (auto& e : t.encoders) {
+            if (e == kBaselineEncoder) continue;
+            const CellRecord* c = t.at(view, s, batch, e, t.overview_bits);
+            const CellRecord::EmbreeFigures* f = c && c->ok() ? c->embree_path(path) : nullptr;
+            if (!f) {
+              row += c && !c->ok() ? " failed |" : " – |";
+              continue;
+            }
+            any = true;
+            if (!base) base = f, rays = c->rays;
+            std::string speed = c->same_order_as_nosort ? "= NoSort" : interval_text(f->speedup);
+            if (!c->same_order_as_nosort && f->speedup.contains(1.0)) speed = "*" + speed + "*";
+            row += fmt::format(" {} · {} |", speed, speedup_text(*c, false));
+          }
+          if (!any && !base) continue;
+          const double mrays = base && base->nosort.median_ms > 0 ? static_cast<double>(rays) / (base->nosort.median_ms * 1e3) : 0.0;
+          md += fmt::format("| {} {} | {} | {} |{}\n", s, batch, path, base ? fmt::format("{:.2f}", mrays) : "–", row);
+        }
+    md += "\n";
+  }
+  return md;
+}
+
 // Pixel against shuffled baseline order (render/batches.h): the same rays, NoSort in generation
 // order or in a fixed-seed shuffle (as atomic compaction leaves them). The baseline decides how much
 // coherence an ordering can recover: every ratio here is against its own baseline.
@@ -614,7 +692,8 @@ std::string render_tables(const std::vector<CellRecord>& cells, const nlohmann::
   const TableContext t(cells, meta);
   return introduction(meta) + noise_section(cells) + trace_speed_sections(t) + overhead_sections(t) +
          gather_permute_section(t) + key_length_sections(t) + deterministic_sections(t) + hcc_dir_section(t) +
-         bounces_section(t) + top_k_section(t) + variants_section(t) + classes_section(t) + baselines_section(t) + failed_section(cells);
+         bounces_section(t) + top_k_section(t) + variants_section(t) + classes_section(t) + embree_section(t, meta) +
+         baselines_section(t) + failed_section(cells);
 }
 
 }  // namespace raysort
