@@ -15,8 +15,13 @@
  */
 #include "traverse_binary.h"
 #include "traverse_wide.h"
-#ifdef RS_TRACE_WIDE8
+/* The kernel loader inlines a guarded header at its first #include (host/runtime/runtime.cpp), so
+ * the 8-wide traversal comes first under either class that needs it. */
+#if defined(RS_TRACE_WIDE8) || defined(RS_TRACE_STREAM)
 #include "traverse_wide8.h"
+#endif
+#ifdef RS_TRACE_STREAM
+#include "traverse_stream.h"
 #endif
 #ifdef RS_TRACE_PACKET
 #define RS_PACKET_W RS_TRACE_PACKET
@@ -56,10 +61,11 @@
   }
 
 /* One trace class per build (host/trace/tracer.cpp passes -DRS_TRACE_BINARY for the binary BVH,
- * -DRS_TRACE_WIDE8 for the 8-wide one, -DRS_TRACE_PACKET=W for packets of W rays; the define of
+ * -DRS_TRACE_WIDE8 for the 8-wide one, -DRS_TRACE_PACKET=W for packets of W rays, -DRS_TRACE_STREAM
+ * for streams; the define of
  * each class is its row of host/trace/trace_class.cpp), so a run compiles only the kernels it
  * launches. */
-#if !defined(RS_TRACE_BINARY) && !defined(RS_TRACE_PACKET) && !defined(RS_TRACE_WIDE8)
+#if !defined(RS_TRACE_BINARY) && !defined(RS_TRACE_PACKET) && !defined(RS_TRACE_WIDE8) && !defined(RS_TRACE_STREAM)
 /* The 4-wide BVH (the default layout). */
 #define NODE RsWideNode
 #define LEAF RsTriPacket
@@ -80,6 +86,36 @@ RS_TRACE_KERNELS(_wide8, RS_WIDE8_FAST)
 RS_TRACE_KERNELS(_wide8_robust, RS_WIDE8_ROBUST)
 #undef NODE
 #undef LEAF
+
+#elif defined(RS_TRACE_STREAM)
+/* Ray streams over the 8-wide BVH (traverse_stream.h): work-item s traces rays
+ * [s * RS_STREAM_RAYS, (s + 1) * RS_STREAM_RAYS) of the order node by node, each ray alone against a
+ * node's eight boxes (the stream class). */
+#define RS_STREAM_KERNELS(SUFFIX, ROBUST)                                                                     \
+  __kernel void trace_closest_stream##SUFFIX(__global const RsWide8Node* nodes, __global const RsTriPacket8* tris, \
+                                             __global const RsRay* rays, __global const uint* order,          \
+                                             uint count, __global RsHit* hits) {                              \
+    const uint first = get_global_id(0) * RS_STREAM_RAYS;                                                    \
+    if (first >= count) return;                                                                               \
+    rs_traverse_stream(nodes, tris, rays, order, first, count, ROBUST, 0, hits, 0);                           \
+  }                                                                                                           \
+  __kernel void trace_any_stream##SUFFIX(__global const RsWide8Node* nodes, __global const RsTriPacket8* tris,   \
+                                         __global const RsRay* rays, __global const uint* order, uint count,  \
+                                         __global RsHit* hits) {                                              \
+    const uint first = get_global_id(0) * RS_STREAM_RAYS;                                                    \
+    if (first >= count) return;                                                                               \
+    rs_traverse_stream(nodes, tris, rays, order, first, count, ROBUST, 1, hits, 0);                           \
+  }                                                                                                           \
+  __kernel void trace_closest_counted_stream##SUFFIX(__global const RsWide8Node* nodes,                        \
+                                                     __global const RsTriPacket8* tris, __global const RsRay* rays, \
+                                                     __global const uint* order, uint count,                  \
+                                                     __global RsHit* hits, __global uint* visits) {           \
+    const uint first = get_global_id(0) * RS_STREAM_RAYS;                                                    \
+    if (first >= count) return;                                                                               \
+    rs_traverse_stream(nodes, tris, rays, order, first, count, ROBUST, 0, hits, visits);                      \
+  }
+RS_STREAM_KERNELS(, 0)
+RS_STREAM_KERNELS(_robust, 1)
 
 #elif defined(RS_TRACE_PACKET)
 /* Ray packets over the 4-wide BVH (traverse_packet.h): work-item p traces rays

@@ -33,6 +33,7 @@
 #define rsw_traverse_subtree rs_traverse_wide_subtree
 #define rsw_traverse_recorded rs_traverse_wide_recorded
 #define rsw_traverse rs_traverse_wide
+#define rsw_leaf rs_wide_leaf
 #elif RS_WIDE_W == 8
 #define rsw_f rs_f8
 #define rsw_i rs_i8
@@ -55,6 +56,7 @@
 #define rsw_traverse_subtree rs_traverse_wide8_subtree
 #define rsw_traverse_recorded rs_traverse_wide8_recorded
 #define rsw_traverse rs_traverse_wide8
+#define rsw_leaf rs_wide8_leaf
 #else
 #error "RS_WIDE_W must be 4 or 8 (traverse_wide.h, traverse_wide8.h)"
 #endif
@@ -217,6 +219,38 @@ RS_INLINE int rsw_intersect_robust(const RsRobustRay* r, const float* d, RS_GLOB
   return bits;
 }
 
+/* The triangle packets of the leaf `ref` against one ray: hit becomes the closest hit so far (the
+ * lane of smallest t below hit->t, ties by lane). Any hit (any_hit = 1) stops at the first packet
+ * with a hit and returns 1; otherwise returns 0. */
+RS_INLINE int rsw_leaf(RS_GLOBAL const RsWPacket* packets, rs_u32 ref, RsTraversalRay r, const RsRobustRay* rr,
+                       const float* d, int robust, int any_hit, RsHit* hit) {
+  const rs_u32 first = (ref & ~RS_WIDE_LEAF) >> 2, end = first + (ref & 3u) + 1u;
+  for (rs_u32 pi = first; pi < end; ++pi) {
+    rsw_f tw, uw, vw;
+    const int bits = robust ? rsw_intersect_robust(rr, d, &packets[pi], hit->t, &tw, &uw, &vw)
+                            : rsw_intersect(r, &packets[pi], hit->t, &tw, &uw, &vw);
+    if (!bits) continue;
+    float ts[RS_WIDE_W], us[RS_WIDE_W], vs[RS_WIDE_W];
+    rsw_store(tw, ts);
+    rsw_store(uw, us);
+    rsw_store(vw, vs);
+    int best = -1;
+    float best_t = hit->t;
+    for (int i = 0; i < RS_WIDE_W; ++i)
+      if (((bits >> i) & 1) && ts[i] < best_t) {
+        best_t = ts[i];
+        best = i;
+      }
+    if (best < 0) continue; /* every hit lane rounded onto the closest t so far: nothing nearer */
+    hit->t = best_t;
+    hit->tri = packets[pi].id[best];
+    hit->u = us[best];
+    hit->v = vs[best];
+    if (any_hit) return 1;
+  }
+  return 0;
+}
+
 /* Closest hit (any_hit = 0) or first hit found (any_hit = 1), fast (robust = 0) or robust
  * (robust = 1), on the RS_WIDE_W-wide BVH. Nearest child first: a node's hit children are ordered
  * by entry distance (ties by lane), the nearest is visited next and the others pushed with their
@@ -298,35 +332,8 @@ RS_INLINE RsHit rsw_traverse_subtree(RS_GLOBAL const RsWNode* nodes, RS_GLOBAL c
         ref = refs[0];
         continue;
       }
-    } else {
-      const rs_u32 first = (ref & ~RS_WIDE_LEAF) >> 2, end = first + (ref & 3u) + 1u;
-      for (rs_u32 pi = first; pi < end; ++pi) {
-        rsw_f tw, uw, vw;
-        const int bits = robust ? rsw_intersect_robust(&rr, ray.d, &packets[pi], hit.t, &tw, &uw, &vw)
-                                : rsw_intersect(r, &packets[pi], hit.t, &tw, &uw, &vw);
-        if (!bits) continue;
-        float ts[RS_WIDE_W], us[RS_WIDE_W], vs[RS_WIDE_W];
-        rsw_store(tw, ts);
-        rsw_store(uw, us);
-        rsw_store(vw, vs);
-        int best = -1;
-        float best_t = hit.t;
-        for (int i = 0; i < RS_WIDE_W; ++i)
-          if (((bits >> i) & 1) && ts[i] < best_t) {
-            best_t = ts[i];
-            best = i;
-          }
-        if (best < 0) continue; /* every hit lane rounded onto the closest t so far: nothing nearer */
-        hit.t = best_t;
-        hit.tri = packets[pi].id[best];
-        hit.u = us[best];
-        hit.v = vs[best];
-        if (any_hit) {
-          live = 0;
-          break;
-        }
-      }
-      if (!live) break;
+    } else if (rsw_leaf(packets, ref, r, &rr, ray.d, robust, any_hit, &hit)) {
+      break; /* any hit: found */
     }
     /* Next: the nearest pending subtree that can still hold a closer hit. */
     live = 0;
@@ -379,3 +386,4 @@ RS_INLINE RsHit rsw_traverse(RS_GLOBAL const RsWNode* nodes, RS_GLOBAL const RsW
 #undef rsw_traverse_subtree
 #undef rsw_traverse_recorded
 #undef rsw_traverse
+#undef rsw_leaf

@@ -2,8 +2,8 @@
 # NVIDIA build check without a GPU (issue 19, item 4): compiles every kernel file in cl/ for
 # nvptx64-nvidia-nvcl (NVIDIA's OpenCL) with clang-15 and libclc, as OpenCL C 1.2, with the options
 # and -D defines the host passes at run time (host/runtime/runtime.cpp build_options, and each
-# rt.build() call: trace.cl for every trace class (-DRS_TRACE_BINARY, -DRS_TRACE_WIDE8, -DRS_TRACE_PACKET=W with and
-# without -DRS_PACKET_SINGLE_AT), radix_sort.cl in both shapes and
+# rt.build() call: trace.cl for every trace class (-DRS_TRACE_BINARY, -DRS_TRACE_WIDE8, -DRS_TRACE_STREAM,
+# -DRS_TRACE_PACKET=W with and without -DRS_PACKET_SINGLE_AT), radix_sort.cl in both shapes and
 # key widths). Fails on any error, on any warning (except libclc's triple spelling, below), and on
 # any function the PTX declares but does not define (.extern .func: a builtin libclc lacks, or one
 # only x86 has). Prints each kernel's local (stack) memory from the PTX's __local_depot sizes.
@@ -44,6 +44,7 @@ CPU_SORT="-DRS_RADIX_BITS=8 -DRS_WG=1 -DRS_MAX_ITEMS=8 -DRS_SCAN_WG=1"
 BUILDS=(
   "trace-wide|cl/trace.cl|"
   "trace-wide8|cl/trace.cl|-DRS_TRACE_WIDE8"
+  "trace-stream|cl/trace.cl|-DRS_TRACE_STREAM"
   "trace-binary|cl/trace.cl|-DRS_TRACE_BINARY"
   "trace-packet4|cl/trace.cl|-DRS_TRACE_PACKET=4"
   "trace-packet8|cl/trace.cl|-DRS_TRACE_PACKET=8"

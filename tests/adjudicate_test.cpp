@@ -102,7 +102,8 @@ TEST(ExactOracle, RobustHasNoWrongAnswerOnTheRecordedDisagreements) {
       const std::vector<RsRay> rays = rays_from_json(batch.at("rays"));
       const bool any_hit = batch.at("any_hit").get<bool>();
       for (TraceLayout layout :
-           {TraceLayout::Wide, TraceLayout::Wide8, TraceLayout::Binary, TraceLayout::Packet8, TraceLayout::Packet16}) {
+           {TraceLayout::Wide, TraceLayout::Wide8, TraceLayout::Binary, TraceLayout::Packet8, TraceLayout::Packet16,
+            TraceLayout::Stream}) {
         const auto host = trace_reference(p.bvh, rays, nullptr, any_hit, nullptr, TraceVariant::Robust, layout);
         const auto dev =
             Tracer(raysort::testing::runtime(), p.bvh, TraceVariant::Robust, layout).run(rays, nullptr, any_hit).hits;

@@ -182,11 +182,12 @@ TEST(Trace, WideAndBinaryLayoutsAgree) {
     }
   }
 }
-// The packet and hybrid classes (cl/traverse_packet.h): each kernel equals its host twin bit for bit, hits and
-// per-ray step counts, with packets formed from a shuffled order and a batch whose size is no
-// multiple of the width (a partial last packet); and every ray's hit equals the single-ray wide
-// traversal's up to ties (another triangle at exactly the same t), as between the wide and binary
-// classes. Shadow rays: the same occluded / free answer.
+// The packet and hybrid classes (cl/traverse_packet.h) and the stream class (cl/traverse_stream.h):
+// each kernel equals its host twin bit for bit, hits and per-ray step counts, with packets (streams)
+// formed from a shuffled order and a batch whose size is no multiple of the width (a partial last
+// packet); and every ray's hit equals the single-ray wide traversal's up to ties (another triangle
+// at exactly the same t), as between the wide and binary classes. Shadow rays: the same occluded /
+// free answer.
 TEST(Trace, PacketKernelsEqualTheirHostTwinAndSingleRays) {
   Scene scene = load_scene("detail-room", {"", {64, 36, 0}});
   Scene::Flat tris = scene.flatten();
@@ -195,7 +196,7 @@ TEST(Trace, PacketKernelsEqualTheirHostTwinAndSingleRays) {
   ASSERT_GE(batches.size(), 3u);
   Runtime& rt = testing::runtime();
   for (TraceLayout layout : {TraceLayout::Packet4, TraceLayout::Packet8, TraceLayout::Packet16, TraceLayout::Hybrid8,
-                             TraceLayout::Hybrid16}) {
+                             TraceLayout::Hybrid16, TraceLayout::Stream}) {
     for (TraceVariant v : {TraceVariant::Fast, TraceVariant::Robust}) {
       Tracer packet(rt, bvh, v, layout);
       ASSERT_EQ(packet.layout(), layout);
@@ -332,7 +333,11 @@ TEST(Trace, TraceClassNames) {
   EXPECT_EQ(resolve_trace_layout(TraceLayout::Hybrid, avx512), TraceLayout::Hybrid16);
   EXPECT_EQ(resolve_trace_layout(TraceLayout::Hybrid, gpu), TraceLayout::Hybrid8);
   EXPECT_EQ(parse_trace_layouts("wide,packet8,wide").size(), 2u);
-  EXPECT_EQ(parse_trace_layouts("all").size(), 8u);  // every class but the unresolved packet and hybrid
+  EXPECT_EQ(parse_trace_layouts("all").size(), 9u);  // every class but the unresolved packet and hybrid
+  EXPECT_EQ(packet_width(TraceLayout::Stream), 32);
+  EXPECT_EQ(tree_width(TraceLayout::Stream), 8);
+  EXPECT_TRUE(is_stream(TraceLayout::Stream));
+  EXPECT_FALSE(is_stream(TraceLayout::Packet16));
   EXPECT_EQ(packet_width(TraceLayout::Wide8), 1);
   EXPECT_EQ(tree_width(TraceLayout::Wide8), 8);
   EXPECT_EQ(tree_width(TraceLayout::Wide), 4);

@@ -9,29 +9,31 @@ namespace raysort {
 
 namespace {
 
-// The trace classes, once: name, rays per work-item, the hybrids' switch, the branching factor of
-// the tree walked, the kernel build's define and the kernels' name suffix (cl/trace.cl).
-// The hybrids switch to single rays at a quarter of the packet's lanes.
+// The trace classes, once: name, rays per work-item, the hybrids' switch, whether the rays walk as a
+// stream, the branching factor of the tree walked, the kernel build's define and the kernels' name
+// suffix (cl/trace.cl). The hybrids switch to single rays at a quarter of the packet's lanes.
 struct TraceClass {
   TraceLayout layout;
   const char* name;
   int width;
   int single_at;
+  bool stream;
   int tree;
   const char* define;
   const char* suffix;
 };
 constexpr TraceClass kTraceClasses[] = {
-    {TraceLayout::Wide, "wide", 1, 0, 4, "", ""},
-    {TraceLayout::Wide8, "wide8", 1, 0, 8, "-DRS_TRACE_WIDE8", "_wide8"},
-    {TraceLayout::Binary, "binary", 1, 0, 2, "-DRS_TRACE_BINARY", "_binary"},
-    {TraceLayout::Packet4, "packet4", 4, 0, 4, "-DRS_TRACE_PACKET=4", "_packet"},
-    {TraceLayout::Packet8, "packet8", 8, 0, 4, "-DRS_TRACE_PACKET=8", "_packet"},
-    {TraceLayout::Packet16, "packet16", 16, 0, 4, "-DRS_TRACE_PACKET=16", "_packet"},
-    {TraceLayout::Packet, "packet", 0, 0, 4, "", ""},
-    {TraceLayout::Hybrid8, "hybrid8", 8, 2, 4, "-DRS_TRACE_PACKET=8 -DRS_PACKET_SINGLE_AT=2", "_packet"},
-    {TraceLayout::Hybrid16, "hybrid16", 16, 4, 4, "-DRS_TRACE_PACKET=16 -DRS_PACKET_SINGLE_AT=4", "_packet"},
-    {TraceLayout::Hybrid, "hybrid", 0, 0, 4, "", ""},
+    {TraceLayout::Wide, "wide", 1, 0, false, 4, "", ""},
+    {TraceLayout::Wide8, "wide8", 1, 0, false, 8, "-DRS_TRACE_WIDE8", "_wide8"},
+    {TraceLayout::Binary, "binary", 1, 0, false, 2, "-DRS_TRACE_BINARY", "_binary"},
+    {TraceLayout::Packet4, "packet4", 4, 0, false, 4, "-DRS_TRACE_PACKET=4", "_packet"},
+    {TraceLayout::Packet8, "packet8", 8, 0, false, 4, "-DRS_TRACE_PACKET=8", "_packet"},
+    {TraceLayout::Packet16, "packet16", 16, 0, false, 4, "-DRS_TRACE_PACKET=16", "_packet"},
+    {TraceLayout::Packet, "packet", 0, 0, false, 4, "", ""},
+    {TraceLayout::Hybrid8, "hybrid8", 8, 2, false, 4, "-DRS_TRACE_PACKET=8 -DRS_PACKET_SINGLE_AT=2", "_packet"},
+    {TraceLayout::Hybrid16, "hybrid16", 16, 4, false, 4, "-DRS_TRACE_PACKET=16 -DRS_PACKET_SINGLE_AT=4", "_packet"},
+    {TraceLayout::Hybrid, "hybrid", 0, 0, false, 4, "", ""},
+    {TraceLayout::Stream, "stream", 32, 0, true, 8, "-DRS_TRACE_STREAM", "_stream"},
 };
 
 const TraceClass& trace_class(TraceLayout l) {
@@ -79,6 +81,8 @@ std::vector<TraceLayout> parse_trace_layouts(const std::string& list) {
 int packet_width(TraceLayout l) { return trace_class(l).width; }
 
 int packet_single_at(TraceLayout l) { return trace_class(l).single_at; }
+
+bool is_stream(TraceLayout l) { return trace_class(l).stream; }
 
 int tree_width(TraceLayout l) { return trace_class(l).tree; }
 

@@ -14,22 +14,26 @@ namespace raysort {
 // layout gains). PacketN: N consecutive rays of the order per work-item over the 4-wide tree, one
 // ray per vector lane (cl/traverse_packet.h). HybridN: the same packets, but a subtree that at most
 // N/4 lanes reach is walked by each of them alone (single rays). Packet, Hybrid: the width the device
-// prefers, resolved by resolve_trace_layout before anything runs.
-enum class TraceLayout { Wide, Wide8, Binary, Packet4, Packet8, Packet16, Packet, Hybrid8, Hybrid16, Hybrid };
+// prefers, resolved by resolve_trace_layout before anything runs. Stream: 32 consecutive rays of the
+// order per work-item over the 8-wide collapse, node by node, each ray tested alone against a
+// node's eight boxes (cl/traverse_stream.h): the rays share each node's fetch.
+enum class TraceLayout { Wide, Wide8, Binary, Packet4, Packet8, Packet16, Packet, Hybrid8, Hybrid16, Hybrid, Stream };
 
 // The classes' names, in the order help and errors list them: wide, wide8, binary, packet4, packet8,
-// packet16, packet, hybrid8, hybrid16, hybrid. parse throws an Error naming the accepted values.
+// packet16, packet, hybrid8, hybrid16, hybrid, stream. parse throws an Error naming the accepted values.
 const std::vector<std::string>& trace_layout_names();
 TraceLayout parse_trace_layout(std::string_view name);
 const char* trace_layout_name(TraceLayout l);
 // A command line's class list: "wide,packet" (in that order, repeats dropped), or "all" for every
 // class but the unresolved packet. Throws Error naming an unknown class.
 std::vector<TraceLayout> parse_trace_layouts(const std::string& list);
-// Rays per work-item: 1 for the single-ray classes, N for PacketN and HybridN (0 for the unresolved
-// Packet and Hybrid).
+// Rays per work-item: 1 for the single-ray classes, N for PacketN and HybridN, 32 for Stream (0 for
+// the unresolved Packet and Hybrid).
 int packet_width(TraceLayout l);
 // The hybrid's switch: a subtree reached by at most this many lanes is walked by each alone (0: never).
 int packet_single_at(TraceLayout l);
+// The class walks ray streams (cl/traverse_stream.h), not packets in vector lanes.
+bool is_stream(TraceLayout l);
 // Packet (Hybrid) becomes the packet (hybrid) class of a device's preferred float vector width
 // (16 on AVX-512, 8 on AVX; packets: else 4, hybrids: else 8); every other class is returned as it is.
 // trace/tracer.h has the overload that takes the device.

@@ -6,6 +6,7 @@
 #include <thread>
 
 #include "trace/packet_twin.h"
+#include "trace/stream_twin.h"
 #include "traverse_binary.h"
 #include "traverse_wide.h"
 #include "traverse_wide8.h"
@@ -136,6 +137,10 @@ std::vector<RsHit> trace_reference(const Bvh& bvh, const std::vector<RsRay>& ray
   const WideBvh& wide = walks_wide_tree(layout) ? wide_of(bvh, scratch) : scratch;
   const Wide8Bvh wide8 = tree_width(layout) == 8 ? collapse_to_wide8(bvh) : Wide8Bvh{};
   const int robust = variant == TraceVariant::Robust ? 1 : 0;
+  if (is_stream(layout)) {
+    trace_streams_on_host(wide8, rays, order, robust, any_hit ? 1 : 0, hits, node_visits ? node_visits->data() : nullptr);
+    return hits;
+  }
   if (const int width = packet_width(layout); width > 1) {
     trace_packets_on_host(width, packet_single_at(layout), wide, rays, order, robust, any_hit ? 1 : 0, hits,
                           node_visits ? node_visits->data() : nullptr);

@@ -1,0 +1,137 @@
+/* raysort — ray-stream traversal of the 8-wide BVH: RS_STREAM_RAYS (32) consecutive rays of the
+ * batch's order walk the tree together, node by node, each ray tested alone against a node's eight
+ * child boxes (docs/trace.md, "Trace classes"). The scheme is the ray-stream traversal of
+ * Fuetterling, Lojewski, Pfreundt and Ebert (HPG 2015, "Efficient Ray Tracing Kernels for Modern
+ * CPU Architectures"), what Embree's incoherent streams (rtcIntersect1M / rtcOccluded1M) run: the
+ * SIMD lanes hold a node's children, as in the single-ray wide8 class, and the stream's rays share
+ * the node's fetch. So a node costs one memory access for every ray of the stream that reaches it,
+ * and the order of the rays decides how many of them reach the same nodes: on a CPU this is the
+ * memory side of a warp's coherence, as the packet classes are its SIMD side.
+ *
+ * - A node is visited with the mask of the stream's rays that entered it (a bit per ray). Each of
+ *   those rays runs the wide8 class's slab test (rs_wide8_boxes / rs_wide8_boxes_robust) with its
+ *   own closest hit so far as the far bound; a child is entered with the rays that hit its box.
+ * - Children nearest first by the smallest entry distance among their rays (ties by slot); any hit
+ *   keeps slot order. The others are pushed with their ray masks.
+ * - Leaves: each ray of the mask tests the leaf's triangle packets as the wide8 class does
+ *   (rs_wide8_leaf: Möller–Trumbore or the watertight test on eight triangles at once); any hit: a
+ *   ray that finds one leaves the stream, which ends when no ray is left.
+ * Per ray the arithmetic is that of the wide8 class, so a triangle is hit or missed as there; only
+ * the order in which a ray meets the nodes of its path differs (its stream's companions decide
+ * it), so which of two equally near triangles it keeps may differ. Steps per ray: the nodes and
+ * leaves at which it was in the mask.
+ * Stack: a node pushes at most seven children and the 8-wide tree is at most 22 deep
+ * (RS_WIDE8_STACK_SIZE entries of reference and ray mask).
+ */
+#ifndef RAYSORT_TRAVERSE_STREAM_H
+#define RAYSORT_TRAVERSE_STREAM_H
+
+#include "traverse_wide8.h"
+
+/* Rays per stream: one bit each in a 32-bit mask. */
+#define RS_STREAM_RAYS 32
+
+/* Traces rays[order[first + i]], i < RS_STREAM_RAYS (and first + i < count), as one stream into
+ * hits[first + i]: closest hit (any_hit = 0) or any hit, fast (robust = 0) or robust. visits, when
+ * not null, receives per ray its steps. */
+RS_INLINE void rs_traverse_stream(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBAL const RsTriPacket8* packets,
+                                  RS_GLOBAL const RsRay* rays, RS_GLOBAL const rs_u32* order, rs_u32 first,
+                                  rs_u32 count, int robust, int any_hit, RS_GLOBAL RsHit* hits,
+                                  RS_GLOBAL rs_u32* visits) {
+  RsRay ray[RS_STREAM_RAYS];
+  RsTraversalRay tr[RS_STREAM_RAYS];
+  RsRobustRay rr[RS_STREAM_RAYS];
+  RsHit hit[RS_STREAM_RAYS];
+  rs_u32 steps[RS_STREAM_RAYS];
+  rs_u32 live = 0; /* rays still looking (any hit: those without one yet) */
+  for (int i = 0; i < RS_STREAM_RAYS; ++i) {
+    steps[i] = 0;
+    if (first + (rs_u32)i >= count) continue;
+    ray[i] = rays[order[first + (rs_u32)i]];
+    hit[i] = rs_miss(ray[i].tmax);
+    if (robust) {
+      rr[i] = rs_prepare_robust_ray(ray[i]);
+      if (!rr[i].valid) continue; /* a zero or non-finite direction hits nothing */
+    } else {
+      tr[i] = rs_prepare_ray(ray[i]);
+    }
+    live |= 1u << i;
+  }
+  rs_u32 stack[RS_WIDE8_STACK_SIZE];
+  rs_u32 stack_rays[RS_WIDE8_STACK_SIZE];
+  int sp = 0;
+  rs_u32 ref = 0; /* the root is always an inner node */
+  rs_u32 m = live;
+  while (m) {
+    if (visits)
+      for (rs_u32 rest = m; rest; rest &= rest - 1) ++steps[rs_lowest_bit_u(rest)];
+    if (!(ref & RS_WIDE_LEAF)) {
+      RS_GLOBAL const RsWide8Node* n = &nodes[ref];
+      /* Each ray of the mask against the eight boxes; per child, its rays and their nearest entry. */
+      rs_u32 child_rays[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+      rs_f8 nearest = rs8_splat(3.4028235e38f);
+      int entered = 0;
+      for (rs_u32 rest = m; rest; rest &= rest - 1) {
+        const int i = rs_lowest_bit_u(rest);
+        rs_f8 tnear;
+        const rs_i8 h = robust ? rs_wide8_boxes_robust(&rr[i], n, hit[i].t, &tnear)
+                               : rs_wide8_boxes(tr[i], n, hit[i].t, &tnear);
+        const int bits = rs8_bits(h);
+        if (!bits) continue;
+        entered |= bits;
+        nearest = rs8_min(nearest, rs8_select(rs8_splat(3.4028235e38f), tnear, h));
+        for (int b = bits; b; b &= b - 1) child_rays[rs_lowest_bit(b)] |= 1u << i;
+      }
+      if (entered) {
+        float dist[8];
+        rs8_store(nearest, dist);
+        rs_u32 refs[8], masks[8];
+        float keys[8];
+        int k = 0;
+        for (int b = entered; b; b &= b - 1) {
+          const int c = rs_lowest_bit(b);
+          const float key = any_hit ? 0.0f : dist[c];
+          int j = k++;
+          for (; j > 0 && keys[j - 1] > key; --j) {
+            keys[j] = keys[j - 1];
+            refs[j] = refs[j - 1];
+            masks[j] = masks[j - 1];
+          }
+          keys[j] = key;
+          refs[j] = n->child[c];
+          masks[j] = child_rays[c];
+        }
+        for (int j = k - 1; j > 0; --j) {
+          stack[sp] = refs[j];
+          stack_rays[sp] = masks[j];
+          ++sp;
+        }
+        ref = refs[0];
+        m = masks[0];
+        continue;
+      }
+    } else {
+      for (rs_u32 rest = m; rest; rest &= rest - 1) {
+        const int i = rs_lowest_bit_u(rest);
+        if (rs_wide8_leaf(packets, ref, tr[i], &rr[i], ray[i].d, robust, any_hit, &hit[i])) live &= ~(1u << i);
+      }
+    }
+    /* Next: the nearest pending subtree with a ray still looking. */
+    m = 0;
+    while (sp > 0) {
+      --sp;
+      m = stack_rays[sp] & live;
+      if (m) {
+        ref = stack[sp];
+        break;
+      }
+    }
+  }
+  for (int i = 0; i < RS_STREAM_RAYS; ++i) {
+    if (first + (rs_u32)i >= count) break;
+    hits[first + (rs_u32)i] = hit[i];
+    if (visits) visits[first + (rs_u32)i] = steps[i];
+  }
+}
+
+#endif /* RAYSORT_TRAVERSE_STREAM_H */
