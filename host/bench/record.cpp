@@ -246,16 +246,6 @@ void from_json(const nlohmann::json& j, CellRecord& r) {
   timing_from_json(j, "nosort_trace", r.nosort_trace);
 }
 
-std::string fnv1a_hex(const void* data, std::size_t bytes) {
-  std::uint64_t h = 0xcbf29ce484222325ull;
-  auto p = static_cast<const unsigned char*>(data);
-  for (std::size_t i = 0; i < bytes; ++i) {
-    h ^= p[i];
-    h *= 0x100000001b3ull;
-  }
-  return fmt::format("{:016x}", h);
-}
-
 namespace {
 
 // An empty CSV field for a missing figure (no interval).

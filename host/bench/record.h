@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "bench/protocol.h"
+#include "util/fnv.h"  // keys_hash and order_hash are FNV-1a
 
 namespace raysort {
 
@@ -143,9 +144,6 @@ struct CellRecord {
 
 void to_json(nlohmann::json& j, const CellRecord& r);
 void from_json(const nlohmann::json& j, CellRecord& r);
-
-// FNV-1a 64 over raw bytes, as 16 hex digits.
-std::string fnv1a_hex(const void* data, std::size_t bytes);
 
 // Why a record read from disk cannot be a cell this raysort wrote, or "" when it can: a status
 // outside the vocabulary (ok, failed, timeout), a negative or non-finite time or count, a trace
