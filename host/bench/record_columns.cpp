@@ -65,7 +65,7 @@ struct ColumnMaker {
       const O* o = has(r);
       return !o ? std::string() : q ? quoted(get(*o)) : get(*o);
     };
-    out.push_back({column_name(prefix, f.column, ""), CellColumn::Text, csv, nullptr, nullptr, std::move(vocabulary)});
+    out.push_back({column_name(prefix, column_stem(f), ""), CellColumn::Text, csv, nullptr, nullptr, std::move(vocabulary)});
   }
 
   // A number (decimals >= 0) or a count (decimals < 0: written as an integer); `estimate` gives
@@ -85,7 +85,7 @@ struct ColumnMaker {
       const O* o = has(r);
       return !o ? point(kNaN) : estimate ? estimate(r, *o) : point(get(r, *o));
     };
-    out.push_back({column_name(prefix, f.column, suffix), CellColumn::Number, csv, value, weighed, {}});
+    out.push_back({column_name(prefix, column_stem(f), suffix), CellColumn::Number, csv, value, weighed, {}});
   }
 
   template <class T>

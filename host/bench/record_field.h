@@ -41,8 +41,10 @@ struct Field {
   // from them); a derived figure; or a group.
   using Member = std::variant<std::string O::*, bool O::*, unsigned O::*, std::uint64_t O::*, double O::*,
                               Estimate O::*, Timing O::*, Series O::*, DerivedText<O>, DerivedRate, Group>;
-  std::string json;    // its key in its JSON object
-  std::string column;  // its cells.csv column and compare metric; the stem of an Estimate's or Timing's columns
+  std::string json;  // its key in its JSON object
+  // Its cells.csv column and compare metric (the stem of an Estimate's or a Timing's columns):
+  // empty, the same as json; kNoStem, none (column_stem).
+  std::string column = "";
   Member member;
   Absent absent = Absent::Never;
   Timing O::*samples_of = nullptr;  // Absent::WithoutSamples: the timing whose samples it needs
@@ -57,6 +59,16 @@ struct Field {
   const std::vector<std::string>& (*vocabulary)() = nullptr;
   bool quoted = false;                       // cells.csv: quoted, as free text (the error)
 };
+
+// A Field::column for no stem at all: an Embree path's sorted-arm timing, whose columns are the
+// path's own (embree_<path>_ms, embree_<path>_lo_ms, ...).
+inline constexpr const char* kNoStem = "-";
+
+// The stem of a field's cells.csv columns (Field::column).
+template <class O>
+std::string column_stem(const Field<O>& f) {
+  return f.column.empty() ? f.json : f.column == kNoStem ? std::string() : f.column;
+}
 
 // Whether a field of `owner` has no value (Field::absent).
 template <class O>
