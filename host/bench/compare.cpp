@@ -3,7 +3,6 @@
 #include <fmt/format.h>
 
 #include <cmath>
-#include <limits>
 #include <functional>
 #include <map>
 #include <optional>
@@ -19,80 +18,32 @@ namespace {
 using Getter = std::function<std::string(const CellRecord&)>;
 using Number = std::function<Estimate(const CellRecord&)>;
 
-// rays / time: the interval of a rate is the rate at the time interval's ends.
-Estimate mrays_of(std::uint64_t rays, const Timing& timing, double value) {
-  const Estimate t = timing.estimate();
-  const double r = static_cast<double>(rays) * 1e-3;
-  Estimate e{value, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN(), t.n};
-  if (t.has_interval() && t.lo > 0) e.lo = r / t.hi, e.hi = r / t.lo;
-  return e;
-}
-Estimate mrays(const CellRecord& c) { return mrays_of(c.rays, c.trace, c.trace_mrays); }
-Estimate exact(double v) { return {v, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN(), 0}; }
-
-const std::map<std::string, Number>& numeric_metrics() {
-  static const std::map<std::string, Number> m = {
-      {"trace_mrays", mrays},
-      {"speedup", [](const CellRecord& c) { return c.speedup; }},
-      {"net_speedup", [](const CellRecord& c) { return c.net_speedup; }},
-      {"overhead_pct", [](const CellRecord& c) { return c.overhead_pct; }},
-      {"aa", [](const CellRecord& c) { return c.aa; }},
-      {"encode_ms", [](const CellRecord& c) { return c.encode.estimate(); }},
-      {"sort_ms", [](const CellRecord& c) { return c.sort.estimate(); }},
-      {"permute_ms", [](const CellRecord& c) { return c.permute.estimate(); }},
-      {"trace_ms", [](const CellRecord& c) { return c.trace.estimate(); }},
-      {"nosort_trace_ms", [](const CellRecord& c) { return c.nosort_trace.estimate(); }},
-  };
-  return m;
-}
-
-// Every metric: the timed figures above with their intervals, then every other column of
-// cells.csv (record.h, cell_columns): numbers as exact values, text (status, flags, hashes...) as is.
+// A metric is a column of cells.csv (bench/record_columns.h): a number with the interval it has
+// (an estimate, a timing, a rate of a timing; exact otherwise), or text (status, flags, hashes...)
+// as is.
 struct Metric {
   bool numeric = true;
   Number number;
   Getter text;
   const std::vector<std::string>* vocabulary = nullptr;
 };
-// An Embree path's timed figures with their intervals (record.h, embree_columns): the speedup,
-// each arm's median ms and MRays/s. Null for any other name.
-Number embree_metric(const std::string& name) {
-  if (!name.starts_with("embree_") || !find_cell_column(name)) return nullptr;
-  for (const char* field : {"_speedup", "_nosort_ms", "_ms", "_nosort_mrays", "_mrays"}) {
-    if (!name.ends_with(field)) continue;
-    const std::string path = name.substr(7, name.size() - 7 - std::string(field).size()), f = field;
-    return [path, f](const CellRecord& c) {
-      const CellRecord::EmbreeFigures* e = c.embree_path(path);
-      if (!e) return exact(std::numeric_limits<double>::quiet_NaN());
-      if (f == "_speedup") return e->trace.n > 0 ? e->speedup : exact(std::numeric_limits<double>::quiet_NaN());
-      const bool nosort = f.starts_with("_nosort");
-      const Timing& t = nosort ? e->nosort : e->trace;
-      if (t.n == 0) return exact(std::numeric_limits<double>::quiet_NaN());
-      if (f.ends_with("_ms")) return t.estimate();
-      return mrays_of(c.rays, t, t.median_ms > 0 ? static_cast<double>(c.rays) / (t.median_ms * 1e3) : 0.0);
-    };
-  }
-  return nullptr;
-}
 
 std::optional<Metric> find_metric(const std::string& name) {
-  if (auto it = numeric_metrics().find(name); it != numeric_metrics().end()) return Metric{true, it->second, {}, nullptr};
-  if (Number embree = embree_metric(name)) return Metric{true, embree, {}, nullptr};
   const CellColumn* col = find_cell_column(name);
   if (!col) return std::nullopt;
-  if (col->kind == CellColumn::Number) {
-    auto value = col->value;
-    return Metric{true, [value](const CellRecord& c) { return exact(value(c)); }, {}, nullptr};
-  }
+  if (col->kind == CellColumn::Number) return Metric{true, col->estimate, {}, nullptr};
   return Metric{false, {}, col->csv, &col->vocabulary};
 }
 
 std::string metric_names() {
   std::string names;
   for (auto& n : comparable_metrics()) names += (names.empty() ? "" : ", ") + n;
-  // Embree's columns, one set per path (run --embree-paths), by pattern rather than 63 names.
-  return names + ", and per Embree path embree_<path>_{speedup,speedup_lo,speedup_hi,ms,nosort_ms,mrays,nosort_mrays} "
-                 "(e.g. embree_16-coherent_speedup)";
+  // Embree's columns, one set per path (run --embree-paths), by pattern rather than every path's.
+  const std::string stem = "embree_<path>";
+  std::string embree;
+  for (const CellColumn& c : embree_columns("<path>"))
+    embree += (embree.empty() ? "" : ",") + (c.name == stem ? "" : c.name.substr(stem.size() + 1));
+  return names + fmt::format(", and per Embree path {}_{{{}}} (e.g. embree_16-coherent_speedup)", stem, embree);
 }
 
 // A number as a rule writes it: digits with at most one point ("5", "0.5", ".5", "5."), nothing else.
@@ -138,9 +89,7 @@ std::string shown(const Estimate& e) {
 
 std::vector<std::string> comparable_metrics() {
   std::vector<std::string> out;
-  for (auto& [k, v] : numeric_metrics()) out.push_back(k);
-  for (const auto& c : cell_columns())
-    if (!numeric_metrics().count(c.name)) out.push_back(c.name);
+  for (const auto& c : cell_columns()) out.push_back(c.name);
   return out;
 }
 

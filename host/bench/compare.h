@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/record_columns.h"
 #include "bench/result_set.h"
 
 namespace raysort {
@@ -16,10 +17,11 @@ namespace raysort {
 //   status!=ok        fail if a cell of B has another value (text columns)
 //   status==timeout   fail if a cell of B has this value (text columns)
 //   missing           fail if a cell of A is absent from B (or failed in B but not in A)
-// Every column of cells.csv is a metric (record.h, cell_columns); a text column whose values form
-// a closed set (status, stopped_by, the true/false flags) refuses a value outside it.
-// Significant (relative rules on timed figures: speedup, net_speedup, overhead_pct, aa,
-// trace_mrays and the stage times): the change passes the threshold even between the nearest ends
+// Every column of cells.csv is a metric (bench/record_columns.h, made from the record's field
+// table); a text column whose values form a closed set (status, stopped_by, the true/false flags)
+// refuses a value outside it.
+// Significant (relative rules on the figures with an interval: speedup, net_speedup, overhead_pct,
+// aa, trace_mrays, the stage times and Embree's): the change passes the threshold even between the nearest ends
 // of the two cells' 95 % intervals (speedup<-5%: B's upper end is more than 5 % below A's lower
 // end; with 0 % the intervals merely do not overlap), so a change inside the measurement noise does
 // not fire (docs/measurement.md, "Comparing result sets").
@@ -34,7 +36,7 @@ struct FailRule {
   std::string text;
 };
 
-// Metric names compare knows: the columns of cells.csv, and the timed figures with intervals.
+// Metric names compare knows: the columns of cells.csv (without an Embree path's).
 std::vector<std::string> comparable_metrics();
 
 struct CompareResult {

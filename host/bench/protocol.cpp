@@ -6,6 +6,8 @@
 #include <chrono>
 #include <numeric>
 
+#include "util/fnv.h"
+
 namespace raysort {
 
 std::string interval_text(const Estimate& e, int decimals) {
@@ -201,14 +203,7 @@ const char* stop_reason_name(StopReason r) {
   return "?";
 }
 
-std::uint64_t protocol_seed(const std::string& key) {
-  std::uint64_t h = 0xcbf29ce484222325ull;
-  for (unsigned char c : key) {
-    h ^= c;
-    h *= 0x100000001b3ull;
-  }
-  return h;
-}
+std::uint64_t protocol_seed(const std::string& key) { return fnv1a(key); }
 
 std::vector<std::size_t> round_order(std::size_t count, std::uint64_t seed, std::uint64_t round) {
   // SplitMix64 (Steele et al. 2014) on (seed, round): a fixed, portable stream per round.

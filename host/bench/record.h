@@ -1,16 +1,17 @@
 #pragma once
 // One record per benchmark cell (scene × batch × encoder × bits × variant × access): the single
 // record type behind every table, plot, CSV/JSON row and comparison (no figure is computed a
-// second way).
+// second way). How each field is written, read, tabulated and compared is data, in one table per
+// part of the record: bench/record_fields.h. A new field is a member here and a row there.
 #include <nlohmann/json.hpp>
 
 #include <cstdint>
-#include <functional>
 #include <limits>
 #include <string>
 #include <vector>
 
 #include "bench/protocol.h"
+#include "util/fnv.h"  // keys_hash and order_hash are FNV-1a
 
 namespace raysort {
 
@@ -25,7 +26,11 @@ namespace raysort {
 //      while their trace walked the wide one (docs/design.md, "SIMT model").
 //      Within version 3, the trace class became an axis (several per set): it is in the id when not
 //      wide (".../packet8"). Files written before name their cell without it and are still read.
-constexpr int kResultFormatVersion = 3;
+//   4: one way to write an absent field (bench/record_field.h, Absent): JSON null, the key always
+//      written. Version 3 wrote -1 for leaks_per_million, left out cut_ms, the "gpu_model" object,
+//      the "embree" list and an Embree path's sorted-arm figures, and may lack the keys added within
+//      it; such records read as before (bench/record_json.cpp). From version 4 every key is required.
+constexpr int kResultFormatVersion = 4;
 constexpr int kOldestReadableFormatVersion = 1;
 
 // The encoder name of the baseline cells (rays traced in generation order): encoder_name(NoSort).
@@ -95,20 +100,21 @@ struct CellRecord {
 
   // NoSort cells of a run with both trace variants: rays this variant misses that the other one
   // hits, per million rays (for the fast variant: its leaks through shared edges and vertices).
-  // -1 when not measured.
+  // -1 when not measured (absent: null in the file).
   double leaks_per_million = -1.0;
 
   // hcc-traffic, hcc-region and mlhcc-cost cells (issue 21): the host time, ms, of the per-batch
   // input (docs/measurement.md): counting the traffic or statistics it learns from, plus building
   // and uploading its cut or tables for this key length. Not part of encode (the kernel time) or of
-  // net_speedup. -1 (absent in JSON) for other cells.
+  // net_speedup. -1 for other cells (absent: null in the file).
   double cut_ms = -1.0;
 
   // Embree's paths on this cell's rays (`run --embree-paths`, docs/measurement.md "Embree on
   // sorted orders"): per path, Embree tracing the batch in NoSort order and, in a sorted cell, in
   // the cell's sorted order (gather: through the order; permute: the rays moved into sorted order
   // on the host first, outside the timed arm), both arms of the cell's own rounds, by wall clock.
-  // Empty (absent in JSON and CSV) when the run named no path: every older set reads so.
+  // Empty (an empty list in the file, no columns in cells.csv) when the run named no path: every
+  // older set reads so.
   struct EmbreeFigures {
     std::string path;      // its --embree-paths key: "16-coherent"
     std::string call;      // the call and flag it made on this batch: "rtcIntersect16 coherent"
@@ -144,9 +150,6 @@ struct CellRecord {
 void to_json(nlohmann::json& j, const CellRecord& r);
 void from_json(const nlohmann::json& j, CellRecord& r);
 
-// FNV-1a 64 over raw bytes, as 16 hex digits.
-std::string fnv1a_hex(const void* data, std::size_t bytes);
-
 // Why a record read from disk cannot be a cell this raysort wrote, or "" when it can: a status
 // outside the vocabulary (ok, failed, timeout), a negative or non-finite time or count, a trace
 // variant, access mode or stopping reason this raysort does not know.
@@ -155,35 +158,5 @@ inline const std::vector<std::string>& cell_statuses() {
   static const std::vector<std::string> s{"ok", "failed", "timeout"};
   return s;
 }
-
-// The columns of cells.csv, in order: the one list behind the CSV header, its rows and the
-// metrics `raysort compare` tabulates and checks rules on (every column is usable in a rule).
-struct CellColumn {
-  std::string name;
-  enum Kind { Number, Text } kind = Number;
-  std::function<std::string(const CellRecord&)> csv;  // the CSV field
-  std::function<double(const CellRecord&)> value;     // Number columns: the figure (NaN: none)
-  // Text columns whose values form a closed set (status, stopped_by, the true/false flags): a rule
-  // naming another value is refused. Empty: any value.
-  std::vector<std::string> vocabulary;
-};
-const std::vector<CellColumn>& cell_columns();
-// The columns of one Embree path's figures (CellRecord::embree), empty fields in a cell without
-// that path: embree_<path>_speedup, _speedup_lo, _speedup_hi (the sorted order's speedup of the
-// path), _ms and _nosort_ms (each arm's median), _mrays and _nosort_mrays. <path> is the
-// --embree-paths key as written ("embree_16-coherent_speedup", "embree_1M_ms").
-std::vector<CellColumn> embree_columns(const std::string& path);
-// The columns of a set of cells: cell_columns(), then embree_columns() of every Embree path the
-// cells hold, in the order the cells name them. Without Embree figures: cell_columns() exactly.
-std::vector<CellColumn> cell_columns_for(const std::vector<CellRecord>& cells);
-// A column by name: one of cell_columns(), or an Embree path's column of any path raysort knows
-// (kEmbreePaths), whether or not a set holds it.
-const CellColumn* find_cell_column(const std::string& name);
-
-// CSV header and row, in the order of `columns` (default: cell_columns()).
-std::string csv_header();
-std::string csv_row(const CellRecord& r);
-std::string csv_header(const std::vector<CellColumn>& columns);
-std::string csv_row(const CellRecord& r, const std::vector<CellColumn>& columns);
 
 }  // namespace raysort

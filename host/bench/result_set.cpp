@@ -7,6 +7,7 @@
 #include <set>
 
 #include "bench/plots.h"
+#include "bench/record_columns.h"
 #include "scene/provenance.h"
 #include "util/atomic_file.h"
 #include "util/error.h"

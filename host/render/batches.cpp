@@ -8,6 +8,7 @@
 
 #include "render/pathtrace.h"
 #include "util/error.h"
+#include "util/fnv.h"
 #include "util/text.h"
 
 namespace raysort {
@@ -31,8 +32,7 @@ std::vector<std::uint32_t> baseline_permutation(std::size_t n, const std::string
   std::vector<std::uint32_t> p(n);
   std::iota(p.begin(), p.end(), 0u);
   // FNV-1a of the batch name, so each batch of a frame gets its own permutation.
-  std::uint64_t h = 0xcbf29ce484222325ull;
-  for (unsigned char c : batch_name) h = (h ^ c) * 0x100000001b3ull;
+  const std::uint64_t h = fnv1a(batch_name);
   std::mt19937_64 rng(h ^ (std::uint64_t{seed} * 0x9e3779b97f4a7c15ull));
   for (std::size_t i = n; i > 1; --i) {
     // j uniform in [0, i - 1] (std::uniform_int_distribution differs between standard libraries).

@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "util/embedded.h"
+#include "util/fnv.h"
 #include "util/input_file.h"
 
 namespace raysort {
@@ -430,10 +431,9 @@ KernelProvenance kernel_provenance() {
   k.source = kernel_dir().empty() ? "embedded" : kernel_dir();
   if (const char* env = std::getenv("RAYSORT_CL_OPTIONS")) k.cl_options = env;
   // The embedded list names every kernel file; with --kernels each is read from the folder instead.
-  std::uint64_t h = 0xcbf29ce484222325ull;
+  std::uint64_t h = kFnv1aOffsetBasis;
   auto mix = [&h](std::string_view bytes) {
-    for (unsigned char c : bytes) h = (h ^ c) * 0x100000001b3ull;
-    h = (h ^ 0xff) * 0x100000001b3ull;  // a separator, so "ab" + "c" differs from "a" + "bc"
+    h = fnv1a("\xff", fnv1a(bytes, h));  // a separator byte, so "ab" + "c" differs from "a" + "bc"
   };
   for (const EmbeddedFile& f : embedded_files()) {
     if (f.path.rfind("cl/", 0) != 0) continue;
