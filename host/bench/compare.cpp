@@ -41,8 +41,11 @@ std::string metric_names() {
   // Embree's columns, one set per path (run --embree-paths), by pattern rather than every path's.
   const std::string stem = "embree_<path>";
   std::string embree;
-  for (const CellColumn& c : embree_columns("<path>"))
-    embree += (embree.empty() ? "" : ",") + (c.name == stem ? "" : c.name.substr(stem.size() + 1));
+  for (const CellColumn& c : embree_columns("<path>")) {
+    if (!embree.empty()) embree += ',';
+    // Appended in place: GCC 12 warns (-Wrestrict, a false positive) on `"," + name.substr(...)`.
+    if (c.name != stem) embree.append(c.name, stem.size() + 1, std::string::npos);
+  }
   return names + fmt::format(", and per Embree path {}_{{{}}} (e.g. embree_16-coherent_speedup)", stem, embree);
 }
 
