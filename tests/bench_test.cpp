@@ -427,6 +427,31 @@ TEST(Matrix, NewEncoderKnobsAreRecordedOnlyWhenRun) {
   EXPECT_EQ(matrix_preset("paper").encoders, all_encoders());  // all three in the paper preset
 }
 
+// Issue 41: the list axes of the command line (variant, access mode, baseline order) are parsed by
+// one parser; each refuses an unknown name and an empty list with the same sentences as before.
+TEST(ListAxes, OneParserForEveryAxis) {
+  auto refusal = [](auto parse) {
+    try {
+      parse();
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_EQ(refusal([] { parse_trace_variants("robust,slow"); }),
+            "--variant 'slow': the trace variants are robust and fast (or both)");
+  EXPECT_EQ(refusal([] { parse_trace_variants(","); }), "--variant: name at least one trace variant (robust, fast)");
+  EXPECT_EQ(refusal([] { parse_ray_accesses("gather,scatter"); }),
+            "--access 'scatter': the access modes are gather and permute (or all)");
+  EXPECT_EQ(refusal([] { parse_baseline_orders(""); }), "--baseline: name at least one baseline order (pixel, shuffled)");
+  EXPECT_EQ(refusal([] { parse_baseline_orders("pixel,random"); }),
+            "--baseline 'random': the baseline orders are pixel and shuffled (or all)");
+  EXPECT_EQ(parse_baseline_orders("shuffled,pixel,shuffled"),
+            (std::vector<BaselineOrder>{BaselineOrder::Shuffled, BaselineOrder::Pixel}));
+  EXPECT_EQ(parse_trace_variants("all"), (std::vector<TraceVariant>{TraceVariant::Robust, TraceVariant::Fast}));
+  EXPECT_EQ(parse_ray_accesses("all"), (std::vector<RayAccess>{RayAccess::Gather, RayAccess::Permute}));
+}
+
 // mlhcc-cost is causal (issue 21): its estimates for a batch come from the same batch of another
 // frame (seed + 1), traced on the host; never from the frame being measured.
 TEST(Matrix, CostEstimatesComeFromAnotherFrame) {

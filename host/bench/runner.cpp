@@ -201,13 +201,6 @@ struct Progress {
   }
 };
 
-// "1.16 [1.12, 1.20]", or "1.16" without an interval.
-std::string with_interval(const Estimate& e) {
-  if (!e.has_value()) return "–";
-  if (!e.has_interval()) return fmt::format("{:.2f}", e.value);
-  return fmt::format("{:.2f} [{:.2f}, {:.2f}]", e.value, e.lo, e.hi);
-}
-
 // "; Embree 1 12.3 MRays/s, 16-coherent 20.1 MRays/s" (NoSort) or "; Embree 1 1.05 [1.01, 1.09], ..."
 // (each path's speedup on the cell's order): nothing without Embree's arms.
 std::string embree_progress(const CellRecord& c) {
@@ -215,7 +208,7 @@ std::string embree_progress(const CellRecord& c) {
   for (const auto& e : c.embree) {
     const std::string figure =
         e.trace.n == 0 ? fmt::format("{:.2f} MRays/s", e.nosort.median_ms > 0 ? c.rays / (e.nosort.median_ms * 1e3) : 0.0)
-                       : with_interval(e.speedup);
+                       : interval_text(e.speedup, 2);
     s += fmt::format("{} {} {}", s.empty() ? "; Embree" : ",", e.path, figure);
   }
   return s;
@@ -225,15 +218,15 @@ std::string progress_text(const CellRecord& c) {
   if (!c.ok()) return fmt::format("{}: {}: {}", c.id(), c.status == "timeout" ? "TIMEOUT" : "FAILED", c.error);
   const std::string rounds = fmt::format("{} rounds, stopped by {}", c.rounds, c.stopped_by);
   if (c.encoder == kBaselineEncoder)
-    return fmt::format("{}: NoSort {:.2f} MRays/s, A/A {}{}  ({})", c.id(), c.trace_mrays, with_interval(c.aa),
+    return fmt::format("{}: NoSort {:.2f} MRays/s, A/A {}{}  ({})", c.id(), c.trace_mrays, interval_text(c.aa, 2),
                        embree_progress(c), rounds);
   const std::string speed =
       c.same_order_as_nosort
           ? fmt::format("same order as NoSort, no speedup (measured {})",
-                        with_interval(ratio_interval(c.samples.at("nosort"), c.samples.at("trace"))))
-          : fmt::format("speedup {}", with_interval(c.speedup));
+                        interval_text(ratio_interval(c.samples.at("nosort"), c.samples.at("trace")), 2))
+          : fmt::format("speedup {}", interval_text(c.speedup, 2));
   return fmt::format("{}: {:.2f} MRays/s, {}, net {}, encode {:.2f} + sort {:.2f}{} ms{}, ANC {:.2f}{}  ({})", c.id(),
-                     c.trace_mrays, speed, with_interval(c.net_speedup), c.encode.median_ms, c.sort.median_ms,
+                     c.trace_mrays, speed, interval_text(c.net_speedup, 2), c.encode.median_ms, c.sort.median_ms,
                      c.access == "permute" ? fmt::format(" + permute {:.2f}", c.permute.median_ms) : "",
                      c.cut_ms >= 0 ? fmt::format(" (host cut {:.1f} ms)", c.cut_ms) : "", c.anc, embree_progress(c),
                      rounds);
