@@ -68,6 +68,24 @@ CLI::Option* finite_number(CLI::Option* opt, double lo, double hi, bool above_lo
                      : fmt::format("{}{:g}..{:g}", above_lo ? ">" : "", lo, hi));
 }
 
+void add_encoder_param_options(CLI::App& cmd, EncoderParams& given) {
+  for (const EncoderParam& row : encoder_params())
+    std::visit(
+        [&](auto member) {
+          CLI::Option* opt = cmd.add_option(std::string(row.flag), given.*member, std::string(row.meaning));
+          if (row.whole())
+            whole_number(opt, static_cast<std::uint64_t>(row.lo), static_cast<std::uint64_t>(row.hi));
+          else
+            finite_number(opt, row.lo, row.hi);
+        },
+        row.field);
+}
+
+void apply_given_params(const CLI::App& cmd, const EncoderParams& given, EncoderParams& into) {
+  for (const EncoderParam& row : encoder_params())
+    if (cmd.count(std::string(row.flag))) copy_param(row, given, into);
+}
+
 void check_resolution_text(const std::string& option, const std::string& text) {
   // By hand, not sscanf("%u"): that reads "-48" as 4294967248 and "4294967344" as 48.
   const std::size_t x = text.find_first_of("xX");
