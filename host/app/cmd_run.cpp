@@ -88,6 +88,31 @@ MatrixSpec matrix_from(const RunArgs& a, const CLI::App& cmd) {
   spec.cell_timeout_s = a.timeout_s;
   return spec;
 }
+// What a run did, on stdout (and on stderr why it did not finish), and its exit code: the state of
+// the whole set.
+void report_run(const RunSummary& s) {
+  fmt::print("{} cells run{}, {} already done (skipped), {} failed; results in {}\n", s.cells_run,
+             s.cells_retried ? fmt::format(" ({} of them retries of failed or timed-out cells)", s.cells_retried) : "",
+             s.cells_skipped, s.cells_failed, s.out_dir);
+  const NoiseSummary noise = summarize_noise(ResultSet::load(s.out_dir).cells());
+  if (noise.aa_intervals > 0)
+    fmt::print("noise: A/A calibration {} of {} intervals contain 1.00 ({:.1f} %); speedup interval half-width "
+               "median {:.1f} %, 90th percentile {:.1f} %; cells stopped by time {}, by noise {}\n",
+               noise.aa_containing_one, noise.aa_intervals, 100.0 * noise.aa_coverage(),
+               100.0 * noise.median_half_width, 100.0 * noise.p90_half_width, noise.stopped_by_time,
+               noise.stopped_by_noise);
+  fmt::print("tables: {}/tables.md\n", s.out_dir);
+  if (s.interrupted) {
+    fmt::print(stderr, "interrupted: finished cells are saved; rerun the same command to resume\n");
+    set_command_exit_code(s.signal > 0 ? 128 + s.signal : kExitInterrupted);
+  } else if (s.cells_not_ok > 0 || s.cells_missing > 0) {
+    // The exit code is the state of the whole set, not of this run's cells: a resumed run that
+    // kept failed cells (--no-retry) or failed again does not report success.
+    fmt::print(stderr, "raysort run: {} has {} cell(s) not ok (failed or timeout) and {} missing; rerun the command "
+               "to retry them\n", s.out_dir, s.cells_not_ok, s.cells_missing);
+    set_command_exit_code(kExitBadInput);
+  }
+}
 }  // namespace
 
 void register_run_command(CLI::App& app) {
@@ -168,28 +193,7 @@ void register_run_command(CLI::App& app) {
       fmt::print("{}", format_plan(plan_matrix_shards(spec, a->opts.scene_root, a->shard_plan), a->shard_plan));
       return;
     }
-    RunSummary s = run_matrix(spec, a->opts);
-    fmt::print("{} cells run{}, {} already done (skipped), {} failed; results in {}\n", s.cells_run,
-               s.cells_retried ? fmt::format(" ({} of them retries of failed or timed-out cells)", s.cells_retried) : "",
-               s.cells_skipped, s.cells_failed, s.out_dir);
-    const NoiseSummary noise = summarize_noise(ResultSet::load(s.out_dir).cells());
-    if (noise.aa_intervals > 0)
-      fmt::print("noise: A/A calibration {} of {} intervals contain 1.00 ({:.1f} %); speedup interval half-width "
-                 "median {:.1f} %, 90th percentile {:.1f} %; cells stopped by time {}, by noise {}\n",
-                 noise.aa_containing_one, noise.aa_intervals, 100.0 * noise.aa_coverage(),
-                 100.0 * noise.median_half_width, 100.0 * noise.p90_half_width, noise.stopped_by_time,
-                 noise.stopped_by_noise);
-    fmt::print("tables: {}/tables.md\n", s.out_dir);
-    if (s.interrupted) {
-      fmt::print(stderr, "interrupted: finished cells are saved; rerun the same command to resume\n");
-      set_command_exit_code(s.signal > 0 ? 128 + s.signal : kExitInterrupted);
-    } else if (s.cells_not_ok > 0 || s.cells_missing > 0) {
-      // The exit code is the state of the whole set, not of this run's cells: a resumed run that
-      // kept failed cells (--no-retry) or failed again does not report success.
-      fmt::print(stderr, "raysort run: {} has {} cell(s) not ok (failed or timeout) and {} missing; rerun the command "
-                 "to retry them\n", s.out_dir, s.cells_not_ok, s.cells_missing);
-      set_command_exit_code(kExitBadInput);
-    }
+    report_run(run_matrix(spec, a->opts));
   });
 }
 

@@ -339,6 +339,33 @@ void finish_run(ResultSet& results, const std::vector<PlannedCell>& plan, const 
   }
 }
 
+// --layout packet is the device's packet width: planned, recorded (and resumed) as the width it
+// runs; "packet,packet8" on an AVX device is one class.
+std::vector<TraceLayout> resolved_layouts(const std::vector<TraceLayout>& layouts, const DeviceInfo& device) {
+  std::vector<TraceLayout> resolved;
+  for (TraceLayout l : layouts)
+    if (const TraceLayout r = resolve_trace_layout(l, device); std::find(resolved.begin(), resolved.end(), r) == resolved.end())
+      resolved.push_back(r);
+  return resolved;
+}
+
+// The result set of this run (a resume's, or a new one) with its meta.json, checked to hold only
+// cells the matrix plans; says on stderr what runs where.
+ResultSet open_results(const MatrixSpec& spec, const RunOptions& opts, const DeviceInfo& device, std::size_t planned,
+                       const std::vector<PlannedCell>& full_plan, const std::string& out_dir) {
+  nlohmann::json meta = run_meta(spec, opts, device);
+  if (opts.shard.active()) meta["shard"] = shard_meta(spec, opts.shard, full_plan);
+  // What files the scenes were made from (scene/provenance.h): compare says when two sets differ.
+  meta["scene_files"] = scene_file_checksums(spec.scenes, resolve_scene_root(SceneOptions{opts.scene_root, {}}));
+  ResultSet results = ResultSet::open_for_run(out_dir, meta);
+  check_cells_planned(results, full_plan);
+  fmt::print(stderr, "raysort run: {}{} on {}; results in {}\n", spec.preset.empty() ? "custom matrix" : spec.preset,
+             opts.shard.active() ? fmt::format(", shard {} ({} of {} cells)", opts.shard.str(), planned, full_plan.size())
+                                 : "",
+             device.name, out_dir);
+  return results;
+}
+
 }  // namespace
 
 std::string default_result_dir(const MatrixSpec& spec, const std::string& device_slug, const ShardSpec& shard) {
@@ -359,13 +386,7 @@ RunSummary run_matrix(const MatrixSpec& requested, const RunOptions& opts) {
   check_scenes_before_work(spec, opts);
 
   Runtime rt(select_device(opts.device));
-  // --layout packet is the device's packet width: planned, recorded (and resumed) as the width it
-  // runs; "packet,packet8" on an AVX device is one class.
-  std::vector<TraceLayout> resolved;
-  for (TraceLayout l : spec.layouts)
-    if (const TraceLayout r = resolve_trace_layout(l, rt.info()); std::find(resolved.begin(), resolved.end(), r) == resolved.end())
-      resolved.push_back(r);
-  spec.layouts = resolved;
+  spec.layouts = resolved_layouts(spec.layouts, rt.info());
 
   // Plan: every cell of the matrix in visiting order; a shard keeps its own (bench/shard.h).
   const std::map<std::string, SceneFacts> facts = scene_facts(spec, opts.scene_root);
@@ -377,16 +398,7 @@ RunSummary run_matrix(const MatrixSpec& requested, const RunOptions& opts) {
   check_matrix_memory(spec, facts, rt.info());  // before the result set is written
   RunSummary summary;
   summary.out_dir = opts.out.empty() ? default_result_dir(spec, rt.info().slug(), opts.shard) : opts.out;
-  nlohmann::json meta = run_meta(spec, opts, rt.info());
-  if (opts.shard.active()) meta["shard"] = shard_meta(spec, opts.shard, full_plan);
-  // What files the scenes were made from (scene/provenance.h): compare says when two sets differ.
-  meta["scene_files"] = scene_file_checksums(spec.scenes, resolve_scene_root(SceneOptions{opts.scene_root, {}}));
-  ResultSet results = ResultSet::open_for_run(summary.out_dir, meta);
-  check_cells_planned(results, full_plan);
-  fmt::print(stderr, "raysort run: {}{} on {}; results in {}\n", spec.preset.empty() ? "custom matrix" : spec.preset,
-             opts.shard.active() ? fmt::format(", shard {} ({} of {} cells)", opts.shard.str(), plan.size(), full_plan.size())
-                                 : "",
-             rt.info().name, summary.out_dir);
+  ResultSet results = open_results(spec, opts, rt.info(), plan.size(), full_plan, summary.out_dir);
 
   InterruptGuard interrupt_guard;
   const char* kill_env = std::getenv("RAYSORT_TEST_KILL_AFTER_CELLS");
