@@ -216,6 +216,33 @@ TEST(Encode, NamesRoundTrip) {
 }
 
 // Keys worked out by hand (docs/encoders.md has the layouts). Scene box [0,1]³.
+// Issue 41: the encoder list (cl/encoders.h) is the one place an encoder is named. The kernel ids,
+// the host's enum, the table with each row's family, kernel and aliases, and the kernels themselves
+// all come from it.
+TEST(EncoderList, IdsTableFamiliesAndKernelsComeFromTheList) {
+  const auto& table = encoder_table();
+  ASSERT_EQ(table.size(), static_cast<std::size_t>(RS_ENC_COUNT));
+  EXPECT_EQ(static_cast<int>(Encoder::MLHCC_COST), RS_ENC_MLHCC_COST);
+  for (std::size_t i = 0; i < table.size(); ++i) {
+    const EncoderInfo& info = table[i];
+    EXPECT_EQ(static_cast<std::size_t>(info.id), i) << info.name;
+    EXPECT_EQ(&encoder_family(info.id), info.family) << info.name;
+    // A spatial encoder has a kernel of its own; any other its family's.
+    if (info.family_name != "spatial") {
+      EXPECT_EQ(info.kernel, "encode_" + std::string(info.family_name)) << info.name;
+    }
+  }
+  EXPECT_EQ(encoder_info(Encoder::Aila).kernel, "encode_aila");
+  EXPECT_EQ(encoder_info(Encoder::HCC_TRAFFIC).family_name, "box_set");
+  EXPECT_EQ(parse_encoder("nosorting"), Encoder::NoSort);
+  EXPECT_EQ(parse_encoder("hierarchy-cut-code"), Encoder::HCC);
+  EXPECT_EQ(parse_encoder("aila_compact"), Encoder::Aila);
+  EXPECT_TRUE(encoder_info(Encoder::Origin).aliases.empty());
+  // Every kernel the table and the families name exists (DeviceEncoder creates them all).
+  const Bvh bvh = four_leaf_bvh();
+  EXPECT_NO_THROW(DeviceEncoder(testing::runtime(), bvh, unit_box()));
+}
+
 TEST(Encode, HandComputedSpatialKeys) {
   Bvh bvh = four_leaf_bvh();
   EncodeScene s(bvh, unit_box());
