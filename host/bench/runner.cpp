@@ -252,6 +252,15 @@ std::vector<std::vector<PlannedCell>> runs_of(const std::vector<PlannedCell>& ce
   return out;
 }
 
+// The cells of a batch the scene's frame does not have: said on stderr, counted as absent (a shard
+// records them for raysort merge) and out of the progress total.
+void skip_absent_batch(const std::vector<PlannedCell>& batch_cells, std::vector<std::string>& absent, Progress& progress) {
+  fmt::print(stderr, "note: scene {} has no batch {} (its effects do not imply it, or it is empty); skipped\n",
+             batch_cells.front().scene, batch_cells.front().batch);
+  for (const auto& c : batch_cells) absent.push_back(c.id);
+  progress.total -= batch_cells.size();
+}
+
 // The cells of one encoder × key length × top-k on one batch. The inputs of an encoder that learns
 // (hcc-traffic's cut, hcc-region's regions, mlhcc-cost's table) are per batch: SceneBench readies
 // them here, and their cells record cut_ms, the host time of that input plus the cut's build and
@@ -445,10 +454,7 @@ RunSummary run_matrix(const MatrixSpec& requested, const RunOptions& opts) {
       const PlannedCell& first = batch_cells.front();
       const ReferencedBatch* rb = scene.batch(first.batch, first.baseline);
       if (!rb) {  // every ray of an earlier bounce missed, or a requested batch the effects do not imply
-        fmt::print(stderr, "note: scene {} has no batch {} (its effects do not imply it, or it is empty); skipped\n",
-                   first.scene, first.batch);
-        for (const auto& c : batch_cells) absent.push_back(c.id);
-        progress.total -= batch_cells.size();
+        skip_absent_batch(batch_cells, absent, progress);
         continue;
       }
       BatchBench bench({rt, *scene.encoder, sorter, permuter, *scene.tracers.at({first.variant, first.layout}),
