@@ -8,7 +8,8 @@
  * keys_cut.h, keys_ppc.h (one per family), shared with the host twin (host/encode/), so both give
  * the same bits.
  *
- * Every kernel exists twice: *_k32 writes uint keys (key bits ≤ 32), *_k64 ulong keys.
+ * Which kernels exist comes from the encoder list (encoders.h): one per spatial encoder, one set per
+ * family. Every kernel exists twice: *_k32 writes uint keys (key bits ≤ 32), *_k64 ulong keys.
  * Cut nodes (HCC, RegularGrid cells, MLHCC top nodes) come as sixteen-box SoA groups (RsCutGroup,
  * keys_cut.h) in __constant memory: every work-item reads the same boxes, which GPUs broadcast
  * from the constant cache, and PoCL needs no per-group copy or barrier (Xiang et al. Alg. 1, line 1, keeps
@@ -102,24 +103,27 @@ static inline RsRay rs_load_ray(__global const RsRay* rays, uint index) {
     values[i] = i;                                                                                       \
   }
 
-#define RS_DEFINE_ENCODE_KERNELS(SUFFIX, KEY_T)                                                             \
+/* The kernels of each family of the encoder list (encoders.h): RS_DEFINE_<family>_KERNELS(SUFFIX,
+ * KEY_T) defines encode_<family>_<SUFFIX> (and any second-pass kernels the family launches); a new
+ * family defines its own in its kernel header. The spatial family's kernels are one per SPATIAL row. */
+#define RS_DEFINE_nosort_KERNELS(SUFFIX, KEY_T)                                                          \
   __kernel void encode_nosort_##SUFFIX(uint count, __global KEY_T* keys, __global uint* values) {        \
     uint i = get_global_id(0);                                                                           \
     if (i >= count) return;                                                                              \
     keys[i] = 0;                                                                                         \
     values[i] = i;                                                                                       \
-  }                                                                                                      \
-                                                                                                         \
-  RS_DEFINE_SPATIAL_KERNEL(origin, SUFFIX, KEY_T)                                                        \
-  RS_DEFINE_SPATIAL_KERNEL(reis, SUFFIX, KEY_T)                                                          \
-  RS_DEFINE_SPATIAL_KERNEL(costa, SUFFIX, KEY_T)                                                         \
-  RS_DEFINE_SPATIAL_KERNEL(aila, SUFFIX, KEY_T)                                                          \
-  RS_DEFINE_SPATIAL_KERNEL(twopoint, SUFFIX, KEY_T)                                                      \
-                                                                                                         \
+  }
+
+#define RS_SPATIAL_KERNEL_k32(ID, HOST, NAME, CODE, ...) RS_DEFINE_SPATIAL_KERNEL(CODE, k32, uint)
+#define RS_SPATIAL_KERNEL_k64(ID, HOST, NAME, CODE, ...) RS_DEFINE_SPATIAL_KERNEL(CODE, k64, ulong)
+#define RS_DEFINE_spatial_KERNELS(SUFFIX, KEY_T) RS_ENCODERS(RS_NO_ROW, RS_SPATIAL_KERNEL_##SUFFIX)
+
+#define RS_DEFINE_box_set_KERNELS(SUFFIX, KEY_T)                                                         \
   RS_DEFINE_BOX_SET_KERNEL(box_set, rs_box_set_code, =, SUFFIX, KEY_T)                                   \
   RS_DEFINE_BOX_SET_KERNEL(box_set_or, rs_box_set_code, |=, SUFFIX, KEY_T)                               \
-  RS_DEFINE_DIRECTION_KERNEL(SUFFIX, KEY_T)                                                              \
-                                                                                                         \
+  RS_DEFINE_DIRECTION_KERNEL(SUFFIX, KEY_T)
+
+#define RS_DEFINE_two_level_KERNELS(SUFFIX, KEY_T)                                                       \
   __kernel void encode_two_level_##SUFFIX(__constant const RsCutGroup* top, uint top_count,              \
                                           __global const RsCutGroup* low, __global const uint* low_count,\
                                           uint half_bits, __global const RsRay* rays,                    \
@@ -135,11 +139,12 @@ static inline RsRay rs_load_ray(__global const RsRay* rays, uint index) {
     values[i] = i;                                                                                       \
     keys[j] = (KEY_T)rs_key_from_code(code_j & RS_CODE_MASK_##SUFFIX, bits);                             \
     values[j] = j;                                                                                       \
-  }                                                                                                      \
-                                                                                                         \
-  /* MLHCC_COST (keys_cut.h, rs_cost_cut_code): MLHCC's tables with rows of low_bits boxes, and the \
-   * per-bin cost field (RS_COST_BINS words) in global memory. One ray per work-item: two, as        \
-   * MLHCC's kernel takes, measured 5-8 % slower here (sibenik bounce1, 960x540, PoCL). */ \
+  }
+
+/* MLHCC_COST (keys_cut.h, rs_cost_cut_code): MLHCC's tables with rows of low_bits boxes, and the
+ * per-bin cost field (RS_COST_BINS words) in global memory. One ray per work-item: two, as
+ * MLHCC's kernel takes, measured 5-8 % slower here (sibenik bounce1, 960x540, PoCL). */
+#define RS_DEFINE_cost_cut_KERNELS(SUFFIX, KEY_T)                                                        \
   __kernel void encode_cost_cut_##SUFFIX(const RsEncodeFrame frame, __constant const RsCutGroup* top,     \
                                          uint top_count, __global const RsCutGroup* low,                 \
                                          __global const uint* low_count, uint top_bits, uint low_bits,   \
@@ -152,11 +157,12 @@ static inline RsRay rs_load_ray(__global const RsRay* rays, uint index) {
                                    low_bits, cost, bits) & RS_CODE_MASK_##SUFFIX;                        \
     keys[i] = (KEY_T)rs_key_from_code(code, bits);                                                       \
     values[i] = i;                                                                                       \
-  }                                                                                                      \
-                                                                                                         \
-  /* HCC_REGION (keys_cut.h, rs_region_cut_code): the region cells in __constant memory, as HCC's \
-   * cut boxes (the same for every ray); the regions' cuts (one row per region) in global memory: \
-   * rays of one work-group may read different rows. */                                           \
+  }
+
+/* HCC_REGION (keys_cut.h, rs_region_cut_code): the region cells in __constant memory, as HCC's
+ * cut boxes (the same for every ray); the regions' cuts (one row per region) in global memory:
+ * rays of one work-group may read different rows. */
+#define RS_DEFINE_region_cut_KERNELS(SUFFIX, KEY_T)                                                      \
   __kernel void encode_region_cut_##SUFFIX(__constant const RsRegionCells* cells, uint region_bits,      \
                                            __global const RsCutGroup* cuts, __global const uint* cut_count,\
                                            uint row_size, __global const RsRay* rays,                    \
@@ -168,8 +174,9 @@ static inline RsRay rs_load_ray(__global const RsRay* rays, uint index) {
                   RS_CODE_MASK_##SUFFIX;                                                                 \
     keys[i] = (KEY_T)rs_key_from_code(code, bits);                                                       \
     values[i] = i;                                                                                       \
-  }                                                                                                      \
-                                                                                                         \
+  }
+
+#define RS_DEFINE_prefix_path_KERNELS(SUFFIX, KEY_T)                                                     \
   __kernel void encode_prefix_path_##SUFFIX(__global const RsBvhNode* nodes,                             \
                                             __global const RsTriangle* tris, __global const RsRay* rays, \
                                             __global const uint* order, uint count, uint bits,           \
@@ -180,5 +187,7 @@ static inline RsRay rs_load_ray(__global const RsRay* rays, uint index) {
     values[i] = i;                                                                                       \
   }
 
-RS_DEFINE_ENCODE_KERNELS(k32, uint)
-RS_DEFINE_ENCODE_KERNELS(k64, ulong)
+/* Every family's kernels, *_k32 (uint keys) and *_k64 (ulong keys). */
+#define RS_DEFINE_FAMILY_KERNELS(FAMILY) \
+  RS_DEFINE_##FAMILY##_KERNELS(k32, uint) RS_DEFINE_##FAMILY##_KERNELS(k64, ulong)
+RS_ENCODER_FAMILIES(RS_DEFINE_FAMILY_KERNELS)

@@ -34,6 +34,7 @@
 #define RAYSORT_KEYS_H
 
 #include "encode_math.h"
+#include "encoders.h"
 #include "intersect.h"
 #include "shared.h"
 
@@ -58,21 +59,11 @@ RS_KEY_INLINE rs_u32 rs_clz64(rs_u64 x) { return (rs_u32)clz(x); }
 RS_KEY_INLINE rs_u32 rs_clz64(rs_u64 x) { return (rs_u32)std::countl_zero(x); }
 #endif
 
-/* Encoder ids: the values of the host's enum class Encoder (host/encode/encode.h). */
-#define RS_ENC_NOSORT 0
-#define RS_ENC_ORIGIN 1
-#define RS_ENC_REIS 2
-#define RS_ENC_COSTA 3
-#define RS_ENC_AILA 4
-#define RS_ENC_TWOPOINT 5
-#define RS_ENC_REGULAR_GRID 6
-#define RS_ENC_HCC 7
-#define RS_ENC_MLHCC 8
-#define RS_ENC_PPC 9
-#define RS_ENC_HCC_DIR 10
-#define RS_ENC_HCC_REGION 11
-#define RS_ENC_HCC_TRAFFIC 12
-#define RS_ENC_MLHCC_COST 13
+/* Encoder ids, RS_ENC_NOSORT = 0, RS_ENC_ORIGIN, ...: the positions in the encoder list
+ * (encoders.h), and the values of the host's enum class Encoder (host/encode/encoder.h). */
+#define RS_ENCODER_ID(ID, ...) RS_ENC_##ID,
+enum { RS_ENCODERS(RS_ENCODER_ID, RS_ENCODER_ID) RS_ENC_COUNT };
+#undef RS_ENCODER_ID
 
 /* The most boxes a box-set key reads per ray: one per key bit. */
 #define RS_MAX_KEY_BITS 64

@@ -188,7 +188,7 @@ RS_KEY_INLINE rs_u64 rs_two_level_cut_code(RsRay ray, RS_CUT_SPACE const RsCutGr
  * different regions ... and encoding rays in different regions separately"): the scene is split
  * into 2^r regions by a k-d tree of r levels, a ray's region is the cell its origin falls in, and
  * each region has its own cut of b − r nodes. Code: | region (r bits) | overlap bits of the
- * region's cut nodes | 0 … |. The host (host/encode/encode.cpp, EncodeScene::regions) places the
+ * region's cut nodes | 0 … |. The host (host/encode/region_cut_family.cpp, region_inputs) places the
  * splits at the median origin of a previous frame's rays, so the regions hold equal shares of the
  * rays, and picks each region's cut by the traffic of that region's rays (or, with no previous
  * frame, halves each cell and cuts by HAD among the nodes overlapping it).

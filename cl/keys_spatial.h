@@ -104,15 +104,17 @@ RS_KEY_INLINE rs_u64 rs_direction_field(RsRay r, rs_u32 d) {
   return d == 1u ? rs_direction_top_bit(r) : rs_direction_bits(r, d);
 }
 
+/* The host twin's spatial key: one case per SPATIAL row of the encoder list (encoders.h), each
+ * calling that row's rs_<code>_code. The kernels call rs_<code>_code directly (encode.cl). */
+#define RS_SPATIAL_CASE(ID, HOST, NAME, CODE, ...) \
+  case RS_ENC_##ID:                                \
+    return rs_##CODE##_code(f, r);
 RS_KEY_INLINE rs_u64 rs_spatial_code(int encoder, const RsEncodeFrame* f, RsRay r) {
   switch (encoder) {
-    case RS_ENC_ORIGIN: return rs_origin_code(f, r);
-    case RS_ENC_REIS: return rs_reis_code(f, r);
-    case RS_ENC_COSTA: return rs_costa_code(f, r);
-    case RS_ENC_AILA: return rs_aila_code(f, r);
-    case RS_ENC_TWOPOINT: return rs_twopoint_code(f, r);
+    RS_ENCODERS(RS_NO_ROW, RS_SPATIAL_CASE)
     default: return 0;
   }
 }
+#undef RS_SPATIAL_CASE
 
 #endif /* RAYSORT_KEYS_SPATIAL_H */

@@ -15,6 +15,7 @@
 #include <thread>
 
 #include "bench/compare.h"
+#include "bench/learned_inputs.h"
 #include "bench/result_set.h"
 #include "bench/runner.h"
 #include "bench/shard.h"
@@ -427,6 +428,31 @@ TEST(Matrix, NewEncoderKnobsAreRecordedOnlyWhenRun) {
   EXPECT_EQ(matrix_preset("paper").encoders, all_encoders());  // all three in the paper preset
 }
 
+// Issue 41: the list axes of the command line (variant, access mode, baseline order) are parsed by
+// one parser; each refuses an unknown name and an empty list with the same sentences as before.
+TEST(ListAxes, OneParserForEveryAxis) {
+  auto refusal = [](auto parse) {
+    try {
+      parse();
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_EQ(refusal([] { parse_trace_variants("robust,slow"); }),
+            "--variant 'slow': the trace variants are robust and fast (or both)");
+  EXPECT_EQ(refusal([] { parse_trace_variants(","); }), "--variant: name at least one trace variant (robust, fast)");
+  EXPECT_EQ(refusal([] { parse_ray_accesses("gather,scatter"); }),
+            "--access 'scatter': the access modes are gather and permute (or all)");
+  EXPECT_EQ(refusal([] { parse_baseline_orders(""); }), "--baseline: name at least one baseline order (pixel, shuffled)");
+  EXPECT_EQ(refusal([] { parse_baseline_orders("pixel,random"); }),
+            "--baseline 'random': the baseline orders are pixel and shuffled (or all)");
+  EXPECT_EQ(parse_baseline_orders("shuffled,pixel,shuffled"),
+            (std::vector<BaselineOrder>{BaselineOrder::Shuffled, BaselineOrder::Pixel}));
+  EXPECT_EQ(parse_trace_variants("all"), (std::vector<TraceVariant>{TraceVariant::Robust, TraceVariant::Fast}));
+  EXPECT_EQ(parse_ray_accesses("all"), (std::vector<RayAccess>{RayAccess::Gather, RayAccess::Permute}));
+}
+
 // mlhcc-cost is causal (issue 21): its estimates for a batch come from the same batch of another
 // frame (seed + 1), traced on the host; never from the frame being measured.
 TEST(Matrix, CostEstimatesComeFromAnotherFrame) {
@@ -434,29 +460,35 @@ TEST(Matrix, CostEstimatesComeFromAnotherFrame) {
   const EncodeScene keys(p.bvh, p.scene.bounds());
   RayGenOptions gen;
   gen.seed = 7;
-  const auto costs = previous_frame_statistics(p, gen, keys, true, false);
+  LearnedInputs learned(p, gen, keys, {Encoder::MLHCC_COST});
   RayGenOptions next = gen;
   next.seed = 8;
   const std::vector<ReferencedBatch> other = generate_batches(p.scene, p.tris, p.bvh, next);
   const std::vector<ReferencedBatch> own = generate_batches(p.scene, p.tris, p.bvh, gen);
-  ASSERT_EQ(costs.size(), other.size());
+  auto means_of = [&](LearnedInputs& from, const std::string& name) -> const std::vector<std::uint64_t>* {
+    const LearnedInputs::Learned* l = from.learned(Encoder::MLHCC_COST, name, {}, keys);
+    return l && l->input ? &dynamic_cast<const CostEstimates&>(*l->input).mean_steps : nullptr;
+  };
   for (std::size_t k = 0; k < other.size(); ++k) {
     const std::string& name = other[k].batch.name;
-    ASSERT_TRUE(costs.count(name)) << name;
+    const std::vector<std::uint64_t>* means = means_of(learned, name);
+    ASSERT_NE(means, nullptr) << name;
     std::vector<std::uint32_t> steps;
     trace_reference(p.bvh, other[k].batch.rays, nullptr, other[k].batch.any_hit(), &steps);
-    EXPECT_EQ(costs.at(name).cost_means, cost_statistics(keys.frame(), other[k].batch.rays, steps)) << name;
-    EXPECT_GE(costs.at(name).cost_ms, 0.0) << name;
-    EXPECT_TRUE(costs.at(name).regions.empty()) << name;  // not asked for
+    EXPECT_EQ(*means, cost_statistics(keys.frame(), other[k].batch.rays, steps)) << name;
+    EXPECT_GE(learned.learned(Encoder::MLHCC_COST, name, {}, keys)->ms, 0.0) << name;
+    // hcc-region was not asked for: nothing studied for it.
+    EXPECT_EQ(learned.learned(Encoder::HCC_REGION, name, {}, keys)->input, nullptr) << name;
     // The measured frame's own statistics differ: its rays are not the ones counted.
     std::vector<std::uint32_t> own_steps;
     trace_reference(p.bvh, own[k].batch.rays, nullptr, own[k].batch.any_hit(), &own_steps);
-    EXPECT_NE(costs.at(name).cost_means, cost_statistics(keys.frame(), own[k].batch.rays, own_steps)) << name;
+    EXPECT_NE(*means, cost_statistics(keys.frame(), own[k].batch.rays, own_steps)) << name;
   }
   // Only the batches asked for are traced (a matrix's batches).
-  const auto some = previous_frame_statistics(p, gen, keys, true, false, {"bounce1", "shadow9"});
-  ASSERT_EQ(some.size(), 1u);
-  EXPECT_EQ(some.at("bounce1").cost_means, costs.at("bounce1").cost_means);
+  LearnedInputs some(p, gen, keys, {Encoder::MLHCC_COST}, {"bounce1", "shadow9"});
+  ASSERT_NE(means_of(some, "bounce1"), nullptr);
+  EXPECT_EQ(*means_of(some, "bounce1"), *means_of(learned, "bounce1"));
+  EXPECT_EQ(means_of(some, "shadow0"), nullptr);
 }
 
 // A previous frame whose batch has no rays (every primary ray missed, say) still gives hcc-region
@@ -479,8 +511,8 @@ TEST(Matrix, RegionStatisticsOfAnEmptyBatch) {
   EXPECT_EQ(halves[0].axis, longest);
   EXPECT_EQ(halves[0].at, 0.5f * (box.min[longest] + box.max[longest]));
   expect_same_splits(stats.splits, halves);
-  keys.set_region_statistics(stats);
-  for (const auto& cut : keys.regions(32).cuts) EXPECT_EQ(cut, keys.hcc_cut(29));
+  set_region_statistics(keys, stats);
+  for (const auto& cut : region_inputs(keys, 32).cuts) EXPECT_EQ(cut, keys.hcc_cut(29));
 }
 
 // hcc-region is causal too: its splits and per-region traffic for a batch come from the same batch
@@ -492,12 +524,14 @@ TEST(Matrix, RegionStatisticsComeFromAnotherFrame) {
   const EncodeScene keys(p.bvh, p.scene.bounds(), params);
   RayGenOptions gen;
   gen.seed = 7;
-  const auto stats = previous_frame_statistics(p, gen, keys, false, true, {"bounce1"});
-  ASSERT_EQ(stats.size(), 1u);
-  const PreviousBatchStatistics& b = stats.at("bounce1");
-  EXPECT_TRUE(b.cost_means.empty());  // not asked for
-  ASSERT_EQ(b.regions.splits.size(), 3u);
-  ASSERT_EQ(b.regions.visits.size(), 4u);
+  LearnedInputs learned(p, gen, keys, {Encoder::HCC_REGION}, {"bounce1"});
+  EXPECT_EQ(learned.learned(Encoder::HCC_REGION, "shadow0", {}, keys)->input, nullptr);  // not asked for
+  EXPECT_EQ(learned.learned(Encoder::MLHCC_COST, "bounce1", {}, keys)->input, nullptr);  // not asked for
+  const LearnedInputs::Learned* l = learned.learned(Encoder::HCC_REGION, "bounce1", {}, keys);
+  ASSERT_TRUE(l && l->input);
+  const RegionStatistics& b = dynamic_cast<const LearnedRegions&>(*l->input).stats;
+  ASSERT_EQ(b.splits.size(), 3u);
+  ASSERT_EQ(b.visits.size(), 4u);
   RayGenOptions next = gen;
   next.seed = 8;
   const auto other = generate_batches(p.scene, p.tris, p.bvh, next);
@@ -506,17 +540,30 @@ TEST(Matrix, RegionStatisticsComeFromAnotherFrame) {
     return *std::find_if(frame.begin(), frame.end(), [](const ReferencedBatch& x) { return x.batch.name == "bounce1"; });
   };
   const RegionStatistics expected = region_statistics(p.bvh, p.scene.bounds(), bounce1(other).batch.rays, false, 2);
-  EXPECT_EQ(b.regions.visits, expected.visits);
-  expect_same_splits(b.regions.splits, expected.splits);
+  EXPECT_EQ(b.visits, expected.visits);
+  expect_same_splits(b.splits, expected.splits);
   const RegionStatistics from_own = region_statistics(p.bvh, p.scene.bounds(), bounce1(own).batch.rays, false, 2);
-  EXPECT_NE(b.regions.visits, from_own.visits);
+  EXPECT_NE(b.visits, from_own.visits);
   // The regions' traffic adds up to the batch's: every ray starts in exactly one region.
   const std::vector<std::uint64_t> all = node_traffic(p.bvh, bounce1(other).batch.rays, false);
   std::vector<std::uint64_t> sum(all.size(), 0);
-  for (const auto& region : b.regions.visits)
+  for (const auto& region : b.visits)
     for (const auto& [node, count] : region) sum[node] += count;
   EXPECT_EQ(sum, all);
 }
+
+namespace {
+
+// hcc-traffic's input for batch `name` of `frame`, as the runner's LearnedInputs makes it.
+std::vector<std::uint64_t> traffic_before(const PreparedScene& p, const std::vector<ReferencedBatch>& frame,
+                                          const std::string& name) {
+  const EncodeScene keys(p.bvh, p.bvh.bounds());
+  LearnedInputs learned(p, {}, keys, {});  // no encoder that learns from a previous frame: none drawn
+  const LearnedInputs::Learned* l = learned.learned(Encoder::HCC_TRAFFIC, name, frame, keys);
+  return l && l->input ? dynamic_cast<const NodeTraffic&>(*l->input).visits : std::vector<std::uint64_t>{};
+}
+
+}  // namespace
 
 // hcc-traffic is causal (issue 21): the traffic for batch k is the previous batch's node traffic,
 // and it does not change when batch k or any later batch changes; the frame's first batch has none.
@@ -525,29 +572,29 @@ TEST(Matrix, TrafficForABatchComesOnlyFromTheBatchBefore) {
   std::vector<ReferencedBatch> frame = generate_batches(p.scene, p.tris, p.bvh, {});
   ASSERT_GE(frame.size(), 4u);
   EXPECT_EQ(frame[0].batch.name, "primary");
-  EXPECT_TRUE(traffic_before(p.bvh, frame, "primary").empty());
-  EXPECT_TRUE(traffic_before(p.bvh, frame, "bounce9").empty());  // not in the frame
+  EXPECT_TRUE(traffic_before(p, frame, "primary").empty());
+  EXPECT_TRUE(traffic_before(p, frame, "bounce9").empty());  // not in the frame
   for (std::size_t k = 1; k < frame.size(); ++k) {
     const std::string name = frame[k].batch.name;
-    const auto traffic = traffic_before(p.bvh, frame, name);
+    const auto traffic = traffic_before(p, frame, name);
     EXPECT_EQ(traffic, node_traffic(p.bvh, frame[k - 1].batch.rays, frame[k - 1].batch.any_hit())) << name;
     EXPECT_GT(traffic.at(0), 0u) << name;
     // Batch k and the later ones replaced (rays moved and turned): the same traffic for k.
     std::vector<ReferencedBatch> changed = frame;
     for (std::size_t j = k; j < changed.size(); ++j)
       for (RsRay& r : changed[j].batch.rays) r.d[0] = -r.d[0], r.o[1] += 0.1f;
-    EXPECT_EQ(traffic_before(p.bvh, changed, name), traffic) << name;
+    EXPECT_EQ(traffic_before(p, changed, name), traffic) << name;
     // The batch before it changed: other traffic.
     std::vector<ReferencedBatch> earlier = frame;
     for (RsRay& r : earlier[k - 1].batch.rays) r.d[0] = -r.d[0], r.d[2] = -r.d[2];
-    EXPECT_NE(traffic_before(p.bvh, earlier, name), traffic) << name;
+    EXPECT_NE(traffic_before(p, earlier, name), traffic) << name;
   }
   // The cut built from it: β = 0 gives HCC's cut whatever the traffic.
   EncoderParams p0;
   p0.traffic_blend = 0.0;
   EncodeScene s0(p.bvh, p.bvh.bounds(), p0);
-  s0.set_node_traffic(traffic_before(p.bvh, frame, frame[2].batch.name));
-  EXPECT_EQ(s0.traffic_cut(32), s0.hcc_cut(32));
+  set_node_traffic(s0, traffic_before(p, frame, frame[2].batch.name));
+  EXPECT_EQ(traffic_cut(s0, 32), s0.hcc_cut(32));
 }
 
 // Issue 22: the paper preset samples as the paper did (§5: "two shadow rays per bounce and eight

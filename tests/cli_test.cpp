@@ -6,6 +6,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <fmt/format.h>
+
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -15,6 +18,7 @@
 #include <vector>
 
 #include "bench/result_set.h"
+#include "encode/encoder_params.h"
 #include "test_util.h"
 
 namespace fs = std::filesystem;
@@ -364,6 +368,39 @@ TEST(CliNumbers, OutOfRangeNonFiniteAndMalformedNumbersAreRefusedWhereParsed) {
   const std::string render_out = raysort::testing::temp_path("render-nan");
   expect_exit({"render", "--scene", "cornell", "--exposure", "nan", "--host", "--resolution", "8x8", "--out", render_out},
               1, {"--exposure nan is not valid"});
+}
+
+// Issue 41: `run` and `encodebench` make their encoder knobs from the same rows
+// (encode/encoder_params.h) and check encoders and key lengths with the same function
+// (validate_encoders), so encodebench refuses what run refuses, with run's message, before any work.
+// encodebench measured nothing and exited 0 (an empty table) for a key length an encoder cannot
+// take, e.g. `--encoders hcc-region --region-bits 8 --bits 8`.
+TEST(CliEncodebench, RefusesWhatRunRefusesWithRunsMessage) {
+  std::vector<std::vector<std::string>> cases = {
+      {"--encoders", "hcc-region", "--region-bits", "9"},
+      {"--encoders", "hcc-region", "--region-bits", "8", "--bits", "8"},
+      {"--encoders", "hcc-dir", "--direction-bits", "16", "--bits", "16"},
+      {"--encoders", "mlhcc-cost", "--cost-bits", "16", "--bits", "32"},
+      {"--encoders", "mlhcc", "--bits", "31"},
+  };
+  // Every knob past its range, as each row states it.
+  for (const raysort::EncoderParam& row : raysort::encoder_params())
+    cases.push_back({"--encoders", "hcc", std::string(row.flag),
+                     std::isinf(row.hi) ? "-1" : fmt::format("{:g}", row.whole() ? row.hi + 1 : row.hi * 2 + 1)});
+  for (const auto& extra : cases) {
+    std::vector<std::string> run = {"run", "--scenes", "cornell", "--shard-plan", "1"};
+    std::vector<std::string> bench = {"encodebench", "--scene", "cornell", "--resolution", "16x16", "--reps", "1",
+                                      "--warmup", "0", "--max-time", "0"};
+    run.insert(run.end(), extra.begin(), extra.end());
+    bench.insert(bench.end(), extra.begin(), extra.end());
+    const CliResult by_run = run_cli(run), by_bench = run_cli(bench);
+    std::string what;
+    for (const auto& a : extra) what += a + " ";
+    EXPECT_EQ(by_run.code, 1) << what << by_run.out << by_run.err;
+    EXPECT_EQ(by_bench.code, 1) << what << by_bench.out << by_bench.err;
+    EXPECT_EQ(by_bench.err, by_run.err) << what;
+    EXPECT_EQ(by_bench.out, "") << what << ": encodebench printed a table";
+  }
 }
 
 // Item 17: the parser's own errors (CLI11's 104-114 before) exit 1 with the prefix and a usage

@@ -216,6 +216,33 @@ TEST(Encode, NamesRoundTrip) {
 }
 
 // Keys worked out by hand (docs/encoders.md has the layouts). Scene box [0,1]³.
+// Issue 41: the encoder list (cl/encoders.h) is the one place an encoder is named. The kernel ids,
+// the host's enum, the table with each row's family, kernel and aliases, and the kernels themselves
+// all come from it.
+TEST(EncoderList, IdsTableFamiliesAndKernelsComeFromTheList) {
+  const auto& table = encoder_table();
+  ASSERT_EQ(table.size(), static_cast<std::size_t>(RS_ENC_COUNT));
+  EXPECT_EQ(static_cast<int>(Encoder::MLHCC_COST), RS_ENC_MLHCC_COST);
+  for (std::size_t i = 0; i < table.size(); ++i) {
+    const EncoderInfo& info = table[i];
+    EXPECT_EQ(static_cast<std::size_t>(info.id), i) << info.name;
+    EXPECT_EQ(&encoder_family(info.id), info.family) << info.name;
+    // A spatial encoder has a kernel of its own; any other its family's.
+    if (info.family_name != "spatial") {
+      EXPECT_EQ(info.kernel, "encode_" + std::string(info.family_name)) << info.name;
+    }
+  }
+  EXPECT_EQ(encoder_info(Encoder::Aila).kernel, "encode_aila");
+  EXPECT_EQ(encoder_info(Encoder::HCC_TRAFFIC).family_name, "box_set");
+  EXPECT_EQ(parse_encoder("nosorting"), Encoder::NoSort);
+  EXPECT_EQ(parse_encoder("hierarchy-cut-code"), Encoder::HCC);
+  EXPECT_EQ(parse_encoder("aila_compact"), Encoder::Aila);
+  EXPECT_TRUE(encoder_info(Encoder::Origin).aliases.empty());
+  // Every kernel the table and the families name exists (DeviceEncoder creates them all).
+  const Bvh bvh = four_leaf_bvh();
+  EXPECT_NO_THROW(DeviceEncoder(testing::runtime(), bvh, unit_box()));
+}
+
 TEST(Encode, HandComputedSpatialKeys) {
   Bvh bvh = four_leaf_bvh();
   EncodeScene s(bvh, unit_box());
@@ -434,7 +461,7 @@ TEST(Encode, ThroughAnOrderBuffer) {
   // mlhcc-cost's one (with a table from these rays' own step counts).
   std::vector<std::uint32_t> steps;
   trace_reference(bvh, rays, nullptr, false, &steps);
-  dev.set_cost_estimates(cost_statistics(dev.scene().frame(), rays, steps));
+  set_cost_estimates(dev.scene(), cost_statistics(dev.scene().frame(), rays, steps));
   for (std::size_t n : {1u, 2u, 3u, 5u, 577u}) {
     std::vector<RsRay> some(rays.begin(), rays.begin() + static_cast<std::ptrdiff_t>(n));
     for (unsigned bits : {16u, 64u})
@@ -500,7 +527,7 @@ TEST(Encode, SingleLeafBvh) {
   ASSERT_EQ(bvh.nodes.size(), 1u);
   EncodeScene es(bvh, bvh.bounds());
   EXPECT_EQ(es.hcc_cut(32), std::vector<std::uint32_t>{0});
-  const auto& t = es.two_level(32);
+  const auto& t = two_level_inputs(es, 32);
   EXPECT_EQ(t.cut.top, std::vector<std::uint32_t>{0});
   ASSERT_EQ(t.cut.low.size(), 1u);
   EXPECT_EQ(t.cut.low[0], std::vector<std::uint32_t>{0});
@@ -703,13 +730,13 @@ std::uint64_t key(Encoder e, unsigned bits, const EncodeScene& s, const RsRay& r
     case Encoder::HCC:
     case Encoder::HCC_TRAFFIC:
     case Encoder::HCC_DIR: {
-      const auto& boxes = s.box_set(e, bits);
+      const auto& boxes = box_set(s, e, bits);
       const unsigned dir = e == Encoder::HCC_DIR ? s.params().direction_bits : 0u;
       code = box_set(r, boxes.data(), static_cast<rs_u32>(boxes.size()), bits - dir, dir);
       break;
     }
     case Encoder::MLHCC: {
-      const auto& t = s.two_level(bits);
+      const auto& t = two_level_inputs(s, bits);
       code = two_level(r, t.top.data(), static_cast<rs_u32>(t.top.size()), t.low.data(), t.low_count.data(), t.half);
       break;
     }
@@ -717,7 +744,7 @@ std::uint64_t key(Encoder e, unsigned bits, const EncodeScene& s, const RsRay& r
       // The region: the one leaf of the split tree all of whose ancestors' conditions the origin
       // meets, found by testing every leaf bottom-up (the kernel walks down); then one scalar slab
       // test per cut node of that region.
-      const auto& g = s.regions(bits);
+      const auto& g = region_inputs(s, bits);
       const rs_u32 rb = g.region_bits;
       rs_u32 region = 0, matches = 0;
       for (rs_u32 leaf = 0; leaf < (1u << rb); ++leaf) {
@@ -742,7 +769,7 @@ std::uint64_t key(Encoder e, unsigned bits, const EncodeScene& s, const RsRay& r
       // Scalar slab tests over the top nodes and the representative's low cut, then the table's
       // value for the bin worked out here: the origin's cell per axis, the octahedral cell from
       // the direction's octant (upper half: (x, y) / L1 norm; lower half: folded).
-      const auto& t = s.cost_cut(bits);
+      const auto& t = cost_cut_inputs(s, bits);
       const RsTraversalRay tr = rs_prepare_ray(r);
       std::size_t rep = t.cut.top.size();
       for (std::size_t i = 0; i < t.cut.top.size(); ++i)
@@ -789,7 +816,7 @@ std::vector<RsRay> edge_rays(const EncodeScene& s, const Aabb& box, std::size_t 
   for (int c = 0; c < 8; ++c)
     points.push_back({c & 1 ? box.max[0] : box.min[0], c & 2 ? box.max[1] : box.min[1], c & 4 ? box.max[2] : box.min[2]});
   for (unsigned bits : {16u, 64u})
-    for (const RsBox& b : s.box_set(Encoder::HCC, bits)) {
+    for (const RsBox& b : box_set(s, Encoder::HCC, bits)) {
       points.push_back({b.bmin[0], b.bmin[1], b.bmin[2]});
       points.push_back({b.bmax[0], b.bmax[1], b.bmax[2]});
       points.push_back({b.bmin[0], 0.5f * (b.bmin[1] + b.bmax[1]), b.bmax[2]});
@@ -878,7 +905,7 @@ TEST(Encode, ShortRowsKeepOnlyTheirOwnBoxes) {
       // The precondition: hcc-region has rows shorter than their width here. (MLHCC's top nodes have
       // at least as many leaves as a row has boxes, so its rows are full; for it and mlhcc-cost the
       // kept bits matter to rays that hit no top node, whose low bits are 0.)
-      const auto& counts = s.regions(bits).counts;
+      const auto& counts = region_inputs(s, bits).counts;
       ASSERT_TRUE(std::any_of(counts.begin(), counts.end(), [&](rs_u32 n) { return n < bits - r; })) << bits;
       for (Encoder e : {Encoder::MLHCC, Encoder::MLHCC_COST, Encoder::HCC_REGION}) {
         const std::string what = std::string(encoder_name(e)) + "/" + std::to_string(bits) + " r " + std::to_string(r);
@@ -1156,7 +1183,7 @@ TEST(Encode, RegionKeysStartWithTheOriginsRegion) {
     p.region_bits = r;
     EncodeScene s(d.bvh, d.box, p);
     for (unsigned bits : kBits) {
-      const auto& g = s.regions(bits);
+      const auto& g = region_inputs(s, bits);
       ASSERT_EQ(g.boxes.size(), 1u << r);
       ASSERT_EQ(g.cuts.size(), 1u << r);
       EXPECT_EQ(g.groups.size(), (std::size_t(1) << r) * ((bits - r + 15) / 16));
@@ -1190,7 +1217,7 @@ TEST(Encode, RegionKeysStartWithTheOriginsRegion) {
   p0.region_bits = 0;
   EncodeScene s0(d.bvh, d.box, p0);
   for (unsigned bits : kBits) {
-    EXPECT_EQ(s0.regions(bits).cuts.at(0), s0.hcc_cut(bits));
+    EXPECT_EQ(region_inputs(s0, bits).cuts.at(0), s0.hcc_cut(bits));
     for (const auto& rb : d.batches)
       EXPECT_EQ(encode_on_host(Encoder::HCC_REGION, bits, s0, rb.batch.rays),
                 encode_on_host(Encoder::HCC, bits, s0, rb.batch.rays))
@@ -1279,7 +1306,7 @@ TEST(Encode, RegionCellsAreTheWalk) {
     RegionStatistics stats;
     stats.splits = random_splits(r);
     stats.visits.resize(std::size_t{1} << r);  // no traffic: every region gets HCC's cut
-    dev.set_region_statistics(stats);
+    set_region_statistics(dev.scene(), stats);
     std::vector<RsRay> rays;
     for (const auto& o : origins_for(stats.splits)) rays.push_back(ray(o[0], o[1], o[2], 0.6f, -0.8f, 0));
     for (unsigned bits : {32u, 64u}) {
@@ -1312,7 +1339,7 @@ TEST(Encode, RegionCellsAreTheWalk) {
     RegionStatistics stats;
     stats.splits = splits;
     stats.visits.resize(4);
-    EXPECT_THROW(s.set_region_statistics(stats), Error);
+    EXPECT_THROW(set_region_statistics(s, stats), Error);
   }
   EXPECT_THROW(region_cells(median_region_splits(unit, {}, 2), 3), Error);  // too few splits
 }
@@ -1347,9 +1374,9 @@ TEST(Encode, RegionsFromAPreviousFrameSplitAtMedianOriginsAndCutByTraffic) {
         if (dense.back()[n]) sparse.emplace_back(static_cast<std::uint32_t>(n), dense.back()[n]);
       stats.visits.push_back(sparse);
     }
-    dev.set_region_statistics(stats);
+    set_region_statistics(dev.scene(), stats);
     for (unsigned bits : {16u, 32u, 64u}) {
-      const auto& g = dev.scene().regions(bits);
+      const auto& g = region_inputs(dev.scene(), bits);
       for (std::size_t k = 0; k < starting_in.size(); ++k) {
         const std::vector<double> priority = traffic_priority(dev.scene().had(), dense[k], p.traffic_blend);
         EXPECT_EQ(g.cuts[k], priority_cut(d.bvh, priority, bits - r, 0, &dev.scene().had())) << "r " << r << " region " << k;
@@ -1361,9 +1388,9 @@ TEST(Encode, RegionsFromAPreviousFrameSplitAtMedianOriginsAndCutByTraffic) {
       ASSERT_NO_FATAL_FAILURE(expect_region_keys_exact(dev, bits, edges, "with statistics, r = " + std::to_string(r)));
     }
     // Clearing the statistics returns to the halved cells and HAD's region cuts.
-    dev.set_region_statistics({});
+    set_region_statistics(dev.scene(), RegionStatistics{});
     EncodeScene plain(d.bvh, d.box, p);
-    EXPECT_EQ(dev.scene().regions(32).cuts, plain.regions(32).cuts);
+    EXPECT_EQ(region_inputs(dev.scene(), 32).cuts, region_inputs(plain, 32).cuts);
   }
   EncoderParams p;
   p.region_bits = 2;
@@ -1371,12 +1398,12 @@ TEST(Encode, RegionsFromAPreviousFrameSplitAtMedianOriginsAndCutByTraffic) {
   RegionStatistics wrong;
   wrong.splits = median_region_splits(d.box, rays, 3);
   wrong.visits.resize(8);
-  EXPECT_THROW(s.set_region_statistics(wrong), Error);  // 8 regions for a 4-region code
+  EXPECT_THROW(set_region_statistics(s, wrong), Error);  // 8 regions for a 4-region code
   RegionStatistics outside;
   outside.splits = median_region_splits(d.box, rays, 2);
   outside.visits.resize(4);
   outside.visits[1].emplace_back(static_cast<std::uint32_t>(d.bvh.nodes.size()), 1);
-  EXPECT_THROW(s.set_region_statistics(outside), Error);  // a node the BVH does not have
+  EXPECT_THROW(set_region_statistics(s, outside), Error);  // a node the BVH does not have
 }
 
 // Node traffic: the root's count is the rays entering the scene box, and no node is entered by more
@@ -1417,17 +1444,17 @@ TEST(Encode, TrafficCutBlendsHadWithTheTraffic) {
     EncoderParams p0;
     p0.traffic_blend = 0.0;
     EncodeScene s0(d.bvh, d.box, p0);
-    EXPECT_EQ(s0.traffic_cut(bits), s0.hcc_cut(bits));  // no traffic yet
-    s0.set_node_traffic(visits);
-    EXPECT_EQ(s0.traffic_cut(bits), s0.hcc_cut(bits)) << "beta = 0";
+    EXPECT_EQ(traffic_cut(s0, bits), s0.hcc_cut(bits));  // no traffic yet
+    set_node_traffic(s0, visits);
+    EXPECT_EQ(traffic_cut(s0, bits), s0.hcc_cut(bits)) << "beta = 0";
     EXPECT_EQ(encode_on_host(Encoder::HCC_TRAFFIC, bits, s0, frame[1].batch.rays),
               encode_on_host(Encoder::HCC, bits, s0, frame[1].batch.rays));
 
     EncoderParams p1;
     p1.traffic_blend = 1.0;
     EncodeScene s1(d.bvh, d.box, p1);
-    s1.set_node_traffic(visits);
-    const auto& cut = s1.traffic_cut(bits);
+    set_node_traffic(s1, visits);
+    const auto& cut = traffic_cut(s1, bits);
     EXPECT_EQ(validate_cut(d.bvh, cut), "") << bits;
     for (std::size_t i = 1; i < cut.size(); ++i) {
       const auto a = visits[cut[i - 1]], b = visits[cut[i]];
@@ -1440,7 +1467,7 @@ TEST(Encode, TrafficCutBlendsHadWithTheTraffic) {
     p.traffic_blend = beta;
     DeviceEncoder dev(testing::runtime(), d.bvh, d.box, p);
     for (std::size_t k = 0; k < frame.size(); ++k) {
-      dev.set_node_traffic(k == 0 ? std::vector<std::uint64_t>{}
+      set_node_traffic(dev.scene(), k == 0 ? std::vector<std::uint64_t>{}
                                   : node_traffic(d.bvh, frame[k - 1].batch.rays, frame[k - 1].batch.any_hit()));
       const std::string what = "beta " + std::to_string(beta) + " " + frame[k].batch.name;
       for (unsigned bits : {16u, 32u, 33u, 64u}) {
@@ -1452,7 +1479,7 @@ TEST(Encode, TrafficCutBlendsHadWithTheTraffic) {
     }
   }
   EncodeScene s(d.bvh, d.box);
-  EXPECT_THROW(s.set_node_traffic(std::vector<std::uint64_t>(3, 1)), Error);  // not one count per node
+  EXPECT_THROW(set_node_traffic(s, std::vector<std::uint64_t>(3, 1)), Error);  // not one count per node
 }
 
 
@@ -1497,13 +1524,13 @@ TEST(Encode, CostStatisticsMeansAndFallbacks) {
   // Quantised for a 32-bit key (4 cost bits by default): mean · 16 / (largest + 1), largest = 21 · 16.
   const DetailRoom& d = detail_room();
   EncodeScene s(d.bvh, d.box);
-  EXPECT_EQ(s.cost_cut(32).cost, std::vector<rs_u32>(RS_COST_BINS, 0u));  // no estimates: field 0
-  s.set_cost_estimates(mean);
-  const auto& t = s.cost_cut(32);
+  EXPECT_EQ(cost_cut_inputs(s, 32).cost, std::vector<rs_u32>(RS_COST_BINS, 0u));  // no estimates: field 0
+  set_cost_estimates(s, mean);
+  const auto& t = cost_cut_inputs(s, 32);
   EXPECT_EQ(t.split.cost_bits, 4u);
   EXPECT_EQ(t.cost[rs_cost_bin(&f, far_cell)], 336u * 16u / 337u);  // 15: the top of the field
   EXPECT_EQ(t.cost[rs_cost_bin(&f, up)], 72u * 16u / 337u);         // 3
-  EXPECT_THROW(s.set_cost_estimates({1, 2, 3}), Error);
+  EXPECT_THROW(set_cost_estimates(s, {1, 2, 3}), Error);
 }
 
 // mlhcc-cost's kernel equals the host twin and the bitwise reference with a real table (the
@@ -1528,13 +1555,13 @@ TEST(Encode, CostKernelMatchesTheHostWithEstimates) {
       ASSERT_NE(same, frame.end()) << rb.batch.name;
       std::vector<std::uint32_t> steps;
       trace_reference(p.bvh, same->batch.rays, nullptr, same->batch.any_hit(), &steps);
-      dev.set_cost_estimates(cost_statistics(dev.scene().frame(), same->batch.rays, steps));
+      set_cost_estimates(dev.scene(), cost_statistics(dev.scene().frame(), same->batch.rays, steps));
       for (unsigned bits : {4u, 16u, 26u, 32u, 50u, 64u}) {
         if (!key_bits_problem(Encoder::MLHCC_COST, bits, params).empty()) continue;
         const std::string what = rb.batch.name + " cost bits " + std::to_string(cost_bits);
         expect_device_equals_host(dev, Encoder::MLHCC_COST, bits, rb.batch.rays, what);
         const auto keys = encode_on_host(Encoder::MLHCC_COST, bits, dev.scene(), rb.batch.rays);
-        const CostSplit split = dev.scene().cost_cut(bits).split;
+        const CostSplit split = cost_cut_inputs(dev.scene(), bits).split;
         std::size_t nonzero_cost = 0;
         for (std::size_t i = 0; i < keys.size(); ++i) {
           ASSERT_EQ(keys[i], ref::key(Encoder::MLHCC_COST, bits, dev.scene(), rb.batch.rays[i])) << what << " ray " << i;
@@ -1543,7 +1570,7 @@ TEST(Encode, CostKernelMatchesTheHostWithEstimates) {
             ASSERT_EQ(keys[i] >> split.cost_bits, 0u) << what << " ray " << i;
           }
           const std::uint64_t field = keys[i] & ((std::uint64_t{1} << split.cost_bits) - 1);
-          ASSERT_EQ(field, dev.scene().cost_cut(bits).cost[rs_cost_bin(&dev.scene().frame(), rb.batch.rays[i])]);
+          ASSERT_EQ(field, cost_cut_inputs(dev.scene(), bits).cost[rs_cost_bin(&dev.scene().frame(), rb.batch.rays[i])]);
           nonzero_cost += field != 0;
         }
         if (split.cost_bits >= 3) {

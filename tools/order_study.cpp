@@ -170,7 +170,7 @@ int run_study(int argc, char** argv) {
   // cut, as in rs_two_level_cut_code.
   {
     const std::vector<std::uint64_t> traffic = node_traffic(p.bvh, prev->batch.rays, any_hit);
-    const EncodeScene::TwoLevel& tl = es.two_level(32);
+    const TwoLevelInputs& tl = two_level_inputs(es, 32);
     const rs_u32 groups = rs_cut_group_count(tl.half);
     std::vector<std::uint64_t> entered_first(rays.size(), 0), lowest_had(rays.size(), 0), most_traffic(rays.size(), 0);
     for (std::size_t i = 0; i < rays.size(); ++i) {
@@ -259,7 +259,7 @@ int run_study(int argc, char** argv) {
       EncoderParams params;
       params.cost_bits = cost_bits;
       EncodeScene with_costs(p.bvh, p.scene.bounds(), params);
-      with_costs.set_cost_estimates(causal_means);
+      set_cost_estimates(with_costs, causal_means);
       const CostSplit split = cost_split(32, params);
       report(fmt::format("mlhcc-cost/32 ({} | {} | {})", split.top_bits, split.low_bits, split.cost_bits),
              encode_on_host(Encoder::MLHCC_COST, 32, with_costs, rays));

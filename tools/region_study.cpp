@@ -64,7 +64,7 @@ int run_study(int argc, char** argv) {
     const std::vector<RsRegionSplit> halved = median_region_splits(box, {}, r);
     const std::vector<RsRegionSplit> median = median_region_splits(box, previous, r);
     // The HAD cuts of a split tree's cells, in the layout hcc-region's code reads (the region's
-    // overlap-restricted cuts: what EncodeScene::regions does without statistics).
+    // overlap-restricted cuts: what region_inputs does without statistics).
     auto had_keys = [&](const std::vector<RsRegionSplit>& splits) {
       std::vector<std::vector<std::uint32_t>> cuts;
       for (const Aabb& cell : region_boxes(box, splits, r)) cuts.push_back(region_cut(p.bvh, es.had(), 32 - r, cell));
@@ -78,7 +78,7 @@ int run_study(int argc, char** argv) {
     };
     auto traffic_keys = [&](const std::vector<RsRegionSplit>& splits) {
       EncodeScene with(p.bvh, box, params);
-      with.set_region_statistics(region_statistics(p.bvh, splits, r, previous, any_hit));
+      set_region_statistics(with, region_statistics(p.bvh, splits, r, previous, any_hit));
       return encode_on_host(Encoder::HCC_REGION, 32, with, rays);
     };
     const EncodeScene without(p.bvh, box, params);

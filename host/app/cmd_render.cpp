@@ -11,6 +11,7 @@
 //      table of the cut nodes.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <memory>
@@ -33,7 +34,7 @@ namespace {
 
 struct RenderArgs {
   std::string scene;
-  std::string overlay = "none";  // none, or an encoder whose table row has `overlay`
+  std::string overlay = "none";  // none, or one of kOverlays
   unsigned bits = 32;
   std::string out;
   float exposure = 0.0f;  // PNG only: radiance x 2^exposure before sRGB encoding
@@ -41,14 +42,16 @@ struct RenderArgs {
   CommonOptions common;   // device, scene root, resolution, spp, seed
 };
 
+// The encoders whose boxes --overlay draws: the grid's cells, HCC's cut nodes, MLHCC's top level.
+const Encoder kOverlays[] = {Encoder::RegularGrid, Encoder::HCC, Encoder::MLHCC};
+
 // The encoder --overlay names; none for "none". Throws Error listing the encoders that have boxes.
 std::optional<Encoder> overlay_encoder(const std::string& name) {
   if (name == "none") return std::nullopt;
   const auto e = parse_encoder(name);
-  if (!e || !encoder_info(*e).overlay) {
+  if (!e || std::find(std::begin(kOverlays), std::end(kOverlays), *e) == std::end(kOverlays)) {
     std::string names = "none";
-    for (const EncoderInfo& info : encoder_table())
-      if (info.overlay) names += fmt::format(", {}", info.name);
+    for (Encoder o : kOverlays) names += fmt::format(", {}", encoder_name(o));
     throw Error(fmt::format("--overlay '{}': expected {}", name, names));
   }
   return e;
@@ -65,7 +68,7 @@ std::vector<Aabb> key_boxes(Encoder e, unsigned bits, const Bvh& bvh) {
     return regular_grid_cells(bvh.bounds(), bits);
   }
   const bool two_level = e == Encoder::MLHCC;
-  const auto& cut = two_level ? es.two_level(bits).cut.top : es.hcc_cut(bits);
+  const auto& cut = two_level ? two_level_inputs(es, bits).cut.top : es.hcc_cut(bits);
   fmt::print("{} cut ({} nodes{}); bit = key bit from the top\n", encoder_name(e), cut.size(),
              two_level ? ", top level" : "");
   fmt::print("{:>4} {:>8} {:>12} {:>8}  box\n", "bit", "node", "HAD", "tris");

@@ -9,7 +9,6 @@
 #include "bench/result_set.h"
 #include "bench/runner.h"
 #include "bench/shard.h"
-#include "encode/encode.h"
 #ifdef RAYSORT_HAVE_EMBREE
 #include "embree/embree_reference.h"
 #endif
@@ -18,7 +17,6 @@
 namespace raysort {
 
 namespace {
-constexpr double kInf = std::numeric_limits<double>::infinity();
 // The largest N of --shard i/N (ShardSpec::parse reads up to six digits).
 constexpr std::uint64_t kMaxShards = 999999;
 
@@ -30,12 +28,7 @@ struct RunArgs {
   std::string variant, access, baseline, layout, gpu_model, embree_paths;
   unsigned reps = 0, warmup = 0;
   double max_noise_pct = 0, max_time_s = 0;
-  double lambda = -1;
-  float twopoint = -1;
-  int direction_bits = -1;
-  int region_bits = -1;
-  double traffic_blend = -1;
-  int cost_bits = -1;
+  EncoderParams params;  // the knobs given (encode/encoder_params.h)
   double timeout_s = 0;
   std::string shard;
   unsigned shard_plan = 0;
@@ -89,16 +82,36 @@ MatrixSpec matrix_from(const RunArgs& a, const CLI::App& cmd) {
   if (cmd.count("--warmup")) spec.warmup = a.warmup;
   if (cmd.count("--max-noise")) spec.max_noise = a.max_noise_pct / 100.0;
   if (cmd.count("--max-time")) spec.max_time_s = a.max_time_s;
-  // The encoder knobs were checked where they were parsed (register_run_command's ranges): a given
+  // The encoder knobs were checked where they were parsed (add_encoder_param_options): a given
   // value is taken, none is replaced by the default.
-  if (cmd.count("--lambda")) spec.params.had_lambda = a.lambda;
-  if (cmd.count("--twopoint-length")) spec.params.twopoint_length_fraction = a.twopoint;
-  if (cmd.count("--direction-bits")) spec.params.direction_bits = static_cast<unsigned>(a.direction_bits);
-  if (cmd.count("--region-bits")) spec.params.region_bits = static_cast<unsigned>(a.region_bits);
-  if (cmd.count("--traffic-blend")) spec.params.traffic_blend = a.traffic_blend;
-  if (cmd.count("--cost-bits")) spec.params.cost_bits = static_cast<unsigned>(a.cost_bits);
+  apply_given_params(cmd, a.params, spec.params);
   spec.cell_timeout_s = a.timeout_s;
   return spec;
+}
+// What a run did, on stdout (and on stderr why it did not finish), and its exit code: the state of
+// the whole set.
+void report_run(const RunSummary& s) {
+  fmt::print("{} cells run{}, {} already done (skipped), {} failed; results in {}\n", s.cells_run,
+             s.cells_retried ? fmt::format(" ({} of them retries of failed or timed-out cells)", s.cells_retried) : "",
+             s.cells_skipped, s.cells_failed, s.out_dir);
+  const NoiseSummary noise = summarize_noise(ResultSet::load(s.out_dir).cells());
+  if (noise.aa_intervals > 0)
+    fmt::print("noise: A/A calibration {} of {} intervals contain 1.00 ({:.1f} %); speedup interval half-width "
+               "median {:.1f} %, 90th percentile {:.1f} %; cells stopped by time {}, by noise {}\n",
+               noise.aa_containing_one, noise.aa_intervals, 100.0 * noise.aa_coverage(),
+               100.0 * noise.median_half_width, 100.0 * noise.p90_half_width, noise.stopped_by_time,
+               noise.stopped_by_noise);
+  fmt::print("tables: {}/tables.md\n", s.out_dir);
+  if (s.interrupted) {
+    fmt::print(stderr, "interrupted: finished cells are saved; rerun the same command to resume\n");
+    set_command_exit_code(s.signal > 0 ? 128 + s.signal : kExitInterrupted);
+  } else if (s.cells_not_ok > 0 || s.cells_missing > 0) {
+    // The exit code is the state of the whole set, not of this run's cells: a resumed run that
+    // kept failed cells (--no-retry) or failed again does not report success.
+    fmt::print(stderr, "raysort run: {} has {} cell(s) not ok (failed or timeout) and {} missing; rerun the command "
+               "to retry them\n", s.out_dir, s.cells_not_ok, s.cells_missing);
+    set_command_exit_code(kExitBadInput);
+  }
 }
 }  // namespace
 
@@ -147,27 +160,7 @@ void register_run_command(CLI::App& app) {
                   "also replay every cell's traversal through a GPU's caches and predict its speedup (docs/gpu-model.md): "
                   "a profile in gpu/profiles/ (rtx3060, h100, h200) or a .toml path; off by default (it adds the replay's "
                   "time to each cell's SIMT model)");
-  finite_number(cmd->add_option("--lambda", a->lambda, "HAD lambda (paper Eq. 1; default 0.125)"), 0, kInf);
-  // Stored as a float (EncoderParams), so bounded by the float range.
-  finite_number(cmd->add_option("--twopoint-length", a->twopoint,
-                                "TwoPoint ray length as a fraction of the largest extent (0.25)"),
-                0, std::numeric_limits<float>::max());
-  whole_number(cmd->add_option("--direction-bits", a->direction_bits,
-                               "HCC_DIR direction bits (fewer than the key's; at most 42)"),
-               0, 64);
-  whole_number(cmd->add_option("--region-bits", a->region_bits,
-                  "hcc-region: key bits that pick the ray origin's region, 2^N regions split at a previous frame's "
-                  "median origins (0-8, default 4; docs/encoders.md)"),
-               0, kMaxRegionBits);
-  finite_number(cmd->add_option("--traffic-blend", a->traffic_blend,
-                  "hcc-traffic and hcc-region: beta of the cut priority (1 - beta) HAD + beta traffic (hcc-traffic: of "
-                  "the previous batch; hcc-region: of the region's rays in a previous frame; 0-1, default 0.5; "
-                  "docs/encoders.md)"),
-                0, 1);
-  whole_number(cmd->add_option("--cost-bits", a->cost_bits,
-                               "mlhcc-cost: key bits of the traversal-cost estimate from a previous frame (1-31 and fewer "
-                               "than half the key; default an eighth of the key; docs/encoders.md)"),
-               1, 31);
+  add_encoder_param_options(*cmd, a->params);
   finite_number(cmd->add_option("--timeout", a->timeout_s,
                                 "per-cell wall-clock limit in seconds (0: none); a cell over it is recorded as \"timeout\" "
                                 "(checked between the arms of a round: a kernel in flight runs to completion)"),
@@ -200,28 +193,7 @@ void register_run_command(CLI::App& app) {
       fmt::print("{}", format_plan(plan_matrix_shards(spec, a->opts.scene_root, a->shard_plan), a->shard_plan));
       return;
     }
-    RunSummary s = run_matrix(spec, a->opts);
-    fmt::print("{} cells run{}, {} already done (skipped), {} failed; results in {}\n", s.cells_run,
-               s.cells_retried ? fmt::format(" ({} of them retries of failed or timed-out cells)", s.cells_retried) : "",
-               s.cells_skipped, s.cells_failed, s.out_dir);
-    const NoiseSummary noise = summarize_noise(ResultSet::load(s.out_dir).cells());
-    if (noise.aa_intervals > 0)
-      fmt::print("noise: A/A calibration {} of {} intervals contain 1.00 ({:.1f} %); speedup interval half-width "
-                 "median {:.1f} %, 90th percentile {:.1f} %; cells stopped by time {}, by noise {}\n",
-                 noise.aa_containing_one, noise.aa_intervals, 100.0 * noise.aa_coverage(),
-                 100.0 * noise.median_half_width, 100.0 * noise.p90_half_width, noise.stopped_by_time,
-                 noise.stopped_by_noise);
-    fmt::print("tables: {}/tables.md\n", s.out_dir);
-    if (s.interrupted) {
-      fmt::print(stderr, "interrupted: finished cells are saved; rerun the same command to resume\n");
-      set_command_exit_code(s.signal > 0 ? 128 + s.signal : kExitInterrupted);
-    } else if (s.cells_not_ok > 0 || s.cells_missing > 0) {
-      // The exit code is the state of the whole set, not of this run's cells: a resumed run that
-      // kept failed cells (--no-retry) or failed again does not report success.
-      fmt::print(stderr, "raysort run: {} has {} cell(s) not ok (failed or timeout) and {} missing; rerun the command "
-                 "to retry them\n", s.out_dir, s.cells_not_ok, s.cells_missing);
-      set_command_exit_code(kExitBadInput);
-    }
+    report_run(run_matrix(spec, a->opts));
   });
 }
 

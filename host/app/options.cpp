@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "util/error.h"
+#include "util/text.h"
 
 namespace raysort {
 
@@ -45,16 +46,14 @@ CLI::Option* whole_number(CLI::Option* opt, std::uint64_t lo, std::uint64_t hi) 
       opt,
       [lo, hi](const std::string& name, const std::string& text) {
         std::uint64_t v = 0;
-        if (!parse_whole(text, v) || v < lo || v > hi) refuse(name, text, fmt::format("a whole number from {} to {}", lo, hi));
+        if (!parse_whole(text, v) || v < lo || v > hi)
+          refuse(name, text, number_range_text(static_cast<double>(lo), static_cast<double>(hi), true));
       },
       fmt::format("{}..{}", lo, hi));
 }
 
 CLI::Option* finite_number(CLI::Option* opt, double lo, double hi, bool above_lo) {
-  const std::string valid =
-      std::isinf(hi) ? (above_lo ? fmt::format("a finite number above {:g}", lo) : fmt::format("a finite number, {:g} or more", lo))
-      : above_lo     ? fmt::format("a finite number above {:g} and at most {:g}", lo, hi)
-                     : fmt::format("a finite number from {:g} to {:g}", lo, hi);
+  const std::string valid = number_range_text(lo, hi, false, above_lo);
   return check_text(
       opt,
       [lo, hi, above_lo, valid](const std::string& name, const std::string& text) {
@@ -67,6 +66,24 @@ CLI::Option* finite_number(CLI::Option* opt, double lo, double hi, bool above_lo
       },
       std::isinf(hi) ? fmt::format("{}{:g}", above_lo ? ">" : ">=", lo)
                      : fmt::format("{}{:g}..{:g}", above_lo ? ">" : "", lo, hi));
+}
+
+void add_encoder_param_options(CLI::App& cmd, EncoderParams& given) {
+  for (const EncoderParam& row : encoder_params())
+    std::visit(
+        [&](auto member) {
+          CLI::Option* opt = cmd.add_option(std::string(row.flag), given.*member, std::string(row.meaning));
+          if (row.whole())
+            whole_number(opt, static_cast<std::uint64_t>(row.lo), static_cast<std::uint64_t>(row.hi));
+          else
+            finite_number(opt, row.lo, row.hi);
+        },
+        row.field);
+}
+
+void apply_given_params(const CLI::App& cmd, const EncoderParams& given, EncoderParams& into) {
+  for (const EncoderParam& row : encoder_params())
+    if (cmd.count(std::string(row.flag))) copy_param(row, given, into);
 }
 
 void check_resolution_text(const std::string& option, const std::string& text) {

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "bench/protocol.h"
+#include "encode/encoder_params.h"
 #include "render/rays.h"
 #include "scene/load.h"
 
@@ -50,6 +51,14 @@ void add_common_options(CLI::App& cmd, CommonOptions& o);
 // The scenes to work on: `--scene` and `--scenes` name the same option (names, .toml or .obj
 // paths, comma-separated).
 CLI::Option* add_scene_list_option(CLI::App& cmd, std::vector<std::string>& scenes, const std::string& help);
+
+// The encoders' knobs (encode/encoder_params.h): one option per row, with the row's range (checked
+// as every number is, above) and meaning. `run` and `encodebench` both take them from here, so they
+// take and refuse the same values with the same message. The values land in `given`.
+void add_encoder_param_options(CLI::App& cmd, EncoderParams& given);
+// `into` with the knobs given on `cmd`'s command line taken from `given`; the others keep their
+// value (a preset's, or the default).
+void apply_given_params(const CLI::App& cmd, const EncoderParams& given, EncoderParams& into);
 
 // The measurement protocol's knobs (bench/protocol.h) for the commands that time one batch at a
 // time (trace, encodebench); `run` keeps them in its matrix.

@@ -41,19 +41,6 @@ Estimate scaled(Estimate e, double factor) {
   return e;
 }
 
-// Keys of `bits` bits from a device buffer, widened to 64 bits.
-std::vector<std::uint64_t> download_keys(Runtime& rt, const cl::Buffer& keys, unsigned bits, std::uint32_t n,
-                                         const char* what) {
-  if (bits > 32) {
-    std::vector<std::uint64_t> k;
-    rt.download(what, keys, k, n);
-    return k;
-  }
-  std::vector<std::uint32_t> k;
-  rt.download(what, keys, k, n);
-  return {k.begin(), k.end()};
-}
-
 }  // namespace
 
 BatchBench::BatchBench(const Stages& stages, const Bvh& bvh, const RayBatch& batch, const std::vector<RsHit>& reference)
@@ -316,7 +303,7 @@ BatchBench::SortedOrder BatchBench::check_order(const cl::Buffer& keys, unsigned
     }
   so.identity = so.permutation;
   for (std::uint32_t i = 0; so.identity && i < n_; ++i) so.identity = so.order[i] == i;
-  std::vector<std::uint64_t> sorted_keys = download_keys(s_.rt, keys, bits, n_, "sorted keys");
+  std::vector<std::uint64_t> sorted_keys = DeviceEncoder::download_keys(s_.rt, keys, bits, n_, "sorted keys");
   // ANC of the codes the sort used: a top-k sort orders by the highest k bits only.
   if (top > 0)
     for (auto& k : sorted_keys) k >>= (bits - top);
@@ -379,7 +366,7 @@ std::vector<CellRecord> BatchBench::measure_sorted(std::vector<CellRecord> cells
     cfg.top_bits = top;
     // The keys in generation order, for their fingerprint (untimed).
     s_.encoder.enqueue(encoder, bits, rays_, identity_, n_, keys, values_).wait();
-    const std::vector<std::uint64_t> unsorted = download_keys(s_.rt, keys, bits, n_, "keys");
+    const std::vector<std::uint64_t> unsorted = DeviceEncoder::download_keys(s_.rt, keys, bits, n_, "keys");
 
     const Outcome o = measure(sorted_measurement(cells, encoder, keys, cfg), settings);
 

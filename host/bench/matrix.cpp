@@ -27,6 +27,18 @@ std::string joined(const std::vector<T>& items, Name name) {
 
 }  // namespace
 
+void MatrixSpec::add_params_json(nlohmann::json& j) const {
+  // Each knob by its row (encode/encoder_params.h), under the field's own name and type. The knobs
+  // of the encoders beyond the paper (issue 21) only in a matrix that runs one of their encoders
+  // (cost_bits only when set): a set written before they existed keeps its entry (and resumes).
+  auto runs = [&](Encoder e) { return std::find(encoders.begin(), encoders.end(), e) != encoders.end(); };
+  for (const EncoderParam& row : encoder_params()) {
+    if (!row.recorded_with.empty() && std::none_of(row.recorded_with.begin(), row.recorded_with.end(), runs)) continue;
+    if (row.recorded_when_set && row.is_default(params)) continue;
+    std::visit([&](auto member) { j[std::string(row.key)] = params.*member; }, row.field);
+  }
+}
+
 nlohmann::json MatrixSpec::to_json() const {
   // The spelling of format version 2's meta.json: a set resumes only under an equal entry.
   nlohmann::json j = {{"preset", preset},
@@ -51,20 +63,12 @@ nlohmann::json MatrixSpec::to_json() const {
           {"variant", joined(variants, trace_variant_name)},
           {"access", joined(accesses, ray_access_name)},
           {"baseline", joined(baselines, baseline_order_name)},
-          {"layout", joined(layouts, trace_layout_name)},
-          {"twopoint_length_fraction", params.twopoint_length_fraction},
-          {"had_lambda", params.had_lambda},
-          {"direction_bits", params.direction_bits}};
+          {"layout", joined(layouts, trace_layout_name)}};
+  add_params_json(j);
   // Only when on, so a set without the model keeps the entry it was written with (and resumes).
   if (!gpu_model.empty()) j["gpu_model"] = gpu_model;
   // Likewise Embree's paths: part of the matrix (a resume with other paths is another matrix).
   if (!embree_paths.empty()) j["embree_paths"] = embree_paths;
-  // The knobs of the encoders beyond the paper (issue 21), only in a matrix that runs them: a set
-  // written before they existed keeps its entry (and resumes).
-  auto runs = [&](Encoder e) { return std::find(encoders.begin(), encoders.end(), e) != encoders.end(); };
-  if (runs(Encoder::HCC_REGION)) j["region_bits"] = params.region_bits;
-  if (runs(Encoder::HCC_TRAFFIC) || runs(Encoder::HCC_REGION)) j["traffic_blend"] = params.traffic_blend;
-  if (runs(Encoder::MLHCC_COST) && params.cost_bits > 0) j["cost_bits"] = params.cost_bits;
   // Likewise the sampling overrides: a set that keeps the scenes' own shadow rays and depth has no entry.
   if (frame.shadow_rays) j["shadow_rays"] = frame.shadow_rays;
   if (frame.bounces) j["bounces"] = frame.bounces;
@@ -81,10 +85,8 @@ void check_matrix_json(const nlohmann::json& matrix, const std::string& file) {
       {"bits", CountList},    {"key_length_scenes", TextList}, {"key_length_bits", CountList}, {"top_bits", CountList},
       {"resolution", Text},   {"spp", Count},            {"reps", Count},              {"warmup", Count},
       {"max_noise", Number},  {"max_time_s", Number},    {"seed", Count},              {"variant", Text},
-      {"access", Text},       {"baseline", Text},        {"layout", Text},             {"twopoint_length_fraction", Number},
-      {"had_lambda", Number}, {"direction_bits", Count}, {"gpu_model", Text},          {"region_bits", Count},
-      {"traffic_blend", Number}, {"cost_bits", Count},   {"shadow_rays", Count},       {"bounces", Count},
-      {"embree_paths", TextList}};
+      {"access", Text},       {"baseline", Text},        {"layout", Text},             {"gpu_model", Text},
+      {"shadow_rays", Count}, {"bounces", Count},        {"embree_paths", TextList}};
   auto is = [](const nlohmann::json& v, Kind k) {
     switch (k) {
       case Text: return v.is_string();
@@ -101,7 +103,9 @@ void check_matrix_json(const nlohmann::json& matrix, const std::string& file) {
   if (!matrix.is_object())
     throw Error(fmt::format("{}: \"matrix\" is a JSON {}, not an object; restore the file (it was edited or damaged)",
                             file, matrix.type_name()));
-  for (const auto& [key, kind] : kKeys) {
+  std::vector<std::pair<std::string, Kind>> keys(kKeys.begin(), kKeys.end());
+  for (const EncoderParam& row : encoder_params()) keys.emplace_back(row.key, row.whole() ? Count : Number);
+  for (const auto& [key, kind] : keys) {
     if (!matrix.contains(key) || is(matrix[key], kind)) continue;
     const nlohmann::json& v = matrix[key];
     std::string what = fmt::format("a JSON {}", v.type_name());
@@ -218,6 +222,18 @@ MatrixSpec matrix_preset(const std::string& name) {
   throw Error(fmt::format("unknown preset '{}'; presets are: {}", name, fmt::join(preset_names(), ", ")));
 }
 
+void validate_encoders(const std::vector<Encoder>& encoders, const std::vector<unsigned>& bits,
+                       const EncoderParams& params) {
+  if (const std::string problem = params_problem(params); !problem.empty()) throw Error(problem);
+  for (Encoder e : encoders) {
+    if (e == Encoder::NoSort) continue;
+    for (unsigned b : bits) {
+      std::string problem = key_bits_problem(e, b, params);
+      if (!problem.empty()) throw Error(fmt::format("encoder {} with {}-bit keys: {}", encoder_name(e), b, problem));
+    }
+  }
+}
+
 void validate_matrix(const MatrixSpec& spec) {
   if (spec.frame.width == 0 || spec.frame.height == 0)
     throw Error(fmt::format("resolution {}x{}: both must be at least 1", spec.frame.width, spec.frame.height));
@@ -257,13 +273,7 @@ void validate_matrix(const MatrixSpec& spec) {
       throw Error(fmt::format("unknown batch '{}'; batches are primary, shadow<k> (k >= 0) and bounce<k> (k >= 1)", b));
   std::vector<unsigned> all_bits = spec.bits;
   all_bits.insert(all_bits.end(), spec.key_length_bits.begin(), spec.key_length_bits.end());
-  for (Encoder e : spec.encoders) {
-    if (e == Encoder::NoSort) continue;
-    for (unsigned b : all_bits) {
-      std::string problem = key_bits_problem(e, b, spec.params);
-      if (!problem.empty()) throw Error(fmt::format("encoder {} with {}-bit keys: {}", encoder_name(e), b, problem));
-    }
-  }
+  validate_encoders(spec.encoders, all_bits, spec.params);
   for (unsigned k : spec.top_bits) {
     unsigned widest = *std::max_element(all_bits.begin(), all_bits.end());
     if (k == 0 || k > widest) throw Error(fmt::format("--top-bits {}: must be between 1 and the key length {}", k, widest));

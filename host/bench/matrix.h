@@ -63,6 +63,8 @@ struct MatrixSpec {
   ProtocolSettings protocol(const std::string& cell_id) const;
 
   nlohmann::json to_json() const;     // "matrix" in meta.json: what must match to resume
+  // The encoder knobs' entries of to_json, by their rows (encode/encoder_params.h).
+  void add_params_json(nlohmann::json& j) const;
   // The key lengths a scene runs.
   std::vector<unsigned> bits_for(const std::string& scene) const;
 };
@@ -81,7 +83,13 @@ std::vector<std::string> preset_names();
 // set written by another version). The readers (tables, plots, sweep) then call get<T>() safely.
 void check_matrix_json(const nlohmann::json& matrix, const std::string& file);
 
-// Checks what parsing cannot: key bits valid per encoder, batch names well formed, resolution and
+// Checks the encoders' settings: every knob in its range (params_problem's message, the option's own
+// refusal) and every key length valid for every encoder but NoSort ("encoder hcc-region with 8-bit
+// keys: ..."). validate_matrix and encodebench both refuse with it. Throws Error.
+void validate_encoders(const std::vector<Encoder>& encoders, const std::vector<unsigned>& bits,
+                       const EncoderParams& params);
+
+// Checks what parsing cannot: key bits valid per encoder (validate_encoders), batch names well formed, resolution and
 // spp non-zero, axes non-empty, protocol settings in range. Throws Error naming the offending value.
 void validate_matrix(const MatrixSpec& spec);
 

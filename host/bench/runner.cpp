@@ -21,6 +21,7 @@
 
 #include "bench/cell_measure.h"
 #include "bench/result_set.h"
+#include "bench/scene_bench.h"
 #include "bvh/prepared_scene.h"
 #include "embree/embree_reference.h"
 #include "render/batches.h"
@@ -201,13 +202,6 @@ struct Progress {
   }
 };
 
-// "1.16 [1.12, 1.20]", or "1.16" without an interval.
-std::string with_interval(const Estimate& e) {
-  if (!e.has_value()) return "–";
-  if (!e.has_interval()) return fmt::format("{:.2f}", e.value);
-  return fmt::format("{:.2f} [{:.2f}, {:.2f}]", e.value, e.lo, e.hi);
-}
-
 // "; Embree 1 12.3 MRays/s, 16-coherent 20.1 MRays/s" (NoSort) or "; Embree 1 1.05 [1.01, 1.09], ..."
 // (each path's speedup on the cell's order): nothing without Embree's arms.
 std::string embree_progress(const CellRecord& c) {
@@ -215,7 +209,7 @@ std::string embree_progress(const CellRecord& c) {
   for (const auto& e : c.embree) {
     const std::string figure =
         e.trace.n == 0 ? fmt::format("{:.2f} MRays/s", e.nosort.median_ms > 0 ? c.rays / (e.nosort.median_ms * 1e3) : 0.0)
-                       : with_interval(e.speedup);
+                       : interval_text(e.speedup, 2);
     s += fmt::format("{} {} {}", s.empty() ? "; Embree" : ",", e.path, figure);
   }
   return s;
@@ -225,15 +219,15 @@ std::string progress_text(const CellRecord& c) {
   if (!c.ok()) return fmt::format("{}: {}: {}", c.id(), c.status == "timeout" ? "TIMEOUT" : "FAILED", c.error);
   const std::string rounds = fmt::format("{} rounds, stopped by {}", c.rounds, c.stopped_by);
   if (c.encoder == kBaselineEncoder)
-    return fmt::format("{}: NoSort {:.2f} MRays/s, A/A {}{}  ({})", c.id(), c.trace_mrays, with_interval(c.aa),
+    return fmt::format("{}: NoSort {:.2f} MRays/s, A/A {}{}  ({})", c.id(), c.trace_mrays, interval_text(c.aa, 2),
                        embree_progress(c), rounds);
   const std::string speed =
       c.same_order_as_nosort
           ? fmt::format("same order as NoSort, no speedup (measured {})",
-                        with_interval(ratio_interval(c.samples.at("nosort"), c.samples.at("trace"))))
-          : fmt::format("speedup {}", with_interval(c.speedup));
+                        interval_text(ratio_interval(c.samples.at("nosort"), c.samples.at("trace")), 2))
+          : fmt::format("speedup {}", interval_text(c.speedup, 2));
   return fmt::format("{}: {:.2f} MRays/s, {}, net {}, encode {:.2f} + sort {:.2f}{} ms{}, ANC {:.2f}{}  ({})", c.id(),
-                     c.trace_mrays, speed, with_interval(c.net_speedup), c.encode.median_ms, c.sort.median_ms,
+                     c.trace_mrays, speed, interval_text(c.net_speedup, 2), c.encode.median_ms, c.sort.median_ms,
                      c.access == "permute" ? fmt::format(" + permute {:.2f}", c.permute.median_ms) : "",
                      c.cut_ms >= 0 ? fmt::format(" (host cut {:.1f} ms)", c.cut_ms) : "", c.anc, embree_progress(c),
                      rounds);
@@ -258,157 +252,22 @@ std::vector<std::vector<PlannedCell>> runs_of(const std::vector<PlannedCell>& ce
   return out;
 }
 
-// A scene loaded for measuring: triangles, BVH, the batches its effects imply (generated once:
-// every encoder sees the same rays), its tracers and encoder kernels.
-struct SceneBench {
-  PreparedScene prepared;
-  const Bvh& bvh = prepared.bvh;
-  const MatrixSpec& spec;
-  std::vector<ReferencedBatch> batches;  // in generation (pixel) order
-  std::map<std::string, ReferencedBatch> shuffled;  // by batch name, made when first asked
-  std::map<std::pair<std::string, std::string>, std::unique_ptr<Tracer>> tracers;  // by variant, class
-  std::unique_ptr<DeviceEncoder> encoder;
-  // The host twin's hits by batch, variant and class.
-  std::map<std::tuple<const ReferencedBatch*, std::string, std::string>, std::vector<RsHit>> references;
-  // hcc-traffic's node visits of the batch before, and the ms their count took, by batch name.
-  std::map<std::string, std::pair<std::vector<std::uint64_t>, double>> traffic;
-  // mlhcc-cost's estimates and hcc-region's statistics from a previous frame, by batch name.
-  std::map<std::string, PreviousBatchStatistics> previous;
-#ifdef RAYSORT_HAVE_EMBREE
-  // Embree's scene of the same triangles (run --embree-paths): built once per scene, its paths
-  // arms of every cell's rounds (bench/cell_measure.h).
-  std::optional<EmbreeScene> embree;
-#endif
-  std::vector<EmbreePath> embree_paths;
+// The cells of a batch the scene's frame does not have: said on stderr, counted as absent (a shard
+// records them for raysort merge) and out of the progress total.
+void skip_absent_batch(const std::vector<PlannedCell>& batch_cells, std::vector<std::string>& absent, Progress& progress) {
+  fmt::print(stderr, "note: scene {} has no batch {} (its effects do not imply it, or it is empty); skipped\n",
+             batch_cells.front().scene, batch_cells.front().batch);
+  for (const auto& c : batch_cells) absent.push_back(c.id);
+  progress.total -= batch_cells.size();
+}
 
-  SceneBench(Runtime& rt, const std::string& name, const MatrixSpec& matrix, const std::string& scene_root,
-             Progress& progress)
-      : prepared(prepare_scene(name, SceneOptions{scene_root, matrix.frame})), spec(matrix) {
-    progress.line(fmt::format("{}: {} triangles, BVH {:.0f} ms; generating batches", name, prepared.tris.size(),
-                              bvh.build_ms));
-    encoder = std::make_unique<DeviceEncoder>(rt, bvh, prepared.scene.bounds(), spec.params);
-    RayGenOptions gen;
-    gen.seed = spec.seed;
-    auto runs = [&](Encoder e) { return std::find(spec.encoders.begin(), spec.encoders.end(), e) != spec.encoders.end(); };
-    if (runs(Encoder::MLHCC_COST) || runs(Encoder::HCC_REGION)) {
-      const char* whose = !runs(Encoder::HCC_REGION) ? "mlhcc-cost's"
-                          : !runs(Encoder::MLHCC_COST) ? "hcc-region's"
-                                                       : "mlhcc-cost's and hcc-region's";
-      progress.line(fmt::format("{}: first a previous frame (seed {}) for {} statistics", name, gen.seed + 1, whose));
-      previous = previous_frame_statistics(prepared, gen, encoder->scene(), runs(Encoder::MLHCC_COST),
-                                           runs(Encoder::HCC_REGION), spec.batches);
-    }
-    batches = generate_batches(prepared.scene, prepared.tris, bvh, gen);
-#ifdef RAYSORT_HAVE_EMBREE
-    if (!spec.embree_paths.empty()) {
-      embree.emplace(prepared.tris);
-      for (const std::string& key : spec.embree_paths) embree_paths.push_back(parse_embree_paths(key).front());
-      progress.line(fmt::format("{}: Embree {} BVH built in {:.0f} ms ({} threads)", name, EmbreeScene::version(),
-                                embree->build_ms(), embree->threads()));
-    }
-#endif
-    for (TraceVariant v : spec.variants)
-      for (TraceLayout l : spec.layouts)
-        tracers[{trace_variant_name(v), trace_layout_name(l)}] = std::make_unique<Tracer>(rt, bvh, v, l);
-    encoder->warm_up();
-  }
-  // Embree's scene for the cells' stages (null without --embree-paths).
-  const EmbreeScene* embree_scene() const {
-#ifdef RAYSORT_HAVE_EMBREE
-    return embree ? &*embree : nullptr;
-#else
-    return nullptr;
-#endif
-  }
-  // The batch in a baseline order (render/batches.h), or null when the frame has no such batch.
-  const ReferencedBatch* batch(const std::string& name, const std::string& baseline) {
-    for (const auto& b : batches) {
-      if (b.batch.name != name) continue;
-      if (baseline == baseline_order_name(BaselineOrder::Pixel)) return &b;
-      auto it = shuffled.find(name);
-      if (it == shuffled.end())
-        it = shuffled.emplace(name, in_baseline_order(b, BaselineOrder::Shuffled, spec.seed)).first;
-      return &it->second;
-    }
-    return nullptr;
-  }
-  // The host twin's hits of a variant and trace class. The batch's own is the fast one on the wide
-  // tree (render/batches.h); any other is traced when a cell first needs it (on the binary tree, or
-  // in packets, of two equally near triangles the other may win).
-  const std::vector<RsHit>& reference(const ReferencedBatch& b, const std::string& variant, const std::string& layout) {
-    if (variant == "fast" && layout == trace_layout_name(TraceLayout::Wide)) return b.reference_hits;
-    auto it = references.find({&b, variant, layout});
-    if (it == references.end())
-      it = references
-               .emplace(std::tuple{&b, variant, layout},
-                        trace_reference(bvh, b.batch.rays, nullptr, b.batch.any_hit(), nullptr,
-                                        parse_trace_variant(variant), parse_trace_layout(layout)))
-               .first;
-    return it->second;
-  }
-  // hcc-traffic (docs/encoders.md): the cut for batch `name` comes from the node traffic of the
-  // batch traced just before it in the frame (generation order: primary, shadow0, bounce1, shadow1,
-  // ...), never from itself or a later one; the frame's first batch has none and gets HCC's cut.
-  // Sets it on the encoder; returns the host ms the count took. The count (a host traversal of the
-  // earlier batch) is made once per batch and kept: every key length, variant and baseline order
-  // of that batch reuses it, and records the time of that one count.
-  double use_traffic_before(const std::string& name) {
-    auto it = traffic.find(name);
-    if (it == traffic.end()) {
-      const auto start = std::chrono::steady_clock::now();
-      std::vector<std::uint64_t> visits = traffic_before(bvh, batches, name);
-      const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-      it = traffic.emplace(name, std::pair{std::move(visits), ms}).first;
-    }
-    encoder->set_node_traffic(it->second.first);
-    return it->second.second;
-  }
-  // mlhcc-cost and hcc-region (docs/encoders.md): their input for batch `name` comes from the same
-  // batch of a previous frame (previous_frame_statistics); a batch that frame lacks gets none
-  // (mlhcc-cost: the cut alone; hcc-region: halved cells and HAD cuts). Sets it on the encoder;
-  // returns the host ms its trace and statistics took.
-  double use_previous_frame(Encoder e, const std::string& name) {
-    auto it = previous.find(name);
-    const PreviousBatchStatistics none;
-    const PreviousBatchStatistics& stats = it == previous.end() ? none : it->second;
-    if (e == Encoder::HCC_REGION) {
-      encoder->set_region_statistics(stats.regions);
-      return stats.regions_ms;
-    }
-    encoder->set_cost_estimates(stats.cost_means);
-    return stats.cost_ms;
-  }
-  // Rays this variant misses that the other one hits in the same class, per million (-1 unless
-  // both variants run).
-  double leaks_per_million(const ReferencedBatch& b, const std::string& variant, const std::string& layout,
-                           bool both_variants) {
-    if (!both_variants || b.batch.size() == 0) return -1.0;
-    const auto& mine = reference(b, variant, layout);
-    const auto& other = reference(b, variant == "fast" ? "robust" : "fast", layout);
-    std::size_t leaks = 0;
-    for (std::size_t i = 0; i < mine.size(); ++i) leaks += mine[i].tri == RS_NO_HIT && other[i].tri != RS_NO_HIT;
-    return static_cast<double>(leaks) * 1e6 / static_cast<double>(b.batch.size());
-  }
-};
-
-// The cells of one encoder × key length × top-k on one batch. hcc-traffic's cut, hcc-region's regions
-// and mlhcc-cost's table are per batch: they are made here from the previous batch's traffic or the
-// previous frame's statistics, and their cells record cut_ms, the host time of that input plus the cut's build and
+// The cells of one encoder × key length × top-k on one batch. The inputs of an encoder that learns
+// (hcc-traffic's cut, hcc-region's regions, mlhcc-cost's table) are per batch: SceneBench readies
+// them here, and their cells record cut_ms, the host time of that input plus the cut's build and
 // upload (outside the timed rounds).
 std::vector<CellRecord> measure_encoder(BatchBench& bench, SceneBench& scene, std::vector<CellRecord> cells, Encoder e,
                                         const ProtocolSettings& settings) {
-  double cut_ms = -1.0;
-  if (e == Encoder::HCC_TRAFFIC || e == Encoder::MLHCC_COST || e == Encoder::HCC_REGION) {
-    const double input_ms = e == Encoder::HCC_TRAFFIC ? scene.use_traffic_before(cells.front().batch)
-                                                      : scene.use_previous_frame(e, cells.front().batch);
-    const auto start = std::chrono::steady_clock::now();
-    try {
-      scene.encoder->prepare(e, cells.front().bits);
-    } catch (const Error&) {
-      // measure_sorted's own prepare fails the cells with this error
-    }
-    cut_ms = input_ms + std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-  }
+  const double cut_ms = scene.prepare_encoder(e, cells.front().bits, cells.front().batch);
   std::vector<CellRecord> out = bench.measure_sorted(std::move(cells), e, settings);
   for (CellRecord& c : out) c.cut_ms = cut_ms;
   return out;
@@ -451,16 +310,10 @@ std::vector<PlannedCell> plan_from(const MatrixSpec& spec, const std::map<std::s
   return plan_shards(matrix_cells(spec, [&](const std::string& scene) { return facts.at(scene); }), count);
 }
 
-// Each scene's frame at the matrix's resolution and spp must fit the device and the host (a refusal
-// names the scene, the estimate and the limit; render/frame_memory.h).
+// Each scene's frame at the matrix's resolution and spp must fit the device and the host.
 void check_matrix_memory(const MatrixSpec& spec, const std::map<std::string, SceneFacts>& facts,
                          const DeviceInfo& device) {
-  for (const auto& [scene, f] : facts)
-    check_frame_memory(estimate_frame_memory(spec.frame.width, spec.frame.height, spec.frame.spp,
-                                             f.shadow_rays_per_bounce, f.max_bounces),
-                       &device, fmt::format("scene {} at {}x{}, {} spp, {} shadow ray(s) per bounce, {} bounce(s)", scene,
-                                            spec.frame.width, spec.frame.height, spec.frame.spp,
-                                            f.shadow_rays_per_bounce, f.max_bounces));
+  for (const auto& [scene, f] : facts) check_scene_memory(spec, scene, f, device);
 }
 
 // Every cell the set holds must be one the matrix plans: a cell file of another matrix (copied in,
@@ -495,69 +348,34 @@ void finish_run(ResultSet& results, const std::vector<PlannedCell>& plan, const 
   }
 }
 
+// --layout packet is the device's packet width: planned, recorded (and resumed) as the width it
+// runs; "packet,packet8" on an AVX device is one class.
+std::vector<TraceLayout> resolved_layouts(const std::vector<TraceLayout>& layouts, const DeviceInfo& device) {
+  std::vector<TraceLayout> resolved;
+  for (TraceLayout l : layouts)
+    if (const TraceLayout r = resolve_trace_layout(l, device); std::find(resolved.begin(), resolved.end(), r) == resolved.end())
+      resolved.push_back(r);
+  return resolved;
+}
+
+// The result set of this run (a resume's, or a new one) with its meta.json, checked to hold only
+// cells the matrix plans; says on stderr what runs where.
+ResultSet open_results(const MatrixSpec& spec, const RunOptions& opts, const DeviceInfo& device, std::size_t planned,
+                       const std::vector<PlannedCell>& full_plan, const std::string& out_dir) {
+  nlohmann::json meta = run_meta(spec, opts, device);
+  if (opts.shard.active()) meta["shard"] = shard_meta(spec, opts.shard, full_plan);
+  // What files the scenes were made from (scene/provenance.h): compare says when two sets differ.
+  meta["scene_files"] = scene_file_checksums(spec.scenes, resolve_scene_root(SceneOptions{opts.scene_root, {}}));
+  ResultSet results = ResultSet::open_for_run(out_dir, meta);
+  check_cells_planned(results, full_plan);
+  fmt::print(stderr, "raysort run: {}{} on {}; results in {}\n", spec.preset.empty() ? "custom matrix" : spec.preset,
+             opts.shard.active() ? fmt::format(", shard {} ({} of {} cells)", opts.shard.str(), planned, full_plan.size())
+                                 : "",
+             device.name, out_dir);
+  return results;
+}
+
 }  // namespace
-
-std::vector<std::uint64_t> traffic_before(const Bvh& bvh, const std::vector<ReferencedBatch>& frame,
-                                          const std::string& batch) {
-  for (std::size_t i = 0; i < frame.size(); ++i)
-    if (frame[i].batch.name == batch)
-      return i == 0 ? std::vector<std::uint64_t>{}
-                    : node_traffic(bvh, frame[i - 1].batch.rays, frame[i - 1].batch.any_hit());
-  return {};
-}
-
-RegionStatistics region_statistics(const Bvh& bvh, const Aabb& box, const std::vector<RsRay>& rays, bool any_hit,
-                                   unsigned r) {
-  return region_statistics(bvh, median_region_splits(box, rays, r), r, rays, any_hit);
-}
-
-RegionStatistics region_statistics(const Bvh& bvh, std::vector<RsRegionSplit> splits, unsigned r,
-                                   const std::vector<RsRay>& rays, bool any_hit) {
-  RegionStatistics stats;
-  stats.splits = std::move(splits);
-  std::vector<std::vector<RsRay>> starting_in(std::size_t{1} << r);
-  for (const RsRay& ray : rays) starting_in[rs_region_of(stats.splits.data(), r, ray)].push_back(ray);
-  for (const std::vector<RsRay>& group : starting_in) {
-    std::vector<std::pair<std::uint32_t, std::uint64_t>> visited;
-    const std::vector<std::uint64_t> visits = group.empty() ? std::vector<std::uint64_t>{} : node_traffic(bvh, group, any_hit);
-    for (std::size_t n = 0; n < visits.size(); ++n)
-      if (visits[n] > 0) visited.emplace_back(static_cast<std::uint32_t>(n), visits[n]);
-    stats.visits.push_back(std::move(visited));
-  }
-  return stats;
-}
-
-std::map<std::string, PreviousBatchStatistics> previous_frame_statistics(const PreparedScene& scene,
-                                                                        const RayGenOptions& gen,
-                                                                        const EncodeScene& keys, bool costs,
-                                                                        bool regions,
-                                                                        const std::vector<std::string>& wanted) {
-  RayGenOptions previous = gen;
-  previous.seed = gen.seed + 1;
-  const std::vector<ReferencedBatch> frame = generate_batches(scene.scene, scene.tris, scene.bvh, previous);
-  std::map<std::string, PreviousBatchStatistics> out;
-  auto since = [](auto start) {
-    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-  };
-  for (const ReferencedBatch& b : frame) {
-    if (!wanted.empty() && std::find(wanted.begin(), wanted.end(), b.batch.name) == wanted.end()) continue;
-    PreviousBatchStatistics& stats = out[b.batch.name];
-    if (costs) {
-      const auto start = std::chrono::steady_clock::now();
-      std::vector<std::uint32_t> steps;
-      trace_reference(scene.bvh, b.batch.rays, nullptr, b.batch.any_hit(), &steps);
-      stats.cost_means = cost_statistics(keys.frame(), b.batch.rays, steps);
-      stats.cost_ms = since(start);
-    }
-    if (regions) {
-      const auto start = std::chrono::steady_clock::now();
-      stats.regions =
-          region_statistics(scene.bvh, keys.box(), b.batch.rays, b.batch.any_hit(), keys.params().region_bits);
-      stats.regions_ms = since(start);
-    }
-  }
-  return out;
-}
 
 std::string default_result_dir(const MatrixSpec& spec, const std::string& device_slug, const ShardSpec& shard) {
   // The same cells give the same folder however the lists were written (canonical_matrix).
@@ -577,13 +395,7 @@ RunSummary run_matrix(const MatrixSpec& requested, const RunOptions& opts) {
   check_scenes_before_work(spec, opts);
 
   Runtime rt(select_device(opts.device));
-  // --layout packet is the device's packet width: planned, recorded (and resumed) as the width it
-  // runs; "packet,packet8" on an AVX device is one class.
-  std::vector<TraceLayout> resolved;
-  for (TraceLayout l : spec.layouts)
-    if (const TraceLayout r = resolve_trace_layout(l, rt.info()); std::find(resolved.begin(), resolved.end(), r) == resolved.end())
-      resolved.push_back(r);
-  spec.layouts = resolved;
+  spec.layouts = resolved_layouts(spec.layouts, rt.info());
 
   // Plan: every cell of the matrix in visiting order; a shard keeps its own (bench/shard.h).
   const std::map<std::string, SceneFacts> facts = scene_facts(spec, opts.scene_root);
@@ -595,16 +407,7 @@ RunSummary run_matrix(const MatrixSpec& requested, const RunOptions& opts) {
   check_matrix_memory(spec, facts, rt.info());  // before the result set is written
   RunSummary summary;
   summary.out_dir = opts.out.empty() ? default_result_dir(spec, rt.info().slug(), opts.shard) : opts.out;
-  nlohmann::json meta = run_meta(spec, opts, rt.info());
-  if (opts.shard.active()) meta["shard"] = shard_meta(spec, opts.shard, full_plan);
-  // What files the scenes were made from (scene/provenance.h): compare says when two sets differ.
-  meta["scene_files"] = scene_file_checksums(spec.scenes, resolve_scene_root(SceneOptions{opts.scene_root, {}}));
-  ResultSet results = ResultSet::open_for_run(summary.out_dir, meta);
-  check_cells_planned(results, full_plan);
-  fmt::print(stderr, "raysort run: {}{} on {}; results in {}\n", spec.preset.empty() ? "custom matrix" : spec.preset,
-             opts.shard.active() ? fmt::format(", shard {} ({} of {} cells)", opts.shard.str(), plan.size(), full_plan.size())
-                                 : "",
-             rt.info().name, summary.out_dir);
+  ResultSet results = open_results(spec, opts, rt.info(), plan.size(), full_plan, summary.out_dir);
 
   InterruptGuard interrupt_guard;
   const char* kill_env = std::getenv("RAYSORT_TEST_KILL_AFTER_CELLS");
@@ -642,7 +445,8 @@ RunSummary run_matrix(const MatrixSpec& requested, const RunOptions& opts) {
       return keep;
     });
     if (scene_cells.empty()) continue;
-    SceneBench scene(rt, scene_cells.front().scene, spec, opts.scene_root, progress);
+    SceneBench scene(rt, prepare_scene(scene_cells.front().scene, SceneOptions{opts.scene_root, spec.frame}), spec,
+                     [&](const std::string& line) { progress.line(line); });
     for (const auto& batch_cells :
          runs_of(scene_cells,
                  [](const PlannedCell& c) { return c.batch + "/" + c.variant + "/" + c.layout + "/" + c.baseline; })) {
@@ -650,10 +454,7 @@ RunSummary run_matrix(const MatrixSpec& requested, const RunOptions& opts) {
       const PlannedCell& first = batch_cells.front();
       const ReferencedBatch* rb = scene.batch(first.batch, first.baseline);
       if (!rb) {  // every ray of an earlier bounce missed, or a requested batch the effects do not imply
-        fmt::print(stderr, "note: scene {} has no batch {} (its effects do not imply it, or it is empty); skipped\n",
-                   first.scene, first.batch);
-        for (const auto& c : batch_cells) absent.push_back(c.id);
-        progress.total -= batch_cells.size();
+        skip_absent_batch(batch_cells, absent, progress);
         continue;
       }
       BatchBench bench({rt, *scene.encoder, sorter, permuter, *scene.tracers.at({first.variant, first.layout}),

@@ -32,18 +32,21 @@ ShardSpec ShardSpec::parse(const std::string& text) {
 
 std::string ShardSpec::str() const { return fmt::format("{}/{}", index, count); }
 
+SceneFacts scene_facts_of(const Scene& s, const FrameSize& frame) {
+  SceneFacts f;
+  f.triangles = s.triangle_count();
+  f.rays_per_batch = std::uint64_t{frame.width} * frame.height * frame.spp;
+  f.shadow_rays_per_bounce = next_event_estimation(s) ? s.effects.shadow_rays_per_bounce : 0;
+  f.max_bounces = s.effects.max_bounces;
+  return f;
+}
+
 SceneFacts load_scene_facts(const std::string& scene, const MatrixSpec& spec, const std::string& scene_root) {
   SceneOptions opts;
   opts.scene_root = scene_root;
   // The camera's resolution does not change the geometry or effects; the sampling overrides do.
   opts.frame = {1, 1, 1, spec.frame.shadow_rays, spec.frame.bounces};
-  Scene s = load_scene(scene, opts);
-  SceneFacts f;
-  f.triangles = s.triangle_count();
-  f.rays_per_batch = std::uint64_t{spec.frame.width} * spec.frame.height * spec.frame.spp;
-  f.shadow_rays_per_bounce = next_event_estimation(s) ? s.effects.shadow_rays_per_bounce : 0;
-  f.max_bounces = s.effects.max_bounces;
-  return f;
+  return scene_facts_of(load_scene(scene, opts), spec.frame);
 }
 
 namespace {

@@ -35,6 +35,8 @@ struct SceneFacts {
   std::uint32_t shadow_rays_per_bounce = 0;   // 0 or no sphere lights: no shadow batches
   std::uint32_t max_bounces = 0;
 };
+// The facts of a loaded scene at `frame`'s resolution and spp.
+SceneFacts scene_facts_of(const Scene& scene, const FrameSize& frame);
 // Loads the scene (at 1×1: only its size and effects are needed) and reads its facts.
 SceneFacts load_scene_facts(const std::string& scene, const MatrixSpec& spec, const std::string& scene_root);
 

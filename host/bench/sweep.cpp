@@ -10,23 +10,27 @@
 
 #include "bench/matrix.h"
 #include "bench/result_set.h"
+#include "encode/encoder_params.h"
 #include "util/error.h"
 
 namespace raysort {
 
 namespace {
 
-// The encoder parameters a sweep may vary (MatrixSpec::params, as meta.json's matrix names them).
-const std::vector<std::string> kSweepable{"had_lambda", "twopoint_length_fraction", "direction_bits", "region_bits",
-                                          "traffic_blend", "cost_bits"};
+// The encoder knobs a sweep may vary (encode/encoder_params.h), as meta.json's matrix names them.
+bool sweepable(const std::string& key) {
+  const auto& rows = encoder_params();
+  return std::any_of(rows.begin(), rows.end(), [&](const EncoderParam& row) { return row.key == key; });
+}
 
-const char* parameter_label(const std::string& p) {
-  if (p == "had_lambda") return "λ (HAD, Eq. 1)";
-  if (p == "twopoint_length_fraction") return "TwoPoint average distance (× largest extent)";
-  if (p == "region_bits") return "hcc-region region bits";
-  if (p == "traffic_blend") return "hcc-traffic and hcc-region blend β";
-  if (p == "cost_bits") return "mlhcc-cost cost bits";
-  return "HCC_DIR direction bits";
+// "--lambda, --twopoint-length, ... or --cost-bits"; "had_lambda, twopoint_length_fraction, ...".
+std::string param_list(bool flags) {
+  std::string out;
+  const auto& rows = encoder_params();
+  for (std::size_t i = 0; i < rows.size(); ++i)
+    out += fmt::format("{}{}", i == 0 ? "" : i + 1 == rows.size() && flags ? " or " : ", ",
+                       flags ? rows[i].flag : rows[i].key);
+  return out;
 }
 
 }  // namespace
@@ -54,16 +58,15 @@ Sweep load_sweep(const std::vector<std::string>& dirs) {
   }
   std::set<std::string> swept, other;
   for (const auto& key : differing)
-    (std::find(kSweepable.begin(), kSweepable.end(), key) != kSweepable.end() ? swept : other).insert(key);
+    (sweepable(key) ? swept : other).insert(key);
   if (!other.empty())
     throw Error(fmt::format("{}: the sets differ in {} as well, so their columns are not comparable; run them with one "
-                            "command that changes only --lambda, --twopoint-length, --direction-bits, --region-bits, "
-                            "--traffic-blend or --cost-bits",
-                            fmt::join(dirs, ", "), fmt::join(other, ", ")));
+                            "command that changes only {}",
+                            fmt::join(dirs, ", "), fmt::join(other, ", "), param_list(true)));
   if (swept.size() != 1)
     throw Error(fmt::format("{}: {}; a sweep varies exactly one of {}", fmt::join(dirs, ", "),
                             swept.empty() ? "the sets ran the same matrix" : fmt::format("the sets differ in {}", fmt::join(swept, " and ")),
-                            fmt::join(kSweepable, ", ")));
+                            param_list(false)));
   sweep.parameter = *swept.begin();
   std::set<double> seen;
   for (std::size_t i = 0; i < matrices.size(); ++i) {
@@ -96,7 +99,7 @@ std::string render_sweep(const Sweep& sweep) {
     }
   std::string md = fmt::format("# Sweep of {}\n\nSets: {}.\n\nEach cell: SIMT lane-efficiency ratio vs NoSort "
                                "(deterministic; **bold**: the row's best) · PoCL speedup.\n\n",
-                               parameter_label(sweep.parameter),
+                               encoder_param(sweep.parameter).label,
                                fmt::join([&] {
                                  std::vector<std::string> v;
                                  for (auto& p : sweep.points) v.push_back(fmt::format("`{}` ({:g})", p.dir, p.value));

@@ -16,16 +16,11 @@ namespace raysort {
 const char* baseline_order_name(BaselineOrder b) { return b == BaselineOrder::Shuffled ? "shuffled" : "pixel"; }
 
 std::vector<BaselineOrder> parse_baseline_orders(const std::string& list) {
-  if (list == "all") return {BaselineOrder::Pixel, BaselineOrder::Shuffled};
-  std::vector<BaselineOrder> out;
-  for (const auto& name : split_list(list)) {
-    if (name != "pixel" && name != "shuffled")
-      throw Error(fmt::format("--baseline '{}': the baseline orders are pixel and shuffled (or all)", name));
-    const BaselineOrder b = name == "pixel" ? BaselineOrder::Pixel : BaselineOrder::Shuffled;
-    if (std::find(out.begin(), out.end(), b) == out.end()) out.push_back(b);
-  }
-  if (out.empty()) throw Error("--baseline: name at least one baseline order (pixel, shuffled)");
-  return out;
+  static const ListAxis<BaselineOrder> axis{"--baseline",
+                                            "baseline orders",
+                                            "baseline order",
+                                            {{"pixel", BaselineOrder::Pixel}, {"shuffled", BaselineOrder::Shuffled}}};
+  return parse_list_axis(axis, list);
 }
 
 std::vector<std::uint32_t> baseline_permutation(std::size_t n, const std::string& batch_name, std::uint32_t seed) {

@@ -13,16 +13,9 @@ namespace raysort {
 const char* ray_access_name(RayAccess a) { return a == RayAccess::Permute ? "permute" : "gather"; }
 
 std::vector<RayAccess> parse_ray_accesses(const std::string& list) {
-  if (list == "all") return {RayAccess::Gather, RayAccess::Permute};
-  std::vector<RayAccess> out;
-  for (const auto& a : split_list(list)) {
-    if (a != "gather" && a != "permute")
-      throw Error(fmt::format("--access '{}': the access modes are gather and permute (or all)", a));
-    const RayAccess r = a == "gather" ? RayAccess::Gather : RayAccess::Permute;
-    if (std::find(out.begin(), out.end(), r) == out.end()) out.push_back(r);
-  }
-  if (out.empty()) throw Error("--access: name at least one access mode (gather, permute)");
-  return out;
+  static const ListAxis<RayAccess> axis{
+      "--access", "access modes", "access mode", {{"gather", RayAccess::Gather}, {"permute", RayAccess::Permute}}};
+  return parse_list_axis(axis, list);
 }
 
 RayPermuter::RayPermuter(Runtime& rt) : rt_(rt) {

@@ -24,16 +24,10 @@ TraceVariant parse_trace_variant(std::string_view name) {
 const char* trace_variant_name(TraceVariant v) { return v == TraceVariant::Robust ? "robust" : "fast"; }
 
 std::vector<TraceVariant> parse_trace_variants(const std::string& list) {
-  if (list == "both" || list == "all") return {TraceVariant::Robust, TraceVariant::Fast};
-  std::vector<TraceVariant> out;
-  for (const auto& v : split_list(list)) {
-    if (v != "robust" && v != "fast")
-      throw Error("--variant '" + v + "': the trace variants are robust and fast (or both)");
-    const TraceVariant t = parse_trace_variant(v);
-    if (std::find(out.begin(), out.end(), t) == out.end()) out.push_back(t);
-  }
-  if (out.empty()) throw Error("--variant: name at least one trace variant (robust, fast)");
-  return out;
+  static const ListAxis<TraceVariant> axis{
+      "--variant", "trace variants", "trace variant", {{"robust", TraceVariant::Robust}, {"fast", TraceVariant::Fast}},
+      {"both", "all"}};
+  return parse_list_axis(axis, list);
 }
 
 Tracer::Tracer(Runtime& rt, const Bvh& bvh, TraceVariant variant, TraceLayout layout)

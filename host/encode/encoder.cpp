@@ -1,0 +1,76 @@
+// The encoder table, made from the encoder list (cl/encoders.h), and the encoders' names.
+#include "encode/encoder.h"
+
+#include <algorithm>
+#include <cctype>
+
+#include "encode/encoder_family.h"
+#include "util/error.h"
+
+namespace raysort {
+
+const std::vector<EncoderInfo>& encoder_table() {
+#define RS_FAMILY_ROW(ID, HOST, NAME, FAMILY, WEIGHT, ...) \
+  {Encoder::HOST, NAME, {__VA_ARGS__}, &encoder_family_##FAMILY(), #FAMILY, "encode_" #FAMILY, WEIGHT},
+#define RS_SPATIAL_ROW(ID, HOST, NAME, CODE, WEIGHT, ...) \
+  {Encoder::HOST, NAME, {__VA_ARGS__}, &encoder_family_spatial(), "spatial", "encode_" #CODE, WEIGHT},
+  static const std::vector<EncoderInfo> table = {RS_ENCODERS(RS_FAMILY_ROW, RS_SPATIAL_ROW)};
+#undef RS_FAMILY_ROW
+#undef RS_SPATIAL_ROW
+  return table;
+}
+
+const EncoderInfo& encoder_info(Encoder e) {
+  const auto& table = encoder_table();
+  const auto i = static_cast<std::size_t>(e);
+  if (i >= table.size() || table[i].id != e) throw Error("encoder_info: an encoder outside the table");
+  return table[i];
+}
+
+const EncoderFamily& encoder_family(Encoder e) { return *encoder_info(e).family; }
+
+std::string_view encoder_name(Encoder e) { return encoder_info(e).name; }
+
+std::optional<Encoder> parse_encoder(std::string_view name) {
+  auto folded = [](std::string_view text) {
+    std::string s;
+    for (char c : text)
+      if (c != '-' && c != '_' && c != ' ') s += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return s;
+  };
+  const std::string wanted = folded(name);
+  for (const EncoderInfo& info : encoder_table()) {
+    if (folded(info.name) == wanted) return info.id;
+    for (std::string_view alias : info.aliases)
+      if (folded(alias) == wanted) return info.id;
+  }
+  return std::nullopt;
+}
+
+const std::vector<Encoder>& all_encoders() {
+  static const std::vector<Encoder> all = [] {
+    std::vector<Encoder> ids;
+    for (const EncoderInfo& info : encoder_table()) ids.push_back(info.id);
+    return ids;
+  }();
+  return all;
+}
+
+std::vector<Encoder> parse_encoders(const std::vector<std::string>& names) {
+  if (names.size() == 1 && names[0] == "all") return all_encoders();
+  std::vector<Encoder> out;
+  for (const auto& name : names) {
+    const auto e = parse_encoder(name);
+    if (!e) {
+      std::string valid;
+      for (const EncoderInfo& info : encoder_table()) valid += (valid.empty() ? "" : ", ") + std::string(info.name);
+      throw Error("unknown encoder '" + name + "'; encoders are: " + valid);
+    }
+    if (std::find(out.begin(), out.end(), *e) == out.end()) out.push_back(*e);
+  }
+  return out;
+}
+
+unsigned max_key_bits(Encoder) { return RS_MAX_KEY_BITS; }
+
+}  // namespace raysort
