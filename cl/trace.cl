@@ -60,6 +60,32 @@
     visits[i] = v;                                                                                            \
   }
 
+/* The same three kernels for the classes whose work-item traces RAYS consecutive rays of the order
+ * at once (packets, streams), positions [first, first + RAYS): TRAVERSE(nodes, tris, rays, order,
+ * first, count, robust, any_hit, hits, visits) writes their hits (and steps). */
+#define RS_GROUP_KERNELS(NAME, NODE_T, LEAF_T, RAYS, TRAVERSE, ROBUST)                                         \
+  __kernel void trace_closest##NAME(__global const NODE_T* nodes, __global const LEAF_T* tris,                 \
+                                    __global const RsRay* rays, __global const uint* order, uint count,        \
+                                    __global RsHit* hits) {                                                    \
+    const uint first = get_global_id(0) * RAYS;                                                               \
+    if (first >= count) return;                                                                                \
+    TRAVERSE(nodes, tris, rays, order, first, count, ROBUST, 0, hits, 0);                                      \
+  }                                                                                                            \
+  __kernel void trace_any##NAME(__global const NODE_T* nodes, __global const LEAF_T* tris,                     \
+                                __global const RsRay* rays, __global const uint* order, uint count,            \
+                                __global RsHit* hits) {                                                        \
+    const uint first = get_global_id(0) * RAYS;                                                               \
+    if (first >= count) return;                                                                                \
+    TRAVERSE(nodes, tris, rays, order, first, count, ROBUST, 1, hits, 0);                                      \
+  }                                                                                                            \
+  __kernel void trace_closest_counted##NAME(__global const NODE_T* nodes, __global const LEAF_T* tris,         \
+                                            __global const RsRay* rays, __global const uint* order, uint count, \
+                                            __global RsHit* hits, __global uint* visits) {                     \
+    const uint first = get_global_id(0) * RAYS;                                                               \
+    if (first >= count) return;                                                                                \
+    TRAVERSE(nodes, tris, rays, order, first, count, ROBUST, 0, hits, visits);                                 \
+  }
+
 /* One trace class per build (host/trace/tracer.cpp passes -DRS_TRACE_BINARY for the binary BVH,
  * -DRS_TRACE_WIDE8 for the 8-wide one, -DRS_TRACE_PACKET=W for packets of W rays, -DRS_TRACE_STREAM
  * for streams; the define of
@@ -91,61 +117,17 @@ RS_TRACE_KERNELS(_wide8_robust, RS_WIDE8_ROBUST)
 /* Ray streams over the 8-wide BVH (traverse_stream.h): work-item s traces rays
  * [s * RS_STREAM_RAYS, (s + 1) * RS_STREAM_RAYS) of the order node by node, each ray alone against a
  * node's eight boxes (the stream class). */
-#define RS_STREAM_KERNELS(SUFFIX, ROBUST)                                                                     \
-  __kernel void trace_closest_stream##SUFFIX(__global const RsWide8Node* nodes, __global const RsTriPacket8* tris, \
-                                             __global const RsRay* rays, __global const uint* order,          \
-                                             uint count, __global RsHit* hits) {                              \
-    const uint first = get_global_id(0) * RS_STREAM_RAYS;                                                    \
-    if (first >= count) return;                                                                               \
-    rs_traverse_stream(nodes, tris, rays, order, first, count, ROBUST, 0, hits, 0);                           \
-  }                                                                                                           \
-  __kernel void trace_any_stream##SUFFIX(__global const RsWide8Node* nodes, __global const RsTriPacket8* tris,   \
-                                         __global const RsRay* rays, __global const uint* order, uint count,  \
-                                         __global RsHit* hits) {                                              \
-    const uint first = get_global_id(0) * RS_STREAM_RAYS;                                                    \
-    if (first >= count) return;                                                                               \
-    rs_traverse_stream(nodes, tris, rays, order, first, count, ROBUST, 1, hits, 0);                           \
-  }                                                                                                           \
-  __kernel void trace_closest_counted_stream##SUFFIX(__global const RsWide8Node* nodes,                        \
-                                                     __global const RsTriPacket8* tris, __global const RsRay* rays, \
-                                                     __global const uint* order, uint count,                  \
-                                                     __global RsHit* hits, __global uint* visits) {           \
-    const uint first = get_global_id(0) * RS_STREAM_RAYS;                                                    \
-    if (first >= count) return;                                                                               \
-    rs_traverse_stream(nodes, tris, rays, order, first, count, ROBUST, 0, hits, visits);                      \
-  }
-RS_STREAM_KERNELS(, 0)
-RS_STREAM_KERNELS(_robust, 1)
+RS_GROUP_KERNELS(_stream, RsWide8Node, RsTriPacket8, RS_STREAM_RAYS, rs_traverse_stream, 0)
+RS_GROUP_KERNELS(_stream_robust, RsWide8Node, RsTriPacket8, RS_STREAM_RAYS, rs_traverse_stream, 1)
 
 #elif defined(RS_TRACE_PACKET)
 /* Ray packets over the 4-wide BVH (traverse_packet.h): work-item p traces rays
  * [p * RS_PACKET_W, (p + 1) * RS_PACKET_W) of the order as one packet, one ray per vector lane
  * (the hybrid classes: down to RS_PACKET_SINGLE_AT lanes, then each alone). */
-#define RS_PACKET_KERNELS(SUFFIX, ROBUST)                                                                     \
-  __kernel void trace_closest_packet##SUFFIX(__global const RsWideNode* nodes, __global const RsTriPacket* tris, \
-                                             __global const RsRay* rays, __global const uint* order,          \
-                                             uint count, __global RsHit* hits) {                              \
-    const uint first = get_global_id(0) * RS_PACKET_W;                                                        \
-    if (first >= count) return;                                                                               \
-    rs_traverse_packet(nodes, tris, rays, order, first, count, ROBUST, 0, RS_PACKET_SINGLE_AT, hits, 0);                           \
-  }                                                                                                           \
-  __kernel void trace_any_packet##SUFFIX(__global const RsWideNode* nodes, __global const RsTriPacket* tris,     \
-                                         __global const RsRay* rays, __global const uint* order, uint count,  \
-                                         __global RsHit* hits) {                                              \
-    const uint first = get_global_id(0) * RS_PACKET_W;                                                        \
-    if (first >= count) return;                                                                               \
-    rs_traverse_packet(nodes, tris, rays, order, first, count, ROBUST, 1, RS_PACKET_SINGLE_AT, hits, 0);                           \
-  }                                                                                                           \
-  __kernel void trace_closest_counted_packet##SUFFIX(__global const RsWideNode* nodes,                         \
-                                                     __global const RsTriPacket* tris, __global const RsRay* rays, \
-                                                     __global const uint* order, uint count,                  \
-                                                     __global RsHit* hits, __global uint* visits) {           \
-    const uint first = get_global_id(0) * RS_PACKET_W;                                                        \
-    if (first >= count) return;                                                                               \
-    rs_traverse_packet(nodes, tris, rays, order, first, count, ROBUST, 0, RS_PACKET_SINGLE_AT, hits, visits);                      \
-  }
-RS_PACKET_KERNELS(, 0)
-RS_PACKET_KERNELS(_robust, 1)
+#define RS_PACKET_TRAVERSE(n, t, r, o, first, count, robust, any, hits, visits) \
+  rs_traverse_packet(n, t, r, o, first, count, robust, any, RS_PACKET_SINGLE_AT, hits, visits)
+RS_GROUP_KERNELS(_packet, RsWideNode, RsTriPacket, RS_PACKET_W, RS_PACKET_TRAVERSE, 0)
+RS_GROUP_KERNELS(_packet_robust, RsWideNode, RsTriPacket, RS_PACKET_W, RS_PACKET_TRAVERSE, 1)
 
 #else
 /* The binary BVH, kept to measure what the wide layout gains (raysort trace --layout binary). */

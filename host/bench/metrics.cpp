@@ -7,6 +7,7 @@
 #include "traverse_binary.h"
 #include "traverse_wide.h"
 #include "traverse_wide8.h"
+#include "util/parallel.h"
 
 namespace raysort {
 
@@ -159,7 +160,7 @@ SimtModel simt_model(const Bvh& bvh, const std::vector<RsRay>& rays, const std::
   const Wide8Bvh wide8 = wide8_layout ? collapse_to_wide8(bvh) : Wide8Bvh{};
   const std::size_t n = rays.size();
   const std::size_t warps = (n + kWarpSize - 1) / kWarpSize;
-  const unsigned threads = std::max(1u, std::min(16u, std::thread::hardware_concurrency()));
+  const unsigned threads = host_threads();
   // Trails are recorded into a fixed buffer per lane. A step visits a node or a leaf at most once,
   // so a trail is shorter than the node count plus the leaf count (a wide node has at most four, or
   // eight, leaf children); longer trails could only be truncated in the union, never in the step count.

@@ -2,8 +2,7 @@
 // key code the kernels run (cl/keys*.h).
 #include "encode/encode.h"
 
-#include <algorithm>
-#include <thread>
+#include "util/parallel.h"
 
 namespace raysort {
 
@@ -20,18 +19,7 @@ std::vector<std::uint64_t> encode_on_host(Encoder e, unsigned bits, const Encode
   auto work = [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) keys[i] = key(rays[i]);
   };
-  const unsigned threads = std::max(1u, std::min(16u, std::thread::hardware_concurrency()));
-  if (rays.size() < 8192 || threads == 1) {
-    work(0, rays.size());
-    return keys;
-  }
-  std::vector<std::thread> pool;
-  const std::size_t chunk = (rays.size() + threads - 1) / threads;
-  for (unsigned t = 0; t < threads; ++t) {
-    const std::size_t b = t * chunk, end = std::min(rays.size(), b + chunk);
-    if (b < end) pool.emplace_back(work, b, end);
-  }
-  for (auto& th : pool) th.join();
+  for_each_chunk(rays.size(), rays.size() < 8192, work);
   return keys;
 }
 

@@ -2,14 +2,13 @@
 // a namespace of its own (the header has no include guard for that reason; packet_lanes.h).
 #include "trace/packet_twin.h"
 
-#include <algorithm>
 #include <numeric>
-#include <thread>
 
 #include "intersect.h"
 #include "lanes.h"
 #include "traverse_wide.h"
 #include "util/error.h"
+#include "util/parallel.h"
 
 namespace raysort {
 
@@ -53,18 +52,7 @@ void trace_packets_on_host(int width, int single_at, const WideBvh& wide, const 
       trace(wide.nodes.data(), wide.packets.data(), rays.data(), order, static_cast<rs_u32>(p * width), n, robust,
             any_hit, single_at, hits.data(), visits);
   };
-  const unsigned threads = std::max(1u, std::min(16u, std::thread::hardware_concurrency()));
-  if (n < 4096 || threads == 1) {
-    work(0, packets);
-    return;
-  }
-  std::vector<std::thread> pool;
-  const std::size_t chunk = (packets + threads - 1) / threads;
-  for (unsigned t = 0; t < threads; ++t) {
-    const std::size_t b = t * chunk, e = std::min(packets, b + chunk);
-    if (b < e) pool.emplace_back(work, b, e);
-  }
-  for (auto& th : pool) th.join();
+  for_each_chunk(packets, n < 4096, work);
 }
 
 }  // namespace raysort

@@ -1,11 +1,10 @@
 // The host twin of the stream kernels: cl/traverse_stream.h compiled as C++ (docs/trace.md).
 #include "trace/stream_twin.h"
 
-#include <algorithm>
 #include <numeric>
-#include <thread>
 
 #include "traverse_stream.h"
+#include "util/parallel.h"
 
 namespace raysort {
 
@@ -25,18 +24,7 @@ void trace_streams_on_host(const Wide8Bvh& wide8, const std::vector<RsRay>& rays
       rs_traverse_stream(wide8.nodes.data(), wide8.packets.data(), rays.data(), order,
                          static_cast<rs_u32>(s * RS_STREAM_RAYS), n, robust, any_hit, hits.data(), visits);
   };
-  const unsigned threads = std::max(1u, std::min(16u, std::thread::hardware_concurrency()));
-  if (n < 4096 || threads == 1) {
-    work(0, streams);
-    return;
-  }
-  std::vector<std::thread> pool;
-  const std::size_t chunk = (streams + threads - 1) / threads;
-  for (unsigned t = 0; t < threads; ++t) {
-    const std::size_t b = t * chunk, e = std::min(streams, b + chunk);
-    if (b < e) pool.emplace_back(work, b, e);
-  }
-  for (auto& th : pool) th.join();
+  for_each_chunk(streams, n < 4096, work);
 }
 
 }  // namespace raysort

@@ -11,6 +11,7 @@
 #include "traverse_wide.h"
 #include "traverse_wide8.h"
 #include "util/error.h"
+#include "util/parallel.h"
 #include "util/text.h"
 
 namespace raysort {
@@ -126,7 +127,6 @@ std::vector<RsHit> trace_reference(const Bvh& bvh, const std::vector<RsRay>& ray
   const std::size_t n = rays.size();
   std::vector<RsHit> hits(n);
   if (node_visits) node_visits->assign(n, 0);
-  const unsigned threads = std::max(1u, std::min(16u, std::thread::hardware_concurrency()));
   WideBvh scratch;
   const WideBvh& wide = walks_wide_tree(layout) ? wide_of(bvh, scratch) : scratch;
   const Wide8Bvh wide8 = tree_width(layout) == 8 ? collapse_to_wide8(bvh) : Wide8Bvh{};
@@ -156,24 +156,14 @@ std::vector<RsHit> trace_reference(const Bvh& bvh, const std::vector<RsRay>& ray
       if (node_visits) (*node_visits)[i] = visits;
     }
   };
-  if (n < 4096 || threads == 1) {
-    work(0, n);
-    return hits;
-  }
-  std::vector<std::thread> pool;
-  const std::size_t chunk = (n + threads - 1) / threads;
-  for (unsigned t = 0; t < threads; ++t) {
-    std::size_t b = t * chunk, e = std::min(n, b + chunk);
-    if (b < e) pool.emplace_back(work, b, e);
-  }
-  for (auto& th : pool) th.join();
+  for_each_chunk(n, n < 4096, work);
   return hits;
 }
 
 std::vector<std::uint64_t> node_traffic(const Bvh& bvh, const std::vector<RsRay>& rays, bool any_hit) {
   if (bvh.nodes.empty()) return {};
   const std::size_t n = rays.size();
-  const unsigned threads = std::max(1u, std::min(16u, std::thread::hardware_concurrency()));
+  const unsigned threads = host_threads();
   const unsigned used = n < 4096 ? 1u : threads;
   std::vector<std::vector<std::uint64_t>> counts(used, std::vector<std::uint64_t>(bvh.nodes.size(), 0));
   auto work = [&](unsigned t, std::size_t begin, std::size_t end) {
