@@ -2,8 +2,6 @@
 // a namespace of its own (the header has no include guard for that reason; packet_lanes.h).
 #include "trace/packet_twin.h"
 
-#include <numeric>
-
 #include "intersect.h"
 #include "lanes.h"
 #include "traverse_wide.h"
@@ -40,12 +38,6 @@ void trace_packets_on_host(int width, int single_at, const WideBvh& wide, const 
   if (!trace) throw Error("internal: no packet traversal of width " + std::to_string(width) + " (4, 8 or 16)");
   const auto n = static_cast<rs_u32>(rays.size());
   hits.resize(n);
-  std::vector<rs_u32> identity;
-  if (!order) {
-    identity.resize(n);
-    std::iota(identity.begin(), identity.end(), 0u);
-    order = identity.data();
-  }
   const std::size_t packets = (static_cast<std::size_t>(n) + width - 1) / width;
   auto work = [&](std::size_t begin, std::size_t end) {
     for (std::size_t p = begin; p < end; ++p)

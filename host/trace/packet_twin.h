@@ -9,7 +9,7 @@
 
 namespace raysort {
 
-// Traces rays[order[i]] (order null: the identity) into hits[i] in packets of `width` (4, 8 or 16)
+// Traces rays[order[i]] (order: as many entries as rays) into hits[i] in packets of `width` (4, 8 or 16)
 // consecutive positions, exactly as the packet kernels do; visits (null: not counted) receives per
 // position the steps at which the ray's lane was active. single_at > 0: the hybrid classes (lanes
 // walk a subtree alone once at most single_at reach it). Throws Error for another width.

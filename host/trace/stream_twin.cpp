@@ -1,8 +1,6 @@
 // The host twin of the stream kernels: cl/traverse_stream.h compiled as C++ (docs/trace.md).
 #include "trace/stream_twin.h"
 
-#include <numeric>
-
 #include "traverse_stream.h"
 #include "util/parallel.h"
 
@@ -12,12 +10,6 @@ void trace_streams_on_host(const Wide8Bvh& wide8, const std::vector<RsRay>& rays
                            int robust, int any_hit, std::vector<RsHit>& hits, std::uint32_t* visits) {
   const auto n = static_cast<rs_u32>(rays.size());
   hits.resize(n);
-  std::vector<rs_u32> identity;
-  if (!order) {
-    identity.resize(n);
-    std::iota(identity.begin(), identity.end(), 0u);
-    order = identity.data();
-  }
   const std::size_t streams = (static_cast<std::size_t>(n) + RS_STREAM_RAYS - 1) / RS_STREAM_RAYS;
   auto work = [&](std::size_t begin, std::size_t end) {
     for (std::size_t s = begin; s < end; ++s)

@@ -131,6 +131,13 @@ std::vector<RsHit> trace_reference(const Bvh& bvh, const std::vector<RsRay>& ray
   const WideBvh& wide = walks_wide_tree(layout) ? wide_of(bvh, scratch) : scratch;
   const Wide8Bvh wide8 = tree_width(layout) == 8 ? collapse_to_wide8(bvh) : Wide8Bvh{};
   const int robust = variant == TraceVariant::Robust ? 1 : 0;
+  // The classes that trace several consecutive rays at once read them through an order.
+  std::vector<std::uint32_t> identity;
+  if (!order && packet_width(layout) > 1) {
+    identity.resize(n);
+    std::iota(identity.begin(), identity.end(), 0u);
+    order = identity.data();
+  }
   if (is_stream(layout)) {
     trace_streams_on_host(wide8, rays, order, robust, any_hit ? 1 : 0, hits, node_visits ? node_visits->data() : nullptr);
     return hits;
