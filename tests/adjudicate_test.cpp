@@ -4,12 +4,14 @@
 // on the device and its host twin, on both BVH layouts, must give no wrong answer on them.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 
 #include "bvh/prepared_scene.h"
 #include "test_util.h"
 #include "trace/adjudicate.h"
 #include "trace/exact_oracle.h"
+#include "trace/order_agreement.h"
 #include "trace/tracer.h"
 #include "util/atomic_file.h"
 
@@ -125,4 +127,39 @@ TEST(ExactOracle, RobustHasNoWrongAnswerOnTheRecordedDisagreements) {
     }
   }
   EXPECT_GE(files, 2u) << "no recorded disagreements in " << dir;
+}
+
+// run's check that a sorted trace reproduces NoSort's hits (trace/order_agreement.h), on the one ray
+// that failed it: breakfast_room's primary ray 1768807 at 1920x1080, packet16, fast variant, in HCC
+// order. Its packet in pixel order found tri 81323 (right); in HCC order its lane also met the
+// sliver tri 81226 and Möller–Trumbore reported a hit 2.7e-4 nearer (u + v = 1 - 4e-5), which exact
+// arithmetic misses. Fast: the variant's own answer, nearer, so it agrees; robust: wrong, so it
+// does not; the same answer with t one ulp off, or farther than NoSort's, does not either.
+TEST(OrderAgreement, FastNearEdgeHitOfASliverAgreesOnlyInTheFastVariant) {
+  RAYSORT_REQUIRE_REAL_SCENES();
+  SceneOptions opts;
+  opts.frame = {16, 16, 1};  // the ray is stored; the frame only sizes what is not used here
+  const PreparedScene p = prepare_scene("breakfast_room", opts);
+  const ExactOracle oracle(p.tris, p.bvh);
+  RsRay r{};
+  r.o[0] = -0x1.2cb4dp-1f, r.o[1] = 0x1.61930cp+1f, r.o[2] = 0x1.36db76p+3f;
+  r.d[0] = -0x1.050bd4p-2f, r.d[1] = -0x1.199594p-2f, r.d[2] = -0x1.daa46ap-1f;
+  r.tmin = 0.0f, r.tmax = 0x1.c363ccp+127f;
+  const RsHit nosort{0x1.8b4d9cp+3f, 81323u, 0x1.3d4f8cp-5f, 0x1.d0204ap-4f};
+  const RsHit hcc{0x1.8b4b6cp+3f, 81226u, 0x1.aaf2cp-1f, 0x1.542ae6p-3f};
+  EXPECT_EQ(ExactOracle::judge(oracle.truth(r, false), nosort), Verdict::Right);
+  EXPECT_EQ(ExactOracle::judge(oracle.truth(r, false), hcc), Verdict::Wrong);
+  EXPECT_TRUE(fast_test_gives(p.tris, r, hcc));
+  EXPECT_TRUE(answers_agree(hcc, nosort, r, false, TraceVariant::Fast, oracle, p.tris));
+  EXPECT_FALSE(answers_agree(hcc, nosort, r, false, TraceVariant::Robust, oracle, p.tris));
+  RsHit off = hcc;
+  off.t = std::nextafter(off.t, 0.0f);
+  EXPECT_FALSE(fast_test_gives(p.tris, r, off));
+  EXPECT_FALSE(answers_agree(off, nosort, r, false, TraceVariant::Fast, oracle, p.tris));
+  // Farther than NoSort's answer: the fast test's own hit, but not one an order can explain.
+  RsHit nearer_nosort = nosort;
+  nearer_nosort.t = 12.0f;
+  EXPECT_FALSE(answers_agree(hcc, nearer_nosort, r, false, TraceVariant::Fast, oracle, p.tris));
+  // And the right answer always agrees.
+  EXPECT_TRUE(answers_agree(nosort, hcc, r, false, TraceVariant::Robust, oracle, p.tris));
 }

@@ -10,6 +10,7 @@
 #include <optional>
 
 #include "trace/exact_oracle.h"
+#include "trace/order_agreement.h"
 
 namespace raysort {
 
@@ -371,10 +372,11 @@ std::vector<CellRecord> BatchBench::measure_sorted(std::vector<CellRecord> cells
     const Outcome o = measure(sorted_measurement(cells, encoder, keys, cfg), settings);
 
     // Checks: the order is a permutation, and each access mode's hits scattered back equal NoSort's.
-    // Single rays: bit for bit. Packets (and hybrids): a ray's companions decide the order in which
+    // Single rays: bit for bit. Packets, hybrids and streams: a ray's companions decide the order in which
     // its packet meets the nodes, so where two surfaces lie within float precision of each other
     // (shared edges, coplanar duplicates) one order may give it the other one. Such a ray agrees
-    // when the exact oracle judges its answer right or a tie (trace/exact_oracle.h); a wrong answer
+    // when its answer agrees with NoSort's up to what the order may change (trace/order_agreement.h:
+    // the exact oracle's ties, and in the fast variant the test's own near-edge hits); anything else
     // fails the cell (docs/trace.md, "Trace classes"). NoSort's own hits equal the host twin's.
     const SortedOrder so = check_order(keys, bits, top);
     const bool judge_ties = packet_width(s_.tracer.layout()) > 1 && s_.tris;
@@ -383,7 +385,7 @@ std::vector<CellRecord> BatchBench::measure_sorted(std::vector<CellRecord> cells
       if (std::memcmp(&sorted, &nosort, sizeof(RsHit)) == 0) return true;
       if (!judge_ties) return false;
       if (!oracle) oracle.emplace(*s_.tris, bvh_);
-      return ExactOracle::judge(oracle->truth(batch_.rays[ray], batch_.any_hit()), sorted) != Verdict::Wrong;
+      return answers_agree(sorted, nosort, batch_.rays[ray], batch_.any_hit(), s_.tracer.variant(), *oracle, *s_.tris);
     };
     for (CellRecord& c : cells) {
       std::vector<RsHit> hits;
