@@ -122,6 +122,7 @@ TEST(FileEncoder, ExampleRunsAndTheSetNamesItBySha256) {
   ASSERT_EQ(r.code, 0) << r.err;
   const nlohmann::json meta = read_json(out + "/meta.json");
   EXPECT_EQ(meta["matrix"]["encoders"], nlohmann::json({"origin", "file:morton_zyx"}));
+  ASSERT_TRUE(meta.contains("encoder_files") && meta["encoder_files"].contains("file:morton_zyx")) << meta.dump(1);
   const nlohmann::json& file = meta["encoder_files"]["file:morton_zyx"];
   EXPECT_EQ(file["path"], kExample);
   EXPECT_EQ(file["sha256"], sha256_file(kExample));
