@@ -20,21 +20,6 @@
 #include "keys_ppc.h"
 #include "keys_spatial.h"
 
-/* Key stores. A 64-bit key goes out as two 32-bit words on a little-endian device: PoCL's
- * work-group vectoriser sizes its vectors by the widest type stored, so a ulong store runs the
- * whole kernel 4 rays at a time (AVX2), two uint stores 8 at a time. */
-#define RS_STORE_KEY_k32(keys, i, key) ((keys)[i] = (uint)(key))
-#ifdef __ENDIAN_LITTLE__
-#define RS_STORE_KEY_k64(keys, i, key)                            \
-  do {                                                            \
-    const ulong k_ = (key);                                       \
-    ((__global uint*)(keys))[2u * (i)] = (uint)k_;                \
-    ((__global uint*)(keys))[2u * (i) + 1u] = (uint)(k_ >> 32);   \
-  } while (0)
-#else
-#define RS_STORE_KEY_k64(keys, i, key) ((keys)[i] = (ulong)(key))
-#endif
-
 /* The code bits a key of this width can hold: a key of at most 32 bits comes from bits 63..32 of the
  * code. Masking the rest lets the compiler drop the low half of the cut-bit accumulation
  * (keys_cut.h, rs_cut_bits) in the 32-bit kernels. */

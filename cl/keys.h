@@ -51,6 +51,20 @@
 #define RS_KEY_INLINE static inline __attribute__((always_inline))
 #endif
 RS_KEY_INLINE rs_u32 rs_clz64(rs_u64 x) { return (rs_u32)clz(x); }
+/* Key stores of the encode kernels (encode.cl, encode_file.h). A 64-bit key goes out as two 32-bit
+ * words on a little-endian device: PoCL's work-group vectoriser sizes its vectors by the widest type
+ * stored, so a ulong store runs the whole kernel 4 rays at a time (AVX2), two uint stores 8 at a time. */
+#define RS_STORE_KEY_k32(keys, i, key) ((keys)[i] = (uint)(key))
+#ifdef __ENDIAN_LITTLE__
+#define RS_STORE_KEY_k64(keys, i, key)                            \
+  do {                                                            \
+    const ulong k_ = (key);                                       \
+    ((__global uint*)(keys))[2u * (i)] = (uint)k_;                \
+    ((__global uint*)(keys))[2u * (i) + 1u] = (uint)(k_ >> 32);   \
+  } while (0)
+#else
+#define RS_STORE_KEY_k64(keys, i, key) ((keys)[i] = (ulong)(key))
+#endif
 #else
 #define RS_LOCAL
 #define RS_CONSTANT

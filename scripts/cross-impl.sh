@@ -3,7 +3,9 @@
 # device, PoCL's single-threaded basic device and Oclgrind must give identical deterministic figures
 # (key and order hashes, ANC, SIMT figures, status) under the golden rules of scripts/golden.sh.
 # Reduced to what Oclgrind interprets in about two minutes: cornell at 16x9, primary and shadow0,
-# (1) origin/hcc/mlhcc/ppc at 16 and 32 bits on the wide class (18 cells: keys, orders, ANC, SIMT)
+# (1) origin/hcc/mlhcc/ppc and the encoder from a file docs/examples/morton_zyx.cl (which has no host
+# twin: its keys are checked across implementations only) at 16 and 32 bits on the wide class (22
+# cells: keys, orders, ANC, SIMT)
 # and (2) origin and hcc at 32 bits in every trace class (wide, wide8, binary, packet4/8/16,
 # hybrid8/16: 48 cells). Each cell's NoSort trace must equal the class's host twin bit for bit on
 # every implementation (a mismatch fails the cell, so its status differs), and the deterministic
@@ -24,7 +26,7 @@ unset RAYSORT_DEVICE
 
 common=(run --scenes cornell --batches primary,shadow0 --resolution 16x9 --reps 1 --warmup 0 --max-time 0)
 declare -A matrix
-matrix[keys]="--encoders origin,hcc,mlhcc,ppc --bits 16,32"
+matrix[keys]="--encoders origin,hcc,mlhcc,ppc,file:docs/examples/morton_zyx.cl --bits 16,32"
 matrix[classes]="--encoders origin,hcc --bits 32 --layout all"
 for m in keys classes; do
   read -r -a margs <<<"${matrix[$m]}"

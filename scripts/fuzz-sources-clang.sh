@@ -16,7 +16,7 @@ if ! command -v "$CXX" >/dev/null; then
   exit 77
 fi
 files=(fuzz/*.cpp host/scene/*.cpp host/util/*.cpp host/bench/record.cpp host/bench/record_fields.cpp
-       host/bench/record_json.cpp host/bench/record_columns.cpp host/bench/result_set.cpp
+       host/bench/record_json.cpp host/bench/record_columns.cpp host/bench/result_set.cpp host/bench/encoder_files.cpp
        host/bench/compare.cpp host/bench/protocol.cpp host/bench/tables.cpp host/bench/plots.cpp
        host/trace/trace_class.cpp host/app/cmd_*.cpp host/app/commands.cpp host/app/options.cpp)
 printf '%s\n' "${files[@]}" | xargs -P 2 -I{} "$CXX" -std=c++20 -fsyntax-only -w -Ihost -Icl \

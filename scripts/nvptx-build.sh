@@ -4,7 +4,8 @@
 # and -D defines the host passes at run time (host/runtime/runtime.cpp build_options, and each
 # rt.build() call: trace.cl for every trace class (-DRS_TRACE_BINARY, -DRS_TRACE_WIDE8, -DRS_TRACE_STREAM,
 # -DRS_TRACE_PACKET=W with and without -DRS_PACKET_SINGLE_AT), radix_sort.cl in both shapes and
-# key widths). Fails on any error, on any warning (except libclc's triple spelling, below), and on
+# key widths), and an encoder from a file: the example docs/examples/morton_zyx.cl after
+# cl/encode_file.h, as host/encode/encoder_file.cpp puts them together. Fails on any error, on any warning (except libclc's triple spelling, below), and on
 # any function the PTX declares but does not define (.extern .func: a builtin libclc lacks, or one
 # only x86 has). Prints each kernel's local (stack) memory from the PTX's __local_depot sizes.
 #
@@ -54,6 +55,7 @@ BUILDS=(
   "encode|cl/encode.cl|"
   "permute|cl/permute.cl|"
   "shade|cl/shade.cl|"
+  "encode-file-example|docs/examples/morton_zyx.cl|-include cl/encode_file.h"
   "sort-gpu-k32|cl/radix_sort.cl|-DRS_KEY_BITS=32 $GPU_SORT"
   "sort-gpu-k64|cl/radix_sort.cl|-DRS_KEY_BITS=64 $GPU_SORT"
   "sort-cpu-k32|cl/radix_sort.cl|-DRS_KEY_BITS=32 $CPU_SORT"

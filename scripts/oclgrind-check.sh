@@ -5,8 +5,9 @@
 # checked):
 #   trace        both variants (robust, fast), the classes wide, wide8, binary, packet4, packet16, hybrid8 and stream,
 #                closest and any hit
-#   encodebench  every encoder at 16, 32 and 64 bits (the *_k32 and *_k64 kernels), and HCC_DIR with 2
-#                direction bits (its two-pass encode_direction_* / encode_box_set_or_* kernels)
+#   encodebench  every encoder at 16, 32 and 64 bits (the *_k32 and *_k64 kernels), HCC_DIR with 2
+#                direction bits (its two-pass encode_direction_* / encode_box_set_or_* kernels), and
+#                an encoder from a file (the example, inside cl/encode_file.h's encode_file_* kernels)
 #   render       generate, shade, the (fast, wide) counted closest hit, accumulate, compaction
 #   sortcheck    the radix sort in the shape Oclgrind gets (the GPU shape: local-memory tiles),
 #                a small GPU shape whose tiles are 256 keys, and the CPU shape, at
@@ -57,6 +58,7 @@ cases=(
   "trace-stream|trace ${DEV[*]} --scene cornell --resolution 16x9 ${PROTO[*]} --variant both --layout stream"
   "encode-all|encodebench ${DEV[*]} --scene cornell --resolution 16x9 ${PROTO[*]} --bits 16,32,64"
   "encode-hcc-dir|encodebench ${DEV[*]} --scene cornell --resolution 16x9 ${PROTO[*]} --bits 16,32,64 --encoders hcc-dir --direction-bits 2"
+  "encode-file|encodebench ${DEV[*]} --scene cornell --resolution 16x9 ${PROTO[*]} --bits 16,32,64 --encoders file:docs/examples/morton_zyx.cl"
   "render|render ${DEV[*]} --scene cornell --resolution 16x9 --spp 1 --out $work/render"
 )
 # Sort shapes: Oclgrind's own (its device type includes GPU: local-memory tiles of 128 x 8 keys),

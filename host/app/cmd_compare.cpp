@@ -46,6 +46,8 @@ void register_compare_command(CLI::App& app) {
     if (!a->out.empty()) write_file_atomically(a->out, res.report);
     for (const auto& line : res.scene_files)
       fmt::print(stderr, "raysort compare: scene files: {}\n", line);
+    for (const auto& line : res.encoder_files)
+      fmt::print(stderr, "raysort compare: encoder files: {}\n", line);
     if (!res.within_noise.empty())
       fmt::print(stderr, "raysort compare: {} change(s) past a --fail-if threshold on the points stayed within the "
                          "noise (not past it between the 95 % intervals' nearest ends), not counted as regressions\n",

@@ -14,6 +14,7 @@
 #include "bench/encode_cost.h"
 #include "bench/matrix.h"
 #include "bench/scene_bench.h"
+#include "encode/encoder_file.h"
 #include "util/error.h"
 
 namespace raysort {
@@ -41,6 +42,15 @@ struct EncodeBenchArgs {
 struct EncodeBenchPlan {
   MatrixSpec spec;
   std::optional<Encoder> versus;
+  // The encoders from files among spec.encoders (encode/encoder_file.h): no host twin, so host== says
+  // so, in a wider column.
+  std::vector<const EncoderFile*> files;
+  int check_width() const { return files.empty() ? 8 : 12; }
+  int name_width() const {  // the list's names fit 11; a file's stem may be longer
+    std::size_t width = 11;
+    for (const EncoderFile* f : files) width = std::max(width, f->name.size());
+    return static_cast<int>(width);
+  }
 };
 
 EncodeBenchPlan plan_of(const EncodeBenchArgs& args, const CLI::App& cmd) {
@@ -58,6 +68,8 @@ EncodeBenchPlan plan_of(const EncodeBenchArgs& args, const CLI::App& cmd) {
   spec.variants = {TraceVariant::Fast};
   spec.layouts = {TraceLayout::Wide};
   validate_encoders(spec.encoders, spec.bits, spec.params);
+  for (Encoder e : spec.encoders)
+    if (const EncoderFile* f = encoder_file(e)) plan.files.push_back(f);
   return plan;
 }
 
@@ -68,7 +80,8 @@ const ReferencedBatch& batch_of(SceneBench& scene, const std::string& name) {
   throw Error(fmt::format("scene '{}' has no batch '{}'; it has: {}", scene.prepared.scene.name, name, names));
 }
 
-void print_header(const Runtime& rt, const SceneBench& scene, const RayBatch& batch, std::optional<Encoder> versus) {
+void print_header(const Runtime& rt, const SceneBench& scene, const RayBatch& batch, const EncodeBenchPlan& plan) {
+  const std::optional<Encoder> versus = plan.versus;
   fmt::print("device   {} ({})\n", rt.info().name, rt.info().platform_name);
   fmt::print("scene    {}: {} triangles; batch {}: {} rays\n", scene.prepared.scene.name, scene.prepared.tris.size(),
              batch.name, batch.size());
@@ -77,10 +90,15 @@ void print_header(const Runtime& rt, const SceneBench& scene, const RayBatch& ba
   if (versus)
     fmt::print("         and with {}'s encode at the same key length: x {} = paired estimate of encode / {}'s per round\n",
                encoder_name(*versus), encoder_name(*versus), encoder_name(*versus));
+  for (const EncoderFile* f : plan.files)
+    fmt::print("file     {} = {} (sha256 {}): no host twin; host== says \"no host twin\" when a second launch gave the "
+               "same keys, NO when not\n",
+               f->name, f->path, f->sha256);
   fmt::print("\n");
   const std::string versus_header = versus ? fmt::format("x {}", encoder_name(*versus)) : "";
-  fmt::print("{:<11} {:>4} {:>28} {:>9} {:>24}{:>{}} {:>10} {:>8} {:>7}\n", "encoder", "bits", "encode ms", "MRays/s",
-             "% trace", versus_header, versus ? 24 : 0, "distinct", "host==", "rounds");
+  fmt::print("{:<{}} {:>4} {:>28} {:>9} {:>24}{:>{}} {:>10} {:>{}} {:>7}\n", "encoder", plan.name_width(), "bits",
+             "encode ms", "MRays/s", "% trace", versus_header, versus ? 24 : 0, "distinct", "host==", plan.check_width(),
+             "rounds");
 }
 
 // One row of the table: e at `bits` bits measured, its keys checked against the host twin (unless
@@ -94,9 +112,12 @@ bool measure_row(const EncodeBenchArgs& args, const EncodeBenchPlan& plan, Scene
                                                                encoder_name(e), bits))));
   std::string check = "-";
   bool same = true;
-  if (args.verify) {
+  if (args.verify && has_host_twin(e)) {
     same = encode_on_host(e, bits, scene.encoder->scene(), batch.rays) == c.keys;
     check = same ? "yes" : "NO";
+  } else if (args.verify) {  // an encoder from a file: checked against a second launch
+    same = scene.encoder->run(e, bits, batch.rays).keys == c.keys;
+    check = same ? "no host twin" : "NO";
   }
   std::vector<std::uint64_t> sorted = c.keys;
   std::sort(sorted.begin(), sorted.end());
@@ -106,9 +127,9 @@ bool measure_row(const EncodeBenchArgs& args, const EncodeBenchPlan& plan, Scene
       share.has_interval() ? fmt::format("{:.1f}% [{:.1f}, {:.1f}]", 100 * share.value, 100 * share.lo, 100 * share.hi)
                            : fmt::format("{:.1f}%", 100 * share.value);
   const std::string versus_text = c.versus ? interval_text(*c.versus) : plan.versus ? "-" : "";
-  fmt::print("{:<11} {:>4} {:>28} {:>9.1f} {:>24}{:>{}} {:>10} {:>8} {:>6}{}\n", encoder_name(e), bits,
+  fmt::print("{:<{}} {:>4} {:>28} {:>9.1f} {:>24}{:>{}} {:>10} {:>{}} {:>6}{}\n", encoder_name(e), plan.name_width(), bits,
              interval_text(c.encode.estimate()), c.encode.median_ms > 0 ? batch.size() / (c.encode.median_ms * 1e3) : 0.0,
-             share_text, versus_text, plan.versus ? 24 : 0, distinct, check, c.rounds,
+             share_text, versus_text, plan.versus ? 24 : 0, distinct, check, plan.check_width(), c.rounds,
              c.stop == StopReason::Noise ? " " : "*");
   std::fflush(stdout);
   return same;
@@ -117,12 +138,13 @@ bool measure_row(const EncodeBenchArgs& args, const EncodeBenchPlan& plan, Scene
 int run_encodebench(const EncodeBenchArgs& args, const CLI::App& cmd) {
   EncodeBenchPlan plan = plan_of(args, cmd);
   Runtime rt(select_device(args.common.device));
+  build_own_programs(rt, plan.spec.encoders);  // an encoder file that does not compile: refused before any work
   PreparedScene prepared = prepare_scene(args.scene, args.common.scene_options());
   plan.spec.frame = prepared.frame();
   check_scene_memory(plan.spec, prepared.scene.name, scene_facts_of(prepared.scene, plan.spec.frame), rt.info());
   SceneBench scene(rt, std::move(prepared), plan.spec);
   const ReferencedBatch& rb = batch_of(scene, args.batch);
-  print_header(rt, scene, rb.batch, plan.versus);
+  print_header(rt, scene, rb.batch, plan);
   EncodeCostBench bench(rt, *scene.encoder, *scene.tracers.begin()->second, rb.batch);
   int failures = 0;
   for (Encoder e : plan.spec.encoders)
@@ -130,7 +152,8 @@ int run_encodebench(const EncodeBenchArgs& args, const CLI::App& cmd) {
   fmt::print("rounds * = stopped by --max-time before the % trace{} interval was within --max-noise\n",
              plan.versus ? fmt::format(" or x {}", encoder_name(*plan.versus)) : std::string());
   if (failures) {
-    fmt::print(stderr, "raysort: {} encoder runs differ from the host twin\n", failures);
+    fmt::print(stderr, "raysort: {} encoder runs differ from the host twin{}\n", failures,
+               plan.files.empty() ? "" : " (or, with no host twin, from a second launch)");
     return 1;
   }
   return 0;
@@ -143,7 +166,10 @@ void register_encode_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("encodebench", "time every encoder and key length on one ray batch of a scene");
   cmd->add_option("--scene,--scenes", args->scene, "scene name, .toml or .obj path (one)")->required();
   cmd->add_option("--batch", args->batch, "batch name: primary, shadow<k>, bounce<k>")->capture_default_str();
-  cmd->add_option("--encoders", args->encoders, "comma-separated encoders (default: all)")->delimiter(',');
+  cmd->add_option("--encoders", args->encoders,
+                  "comma-separated encoders (default: all); file:PATH is an encoder from an OpenCL C file "
+                  "(docs/encoders.md, \"An encoder from a file\")")
+      ->delimiter(',');
   // The same ranges as run's options of the same names.
   whole_number(cmd->add_option("--bits", args->bits, "comma-separated key lengths")->delimiter(',')->capture_default_str(),
                1, 64);

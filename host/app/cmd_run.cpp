@@ -123,7 +123,10 @@ void register_run_command(CLI::App& app) {
                   "paper-1spp, paper-viewport, paper-hcc-dir or paper-bounces (docs/paper.md)");
   add_scene_list_option(*cmd, a->scenes, "scenes (names, .toml or .obj paths, comma-separated)");
   cmd->add_option("--batches", a->batches, "batches: primary, shadow<k>, bounce<k>, or all")->delimiter(',');
-  cmd->add_option("--encoders", a->encoders, "encoders, or all")->delimiter(',');
+  cmd->add_option("--encoders", a->encoders,
+                  "encoders, or all; file:PATH is an encoder from an OpenCL C file, named file:<its stem> in the "
+                  "result set (docs/encoders.md, \"An encoder from a file\")")
+      ->delimiter(',');
   whole_number(cmd->add_option("--bits", a->bits, "key bits, e.g. 16,32,64")->delimiter(','), 1, 64);
   whole_number(cmd->add_option("--top-bits", a->top_bits, "also sort by only the highest k bits (top-k cells)")->delimiter(','),
                1, 64);

@@ -350,6 +350,20 @@ void BatchBench::fill_sorted_cell(CellRecord& c, const Outcome& o, const SortedO
   if (s_.gpu && so.permutation) c.gpu = gpu_figures(*s_.gpu, so.gpu, nosort_gpu_);
 }
 
+std::string BatchBench::unrepeated_keys(Encoder encoder, unsigned bits, const cl::Buffer& keys,
+                                        const std::vector<std::uint64_t>& first) {
+  if (has_host_twin(encoder)) return "";
+  s_.encoder.enqueue(encoder, bits, rays_, identity_, n_, keys, values_).wait();
+  const std::vector<std::uint64_t> again = DeviceEncoder::download_keys(s_.rt, keys, bits, n_, "keys (second launch)");
+  std::size_t differ = 0;
+  for (std::uint32_t i = 0; i < n_; ++i) differ += first[i] != again[i];
+  if (differ == 0) return "";
+  return fmt::format("{} gave other keys on a second launch over the same rays ({} of {} differ); it has no host twin, "
+                     "so its keys are checked against themselves: make its key a function of the ray and the scene "
+                     "alone (no uninitialised variable, no other work-item's data)",
+                     encoder_name(encoder), differ, n_);
+}
+
 std::vector<CellRecord> BatchBench::measure_sorted(std::vector<CellRecord> cells, Encoder encoder,
                                                    const ProtocolSettings& settings) {
   const unsigned bits = cells.front().bits, top = cells.front().top_bits;
@@ -368,6 +382,7 @@ std::vector<CellRecord> BatchBench::measure_sorted(std::vector<CellRecord> cells
     // The keys in generation order, for their fingerprint (untimed).
     s_.encoder.enqueue(encoder, bits, rays_, identity_, n_, keys, values_).wait();
     const std::vector<std::uint64_t> unsorted = DeviceEncoder::download_keys(s_.rt, keys, bits, n_, "keys");
+    if (const std::string why = unrepeated_keys(encoder, bits, keys, unsorted); !why.empty()) return fail_all("failed", why);
 
     const Outcome o = measure(sorted_measurement(cells, encoder, keys, cfg), settings);
 

@@ -85,6 +85,10 @@ class BatchBench {
   // per access mode.
   Measurement sorted_measurement(const std::vector<CellRecord>& cells, Encoder encoder, const cl::Buffer& keys,
                                  const RadixSortConfig& cfg);
+  // An encoder without a host twin (an encoder from a file) is checked against itself: "" when a
+  // second launch over the rays gives `first` (the keys of the first) again, else why the cells fail.
+  std::string unrepeated_keys(Encoder encoder, unsigned bits, const cl::Buffer& keys,
+                              const std::vector<std::uint64_t>& first);
   // What the sort left after the rounds: the order, whether it is a permutation and the identity,
   // and its ANC and SIMT model.
   struct SortedOrder {

@@ -8,6 +8,7 @@
 #include <optional>
 #include <set>
 
+#include "bench/encoder_files.h"
 #include "scene/provenance.h"
 #include "util/error.h"
 
@@ -257,6 +258,28 @@ std::string matrix_mismatch(const ResultSet& a, const ResultSet& b) {
   return keys.empty() && ma != mb ? "matrix entry of another shape" : json_differences(ma, mb, keys);
 }
 
+namespace {
+
+// The files the two sets' figures came from, where their checksums differ: scene files (meta.json
+// "scene_files") and encoders from files ("encoder_files"). Such figures are not comparable,
+// whatever the rules say.
+void add_provenance_notes(const nlohmann::json& meta_a, const nlohmann::json& meta_b, CompareResult& out) {
+  out.scene_files = scene_file_differences(meta_a, meta_b);
+  out.encoder_files = encoder_file_differences(meta_a, meta_b);
+  auto note = [&](const std::vector<std::string>& lines, const char* what) {
+    if (lines.empty()) return;
+    out.report += what;
+    for (const auto& line : lines) out.report += "- " + line + "\n";
+    out.report += "\n";
+  };
+  note(out.scene_files, "**The sets traced different scene files** (meta.json \"scene_files\", SHA-256): their "
+                        "figures on these scenes are not comparable.\n\n");
+  note(out.encoder_files, "**The sets ran different encoder files** (meta.json \"encoder_files\", SHA-256): their "
+                          "figures for these encoders are not comparable.\n\n");
+}
+
+}  // namespace
+
 CompareResult compare_result_sets(const ResultSet& a, const ResultSet& b, const std::vector<std::string>& metrics,
                                   const std::vector<FailRule>& rules, bool allow_different_matrix) {
   CompareResult out;
@@ -277,13 +300,7 @@ CompareResult compare_result_sets(const ResultSet& a, const ResultSet& b, const 
                                        {protocol_keys().begin(), protocol_keys().end()});
       !p.empty())
     md += fmt::format("Measurement settings differ (the intervals' widths may too): {}\n\n", p);
-  out.scene_files = scene_file_differences(a.meta(), b.meta());
-  if (!out.scene_files.empty()) {
-    md += "**The sets traced different scene files** (meta.json \"scene_files\", SHA-256): their figures on these "
-          "scenes are not comparable.\n\n";
-    for (const auto& line : out.scene_files) md += "- " + line + "\n";
-    md += "\n";
-  }
+  add_provenance_notes(a.meta(), b.meta(), out);
 
   for (auto& metric : metrics) {
     const std::optional<Metric> found = find_metric(metric);

@@ -47,6 +47,8 @@ struct CompareResult {
   // The scene files the two sets traced, where their checksums differ (meta.json "scene_files",
   // scene/provenance.h): results on different files are not comparable, whatever the rules say.
   std::vector<std::string> scene_files;
+  // Likewise the encoders from files (meta.json "encoder_files", bench/encoder_files.h).
+  std::vector<std::string> encoder_files;
 };
 
 // The two sets must have run one matrix (scenes, batches, encoders, bits, resolution, spp, seed,

@@ -14,6 +14,7 @@
 #include <optional>
 #include <set>
 
+#include "bench/encoder_files.h"
 #include "bench/result_set.h"
 #include "util/folder_lock.h"
 #include "util/error.h"
@@ -99,6 +100,9 @@ std::map<unsigned, std::string> check_one_run(const std::vector<Input>& sets, st
     if (build_name(a) != build_name(b))
       problems.push_back(fmt::format("{} was run by {} but {} by {}; rerun that shard with the same raysort build",
                                      in.dir, build_name(b), ref.dir, build_name(a)));
+    if (const std::vector<std::string> d = encoder_file_differences(a, b); !d.empty())
+      problems.push_back(fmt::format("{} ran other encoder files than {} ({}); rerun that shard with the same files",
+                                     in.dir, ref.dir, d.front()));
   }
   std::map<unsigned, std::string> shard_dir;  // shard index -> input folder
   for (const auto& in : sets) {

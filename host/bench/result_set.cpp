@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <set>
 
+#include "bench/encoder_files.h"
 #include "bench/plots.h"
 #include "bench/record_columns.h"
 #include "scene/provenance.h"
@@ -126,6 +127,15 @@ void check_meta_shape(const nlohmann::json& meta, const std::string& path) {
   if (meta.contains("kernels"))
     for (const char* key : {"source", "hash", "cl_options"}) expect(meta["kernels"], "kernels.", key, Text);
   for (const char* key : {"git_commit", "raysort_version", "command", "date", "host_cpu"}) expect(meta, "", key, Text);
+  expect(meta, "", "encoder_files", Object);
+  if (meta.contains("encoder_files"))
+    for (const auto& [name, file] : meta["encoder_files"].items()) {
+      const std::string where = "encoder_files." + name;
+      if (!file.is_object())
+        throw Error(fmt::format("{}: \"{}\" is a JSON {}, not an object; restore the file (it was edited or damaged)",
+                                path, where, file.type_name()));
+      for (const char* key : {"path", "sha256"}) expect(file, where + ".", key, Text);
+    }
   if (meta.contains("device"))
     for (const char* key : {"name", "type", "platform", "platform_version", "opencl", "opencl_c", "driver", "slug"})
       expect(meta["device"], "device.", key, Text);
@@ -354,6 +364,12 @@ ResultSet ResultSet::open_for_run(const std::string& dir, const nlohmann::json& 
                                 "comparable (A: when it was started, B: now); restore the files, or choose another --out "
                                 "folder",
                                 dir, diff.front()));
+    // An encoder file changed since the set was started: resumed cells would use other keys.
+    if (const auto diff = encoder_file_differences(old, meta); !diff.empty())
+      throw Error(fmt::format("{} was started with other encoder files ({}); its cells and new ones would not be "
+                              "comparable (A: when it was started, B: now); restore the file, or choose another --out "
+                              "folder",
+                              dir, diff.front()));
     read_cells(dir, old, rs.cells_);
     // Keep the original meta (first start), but record that the run was resumed.
     rs.meta_ = old;

@@ -24,6 +24,7 @@
 #include "bench/scene_bench.h"
 #include "bvh/prepared_scene.h"
 #include "embree/embree_reference.h"
+#include "encode/encoder_file.h"
 #include "render/batches.h"
 #include "render/frame_memory.h"
 #include "runtime/runtime.h"
@@ -108,6 +109,21 @@ nlohmann::json kernels_meta() {
   return {{"source", k.source}, {"hash", k.hash}, {"cl_options", k.cl_options}};
 }
 
+// The encoders from files among `encoders` (encode/encoder_file.h), for meta.json "encoder_files"
+// (bench/encoder_files.h): each file's path and SHA-256 (a resume with another file is refused);
+// null when there is none.
+nlohmann::json encoder_files_meta(const std::vector<Encoder>& encoders) {
+  nlohmann::json files = nlohmann::json::object();
+  for (Encoder e : encoders)
+    if (const EncoderFile* f = encoder_file(e))
+      files[f->name] = {{"path", f->path},
+                        {"sha256", f->sha256},
+                        {"host_twin", false},
+                        {"keys_checked", "no host twin: in every cell a second launch over the batch must give the "
+                                         "same keys (bench/cell_measure.h)"}};
+  return files.empty() ? nlohmann::json() : files;
+}
+
 // Embree's arms (run --embree-paths): which call and context flag each path makes, on how many
 // threads, and how an arm is timed. Empty without paths (and in a build without Embree, which
 // refuses them in validate_matrix).
@@ -184,6 +200,7 @@ nlohmann::json run_meta(const MatrixSpec& spec, const RunOptions& opts, const De
                      "with FNV-1a(batch name) ^ seed * 0x9e3779b97f4a7c15 (render/batches.h)"}}},
   };
   if (!spec.embree_paths.empty()) meta["embree"] = embree_meta(spec.embree_paths);
+  if (nlohmann::json files = encoder_files_meta(spec.encoders); !files.is_null()) meta["encoder_files"] = std::move(files);
   return meta;
 }
 
@@ -395,6 +412,7 @@ RunSummary run_matrix(const MatrixSpec& requested, const RunOptions& opts) {
   check_scenes_before_work(spec, opts);
 
   Runtime rt(select_device(opts.device));
+  build_own_programs(rt, spec.encoders);  // an encoder file that does not compile: refused before any work
   spec.layouts = resolved_layouts(spec.layouts, rt.info());
 
   // Plan: every cell of the matrix in visiting order; a shard keeps its own (bench/shard.h).

@@ -15,6 +15,7 @@
 #include <map>
 #include <set>
 
+#include "bench/encoder_files.h"
 #include "bench/result_set.h"
 
 namespace raysort {
@@ -196,6 +197,29 @@ std::string introduction(const nlohmann::json& meta) {
         "order is the generation order, so no speedup is reported. A cell whose sorted trace does not reproduce the "
         "NoSort hits exactly is listed under failed cells and has no speed.\n\n";
   return md;
+}
+
+// Free text (a device's message, a path) in a list item or a table cell: one line, its '|' escaped,
+// so it cannot end the item or the cell, or be read as a table by a markdown viewer.
+std::string one_line(const std::string& text) {
+  std::string out;
+  for (char ch : text) out += ch == '|' ? std::string("\\|") : ch == '\n' || ch == '\r' ? std::string(" ") : std::string(1, ch);
+  return out;
+}
+
+// Where the encoders from files came from, and that they have no host twin (meta.json
+// "encoder_files"): nothing when the set has none.
+std::string encoder_files_section(const nlohmann::json& meta) {
+  const std::vector<RecordedEncoderFile> files = recorded_encoder_files(meta);
+  if (files.empty()) return "";
+  std::string md =
+      "## Encoders from files\n\nEach written as one OpenCL C function in a file (docs/encoders.md, \"An encoder from "
+      "a file\"), named here by its file and SHA-256. **No host twin**: unlike a built-in encoder, whose kernel the "
+      "tests compare bit for bit with a host copy, its keys are checked only against themselves: in every cell a second "
+      "launch over the batch gave the same keys, or the cell failed.\n\n| encoder | file | SHA-256 | host twin |\n|---|---|---|---|\n";
+  for (const RecordedEncoderFile& f : files)
+    md += fmt::format("| {} | `{}` | `{}` | no host twin |\n", one_line(f.name), one_line(f.path), one_line(f.sha256));
+  return md + "\n";
 }
 
 // Trace speed per batch and access mode (Tables 2-4).
@@ -674,13 +698,6 @@ std::string failed_section(const std::vector<CellRecord>& cells) {
   for (auto& c : cells)
     if (!c.ok()) failed.push_back(&c);
   std::string md = fmt::format("## Failed cells: {}\n\n", failed.size());
-  // An error is free text (a device's message, a path): one line, its '|' escaped, so it cannot
-  // end the list item or be read as a table by a markdown viewer.
-  auto one_line = [](const std::string& text) {
-    std::string out;
-    for (char ch : text) out += ch == '|' ? std::string("\\|") : ch == '\n' || ch == '\r' ? std::string(" ") : std::string(1, ch);
-    return out;
-  };
   for (auto* c : failed) md += fmt::format("- `{}`: {} — {}\n", c->id(), c->status, one_line(c->error));
   if (!failed.empty()) md += "\n";
   return md;
@@ -690,7 +707,7 @@ std::string failed_section(const std::vector<CellRecord>& cells) {
 
 std::string render_tables(const std::vector<CellRecord>& cells, const nlohmann::json& meta) {
   const TableContext t(cells, meta);
-  return introduction(meta) + noise_section(cells) + trace_speed_sections(t) + overhead_sections(t) +
+  return introduction(meta) + encoder_files_section(meta) + noise_section(cells) + trace_speed_sections(t) + overhead_sections(t) +
          gather_permute_section(t) + key_length_sections(t) + deterministic_sections(t) + hcc_dir_section(t) +
          bounces_section(t) + top_k_section(t) + variants_section(t) + classes_section(t) + embree_section(t, meta) +
          baselines_section(t) + failed_section(cells);

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <numeric>
 
+#include "encode/encoder_file.h"
 #include "util/error.h"
 
 namespace raysort {
@@ -24,6 +25,23 @@ DeviceEncoder::DeviceEncoder(Runtime& rt, const Bvh& bvh, const Aabb& scene_box,
   // 64 work-items suit PoCL (the group is a loop; 256 measured no faster) and GPUs (two warps).
   // Cut boxes are read from __constant memory (broadcast on GPUs; no copy or barrier on PoCL).
   local_ = std::min<std::size_t>(64, rt.info().max_work_group_size);
+}
+
+DeviceEncoder::Kernels& DeviceEncoder::kernels_of(Encoder e, unsigned bits) {
+  const EncoderFamily& family = encoder_family(e);
+  auto own = own_kernels_.find(e);
+  if (own == own_kernels_.end()) {
+    const std::optional<cl::Program> program = family.own_program(e, rt_);
+    if (!program) return bits > 32 ? k64_ : k32_;
+    std::pair<Kernels, Kernels> made;
+    const std::string name(encoder_info(e).kernel);
+    cl_call("creating the kernels of " + std::string(encoder_name(e)), [&] {
+      made.first.emplace(name, cl::Kernel(*program, (name + "_k32").c_str()));
+      made.second.emplace(name, cl::Kernel(*program, (name + "_k64").c_str()));
+    });
+    own = own_kernels_.emplace(e, std::move(made)).first;
+  }
+  return bits > 32 ? own->second.second : own->second.first;
 }
 
 const std::vector<KernelArg>& DeviceEncoder::uploaded(Encoder e, unsigned bits) {
@@ -48,7 +66,7 @@ DeviceEncoder::Events DeviceEncoder::enqueue(Encoder e, unsigned bits, const cl:
     throw Error("a batch of " + std::to_string(count) + " rays is too large to encode (at most " +
                 std::to_string(kMaxRays - 1) + "); trace it in smaller batches (a lower --resolution or --spp)");
   const std::vector<KernelArg>& inputs = uploaded(e, bits);
-  auto& kernels = bits > 32 ? k64_ : k32_;
+  Kernels& kernels = kernels_of(e, bits);
   const EncodeLaunch launch{e,     bits,   scene_, inputs, rays, order, count, keys, values, rt_, local_,
                             [&kernels](const std::string& name) -> cl::Kernel& { return kernels.at(name); }};
   Events ev;
@@ -110,8 +128,10 @@ double DeviceEncoder::warm_up() {
   // Best effort: an encoder's cut data is per key length, and if it cannot be made here (HCC_DIR
   // whose direction bits do not fit, a device out of memory), the cell that needs it fails with
   // that message and the other cells still run.
+  std::vector<Encoder> encoders = all_encoders();
+  for (Encoder e : file_encoders()) encoders.push_back(e);  // loaded for this run (encode/encoder_file.h)
   for (unsigned bits : {32u, 64u})
-    for (Encoder e : all_encoders()) {
+    for (Encoder e : encoders) {
       try {
         run(e, bits, rays);
       } catch (const Error&) {

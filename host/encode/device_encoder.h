@@ -55,10 +55,15 @@ class DeviceEncoder {
     std::uint64_t generation = 0;  // EncodeScene::generation of the encoder when uploaded
   };
   const std::vector<KernelArg>& uploaded(Encoder e, unsigned bits);
+  using Kernels = std::map<std::string, cl::Kernel>;  // by kernel name without the suffix
+  // e's kernels for keys of `bits` bits: cl/encode.cl's, or those of e's own program
+  // (EncoderFamily::own_program: an encoder from a file), created on first use.
+  Kernels& kernels_of(Encoder e, unsigned bits);
 
   Runtime& rt_;
   EncodeScene scene_;
-  std::map<std::string, cl::Kernel> k32_, k64_;  // by kernel name without the suffix
+  Kernels k32_, k64_;
+  std::map<Encoder, std::pair<Kernels, Kernels>> own_kernels_;  // _k32, _k64 of an own program
   std::map<std::pair<Encoder, unsigned>, Uploaded> uploads_;
   std::map<std::string, cl::Buffer> scene_buffers_;  // uploaded once per scene (DeviceUploads::scene_buffer)
   std::size_t local_ = 64;

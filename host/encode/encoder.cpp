@@ -5,6 +5,7 @@
 #include <cctype>
 
 #include "encode/encoder_family.h"
+#include "encode/encoder_file.h"
 #include "util/error.h"
 
 namespace raysort {
@@ -23,8 +24,10 @@ const std::vector<EncoderInfo>& encoder_table() {
 const EncoderInfo& encoder_info(Encoder e) {
   const auto& table = encoder_table();
   const auto i = static_cast<std::size_t>(e);
-  if (i >= table.size() || table[i].id != e) throw Error("encoder_info: an encoder outside the table");
-  return table[i];
+  if (i < table.size() && table[i].id == e) return table[i];
+  // Past the list: an encoder from a file (encoder_file.h).
+  if (const EncoderInfo* file = encoder_file_info(e)) return *file;
+  throw Error("encoder_info: an encoder outside the table");
 }
 
 const EncoderFamily& encoder_family(Encoder e) { return *encoder_info(e).family; }
@@ -32,6 +35,8 @@ const EncoderFamily& encoder_family(Encoder e) { return *encoder_info(e).family;
 std::string_view encoder_name(Encoder e) { return encoder_info(e).name; }
 
 std::optional<Encoder> parse_encoder(std::string_view name) {
+  // An encoder from a file, as result sets name it ("file:<stem>", once loaded): spelled exactly.
+  if (name.starts_with(kFileEncoderPrefix)) return find_encoder_file(name);
   auto folded = [](std::string_view text) {
     std::string s;
     for (char c : text)
@@ -60,11 +65,15 @@ std::vector<Encoder> parse_encoders(const std::vector<std::string>& names) {
   if (names.size() == 1 && names[0] == "all") return all_encoders();
   std::vector<Encoder> out;
   for (const auto& name : names) {
-    const auto e = parse_encoder(name);
+    // file:PATH loads the file (encoder_file.h); the same path twice is one encoder.
+    const auto e = name.starts_with(kFileEncoderPrefix)
+                       ? std::optional<Encoder>(load_encoder_file(name.substr(kFileEncoderPrefix.size())))
+                       : parse_encoder(name);
     if (!e) {
       std::string valid;
       for (const EncoderInfo& info : encoder_table()) valid += (valid.empty() ? "" : ", ") + std::string(info.name);
-      throw Error("unknown encoder '" + name + "'; encoders are: " + valid);
+      throw Error("unknown encoder '" + name + "'; encoders are: " + valid +
+                  ", or file:PATH (an OpenCL C file; docs/encoders.md, \"An encoder from a file\")");
     }
     if (std::find(out.begin(), out.end(), *e) == out.end()) out.push_back(*e);
   }

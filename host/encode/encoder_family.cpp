@@ -70,4 +70,10 @@ void check_key_bits(Encoder e, unsigned bits, const EncoderParams& params) {
   if (!why.empty()) throw Error(why);
 }
 
+void build_own_programs(Runtime& rt, const std::vector<Encoder>& encoders) {
+  for (Encoder e : encoders) (void)encoder_family(e).own_program(e, rt);
+}
+
+bool has_host_twin(Encoder e) { return encoder_family(e).has_host_twin(); }
+
 }  // namespace raysort

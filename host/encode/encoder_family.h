@@ -16,6 +16,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <variant>
 #include <vector>
@@ -117,6 +118,13 @@ class EncoderFamily {
   virtual EncodeEvents enqueue(const EncodeLaunch& launch) const;
   virtual unsigned rays_per_work_item() const { return 1; }
 
+  // Whether host_key is the kernel's bit-exact twin. A family without one (encoders from files)
+  // has its keys checked against themselves: the same keys on a second launch (bench/cell_measure.h).
+  virtual bool has_host_twin() const { return true; }
+  // The program holding e's kernels when it is not cl/encode.cl (built, or taken from rt's cache):
+  // an encoder made at run time brings its own. Null: cl/encode.cl's kernels.
+  virtual std::optional<cl::Program> own_program(Encoder, Runtime&) const { return std::nullopt; }
+
   virtual LearnsFrom learns_from(Encoder) const { return LearnsFrom::Nothing; }
   // What e learns from `before` (the batch learns_from names, traced before the one it encodes).
   virtual std::shared_ptr<const LearnedInput> study(Encoder e, const EncodeScene& scene, const RayBatch& before) const;
@@ -128,6 +136,15 @@ class EncoderFamily {
 #define RS_DECLARE_FAMILY(FAMILY) const EncoderFamily& encoder_family_##FAMILY();
 RS_ENCODER_FAMILIES(RS_DECLARE_FAMILY)
 #undef RS_DECLARE_FAMILY
+// The family of the encoders from files (encode/encoder_file.h), outside the list: no kernel of
+// cl/encode.cl, a program per file (host/encode/file_family.cpp).
+const EncoderFamily& encoder_family_file();
+
+// Builds the programs of the encoders that bring their own (own_program) before any work, so a file
+// that does not compile is refused with its build log before a result set is written. Throws Error.
+void build_own_programs(Runtime& rt, const std::vector<Encoder>& encoders);
+// Whether e's keys have a host twin to be checked against (EncoderFamily::has_host_twin).
+bool has_host_twin(Encoder e);
 
 // "" when `bits` is a valid key length for e with these parameters (1..64, then the family's rule:
 // MLHCC: even; HCC_DIR: more than d bits; hcc-region: more than r bits and r ≤ 8; hcc-traffic:

@@ -381,11 +381,11 @@ cl::Program Runtime::build_source(const std::string& source, const std::string& 
     } catch (const cl::Error&) {
       log = "(no build log available)";
     }
-    throw ClError(fmt::format("OpenCL build of {} failed with {} on device '{}' ({})\n  options: {}\n  build log:\n{}\n"
-                              "  (RAYSORT_CL_OPTIONS adds build options; -DRS_PORTABLE_MASK_BITS avoids the x86 "
-                              "target builtins of cl/lanes.h)",
-                              names, cl_error_name(err), info_.name, info_.platform_name, opts, trim(log)),
-                  err);
+    throw BuildError(fmt::format("OpenCL build of {} failed with {} on device '{}' ({})\n  options: {}\n  build log:\n{}\n"
+                                 "  (RAYSORT_CL_OPTIONS adds build options; -DRS_PORTABLE_MASK_BITS avoids the x86 "
+                                 "target builtins of cl/lanes.h)",
+                                 names, cl_error_name(err), info_.name, info_.platform_name, opts, trim(log)),
+                     err, trim(log));
   }
   programs_.emplace(std::move(key), program);
   return program;

@@ -23,6 +23,18 @@ class ClError : public Error {
   cl_int code_;
 };
 
+// A program that did not build (Runtime::build_source): the message holds the build log, the
+// options and the device; log() is the compiler's log alone, for a caller that reports it against
+// a file of its own (an encoder from a file, encode/encoder_file.h).
+class BuildError : public ClError {
+ public:
+  BuildError(std::string what, cl_int code, std::string log) : ClError(std::move(what), code), log_(std::move(log)) {}
+  const std::string& log() const { return log_; }
+
+ private:
+  std::string log_;
+};
+
 // "CL_OUT_OF_RESOURCES" for -5, and so on; "CL_UNKNOWN_ERROR(<n>)" otherwise.
 std::string cl_error_name(cl_int code);
 
@@ -114,7 +126,7 @@ class Runtime {
 
   // Builds a program from kernel files (e.g. {"cl/trace.cl"}) with the standard options
   // (OpenCL C 1.2, correctly rounded divide/sqrt where supported) plus `extra_options`.
-  // On failure throws an Error holding the full build log, the options and the device.
+  // On failure throws a BuildError holding the full build log, the options and the device.
   // A program already built with the same source and options is returned without rebuilding.
   cl::Program build(const std::vector<std::string>& files, const std::string& extra_options = "");
   // Builds a program from source text; `name` identifies it in errors.

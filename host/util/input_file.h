@@ -11,8 +11,8 @@
 
 namespace raysort {
 
-// What an input file is, for messages ("scene file", "OBJ file", "MTL file", "kernel file"), and
-// the most bytes it may have.
+// What an input file is, for messages ("scene file", "OBJ file", "MTL file", "kernel file",
+// "encoder file"), and the most bytes it may have.
 struct InputKind {
   std::string_view what;       // "OBJ file"
   std::string_view fix;        // what to do instead: "give the path of the .obj file"
@@ -28,6 +28,11 @@ inline constexpr InputKind kSceneFile{"scene file", "give the path of a .toml sc
 inline constexpr InputKind kObjFile{"OBJ file", "give the path of the .obj file", std::uint64_t(4) << 30};
 inline constexpr InputKind kMtlFile{"MTL file", "give the path of the .mtl file, or remove the mtllib line", std::uint64_t(64) << 20};
 inline constexpr InputKind kKernelFile{"kernel file", "point --kernels at the repository's cl/ folder", std::uint64_t(16) << 20};
+// An encoder from a file (--encoders file:PATH): one OpenCL C function, a few KB; the kernel files' bound.
+inline constexpr InputKind kEncoderFile{"encoder file",
+                                        "give the path of an OpenCL C file that defines rs_file_code (docs/encoders.md, "
+                                        "\"An encoder from a file\")",
+                                        std::uint64_t(16) << 20};
 
 // Reads `path` whole. Throws Error naming the kind and the path when it does not exist, cannot be
 // opened, is not a regular file (a directory, FIFO, device or socket), or is (or grows) larger than
