@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <functional>
+#include <map>
 #include <random>
 #include <set>
 #include <thread>
@@ -259,6 +260,115 @@ TEST(Protocol, MeasureStopsOnNoiseTimeOrRounds) {
   hard.min_rounds = 1000;
   hard.hard_limit_s = 0.05;
   EXPECT_THROW(measure(slow, hard), TimedOut);
+}
+
+// measure_shared(): the common arms run every round while any group is active; each group retires
+// on its own stopping rule, its prologue and arms stop with it, and its outcome holds the common
+// series of exactly its rounds (the first ones), so its paired figures pair the same rounds.
+TEST(Protocol, SharedRoundsRetireEachGroupOnItsOwnRule) {
+  int common_calls = 0;
+  std::map<std::string, int> runs;
+  std::vector<std::string> calls;
+  auto arm = [&](const std::string& name, std::function<double()> ms) {
+    return Arm{{name}, [&, name, ms] {
+                 ++runs[name];
+                 calls.push_back(name);
+                 return std::vector<double>{ms()};
+               }};
+  };
+  SharedMeasurement m;
+  // The common arm's n-th call returns n (warm-up calls included), to check the alignment.
+  m.common = {{{"base"}, [&] {
+                 calls.push_back("base");
+                 return std::vector<double>{static_cast<double>(common_calls++ + 1)};
+               }}};
+  // Group 0: constant times, within any noise bar once it has an interval (6 rounds).
+  MeasurementGroup quiet;
+  quiet.prologue = arm("quiet:prep", [] { return 1.0; });
+  quiet.arms = {arm("quiet:trace", [] { return 2.0; })};
+  quiet.targets = {[](const Series& s) { return ratio_interval(s.at("trace"), s.at("trace")); }};
+  // Group 1: wild times, never within the bar: stopped at max_rounds.
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> wild(1.0, 10.0);
+  MeasurementGroup noisy;
+  noisy.prologue = arm("noisy:prep", [&] { return 1.0; });
+  noisy.arms = {arm("noisy:trace", [&] { return wild(rng); })};
+  noisy.targets = {[](const Series& s) { return ratio_interval(s.at("base"), s.at("trace")); }};
+  // The stages are named without the group's prefix inside a group: rename the series keys.
+  for (MeasurementGroup* g : {&quiet, &noisy}) {
+    g->prologue.stages = {"prep"};
+    for (Arm& a : g->arms) a.stages = {"trace"};
+  }
+  m.groups = {quiet, noisy};
+  ProtocolSettings s;
+  s.warmup = 1;
+  s.min_rounds = 6;
+  s.max_rounds = 15;
+  s.max_noise = 0.01;
+  s.max_time_s = 100;
+  const std::vector<Outcome> o = measure_shared(m, s);
+  ASSERT_EQ(o.size(), 2u);
+  EXPECT_EQ(o[0].stop, StopReason::Noise);
+  EXPECT_EQ(o[0].rounds, 6u);
+  EXPECT_EQ(o[1].stop, StopReason::Rounds);
+  EXPECT_EQ(o[1].rounds, 15u);
+  // Each group's prologue and arm ran in its rounds and the warm-up round only; the common arm in
+  // every round of the batch.
+  EXPECT_EQ(runs["quiet:prep"], 7);
+  EXPECT_EQ(runs["quiet:trace"], 7);
+  EXPECT_EQ(runs["noisy:prep"], 16);
+  EXPECT_EQ(runs["noisy:trace"], 16);
+  EXPECT_EQ(common_calls, 16);
+  // A group's view: its own series and the common one cut to its rounds, the same rounds.
+  EXPECT_EQ(o[0].series.at("trace").size(), 6u);
+  EXPECT_EQ(o[0].series.at("base"), (std::vector<double>{2, 3, 4, 5, 6, 7}));
+  EXPECT_EQ(o[1].series.at("base").size(), 15u);
+  EXPECT_EQ(o[1].series.at("base").front(), 2.0);
+  EXPECT_EQ(o[1].series.at("trace").size(), 15u);
+  // Every round: the active groups' prologues first, then the arms.
+  std::size_t i = 0;
+  for (int round = 0; round < 16; ++round) {
+    const std::size_t prologues = round < 7 ? 2 : 1, arms = round < 7 ? 3 : 2;
+    for (std::size_t k = 0; k < prologues; ++k, ++i) EXPECT_NE(calls[i].find(":prep"), std::string::npos) << i;
+    for (std::size_t k = 0; k < arms; ++k, ++i) EXPECT_EQ(calls[i].find(":prep"), std::string::npos) << i;
+  }
+  EXPECT_EQ(i, calls.size());
+}
+
+// The arms of a shared round run in one seeded order over the common arms and every group's: each
+// comes first about equally often, so no group's trace always follows the NoSort trace.
+TEST(Protocol, SharedRoundsShuffleCommonAndGroupArmsTogether) {
+  std::vector<std::string> firsts;
+  std::string last_prologue;
+  bool round_start = true;
+  auto arm = [&](const std::string& name) {
+    return Arm{{name}, [&, name] {
+                 if (round_start) firsts.push_back(name), round_start = false;
+                 return std::vector<double>{1.0};
+               }};
+  };
+  SharedMeasurement m;
+  m.common = {arm("nosort"), arm("aa")};
+  for (const char* g : {"g0", "g1"}) {
+    MeasurementGroup group;
+    group.prologue = {{"prep"}, [&] {
+                        round_start = true;
+                        return std::vector<double>{1.0};
+                      }};
+    group.arms = {arm(std::string(g) + ":trace")};
+    m.groups.push_back(group);
+  }
+  ProtocolSettings s;
+  s.warmup = 0;
+  s.min_rounds = 2000;
+  s.max_rounds = 2000;
+  s.max_time_s = 100;
+  s.seed = 5;
+  measure_shared(m, s);
+  std::map<std::string, int> count;
+  for (const auto& f : firsts) ++count[f];
+  ASSERT_EQ(count.size(), 4u);
+  for (const auto& [name, c] : count) EXPECT_NEAR(c, 500, 90) << name;
 }
 
 }  // namespace

@@ -91,9 +91,13 @@ MatrixSpec matrix_from(const RunArgs& a, const CLI::App& cmd) {
 // What a run did, on stdout (and on stderr why it did not finish), and its exit code: the state of
 // the whole set.
 void report_run(const RunSummary& s) {
+  std::string again;
+  if (s.cells_retried) again += fmt::format("{} of them retries of failed or timed-out cells", s.cells_retried);
+  if (s.cells_remeasured)
+    again += fmt::format("{}{} ok cells measured again with the rest of their batch", again.empty() ? "" : ", ",
+                         s.cells_remeasured);
   fmt::print("{} cells run{}, {} already done (skipped), {} failed; results in {}\n", s.cells_run,
-             s.cells_retried ? fmt::format(" ({} of them retries of failed or timed-out cells)", s.cells_retried) : "",
-             s.cells_skipped, s.cells_failed, s.out_dir);
+             again.empty() ? "" : " (" + again + ")", s.cells_skipped, s.cells_failed, s.out_dir);
   const NoiseSummary noise = summarize_noise(ResultSet::load(s.out_dir).cells());
   if (noise.aa_intervals > 0)
     fmt::print("noise: A/A calibration {} of {} intervals contain 1.00 ({:.1f} %); speedup interval half-width "

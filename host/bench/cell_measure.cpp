@@ -5,10 +5,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cstring>
+#include <deque>
 #include <limits>
 #include <numeric>
 #include <optional>
 
+#include "render/frame_memory.h"
 #include "trace/exact_oracle.h"
 #include "trace/order_agreement.h"
 
@@ -50,7 +52,6 @@ BatchBench::BatchBench(const Stages& stages, const Bvh& bvh, const RayBatch& bat
     const std::size_t n = std::max<std::size_t>(1, n_);
     rays_ = s_.rt.upload("rays of " + batch.name, batch.rays);
     identity_ = s_.rt.upload("identity order", identity_order(n_));
-    values_ = s_.rt.buffer("sort values (ray order)", n * sizeof(std::uint32_t));
     keys32_ = s_.rt.buffer("32-bit keys", n * sizeof(std::uint32_t));
     keys64_ = s_.rt.buffer("64-bit keys", n * sizeof(std::uint64_t));
     nosort_hits_ = s_.rt.buffer("NoSort hits", n * sizeof(RsHit));
@@ -79,132 +80,194 @@ double BatchBench::timed_trace(const cl::Buffer& rays, const cl::Buffer& order, 
   return event_ms(ev);
 }
 
-std::vector<Arm> BatchBench::baseline_arms() {
-  auto nosort_trace = [this] {
-    return std::vector<double>{timed_trace(rays_, identity_, nosort_hits_, "waiting for the NoSort trace")};
-  };
-  return {{{"nosort"}, nosort_trace}, {{"aa"}, nosort_trace}};
-}
-
 const cl::Buffer& BatchBench::permuted_rays() {
   // Only cells of the permute access mode need the second copy of the rays.
   if (!permuted_()) permuted_ = s_.rt.buffer("rays in sorted order (permute)", std::max<std::size_t>(1, n_) * sizeof(RsRay));
   return permuted_;
 }
 
-CellRecord BatchBench::measure_nosort(CellRecord c, const ProtocolSettings& settings) {
-  c.rays = n_;
-  c.order_is_permutation = true;
-  c.same_order_as_nosort = true;
-  const std::vector<std::uint32_t> identity = identity_order(n_);
-  c.keys_hash = fnv1a_hex(nullptr, 0);
-  c.order_hash = fnv1a_hex(identity.data(), identity.size() * sizeof(std::uint32_t));
-  c.simt_lane_efficiency = nosort_simt_.lane_efficiency;
-  c.simt_distinct_per_visit = nosort_simt_.distinct_nodes_per_visit;
-  c.simt_lane_efficiency_ratio = c.simt_distinct_per_visit_ratio = 1.0;
-  if (s_.gpu) c.gpu = gpu_figures(*s_.gpu, nosort_gpu_, nosort_gpu_);
-  c.hits_match_nosort = setup_error_.empty();
-  if (!setup_error_.empty()) {
-    c.status = "failed";
-    c.error = setup_error_;
-    return c;
-  }
-  try {
-    Measurement m;
-    m.arms = baseline_arms();
-    m.targets = {[](const Series& s) { return ratio_interval(s.at("nosort"), s.at("aa")); }};
-    add_embree_arms(m, {});
-    const Outcome o = measure(m, settings);
-    const auto &nosort = o.series.at("nosort"), &aa = o.series.at("aa");
-    c.trace = c.nosort_trace = Timing::of(nosort);
-    c.trace_mrays = c.trace.median_ms > 0 ? n_ / (c.trace.median_ms * 1e3) : 0.0;
-    c.aa = ratio_interval(nosort, aa, settings.confidence);
-    // NoSort against itself: 1 and no overhead by definition.
-    c.speedup = c.net_speedup = Estimate::exact(1.0);
-    c.overhead_pct = Estimate::exact(0.0);
-    c.speedup.n = c.net_speedup.n = c.overhead_pct.n = o.rounds;
-    c.rounds = o.rounds;
-    c.stopped_by = stop_reason_name(o.stop);
-    c.noise = c.aa.relative_half_width();
-    c.samples = {{"nosort", nosort}, {"aa", aa}};
-    if (const std::string why = fill_embree(c, o, nullptr, settings); !why.empty()) {
-      c.status = "failed";
-      c.error = why;
-    }
-  } catch (const TimedOut& t) {
-    c.status = "timeout";
-    c.error = t.what();
-  } catch (const Error& err) {
-    c.status = "failed";
-    c.error = err.what();
-  }
-  return c;
+std::size_t BatchBench::max_shared_groups() const {
+  const std::uint64_t per_group = std::max<std::uint64_t>(1, std::uint64_t{n_} * sizeof(std::uint32_t));
+  const DeviceInfo& d = s_.rt.info();
+  // A CPU device's buffers are host memory (render/frame_memory.h says why its reported size is no
+  // limit): a quarter of what the host has free. A GPU: half of what the frame leaves.
+  const std::uint64_t frame = std::uint64_t{n_} * FrameMemory::kDevicePerRay;
+  const std::uint64_t spare = d.type == "CPU" ? available_host_memory() / 4
+                              : d.global_mem_bytes > frame ? (d.global_mem_bytes - frame) / 2
+                                                           : 0;
+  return static_cast<std::size_t>(std::max<std::uint64_t>(1, spare / per_group));
 }
 
-Measurement BatchBench::sorted_measurement(const std::vector<CellRecord>& cells, Encoder encoder,
-                                           const cl::Buffer& keys, const RadixSortConfig& cfg) {
-  Measurement m;
-  m.prologue = {{"encode", "sort"}, [this, encoder, &keys, cfg] {
-                  const DeviceEncoder::Events ev =
-                      s_.encoder.enqueue(encoder, cfg.key_bits, rays_, identity_, n_, keys, values_);
+std::vector<Arm> BatchBench::common_arms() {
+  auto nosort_trace = [this] {
+    return std::vector<double>{timed_trace(rays_, identity_, nosort_hits_, "waiting for the NoSort trace")};
+  };
+  std::vector<Arm> arms{{{"nosort"}, nosort_trace}, {{"aa"}, nosort_trace}};
+#ifdef RAYSORT_HAVE_EMBREE
+  // Embree's time is the wall clock of its whole trace call (threads started and joined inside),
+  // as in `trace --reference embree`.
+  for (const EmbreeArm& arm : embree_arms_)
+    arms.push_back({{"embree:" + arm.key + ":nosort"}, [this, path = arm.path] {
+                      const auto t0 = std::chrono::steady_clock::now();
+                      (void)s_.embree->trace(batch_.rays, batch_.any_hit(), path);
+                      return std::vector<double>{
+                          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count()};
+                    }});
+#endif
+  return arms;
+}
+
+void BatchBench::ready_embree() {
+  if (embree_ready_) return;
+  embree_ready_ = true;
+  if (!s_.embree) return;
+#ifdef RAYSORT_HAVE_EMBREE
+  const bool any_hit = batch_.any_hit();
+  for (EmbreePath path : s_.embree_paths) {
+    EmbreeArm arm{path, embree_path_info(path).key, s_.embree->trace(batch_.rays, any_hit, path), "", 1.0};
+    // The anchor: Embree traced the rays we traced (same triangle or a tie, trace's rule).
+    const HitAgreement ours = compare_with_embree(nosort_hits_host_, arm.nosort_hits, any_hit);
+    arm.agreement = ours.fraction_with_ties();
+    if (arm.agreement < kEmbreeMinAgreement)
+      arm.agreement_error = fmt::format(
+          "Embree {} ({}) agrees with our NoSort hits on {:.3f} % of rays (same triangle or a tie), below the required "
+          "{:.1f} %: {}",
+          arm.key, embree_path_name(path, any_hit), 100.0 * arm.agreement, 100.0 * kEmbreeMinAgreement, ours.describe());
+    embree_arms_.push_back(std::move(arm));
+  }
+#endif
+}
+
+std::size_t BatchBench::disagreeing_rays(const std::vector<RsHit>& hits, const std::vector<std::uint32_t>& order) {
+  // Single rays: bit for bit. Packets, hybrids and streams: a ray's companions decide the order in
+  // which its packet meets the nodes, so where two surfaces lie within float precision of each other
+  // (shared edges, coplanar duplicates) one order may give it the other one. Such a ray agrees when
+  // its answer agrees with NoSort's up to what the order may change (trace/order_agreement.h: the
+  // exact oracle's ties, and in the fast variant the test's own near-edge hits); anything else fails
+  // the cell (docs/trace.md, "Trace classes"). NoSort's own hits equal the host twin's.
+  const bool judge_ties = packet_width(s_.tracer.layout()) > 1 && s_.tris;
+  std::optional<ExactOracle> oracle;
+  std::size_t bad = 0;
+  for (std::uint32_t i = 0; i < n_; ++i) {
+    const std::uint32_t ray = order[i];
+    if (ray >= n_) return n_;  // no permutation: check_order says so
+    const RsHit& nosort = nosort_hits_host_[ray];
+    if (std::memcmp(&hits[i], &nosort, sizeof(RsHit)) == 0) continue;
+    if (!judge_ties) {
+      ++bad;
+      continue;
+    }
+    if (!oracle) oracle.emplace(*s_.tris, bvh_);
+    bad += !answers_agree(hits[i], nosort, batch_.rays[ray], batch_.any_hit(), s_.tracer.variant(), *oracle, *s_.tris);
+  }
+  return bad;
+}
+
+void BatchBench::ready_group(SortedGroup& g, const PrepareEncoder& prepare) {
+  const unsigned bits = g.cells.front().bits;
+  for (auto& c : g.cells) c.rays = n_;
+  try {
+    g.cut_ms = prepare ? prepare(g.encoder, bits) : -1.0;
+    s_.encoder.prepare(g.encoder, bits);
+    g.cfg.key_bits = bits;
+    g.cfg.top_bits = g.cells.front().top_bits;
+    g.order = s_.rt.buffer("sorted order of " + g.cells.front().id(), std::max<std::size_t>(1, n_) * sizeof(std::uint32_t));
+    const cl::Buffer& keys = bits > 32 ? keys64_ : keys32_;
+    // The keys in generation order, for their fingerprint and the ANC (untimed).
+    s_.encoder.enqueue(g.encoder, bits, rays_, identity_, n_, keys, g.order).wait();
+    g.unsorted = DeviceEncoder::download_keys(s_.rt, keys, bits, n_, "keys");
+    g.error = unrepeated_keys(g.encoder, bits, keys, g.unsorted);
+  } catch (const Error& err) {
+    g.error = err.what();
+  }
+}
+
+MeasurementGroup BatchBench::sorted_group(SortedGroup& g) {
+  MeasurementGroup m;
+  m.prologue = {{"encode", "sort"}, [this, &g] {
+                  const cl::Buffer& keys = g.cfg.key_bits > 32 ? keys64_ : keys32_;
+                  const DeviceEncoder::Events ev = s_.encoder.enqueue(g.encoder, g.cfg.key_bits, rays_, identity_, n_, keys, g.order);
                   ev.wait();
                   cl::Buffer k = keys;
-                  const SortStats st = s_.sorter.sort(k, values_, n_, cfg);
+                  const SortStats st = s_.sorter.sort(k, g.order, n_, g.cfg);
+                  // The order of the first sort, for the checks (untimed: after both clocks stopped).
+                  if (g.first_order.empty()) s_.rt.download("sorted order", g.order, g.first_order, n_);
                   return std::vector<double>{ev.ms(), st.ms};
                 }};
-  m.arms = baseline_arms();
-  for (const CellRecord& c : cells) {
-    if (c.access == "gather") {
-      m.arms.push_back({{"trace:gather"}, [this] {
-                          return std::vector<double>{timed_trace(rays_, values_, gather_hits_, "waiting for the sorted trace")};
+  for (const CellRecord& c : g.cells) {
+    const bool permute = c.access == "permute";
+    // Each arm checks its hits the first time it runs (untimed, after its clock stopped): the
+    // groups share the hit buffers.
+    auto check = [this, &g, access = c.access](const cl::Buffer& hits) {
+      if (g.bad.count(access)) return;
+      std::vector<RsHit> h;
+      s_.rt.download("sorted hits", hits, h, n_);
+      g.bad[access] = disagreeing_rays(h, g.first_order);
+    };
+    if (!permute) {
+      m.arms.push_back({{"trace:gather"}, [this, &g, check] {
+                          const double ms = timed_trace(rays_, g.order, gather_hits_, "waiting for the sorted trace");
+                          check(gather_hits_);
+                          return std::vector<double>{ms};
                         }});
     } else {
-      m.arms.push_back({{"permute", "trace:permute"}, [this] {
-                          cl::Event p = s_.permuter.enqueue(rays_, values_, n_, permuted_rays());
+      m.arms.push_back({{"permute", "trace:permute"}, [this, &g, check] {
+                          cl::Event p = s_.permuter.enqueue(rays_, g.order, n_, permuted_rays());
                           cl_call("waiting for the permute kernel", [&] { p.wait(); });
                           const double permute_ms = event_ms(p);
-                          return std::vector<double>{permute_ms, timed_trace(permuted_rays(), identity_, permute_hits_,
-                                                                             "waiting for the trace of the permuted rays")};
+                          const double trace_ms = timed_trace(permuted_rays(), identity_, permute_hits_,
+                                                              "waiting for the trace of the permuted rays");
+                          check(permute_hits_);
+                          return std::vector<double>{permute_ms, trace_ms};
                         }});
     }
     m.targets.push_back([trace = "trace:" + c.access](const Series& s) { return ratio_interval(s.at("nosort"), s.at(trace)); });
   }
-  add_embree_arms(m, cells);
+  add_embree_arms(m, g);
   return m;
 }
 
-void BatchBench::add_embree_arms(Measurement& m, const std::vector<CellRecord>& sorted_cells) {
-  embree_arms_.clear();
-  embree_order_ready_ = embree_permuted_ready_ = false;
-  if (!s_.embree) return;
+void BatchBench::add_embree_arms(MeasurementGroup& m, SortedGroup& g) {
 #ifdef RAYSORT_HAVE_EMBREE
-  for (EmbreePath path : s_.embree_paths) embree_arms_.push_back({path, embree_path_info(path).key, {}, {}});
-  // Embree's time is the wall clock of its whole trace call (threads started and joined inside),
-  // as in `trace --reference embree`; the hits are kept after the clock stops.
   using Clock = std::chrono::steady_clock;
-  auto ms_since = [](Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); };
-  for (std::size_t i = 0; i < embree_arms_.size(); ++i) {
-    const std::string stage = "embree:" + embree_arms_[i].key + ":";
-    m.arms.push_back({{stage + "nosort"}, [this, i, ms_since] {
-                        EmbreeArm& arm = embree_arms_[i];
-                        const auto t0 = Clock::now();
-                        std::vector<RsHit> hits = s_.embree->trace(batch_.rays, batch_.any_hit(), arm.path);
-                        const double ms = ms_since(t0);
-                        arm.nosort_hits = std::move(hits);
-                        return std::vector<double>{ms};
-                      }});
-    for (const CellRecord& c : sorted_cells) {
+  for (const EmbreeArm& arm : embree_arms_) {
+    const std::string stage = "embree:" + arm.key + ":";
+    for (const CellRecord& c : g.cells) {
       const bool permute = c.access == "permute";
-      m.arms.push_back({{stage + c.access}, [this, i, permute, access = c.access, ms_since] {
-                          EmbreeArm& arm = embree_arms_[i];
-                          // Untimed: the round's order on the host (gather), the rays in it (permute).
-                          const std::vector<std::uint32_t>& order = embree_order();
-                          if (permute) (void)embree_permuted_rays();
+      m.arms.push_back({{stage + c.access}, [this, &g, &arm, permute, access = c.access] {
+                          const bool any_hit = batch_.any_hit();
+                          // Untimed: the rays in the group's order (permute), made once.
+                          if (permute && g.embree_permuted.empty()) {
+                            g.embree_permuted.resize(n_);
+                            // An entry past the rays (an order that is no permutation, which fails the
+                            // cell after the rounds) must not be read past the batch.
+                            for (std::uint32_t i = 0; i < n_; ++i)
+                              g.embree_permuted[i] = batch_.rays[g.first_order[i] < n_ ? g.first_order[i] : 0];
+                          }
                           const auto t0 = Clock::now();
-                          std::vector<RsHit> hits = permute ? s_.embree->trace(embree_permuted_, batch_.any_hit(), arm.path)
-                                                            : s_.embree->trace(batch_.rays, batch_.any_hit(), arm.path, order);
-                          const double ms = ms_since(t0);
-                          arm.sorted_hits[access] = std::move(hits);
+                          std::vector<RsHit> hits = permute ? s_.embree->trace(g.embree_permuted, any_hit, arm.path)
+                                                            : s_.embree->trace(batch_.rays, any_hit, arm.path, g.first_order);
+                          const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+                          // The first run's hits back in ray order, against Embree's NoSort-order ones:
+                          // an order may give a ray the other triangle of a tie (a packet's companions
+                          // decide which is met first), and nothing else.
+                          const std::string key = arm.key + ":" + access;
+                          if (!g.embree_checked.count(key)) {
+                            std::vector<RsHit> back(n_);
+                            for (std::uint32_t i = 0; i < n_; ++i)
+                              if (g.first_order[i] < n_) back[g.first_order[i]] = hits[i];
+                            const HitAgreement a = compare_with_embree(arm.nosort_hits, back, any_hit);
+                            const std::size_t differ = a.differences() - a.ties();
+                            g.embree_checked[key] =
+                                differ == 0 ? ""
+                                            : fmt::format("Embree {} ({}): {} of {} rays traced in the sorted order ({}) "
+                                                          "differ from the NoSort order beyond ties ({} another triangle "
+                                                          "farther apart, {} hit only in NoSort order, {} hit only in the "
+                                                          "sorted order)",
+                                                          arm.key, embree_path_name(arm.path, any_hit), differ, n_, access,
+                                                          a.other_tri, a.ours_only, a.embree_only);
+                            g.embree_checked[key + ":ties"] = std::to_string(a.ties());
+                          }
                           return std::vector<double>{ms};
                         }});
       m.targets.push_back([nosort = stage + "nosort", sorted = stage + c.access](const Series& s) {
@@ -213,88 +276,48 @@ void BatchBench::add_embree_arms(Measurement& m, const std::vector<CellRecord>& 
     }
   }
 #else
-  (void)m, (void)sorted_cells;
+  (void)m, (void)g;
 #endif
 }
 
-const std::vector<std::uint32_t>& BatchBench::embree_order() {
-  // Every round sorts the same keys the same way (the checks after the rounds compare this order
-  // with the last round's), so one download serves every round.
-  if (!embree_order_ready_) {
-    s_.rt.download("sorted order (for Embree)", values_, embree_order_, n_);
-    embree_order_ready_ = true;
-  }
-  return embree_order_;
-}
-
-const std::vector<RsRay>& BatchBench::embree_permuted_rays() {
-  if (!embree_permuted_ready_) {
-    const std::vector<std::uint32_t>& order = embree_order();
-    embree_permuted_.resize(n_);
-    // An entry past the rays (an order that is no permutation, which fails the cell after the
-    // rounds) must not be read past the batch.
-    for (std::uint32_t i = 0; i < n_; ++i) embree_permuted_[i] = batch_.rays[order[i] < n_ ? order[i] : 0];
-    embree_permuted_ready_ = true;
-  }
-  return embree_permuted_;
-}
-
-std::string BatchBench::fill_embree(CellRecord& c, const Outcome& o, const SortedOrder* so,
+std::string BatchBench::fill_embree(CellRecord& c, const Outcome& o, const SortedOrder* so, const SortedGroup* g,
                                     const ProtocolSettings& settings) {
   if (embree_arms_.empty()) return "";
 #ifdef RAYSORT_HAVE_EMBREE
-  if (so && so->order != embree_order_)
-    return "Embree traced another sorted order than the one checked (the sort's order changed between rounds)";
   const bool any_hit = batch_.any_hit();
   for (const EmbreeArm& arm : embree_arms_) {
+    if (!arm.agreement_error.empty()) return arm.agreement_error;
     CellRecord::EmbreeFigures e;
     e.path = arm.key;
     e.call = embree_path_name(arm.path, any_hit);
     e.threads = s_.embree->threads();
+    e.agreement_with_ours = arm.agreement;
     const std::vector<double>& nosort = o.series.at("embree:" + arm.key + ":nosort");
     e.nosort = Timing::of(nosort);
     c.samples["embree:" + arm.key + ":nosort"] = nosort;
-    // The anchor: Embree traced the rays we traced (same triangle or a tie, trace's rule).
-    const HitAgreement ours = compare_with_embree(nosort_hits_host_, arm.nosort_hits, any_hit);
-    e.agreement_with_ours = ours.fraction_with_ties();
-    if (e.agreement_with_ours < kEmbreeMinAgreement)
-      return fmt::format("Embree {} ({}) agrees with our NoSort hits on {:.3f} % of rays (same triangle or a tie), below "
-                         "the required {:.1f} %: {}",
-                         arm.key, e.call, 100.0 * e.agreement_with_ours, 100.0 * kEmbreeMinAgreement, ours.describe());
-    if (so) {
-      const std::vector<double>& trace = o.series.at("embree:" + arm.key + ":" + c.access);
+    if (so && g) {
+      const std::string key = arm.key + ":" + c.access;
+      if (const std::string& why = g->embree_checked.at(key); !why.empty()) return why;
+      const std::vector<double>& trace = o.series.at("embree:" + key);
       e.trace = Timing::of(trace);
       c.samples["embree:" + arm.key + ":trace"] = trace;
       const Estimate measured = ratio_interval(nosort, trace, settings.confidence);
       // The same rays in the same order: whatever the clock says is noise (as our own speedup).
       e.speedup = so->identity ? Estimate{1.0, 1.0, 1.0, measured.n} : measured;
-      // The sorted-order hits back in ray order, against the NoSort-order ones: an order may give
-      // a ray the other triangle of a tie (a packet's companions decide which is met first), and
-      // nothing else.
-      const std::vector<RsHit>& sorted = arm.sorted_hits.at(c.access);
-      std::vector<RsHit> back(n_);
-      for (std::uint32_t i = 0; i < n_; ++i) back[so->order[i]] = sorted[i];
-      const HitAgreement a = compare_with_embree(arm.nosort_hits, back, any_hit);
-      e.ties = a.ties();
-      e.differ = a.differences() - a.ties();
-      if (e.differ > 0)
-        return fmt::format("Embree {} ({}): {} of {} rays traced in the sorted order ({}) differ from the NoSort order "
-                           "beyond ties ({} another triangle farther apart, {} hit only in NoSort order, {} hit only "
-                           "in the sorted order)",
-                           arm.key, e.call, e.differ, n_, c.access, a.other_tri, a.ours_only, a.embree_only);
+      e.ties = std::stoull(g->embree_checked.at(key + ":ties"));
+      e.differ = 0;
     }
     c.embree.push_back(std::move(e));
   }
   return "";
 #else
-  (void)c, (void)o, (void)so, (void)settings;
+  (void)c, (void)o, (void)so, (void)g, (void)settings;
   return "";
 #endif
 }
 
-BatchBench::SortedOrder BatchBench::check_order(const cl::Buffer& keys, unsigned bits, unsigned top) {
-  SortedOrder so;
-  s_.rt.download("sorted order", values_, so.order, n_);
+std::string BatchBench::check_order(const SortedGroup& g, SortedOrder& so) {
+  s_.rt.download("sorted order", g.order, so.order, n_);
   std::vector<std::uint8_t> seen(n_, 0);
   so.permutation = true;
   for (auto v : so.order)
@@ -302,16 +325,19 @@ BatchBench::SortedOrder BatchBench::check_order(const cl::Buffer& keys, unsigned
       so.permutation = false;
       break;
     }
-  so.identity = so.permutation;
+  if (!so.permutation) return "the sorted order is not a permutation of the rays";
+  if (so.order != g.first_order) return "the sort gave another order in a later round than in the first";
+  so.identity = true;
   for (std::uint32_t i = 0; so.identity && i < n_; ++i) so.identity = so.order[i] == i;
-  std::vector<std::uint64_t> sorted_keys = DeviceEncoder::download_keys(s_.rt, keys, bits, n_, "sorted keys");
-  // ANC of the codes the sort used: a top-k sort orders by the highest k bits only.
-  if (top > 0)
-    for (auto& k : sorted_keys) k >>= (bits - top);
+  // The codes the sort ordered by (a top-k sort: the highest k bits only), in sorted order.
+  const unsigned shift = g.cfg.top_bits > 0 ? g.cfg.key_bits - g.cfg.top_bits : 0;
+  std::vector<std::uint64_t> sorted_keys(n_);
+  for (std::uint32_t i = 0; i < n_; ++i) sorted_keys[i] = g.unsorted[so.order[i]] >> shift;
+  if (!std::is_sorted(sorted_keys.begin(), sorted_keys.end())) return "the sorted order does not sort the keys";
   so.anc = average_number_of_codes(sorted_keys);
-  if (so.permutation) so.simt = simt_model(bvh_, batch_.rays, so.order.data(), batch_.any_hit(), s_.tracer.variant(),
-                                         s_.tracer.layout(), s_.gpu, &so.gpu);
-  return so;
+  so.simt = simt_model(bvh_, batch_.rays, so.order.data(), batch_.any_hit(), s_.tracer.variant(), s_.tracer.layout(),
+                       s_.gpu, &so.gpu);
+  return "";
 }
 
 void BatchBench::fill_sorted_cell(CellRecord& c, const Outcome& o, const SortedOrder& so,
@@ -353,7 +379,8 @@ void BatchBench::fill_sorted_cell(CellRecord& c, const Outcome& o, const SortedO
 std::string BatchBench::unrepeated_keys(Encoder encoder, unsigned bits, const cl::Buffer& keys,
                                         const std::vector<std::uint64_t>& first) {
   if (has_host_twin(encoder)) return "";
-  s_.encoder.enqueue(encoder, bits, rays_, identity_, n_, keys, values_).wait();
+  cl::Buffer values = s_.rt.buffer("values (second launch)", std::max<std::size_t>(1, n_) * sizeof(std::uint32_t));
+  s_.encoder.enqueue(encoder, bits, rays_, identity_, n_, keys, values).wait();
   const std::vector<std::uint64_t> again = DeviceEncoder::download_keys(s_.rt, keys, bits, n_, "keys (second launch)");
   std::size_t differ = 0;
   for (std::uint32_t i = 0; i < n_; ++i) differ += first[i] != again[i];
@@ -364,75 +391,149 @@ std::string BatchBench::unrepeated_keys(Encoder encoder, unsigned bits, const cl
                      encoder_name(encoder), differ, n_);
 }
 
-std::vector<CellRecord> BatchBench::measure_sorted(std::vector<CellRecord> cells, Encoder encoder,
-                                                   const ProtocolSettings& settings) {
-  const unsigned bits = cells.front().bits, top = cells.front().top_bits;
-  for (auto& c : cells) c.rays = n_;
-  auto fail_all = [&](const std::string& status, const std::string& error) {
-    for (auto& c : cells) c.status = status, c.error = error;
-    return cells;
-  };
-  if (!setup_error_.empty()) return fail_all("failed", "the batch's setup failed: " + setup_error_);
-  try {
-    s_.encoder.prepare(encoder, bits);
-    const cl::Buffer& keys = bits > 32 ? keys64_ : keys32_;
-    RadixSortConfig cfg;
-    cfg.key_bits = bits;
-    cfg.top_bits = top;
-    // The keys in generation order, for their fingerprint (untimed).
-    s_.encoder.enqueue(encoder, bits, rays_, identity_, n_, keys, values_).wait();
-    const std::vector<std::uint64_t> unsorted = DeviceEncoder::download_keys(s_.rt, keys, bits, n_, "keys");
-    if (const std::string why = unrepeated_keys(encoder, bits, keys, unsorted); !why.empty()) return fail_all("failed", why);
+void BatchBench::finish_nosort(CellRecord& c, const Outcome& o, const ProtocolSettings& settings) {
+  const auto &nosort = o.series.at("nosort"), &aa = o.series.at("aa");
+  c.trace = c.nosort_trace = Timing::of(nosort);
+  c.trace_mrays = c.trace.median_ms > 0 ? n_ / (c.trace.median_ms * 1e3) : 0.0;
+  c.aa = ratio_interval(nosort, aa, settings.confidence);
+  // NoSort against itself: 1 and no overhead by definition.
+  c.speedup = c.net_speedup = Estimate::exact(1.0);
+  c.overhead_pct = Estimate::exact(0.0);
+  c.speedup.n = c.net_speedup.n = c.overhead_pct.n = o.rounds;
+  c.rounds = o.rounds;
+  c.stopped_by = stop_reason_name(o.stop);
+  c.noise = c.aa.relative_half_width();
+  c.samples = {{"nosort", nosort}, {"aa", aa}};
+  if (const std::string why = fill_embree(c, o, nullptr, nullptr, settings); !why.empty()) {
+    c.status = "failed";
+    c.error = why;
+  }
+}
 
-    const Outcome o = measure(sorted_measurement(cells, encoder, keys, cfg), settings);
+void BatchBench::finish_group(SortedGroup& g, const Outcome& o, const ProtocolSettings& settings) {
+  SortedOrder so;
+  std::string why = check_order(g, so);
+  const std::string keys_hash = fnv1a_hex(g.unsorted.data(), g.unsorted.size() * sizeof(std::uint64_t));
+  for (CellRecord& c : g.cells) {
+    c.cut_ms = g.cut_ms;
+    c.keys_hash = keys_hash;
+    c.order_hash = fnv1a_hex(so.order.data(), so.order.size() * sizeof(std::uint32_t));
+    c.order_is_permutation = so.permutation;
+    c.same_order_as_nosort = so.identity;
+    const std::size_t bad = g.bad.count(c.access) ? g.bad.at(c.access) : n_;
+    c.hits_match_nosort = why.empty() && bad == 0;
+    if (!why.empty()) {
+      c.status = "failed", c.error = why;
+      continue;
+    }
+    if (bad != 0) {
+      c.status = "failed";
+      c.error = fmt::format("{} of {} hits differ from NoSort after scattering back ({})", bad, n_, c.access);
+      continue;
+    }
+    fill_sorted_cell(c, o, so, settings);
+    if (const std::string embree_why = fill_embree(c, o, &so, &g, settings); !embree_why.empty())
+      c.status = "failed", c.error = embree_why;
+  }
+}
 
-    // Checks: the order is a permutation, and each access mode's hits scattered back equal NoSort's.
-    // Single rays: bit for bit. Packets, hybrids and streams: a ray's companions decide the order in which
-    // its packet meets the nodes, so where two surfaces lie within float precision of each other
-    // (shared edges, coplanar duplicates) one order may give it the other one. Such a ray agrees
-    // when its answer agrees with NoSort's up to what the order may change (trace/order_agreement.h:
-    // the exact oracle's ties, and in the fast variant the test's own near-edge hits); anything else
-    // fails the cell (docs/trace.md, "Trace classes"). NoSort's own hits equal the host twin's.
-    const SortedOrder so = check_order(keys, bits, top);
-    const bool judge_ties = packet_width(s_.tracer.layout()) > 1 && s_.tris;
-    std::optional<ExactOracle> oracle;
-    auto agree = [&](const RsHit& sorted, const RsHit& nosort, std::uint32_t ray) {
-      if (std::memcmp(&sorted, &nosort, sizeof(RsHit)) == 0) return true;
-      if (!judge_ties) return false;
-      if (!oracle) oracle.emplace(*s_.tris, bvh_);
-      return answers_agree(sorted, nosort, batch_.rays[ray], batch_.any_hit(), s_.tracer.variant(), *oracle, *s_.tris);
-    };
-    for (CellRecord& c : cells) {
-      std::vector<RsHit> hits;
-      s_.rt.download("sorted hits", c.access == "gather" ? gather_hits_ : permute_hits_, hits, n_);
-      std::size_t bad = 0;
-      if (so.permutation)
-        for (std::uint32_t i = 0; i < n_; ++i) bad += !agree(hits[i], nosort_hits_host_[so.order[i]], so.order[i]);
-      c.order_is_permutation = so.permutation;
-      c.hits_match_nosort = so.permutation && bad == 0;
-      c.same_order_as_nosort = so.identity;
-      c.keys_hash = fnv1a_hex(unsorted.data(), unsorted.size() * sizeof(std::uint64_t));
-      c.order_hash = fnv1a_hex(so.order.data(), so.order.size() * sizeof(std::uint32_t));
-      if (c.hits_match_nosort) {
-        fill_sorted_cell(c, o, so, settings);
-        if (const std::string why = fill_embree(c, o, &so, settings); !why.empty()) {
-          c.status = "failed";
-          c.error = why;
-        }
+std::vector<Outcome> BatchBench::measure_chunk(bool with_nosort, const std::vector<SortedGroup*>& sorted,
+                                               const ProtocolSettings& settings) {
+  SharedMeasurement m;
+  m.common = common_arms();
+  if (with_nosort) {
+    MeasurementGroup nosort;
+    nosort.targets = {[](const Series& s) { return ratio_interval(s.at("nosort"), s.at("aa")); }};
+    m.groups.push_back(std::move(nosort));
+  }
+  for (SortedGroup* g : sorted) m.groups.push_back(sorted_group(*g));
+  return measure_shared(m, settings);
+}
+
+std::vector<CellRecord> BatchBench::measure_batch(const std::vector<std::vector<CellRecord>>& groups,
+                                                  const ProtocolSettings& settings, const PrepareEncoder& prepare) {
+  // The NoSort cell and the sorted groups (a deque: the arms hold references to their group).
+  std::optional<CellRecord> nosort;
+  std::deque<SortedGroup> sorted;
+  for (const auto& cells : groups) {
+    if (cells.front().encoder == kBaselineEncoder) {
+      nosort = cells.front();
+    } else {
+      sorted.emplace_back();
+      sorted.back().cells = cells;
+      sorted.back().encoder = *parse_encoder(cells.front().encoder);
+    }
+  }
+  if (nosort) {
+    CellRecord& c = *nosort;
+    c.rays = n_;
+    c.order_is_permutation = true;
+    c.same_order_as_nosort = true;
+    const std::vector<std::uint32_t> identity = identity_order(n_);
+    c.keys_hash = fnv1a_hex(nullptr, 0);
+    c.order_hash = fnv1a_hex(identity.data(), identity.size() * sizeof(std::uint32_t));
+    c.simt_lane_efficiency = nosort_simt_.lane_efficiency;
+    c.simt_distinct_per_visit = nosort_simt_.distinct_nodes_per_visit;
+    c.simt_lane_efficiency_ratio = c.simt_distinct_per_visit_ratio = 1.0;
+    if (s_.gpu) c.gpu = gpu_figures(*s_.gpu, nosort_gpu_, nosort_gpu_);
+    c.hits_match_nosort = setup_error_.empty();
+  }
+  auto collect = [&] {
+    std::vector<CellRecord> out;
+    std::size_t next = 0;
+    for (const auto& cells : groups) {
+      if (cells.front().encoder == kBaselineEncoder) {
+        out.push_back(*nosort);
       } else {
-        c.status = "failed";
-        c.error = so.permutation
-                      ? fmt::format("{} of {} hits differ from NoSort after scattering back ({})", bad, n_, c.access)
-                      : "the sorted order is not a permutation of the rays";
+        const SortedGroup& g = sorted[next++];
+        out.insert(out.end(), g.cells.begin(), g.cells.end());
       }
     }
-  } catch (const TimedOut& t) {
-    return fail_all("timeout", t.what());
-  } catch (const Error& err) {
-    // A device fault (allocation, build, launch) fails these cells; the run goes on.
-    return fail_all("failed", err.what());
+    return out;
+  };
+  auto fail = [](std::vector<CellRecord>& cells, const std::string& status, const std::string& error) {
+    for (CellRecord& c : cells) c.status = status, c.error = error;
+  };
+  if (!setup_error_.empty()) {
+    if (nosort) nosort->status = "failed", nosort->error = setup_error_;
+    for (SortedGroup& g : sorted) {
+      for (CellRecord& c : g.cells) c.rays = n_;
+      fail(g.cells, "failed", "the batch's setup failed: " + setup_error_);
+    }
+    return collect();
   }
-  return cells;
+
+  ready_embree();
+  std::vector<SortedGroup*> ready;
+  for (SortedGroup& g : sorted) {
+    ready_group(g, prepare);
+    if (g.error.empty())
+      ready.push_back(&g);
+    else
+      fail(g.cells, "failed", g.error);
+  }
+  // Chunks of groups whose orders fit the device together; the first one holds the NoSort cell.
+  const std::size_t chunk = max_shared_groups();
+  bool with_nosort = nosort.has_value();
+  for (std::size_t begin = 0; begin < ready.size() || with_nosort; begin += chunk) {
+    const std::vector<SortedGroup*> part(ready.begin() + static_cast<std::ptrdiff_t>(std::min(begin, ready.size())),
+                                         ready.begin() + static_cast<std::ptrdiff_t>(std::min(begin + chunk, ready.size())));
+    try {
+      const std::vector<Outcome> o = measure_chunk(with_nosort, part, settings);
+      if (with_nosort) finish_nosort(*nosort, o.front(), settings);
+      for (std::size_t i = 0; i < part.size(); ++i) finish_group(*part[i], o[i + with_nosort], settings);
+    } catch (const TimedOut& t) {
+      if (with_nosort) nosort->status = "timeout", nosort->error = t.what();
+      for (SortedGroup* g : part) fail(g->cells, "timeout", t.what());
+    } catch (const Error& err) {
+      // A device fault (allocation, build, launch) fails these cells; the run goes on.
+      if (with_nosort) nosort->status = "failed", nosort->error = err.what();
+      for (SortedGroup* g : part) fail(g->cells, "failed", err.what());
+    }
+    with_nosort = false;
+    for (SortedGroup* g : part) g->embree_permuted = {}, g->order = cl::Buffer();  // free as we go
+  }
+  return collect();
 }
 
 }  // namespace raysort

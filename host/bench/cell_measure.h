@@ -1,25 +1,29 @@
 #pragma once
-// One cell's life: encode → radix sort → [permute] → trace, timed against NoSort in the rounds of
-// the measurement protocol (bench/protocol.h), checked bit for bit, and summarised in a
-// CellRecord. The runner (bench/runner.cpp) decides which cells to measure; this file decides how
-// one is measured (docs/measurement.md tells the same story with the figures behind it).
+// A batch's cells: encode → radix sort → [permute] → trace, timed against NoSort in rounds the
+// batch's cells share (bench/protocol.h, "Shared rounds"), checked bit for bit, and summarised in
+// CellRecords. The runner (bench/runner.cpp) decides which cells to measure; this file decides how
+// they are measured (docs/measurement.md tells the same story with the figures behind it).
 //
-// The arms of a cell's rounds, run in a seeded random order after the prologue (encode + sort):
-//   nosort          the batch in generation order: the baseline of the speedup
+// A batch's measurement: the common arms run every round, for every cell (issue 42: one NoSort and
+// one A/A per round for the whole batch, not per cell):
+//   nosort          the batch in generation order: the baseline of every speedup
 //   aa              the same NoSort trace once more: the A/A check (nosort / aa should be 1)
+//   embree:<path>:nosort   Embree tracing the batch in generation order (run --embree-paths)
+// and one group per encoder × key length × top-k, with its access modes side by side: its prologue
+// (encode + sort into the group's own order buffer) and its arms,
 //   trace:gather    the rays traced through the sorted order (access mode gather)
 //   permute         the rays moved into sorted order, then traced (access mode permute; stages
 //                   "permute" and "trace:permute")
-//   embree:<path>:nosort   Embree tracing the batch in generation order (run --embree-paths,
-//                   one per path, in NoSort cells too)
 //   embree:<path>:gather   Embree tracing the rays through the sorted order (a packet or stream
 //                   holds consecutive entries of it)
 //   embree:<path>:permute  Embree tracing the rays moved into sorted order (on the host, once,
 //                   outside the timed arm) in identity order
-// When a matrix asks for both access modes, the gather and permute cells of one encoder and key
-// length share their rounds: one encode + sort feeds both, and both are paired with the same
-// NoSort traces (ours and Embree's).
+// The NoSort cell is a group without arms whose target is the A/A ratio. Each group retires on its
+// own stopping rule; its cells' figures pair its arms with the common arms of its rounds. Each arm
+// checks its hits the first time it runs (the warm-up round, untimed): the groups share the hit
+// buffers, so nothing is left to check after the rounds but the order each group's sort gave.
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -66,31 +70,60 @@ class BatchBench {
   const std::string& setup_error() const { return setup_error_; }
   const RayBatch& batch() const { return batch_; }
 
-  // The NoSort cell: rounds of the nosort and aa arms only. `cell` names the cell (its identity
-  // fields are kept); the figures are filled in.
-  CellRecord measure_nosort(CellRecord cell, const ProtocolSettings& settings);
-  // The cells of one encoder × key length × top-k, one per access mode (identity fields set; all
-  // with the same encoder, bits and top_bits), measured in shared rounds.
-  std::vector<CellRecord> measure_sorted(std::vector<CellRecord> cells, Encoder encoder,
-                                         const ProtocolSettings& settings);
+  // The inputs an encoder learns (bench/scene_bench.h): readied before the rounds, for every group
+  // at once; returns the host ms it took (CellRecord::cut_ms), or < 0 when there is none.
+  using PrepareEncoder = std::function<double(Encoder, unsigned bits)>;
+  // Every cell of the batch in shared rounds: `groups` holds, in the plan's order, the NoSort cell
+  // (encoder nosort, alone in its group) and the cells of each encoder × key length × top-k, one per
+  // access mode (identity fields set). Returns the cells with their figures, in the same order.
+  // Groups whose sorted orders do not fit the device together (max_shared_groups) share rounds in
+  // consecutive chunks, each with the common arms.
+  std::vector<CellRecord> measure_batch(const std::vector<std::vector<CellRecord>>& groups,
+                                        const ProtocolSettings& settings, const PrepareEncoder& prepare);
+  // How many sorted groups' orders (4 bytes per ray each) fit beside the frame: half the device
+  // memory the frame estimate leaves, at least 1.
+  std::size_t max_shared_groups() const;
 
  private:
+  // One encoder × key length × top-k of the batch: its cells (one per access mode), its own order
+  // buffer (the sort's values, kept from its prologue to its arms), and the checks its arms made.
+  struct SortedGroup {
+    std::vector<CellRecord> cells;
+    Encoder encoder{};
+    RadixSortConfig cfg;
+    double cut_ms = -1.0;
+    cl::Buffer order;                       // the sorted order, on the device
+    std::vector<std::uint64_t> unsorted;    // the keys in generation order (fingerprint, ANC)
+    std::vector<std::uint32_t> first_order;  // the order of the first sort (downloaded once)
+    std::map<std::string, std::size_t> bad;  // by access mode: rays whose hits disagree with NoSort
+    std::vector<RsRay> embree_permuted;     // the rays in sorted order, for Embree's permute arms
+    std::map<std::string, std::string> embree_checked;  // by "path:access": "" or why the cells fail
+    std::string error;                      // why its cells fail before any round
+  };
+
   cl::Event trace(const cl::Buffer& rays, const cl::Buffer& order, const cl::Buffer& hits);
   double timed_trace(const cl::Buffer& rays, const cl::Buffer& order, const cl::Buffer& hits, const char* doing);
   const cl::Buffer& permuted_rays();
-  // The two NoSort arms every cell's rounds hold: "nosort" (the baseline) and "aa" (the same trace
-  // again, the A/A check).
-  std::vector<Arm> baseline_arms();
-  // The rounds of sorted cells: encode + sort as the prologue, the baseline arms, and one trace arm
-  // per access mode.
-  Measurement sorted_measurement(const std::vector<CellRecord>& cells, Encoder encoder, const cl::Buffer& keys,
-                                 const RadixSortConfig& cfg);
+  // The common arms: "nosort" (the baseline), "aa" (the same trace again, the A/A check), and per
+  // Embree path its NoSort-order arm.
+  std::vector<Arm> common_arms();
+  // Readies a group before the rounds (prepare, keys in generation order, the repeat check for an
+  // encoder without a host twin); a failure is kept in g.error.
+  void ready_group(SortedGroup& g, const PrepareEncoder& prepare);
+  // A group's prologue (encode + sort into its order) and arms (one trace per access mode, Embree's).
+  MeasurementGroup sorted_group(SortedGroup& g);
+  // The measurement of the NoSort group (if any) and `sorted` sharing their rounds.
+  std::vector<Outcome> measure_chunk(bool with_nosort, const std::vector<SortedGroup*>& sorted,
+                                     const ProtocolSettings& settings);
   // An encoder without a host twin (an encoder from a file) is checked against itself: "" when a
   // second launch over the rays gives `first` (the keys of the first) again, else why the cells fail.
   std::string unrepeated_keys(Encoder encoder, unsigned bits, const cl::Buffer& keys,
                               const std::vector<std::uint64_t>& first);
-  // What the sort left after the rounds: the order, whether it is a permutation and the identity,
-  // and its ANC and SIMT model.
+  // A sorted trace's hits (in sorted order) against NoSort's: the rays that disagree (the rule of
+  // docs/trace.md, "Trace classes": bit for bit, or for a packet class up to what an order may change).
+  std::size_t disagreeing_rays(const std::vector<RsHit>& hits, const std::vector<std::uint32_t>& order);
+  // What the group's sort left after the rounds: the order, whether it is a permutation and the
+  // identity, and its ANC and SIMT model.
   struct SortedOrder {
     std::vector<std::uint32_t> order;
     bool permutation = false, identity = false;
@@ -98,39 +131,40 @@ class BatchBench {
     SimtModel simt;
     GpuCounts gpu;
   };
-  SortedOrder check_order(const cl::Buffer& keys, unsigned bits, unsigned top);
+  // "" or why the group's cells fail (an order that is no permutation, changed between rounds, or
+  // does not sort the keys).
+  std::string check_order(const SortedGroup& g, SortedOrder& so);
+  // The cells of a group from its rounds and checks.
+  void finish_group(SortedGroup& g, const Outcome& o, const ProtocolSettings& settings);
+  // The NoSort cell from its rounds.
+  void finish_nosort(CellRecord& c, const Outcome& o, const ProtocolSettings& settings);
   // The figures of a checked cell from its rounds.
   void fill_sorted_cell(CellRecord& c, const Outcome& o, const SortedOrder& so, const ProtocolSettings& settings);
 
-  // Embree's arms (Stages::embree_paths): per path, the NoSort-order arm, and in sorted rounds one
-  // sorted-order arm per access mode. Each keeps the hits of its last run, for the checks.
+  // Embree's paths (Stages::embree_paths): each traces the batch in generation order once before the
+  // rounds (untimed), for the checks; the arms keep no hits.
   struct EmbreeArm {
     EmbreePath path;
     std::string key;
-    std::vector<RsHit> nosort_hits;                      // ray order
-    std::map<std::string, std::vector<RsHit>> sorted_hits;  // by access mode, sorted order
+    std::vector<RsHit> nosort_hits;  // ray order
+    std::string agreement_error;     // "" or why Embree's NoSort hits disagree with ours
+    double agreement = 1.0;
   };
-  void add_embree_arms(Measurement& m, const std::vector<CellRecord>& sorted_cells);
-  // The sorted order on the host and the rays in it, made by the first sorted Embree arm of a
-  // measurement (after its round's sort, before its clock starts) and kept for the others.
-  const std::vector<std::uint32_t>& embree_order();
-  const std::vector<RsRay>& embree_permuted_rays();
-  // Each path's figures of cell `c` from the rounds, and the checks: Embree's NoSort hits agree
-  // with ours (as `trace --reference embree` requires), and its sorted-order hits, scattered back,
-  // with its NoSort-order ones up to ties. "" or why the cell fails.
-  std::string fill_embree(CellRecord& c, const Outcome& o, const SortedOrder* so, const ProtocolSettings& settings);
+  void ready_embree();
+  void add_embree_arms(MeasurementGroup& m, SortedGroup& g);
+  // Each path's figures of cell `c` from the rounds; "" or why the cell fails.
+  std::string fill_embree(CellRecord& c, const Outcome& o, const SortedOrder* so, const SortedGroup* g,
+                          const ProtocolSettings& settings);
 
   Stages s_;
   const Bvh& bvh_;
   const RayBatch& batch_;
   const std::uint32_t n_;
   std::string setup_error_;
-  cl::Buffer rays_, identity_, values_, keys32_, keys64_, nosort_hits_, gather_hits_, permute_hits_, permuted_;
+  cl::Buffer rays_, identity_, keys32_, keys64_, nosort_hits_, gather_hits_, permute_hits_, permuted_;
   std::vector<RsHit> nosort_hits_host_;
   std::vector<EmbreeArm> embree_arms_;
-  std::vector<std::uint32_t> embree_order_;
-  std::vector<RsRay> embree_permuted_;
-  bool embree_order_ready_ = false, embree_permuted_ready_ = false;
+  bool embree_ready_ = false;
   SimtModel nosort_simt_;
   GpuCounts nosort_gpu_;
 };

@@ -221,58 +221,98 @@ std::vector<std::size_t> round_order(std::size_t count, std::uint64_t seed, std:
 }
 
 Outcome measure(const Measurement& m, const ProtocolSettings& s) {
+  return measure_shared({{}, {{m.prologue, m.arms, m.targets}}}, s).front();
+}
+
+namespace {
+
+// A group's view of the series: its own stages and the common ones cut to its rounds.
+Series group_view(const Series& own, const Series& common, unsigned rounds) {
+  Series view = own;
+  for (const auto& [stage, samples] : common)
+    view[stage].assign(samples.begin(), samples.begin() + std::min<std::size_t>(rounds, samples.size()));
+  return view;
+}
+
+}  // namespace
+
+std::vector<Outcome> measure_shared(const SharedMeasurement& m, const ProtocolSettings& s) {
   using Clock = std::chrono::steady_clock;
   auto seconds_since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
   const Clock::time_point start = Clock::now();
-  Outcome out;
+  const std::size_t groups = m.groups.size();
+  std::vector<Outcome> out(groups);
+  std::vector<Series> own(groups);
+  Series common;
+  std::vector<bool> active(groups, true);
+  const double hard_limit_s = s.hard_limit_s * static_cast<double>(std::max<std::size_t>(1, groups));
   auto check_hard_limit = [&] {
     if (s.interrupted && s.interrupted->load()) throw Interrupted("interrupted");
-    if (s.hard_limit_s > 0 && seconds_since(start) > s.hard_limit_s)
-      throw TimedOut(fmt::format("timed out: {:.3f} s, over --timeout {} s (remaining rounds skipped)",
-                                 seconds_since(start), s.hard_limit_s));
+    if (s.hard_limit_s > 0 && seconds_since(start) > hard_limit_s)
+      throw TimedOut(fmt::format("timed out: {:.3f} s, over --timeout {} s{} (remaining rounds skipped)",
+                                 seconds_since(start), s.hard_limit_s,
+                                 groups > 1 ? fmt::format(" per group × {} groups sharing the rounds", groups) : ""));
   };
-  auto run_arm = [&](const Arm& arm, bool timed) {
+  auto run_arm = [&](const Arm& arm, Series* into) {
     check_hard_limit();
     const std::vector<double> ms = arm.run();
     if (ms.size() != arm.stages.size())
       throw Error(fmt::format("measure: an arm returned {} stage times for {} stages", ms.size(), arm.stages.size()));
-    if (timed)
-      for (std::size_t i = 0; i < ms.size(); ++i) out.series[arm.stages[i]].push_back(ms[i]);
+    if (into)
+      for (std::size_t i = 0; i < ms.size(); ++i) (*into)[arm.stages[i]].push_back(ms[i]);
   };
   std::uint64_t round = 0;
   auto run_round = [&](bool timed) {
-    if (m.prologue.run) run_arm(m.prologue, timed);
-    for (std::size_t i : round_order(m.arms.size(), s.seed, round)) run_arm(m.arms[i], timed);
+    // The prologues of the active groups, then every arm of the round (common ones and the active
+    // groups') in one order; the prologue order is drawn from a stream of its own.
+    std::vector<std::size_t> live;
+    for (std::size_t g = 0; g < groups; ++g)
+      if (active[g]) live.push_back(g);
+    for (std::size_t i : round_order(live.size(), ~s.seed, round))
+      if (m.groups[live[i]].prologue.run) run_arm(m.groups[live[i]].prologue, timed ? &own[live[i]] : nullptr);
+    std::vector<std::pair<const Arm*, Series*>> arms;
+    for (const Arm& a : m.common) arms.push_back({&a, timed ? &common : nullptr});
+    for (std::size_t g : live)
+      for (const Arm& a : m.groups[g].arms) arms.push_back({&a, timed ? &own[g] : nullptr});
+    for (std::size_t i : round_order(arms.size(), s.seed, round)) run_arm(*arms[i].first, arms[i].second);
     ++round;
   };
 
   for (unsigned w = 0; w < s.warmup; ++w) run_round(false);
   const Clock::time_point sampling = Clock::now();
   const unsigned min_rounds = std::max(1u, s.min_rounds);
-  for (;;) {
+  const double budget_s = s.max_time_s * static_cast<double>(std::max<std::size_t>(1, groups));
+  auto retire = [&](std::size_t g, StopReason why) {
+    active[g] = false;
+    out[g].stop = why;
+  };
+  for (std::size_t live = groups; live > 0;) {
     run_round(true);
-    ++out.rounds;
-    if (out.rounds < min_rounds) continue;
-    // The targets cost O(rounds²) (Walsh averages): past 64 rounds, ask about 32 times per doubling.
-    if (out.rounds > 64 && out.rounds % (out.rounds / 32) != 0 && seconds_since(sampling) < s.max_time_s &&
-        out.rounds < s.max_rounds)
-      continue;
-    out.noise = 0.0;
-    for (const auto& target : m.targets) out.noise = std::max(out.noise, target(out.series).relative_half_width());
-    if (out.noise <= s.max_noise) {
-      out.stop = StopReason::Noise;
-      break;
+    const bool over_time = seconds_since(sampling) >= budget_s;
+    for (std::size_t g = 0; g < groups; ++g) {
+      if (!active[g]) continue;
+      Outcome& o = out[g];
+      ++o.rounds;
+      if (o.rounds < min_rounds) continue;
+      // The targets cost O(rounds²) (Walsh averages): past 64 rounds, ask about 32 times per doubling.
+      if (o.rounds > 64 && o.rounds % (o.rounds / 32) != 0 && !over_time && o.rounds < s.max_rounds) continue;
+      const Series view = group_view(own[g], common, o.rounds);
+      o.noise = 0.0;
+      for (const auto& target : m.groups[g].targets) o.noise = std::max(o.noise, target(view).relative_half_width());
+      if (o.noise <= s.max_noise)
+        retire(g, StopReason::Noise);
+      else if (o.rounds >= std::max(min_rounds, s.max_rounds))
+        retire(g, StopReason::Rounds);
+      else if (over_time)
+        retire(g, StopReason::Time);
     }
-    if (out.rounds >= std::max(min_rounds, s.max_rounds)) {
-      out.stop = StopReason::Rounds;
-      break;
-    }
-    if (seconds_since(sampling) >= s.max_time_s) {
-      out.stop = StopReason::Time;
-      break;
-    }
+    live = static_cast<std::size_t>(std::count(active.begin(), active.end(), true));
   }
-  out.sampling_s = seconds_since(sampling);
+  const double sampling_s = seconds_since(sampling);
+  for (std::size_t g = 0; g < groups; ++g) {
+    out[g].series = group_view(own[g], common, out[g].rounds);
+    out[g].sampling_s = sampling_s;
+  }
   return out;
 }
 

@@ -120,8 +120,9 @@ struct ProtocolSettings {
   unsigned max_rounds = 1000;
   double max_noise = 0.02;   // target relative half-width of every target's interval
   double max_time_s = 5.0;   // sampling budget; past it (and min_rounds) the measurement stops
-  // A hard limit on the whole measurement, warm-up included (run --timeout; 0: none). Checked
-  // between arms: a kernel in flight runs to completion. Past it, measure() throws TimedOut.
+  // A hard limit on the whole measurement, warm-up included (run --timeout; 0: none); shared rounds
+  // get it once per group. Checked between arms: a kernel in flight runs to completion. Past it,
+  // measure() throws TimedOut.
   double hard_limit_s = 0.0;
   std::uint64_t seed = 1;    // of the arm order
   double confidence = kConfidence;
@@ -170,6 +171,38 @@ struct Interrupted : std::runtime_error {
 };
 
 Outcome measure(const Measurement& m, const ProtocolSettings& s);
+
+// ---- Shared rounds: the cells of one batch measured together (issue 42) -----------------------
+//
+// A batch's cells all compare their trace with the same NoSort trace. Measured one cell at a time,
+// each cell pays for its own NoSort and A/A traces every round: three traces per measured order.
+// Shared, each round runs the batch's common arms (NoSort, A/A) once for every group still active:
+//
+//  - A round runs every active group's prologue (its encode + sort), in a seeded order, then the
+//    common arms and every active group's arms in one seeded random order (step 2 over all of them).
+//  - Each group has its own targets and stopping rule (step 4): it retires once its targets are
+//    within max_noise after min_rounds, or at max_rounds; its arms stop, the others go on. So a
+//    group's rounds are the first `rounds` of the batch, and its figures pair its arms with the
+//    common arms of exactly those rounds: the estimates keep their guarantees.
+//  - The sampling budget is max_time_s per group (a cell's budget, as before): once the batch's
+//    sampling time passes max_time_s × groups, every group still active stops ("time"). The hard
+//    limit is hard_limit_s × groups likewise (--timeout stays a cell's).
+// measure() is the case of one group without common arms, round for round the same.
+struct MeasurementGroup {
+  Arm prologue;  // optional: runs first in every round the group is active
+  std::vector<Arm> arms;
+  std::vector<std::function<Estimate(const Series&)>> targets;  // over the group's and the common series
+};
+
+struct SharedMeasurement {
+  std::vector<Arm> common;  // run in every round while any group is active
+  std::vector<MeasurementGroup> groups;
+};
+
+// One Outcome per group: its own stages and the common ones over the rounds it was active, its
+// rounds, stop and noise; sampling_s is the batch's. Stage names must be unique within a group and
+// across the common arms (a group's may repeat another group's).
+std::vector<Outcome> measure_shared(const SharedMeasurement& m, const ProtocolSettings& s);
 
 // A measurement's seed from a text that names it (e.g. "1/sibenik/bounce1/hcc/32"): FNV-1a 64, the
 // same on every platform, so the same command draws the same arm orders.

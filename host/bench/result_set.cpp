@@ -606,21 +606,19 @@ void ResultSet::write_plots() const { raysort::write_plots(cells(), dir_); }
 
 NoiseSummary summarize_noise(const std::vector<CellRecord>& cells) {
   NoiseSummary n;
-  std::map<std::string, const CellRecord*> by_id;
-  for (const auto& c : cells) by_id[c.id()] = &c;
+  std::set<std::pair<std::string, std::vector<double>>> seen_rounds;
   std::vector<double> widths;
   std::vector<unsigned> rounds;
   for (const auto& c : cells) {
     if (!c.ok() || c.rounds == 0) continue;
-    // A permute cell measured in the rounds of its gather sibling repeats that cell's A/A interval.
-    bool shared_rounds = false;
-    if (c.access == "permute") {
-      CellRecord sibling = c;
-      sibling.access = "gather";
-      auto it = by_id.find(sibling.id());
-      shared_rounds = it != by_id.end() && it->second->ok() && it->second->samples.count("nosort") &&
-                      c.samples.count("nosort") && it->second->samples.at("nosort") == c.samples.at("nosort");
-    }
+    // Cells of one batch share their rounds (bench/cell_measure.h): the gather and permute cells of
+    // one sort, and groups that stopped at the same round, hold the same NoSort and A/A samples and
+    // repeat one A/A interval. Each distinct one counts once.
+    const bool shared_rounds =
+        c.samples.count("nosort") &&
+        !seen_rounds.insert({fmt::format("{}/{}/{}/{}/{}", c.scene, c.batch, c.variant, c.layout, c.baseline),
+                             c.samples.at("nosort")})
+             .second;
     if (!shared_rounds) {
       rounds.push_back(c.rounds);
       n.stopped_by_noise += c.stopped_by == "noise";

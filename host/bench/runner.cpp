@@ -169,12 +169,15 @@ nlohmann::json run_meta(const MatrixSpec& spec, const RunOptions& opts, const De
       {"matrix", spec.to_json()},
       {"protocol",
        {{"doc", "docs/measurement.md"},
-        {"arms", "per round, after encode + sort: nosort, aa (nosort again), and the cell's trace(s), in a seeded random order"},
+        {"arms", "a batch's cells share their rounds: per round, every measuring group's encode + sort, then nosort and "
+                 "aa (nosort again) once for the batch and every measuring group's trace(s), in one seeded random order"},
+        {"rounds", "shared per batch (docs/measurement.md, \"Shared rounds\"): a group leaves them when it stops"},
         {"estimate", "paired: Hodges-Lehmann location of the per-round log ratios; one arm's time: the median"},
         {"interval", fmt::format("{:.0f} %: exact Wilcoxon signed-rank interval of the Walsh averages (ratios), exact "
                                  "order-statistic (sign-test) interval of the median (times)",
                                  kConfidence * 100)},
-        {"stop", "min rounds (reps), then relative half-width <= max_noise, or max_time_s of sampling"}}},
+        {"stop", "per group: min rounds (reps), then relative half-width <= max_noise, or max_time_s of sampling per "
+                 "group of the batch"}}},
       {"device",
        {{"name", dev.name},
         {"type", dev.type},
@@ -276,18 +279,6 @@ void skip_absent_batch(const std::vector<PlannedCell>& batch_cells, std::vector<
              batch_cells.front().scene, batch_cells.front().batch);
   for (const auto& c : batch_cells) absent.push_back(c.id);
   progress.total -= batch_cells.size();
-}
-
-// The cells of one encoder × key length × top-k on one batch. The inputs of an encoder that learns
-// (hcc-traffic's cut, hcc-region's regions, mlhcc-cost's table) are per batch: SceneBench readies
-// them here, and their cells record cut_ms, the host time of that input plus the cut's build and
-// upload (outside the timed rounds).
-std::vector<CellRecord> measure_encoder(BatchBench& bench, SceneBench& scene, std::vector<CellRecord> cells, Encoder e,
-                                        const ProtocolSettings& settings) {
-  const double cut_ms = scene.prepare_encoder(e, cells.front().bits, cells.front().batch);
-  std::vector<CellRecord> out = bench.measure_sorted(std::move(cells), e, settings);
-  for (CellRecord& c : out) c.cut_ms = cut_ms;
-  return out;
 }
 
 // Scene problems a run can find before any work starts: a scene file or OBJ given by path is
@@ -455,19 +446,27 @@ RunSummary run_matrix(const MatrixSpec& requested, const RunOptions& opts) {
 
   for (auto& scene_cells : runs_of(plan, [](const PlannedCell& c) { return c.scene; })) {  // → scene
     if (g_interrupted) break;
-    std::erase_if(scene_cells, [&](const PlannedCell& c) {
-      const CellRecord* had = results.find(c.id);
-      const bool keep = had && (had->ok() || opts.no_retry);  // failed and timed-out cells run again
-      summary.cells_skipped += keep, progress.done += keep;
-      summary.cells_retried += had && !keep;
-      return keep;
-    });
+    // A batch's cells share their rounds (bench/cell_measure.h), so a batch is measured whole or not
+    // at all: one with a cell missing (or failed, unless --no-retry) runs again, every cell of it.
+    std::set<std::string> complete;
+    for (const auto& batch_cells : runs_of(scene_cells, round_group)) {
+      const bool whole = std::all_of(batch_cells.begin(), batch_cells.end(), [&](const PlannedCell& c) {
+        const CellRecord* had = results.find(c.id);
+        return had && (had->ok() || opts.no_retry);  // failed and timed-out cells run again
+      });
+      if (whole) complete.insert(round_group(batch_cells.front()));
+      for (const auto& c : batch_cells) {
+        summary.cells_skipped += whole, progress.done += whole;
+        const CellRecord* had = whole ? nullptr : results.find(c.id);
+        summary.cells_retried += had && !had->ok();
+        summary.cells_remeasured += had && had->ok();
+      }
+    }
+    std::erase_if(scene_cells, [&](const PlannedCell& c) { return complete.count(round_group(c)) > 0; });
     if (scene_cells.empty()) continue;
     SceneBench scene(rt, prepare_scene(scene_cells.front().scene, SceneOptions{opts.scene_root, spec.frame}), spec,
                      [&](const std::string& line) { progress.line(line); });
-    for (const auto& batch_cells :
-         runs_of(scene_cells,
-                 [](const PlannedCell& c) { return c.batch + "/" + c.variant + "/" + c.layout + "/" + c.baseline; })) {
+    for (const auto& batch_cells : runs_of(scene_cells, round_group)) {
       if (g_interrupted) break;
       const PlannedCell& first = batch_cells.front();
       const ReferencedBatch* rb = scene.batch(first.batch, first.baseline);
@@ -478,24 +477,25 @@ RunSummary run_matrix(const MatrixSpec& requested, const RunOptions& opts) {
       BatchBench bench({rt, *scene.encoder, sorter, permuter, *scene.tracers.at({first.variant, first.layout}),
                         gpu ? &*gpu : nullptr, &scene.prepared.tris, scene.embree_scene(), scene.embree_paths},
                        scene.bvh, rb->batch, scene.reference(*rb, first.variant, first.layout));
-      for (const auto& group : runs_of(batch_cells, round_group)) {  // → cell (bench/shard.h)
-        if (g_interrupted) break;
-        std::vector<CellRecord> cells;
-        for (const auto& p : group) cells.push_back(cell_of(p));
-        ProtocolSettings settings = spec.protocol(cells.front().id());
-        settings.interrupted = &g_interrupted;  // Ctrl-C stops the rounds between two arms
-        try {
-          if (group.front().encoder == kBaselineEncoder) {
-            CellRecord c = bench.measure_nosort(cells.front(), settings);
+      std::vector<std::vector<CellRecord>> groups;  // → cell: NoSort, then each encoder × key length × top-k
+      for (const auto& group : runs_of(batch_cells, sort_group)) {
+        groups.emplace_back();
+        for (const auto& p : group) groups.back().push_back(cell_of(p));
+      }
+      ProtocolSettings settings = spec.protocol(round_group(first));
+      settings.interrupted = &g_interrupted;  // Ctrl-C stops the rounds between two arms
+      // The inputs of an encoder that learns (hcc-traffic's cut, hcc-region's regions, mlhcc-cost's
+      // table) are per batch: SceneBench readies them, and their cells record cut_ms, the host time
+      // of that input plus the cut's build and upload (outside the timed rounds).
+      auto prepare = [&](Encoder e, unsigned bits) { return scene.prepare_encoder(e, bits, first.batch); };
+      try {
+        for (CellRecord& c : bench.measure_batch(groups, settings, prepare)) {
+          if (c.encoder == kBaselineEncoder)
             c.leaks_per_million = scene.leaks_per_million(*rb, first.variant, first.layout, both_variants);
-            record(c);
-            continue;
-          }
-          const Encoder e = *parse_encoder(group.front().encoder);
-          for (const CellRecord& c : measure_encoder(bench, scene, std::move(cells), e, settings)) record(c);
-        } catch (const Interrupted&) {
-          break;  // the cells in flight are not recorded: a resume measures them
+          record(c);
         }
+      } catch (const Interrupted&) {
+        break;  // the batch in flight is not recorded: a resume measures it
       }
     }
   }

@@ -31,6 +31,9 @@ struct RunSummary {
   std::string out_dir;
   std::size_t cells_run = 0;      // measured by this run (retries included)
   std::size_t cells_retried = 0;  // of those, cells the set held as failed or timeout
+  // of those, cells the set held as ok, measured again with the rest of their batch (its cells share
+  // their rounds: a batch is measured whole)
+  std::size_t cells_remeasured = 0;
   std::size_t cells_skipped = 0;  // already in the set and kept (ok, or not ok with no_retry)
   std::size_t cells_failed = 0;   // measured by this run and not ok
   // The final state: planned cells (of this shard) the set holds that are not ok, and planned

@@ -105,8 +105,11 @@ std::vector<PlannedCell> matrix_cells(const MatrixSpec& spec,
 }
 
 std::string round_group(const PlannedCell& c) {
-  return fmt::format("{}/{}/{}/{}/{}/{}/{}/{}", c.scene, c.batch, c.variant, c.layout, c.baseline, c.encoder, c.bits,
-                     c.top_bits);
+  return fmt::format("{}/{}/{}/{}/{}", c.scene, c.batch, c.variant, c.layout, c.baseline);
+}
+
+std::string sort_group(const PlannedCell& c) {
+  return fmt::format("{}/{}/{}/{}", round_group(c), c.encoder, c.bits, c.top_bits);
 }
 
 std::vector<PlannedCell> plan_shards(std::vector<PlannedCell> cells, unsigned count) {

@@ -64,10 +64,13 @@ struct PlannedCell {
 std::vector<PlannedCell> matrix_cells(const MatrixSpec& spec,
                                       const std::function<SceneFacts(const std::string&)>& facts);
 
-// The cells `raysort run` measures in one set of rounds (bench/cell_measure.h): one encoder, key
-// length and top-k on one batch, variant, trace class and baseline order, with its access modes side by side
-// (encode + sort and the NoSort arms are timed once for all of them). A shard never splits them.
+// The cells `raysort run` measures in one set of rounds (bench/cell_measure.h): every cell of one
+// batch, variant, trace class and baseline order share their rounds and their NoSort and A/A arms
+// (issue 42). A shard never splits them, and a resume measures them whole.
 std::string round_group(const PlannedCell& c);
+// The cells of one encode + sort within a round group: one encoder, key length and top-k with its
+// access modes side by side.
+std::string sort_group(const PlannedCell& c);
 
 // Contiguous split by cost: `cells` in visiting order (as matrix_cells lists them) are cut into
 // round groups, and group g, whose cost spans [P, P + c) of the total T, goes to shard
