@@ -307,6 +307,7 @@ std::vector<Outcome> measure_shared(const SharedMeasurement& m, const ProtocolSe
         retire(g, StopReason::Time);
     }
     live = static_cast<std::size_t>(std::count(active.begin(), active.end(), true));
+    if (s.on_round) s.on_round(static_cast<unsigned>(round - s.warmup), live, groups);
   }
   const double sampling_s = seconds_since(sampling);
   for (std::size_t g = 0; g < groups; ++g) {

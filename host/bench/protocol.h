@@ -128,6 +128,9 @@ struct ProtocolSettings {
   double confidence = kConfidence;
   // Set by a signal handler (run's Ctrl-C): checked between arms, measure() then throws Interrupted.
   const std::atomic<bool>* interrupted = nullptr;
+  // Called after every timed round of shared rounds with the rounds so far and the groups still
+  // measuring (run's progress line while a batch's rounds go on); may be empty.
+  std::function<void(unsigned rounds, std::size_t measuring, std::size_t groups)> on_round;
 };
 
 enum class StopReason { Noise, Time, Rounds };

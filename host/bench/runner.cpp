@@ -484,6 +484,14 @@ RunSummary run_matrix(const MatrixSpec& requested, const RunOptions& opts) {
       }
       ProtocolSettings settings = spec.protocol(round_group(first));
       settings.interrupted = &g_interrupted;  // Ctrl-C stops the rounds between two arms
+      // A batch's cells are recorded when its rounds end: until then, a line every 30 s.
+      auto last_line = std::chrono::steady_clock::now();
+      settings.on_round = [&](unsigned rounds, std::size_t measuring, std::size_t total) {
+        if (std::chrono::steady_clock::now() - last_line < std::chrono::seconds(30)) return;
+        last_line = std::chrono::steady_clock::now();
+        progress.line(fmt::format("{}: round {}, {} of {} cell groups still measuring", round_group(first), rounds,
+                                  measuring, total));
+      };
       // The inputs of an encoder that learns (hcc-traffic's cut, hcc-region's regions, mlhcc-cost's
       // table) are per batch: SceneBench readies them, and their cells record cut_ms, the host time
       // of that input plus the cut's build and upload (outside the timed rounds).
