@@ -13,6 +13,7 @@
 
 #include "bvh/bvh.h"
 #include "scene/load.h"
+#include "test_util.h"
 
 namespace raysort {
 
@@ -499,6 +500,32 @@ TEST(BvhThreads, SahCostOfATwoLeafTree) {
   ASSERT_EQ(bvh.nodes.size(), 3u);
   EXPECT_DOUBLE_EQ(bvh.sah_cost, 1.5);
   EXPECT_DOUBLE_EQ(sah_cost(bvh, opts), 1.5);
+}
+
+// `raysort trace --build-rounds N` (host/app/build_timing.h): the build timed in N rounds, with
+// Embree's beside it under --reference embree, the SAH cost on the line, nothing traced; options
+// that only a trace uses are refused in one line before any work.
+TEST(BvhThreads, TraceBuildRoundsTimesTheBuildsAndStops) {
+  using raysort::testing::CliResult;
+  using raysort::testing::run_cli;
+  CliResult r = run_cli({"trace", "--scene", "cornell", "--build-rounds", "6"});
+  ASSERT_EQ(r.code, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find("build    6 rounds alternated, medians with 95 % intervals: ours "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("SAH cost "), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("kernels  built"), std::string::npos) << "nothing is traced:\n" << r.out;
+#ifdef RAYSORT_HAVE_EMBREE
+  r = run_cli({"trace", "--scene", "cornell", "--build-rounds", "6", "--reference", "embree"});
+  ASSERT_EQ(r.code, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find("build quality high, "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("; ours/Embree "), std::string::npos) << r.out;
+#endif
+  r = run_cli({"trace", "--scene", "cornell", "--build-rounds", "6", "--variant", "both", "--adjudicate"});
+  EXPECT_NE(r.code, 0);
+  EXPECT_EQ(r.err.find('\n'), r.err.size() - 1) << "not one line:\n" << r.err;
+  EXPECT_NE(r.err.find("--build-rounds times the BVH builds alone"), std::string::npos) << r.err;
+  r = run_cli({"trace", "--scene", "cornell", "--build-rounds", "0"});
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.err.find("--build-rounds"), std::string::npos) << r.err;
 }
 
 }  // namespace raysort
