@@ -491,7 +491,8 @@ TEST(BvhThreads, SameTreeOnOneTwoAndFiveThreadsAsTheSerialBuild) {
 }
 
 // The SAH cost by hand: two unit squares in z = 0 (area 2 each, box faces counted twice over),
-// 3 apart in x: root box 4 x 1 x 0, area 8; cost 1 + (1 · 2 + 1 · 2) / 8 = 1.5.
+// 3 apart in x: root box 4 x 1 x 0, area 8; cost 1 + (1 · 2 + 1 · 2) / 8 = 1.5. (nodes[1] is the
+// left leaf: the builder lays the left child out first.)
 TEST(BvhThreads, SahCostOfATwoLeafTree) {
   auto f = flat_from({{Vec3{0, 0, 0}, Vec3{1, 0, 0}, Vec3{1, 1, 0}}, {Vec3{3, 0, 0}, Vec3{4, 0, 0}, Vec3{4, 1, 0}}});
   BvhBuildOptions opts;
@@ -500,6 +501,12 @@ TEST(BvhThreads, SahCostOfATwoLeafTree) {
   ASSERT_EQ(bvh.nodes.size(), 3u);
   EXPECT_DOUBLE_EQ(bvh.sah_cost, 1.5);
   EXPECT_DOUBLE_EQ(sah_cost(bvh, opts), 1.5);
+  // By hand, with a leaf of two triangles and other constants: the same root over a leaf of 2
+  // (area 2) and one of 1 (area 2), traversal 2, intersection 3: (2 · 8 + 3 · 2 · 2 + 3 · 1 · 2) / 8.
+  bvh.nodes[1].count = 2;
+  opts.traversal_cost = 2.0f;
+  opts.intersection_cost = 3.0f;
+  EXPECT_DOUBLE_EQ(sah_cost(bvh, opts), 34.0 / 8.0);
 }
 
 // `raysort trace --build-rounds N` (host/app/build_timing.h): the build timed in N rounds, with
