@@ -443,7 +443,8 @@ void expect_same_tree(const Bvh& a, const Bvh& b, const std::string& what) {
 
 // A scene large enough that 2 and 5 threads split its top levels together (more than 8192
 // triangles per thread at the root) and its subtrees are several jobs: `copies` copies of the
-// landscape, each moved along x, plus runs of identical triangles that force median splits.
+// landscape, each moved along x, plus runs of identical triangles that force median splits and a
+// wall of signed zeros.
 Scene::Flat large_scene(int copies) {
   const Scene landscape = load_scene("landscape");
   const Scene::Flat one = landscape.flatten();
@@ -463,13 +464,24 @@ Scene::Flat large_scene(int copies) {
     f.v2.push_back({0, 1, 0});
     f.material.push_back(0);
   }
+  // A wall in the plane x = 0 whose vertices carry +0 and -0 in a scattered pattern: a box's min or
+  // max over both zeros is the first one met (std::min keeps the earlier of equals), so the node
+  // boxes are only byte-equal if the build meets the triangles in the serial build's order.
+  for (int i = 0; i < 4000; ++i) {
+    auto zero = [&](int k) { return (i * 7 + k) % 3 == 0 ? -0.0f : 0.0f; };
+    const float y = static_cast<float>(i % 64), z = static_cast<float>(i / 64);
+    f.v0.push_back({zero(0), y, z});
+    f.v1.push_back({zero(1), y + 1, z});
+    f.v2.push_back({zero(2), y, z + 1});
+    f.material.push_back(0);
+  }
   return f;
 }
 }  // namespace
 
 TEST(BvhThreads, SameTreeOnOneTwoAndFiveThreadsAsTheSerialBuild) {
   for (const auto& [name, tris] : {std::pair<std::string, Scene::Flat>{"multi-instance", load_scene("multi-instance").flatten()},
-                                   {"landscape x3 + 3000 equal", large_scene(3)}}) {
+                                   {"landscape x3 + 3000 equal + a wall of +-0", large_scene(3)}}) {
     ASSERT_GT(tris.size(), 5u * 8192u) << name << " is too small to split its root on 5 threads";
     const serial_reference::Tree ref = serial_reference::build(tris);
     BvhBuildOptions opts;

@@ -4,8 +4,10 @@
 // set of triangles in its range, and a node's partition reorders only its own range; so subtrees
 // build independently of each other, in any order, on any thread. The builder therefore
 //  1. splits the top of the tree, node by node, each node's bounds and bins computed by all
-//     threads over chunks of its range and merged (exact: min/max and sums), then partitions it
-//     (std::partition, the one the serial build always used, so the triangle order is the same);
+//     threads over chunks of its range and merged in chunk order (exact: min/max keep the first
+//     of equal values, +0 or -0, as one pass in range order does; counts are sums), then
+//     partitions it (std::partition, the one the serial build always used, so the triangle order
+//     is the same);
 //  2. builds each subtree below the top (a node of at most `job_size` triangles) as a job of its
 //     own, numbered locally, the jobs shared among the threads;
 //  3. lays the tree out exactly as the serial depth-first build numbers it: children allocated in
@@ -47,12 +49,11 @@ struct Range {
 };
 
 // What a node becomes once its bounds and best split are known: a leaf (nullopt), or an inner
-// node whose range is now partitioned at the returned middle, with its children's bounds. The
-// serial builder's rules: SAH split when it is cheaper than a leaf or the leaf would be too big;
-// the object median when no SAH split exists or it leaves a side empty.
+// node whose range is now partitioned at the returned middle. The serial builder's rules: SAH
+// split when it is cheaper than a leaf or the leaf would be too big; the object median when no SAH
+// split exists or it leaves a side empty.
 std::optional<std::uint32_t> split_or_leaf(std::vector<PrimRef>& refs, const Range& r, const NodeBounds& nb,
-                                           const Split& split, std::uint32_t nbins, const BvhBuildOptions& opts,
-                                           NodeBounds& left, NodeBounds& right) {
+                                           const Split& split, std::uint32_t nbins, const BvhBuildOptions& opts) {
   const std::uint32_t count = r.count();
   if (count == 1) return std::nullopt;
   const float parent_area = nb.bounds.area();
@@ -64,10 +65,9 @@ std::optional<std::uint32_t> split_or_leaf(std::vector<PrimRef>& refs, const Ran
   if (split.axis >= 0 && (split_cost < leaf_cost || count > opts.max_leaf_size)) {
     const BinMap map(nb.centroids, nbins);
     const int a = split.axis;
-    const PrimRef* it = sah::partition_with_bounds(
-        refs.data() + r.begin, refs.data() + r.end, [&](const PrimRef& p) { return map.bin(p, a) <= split.bin; },
-        left, right);
-    mid = static_cast<std::uint32_t>(it - refs.data());
+    auto it = std::partition(refs.begin() + r.begin, refs.begin() + r.end,
+                             [&](const PrimRef& p) { return map.bin(p, a) <= split.bin; });
+    mid = static_cast<std::uint32_t>(it - refs.begin());
   } else if (count <= opts.max_leaf_size) {
     return std::nullopt;
   }
@@ -83,9 +83,6 @@ std::optional<std::uint32_t> split_or_leaf(std::vector<PrimRef>& refs, const Ran
                        const float cx = x.centroid(axis), cy = y.centroid(axis);
                        return cx < cy || (cx == cy && x.id < y.id);
                      });
-    left = right = NodeBounds{};
-    left.add(refs.data() + r.begin, refs.data() + mid);
-    right.add(refs.data() + mid, refs.data() + r.end);
   }
   return mid;
 }
@@ -104,25 +101,25 @@ struct Subtree {
   std::uint32_t depth = 0, leaves = 0;
 };
 
-// A node waiting to be split: where it goes, its triangles, and their bounds.
+// A node waiting to be split: where it goes and its triangles.
 struct Task {
   std::uint32_t node;
   Range range;
-  NodeBounds bounds;
 };
 
-Subtree build_subtree(std::vector<PrimRef>& refs, const Range& root, const NodeBounds& root_bounds, std::uint32_t nbins,
-                      const BvhBuildOptions& opts) {
+Subtree build_subtree(std::vector<PrimRef>& refs, const Range& root, std::uint32_t nbins, const BvhBuildOptions& opts) {
   Subtree t;
   t.nodes.reserve(2 * root.count() / std::max<std::uint32_t>(1, opts.max_leaf_size / 2) + 1);
   t.nodes.push_back({});
   SahBins bins(nbins);
-  std::vector<Task> stack{{0, root, root_bounds}};
+  std::vector<Task> stack{{0, root}};
   while (!stack.empty()) {
     const Task task = stack.back();
     stack.pop_back();
     const Range& r = task.range;
-    const NodeBounds& nb = task.bounds;
+    // In range order, as the serial build: of equal values (+0 and -0) a box keeps the first met.
+    NodeBounds nb;
+    nb.add(refs.data() + r.begin, refs.data() + r.end);
     set_box(t.nodes[task.node], nb.bounds);
     t.depth = std::max(t.depth, r.depth);
     Split split;
@@ -132,8 +129,7 @@ Subtree build_subtree(std::vector<PrimRef>& refs, const Range& root, const NodeB
       bins.add(refs.data() + r.begin, refs.data() + r.end, map);
       split = bins.best(map);
     }
-    NodeBounds left_bounds, right_bounds;
-    const std::optional<std::uint32_t> mid = split_or_leaf(refs, r, nb, split, nbins, opts, left_bounds, right_bounds);
+    const std::optional<std::uint32_t> mid = split_or_leaf(refs, r, nb, split, nbins, opts);
     if (!mid) {
       t.nodes[task.node].first = r.begin;
       t.nodes[task.node].count = r.count();
@@ -146,9 +142,8 @@ Subtree build_subtree(std::vector<PrimRef>& refs, const Range& root, const NodeB
     t.nodes[task.node].first = left;
     t.nodes[task.node].count = 0;
     // Right first on the stack so the left subtree is laid out first (depth-first order).
-    const Range right_range{*mid, r.end, r.depth + 1}, left_range{r.begin, *mid, r.depth + 1};
-    stack.push_back({left + 1, right_range, right_bounds});
-    stack.push_back({left, left_range, left_bounds});
+    stack.push_back({left + 1, {*mid, r.end, r.depth + 1}});
+    stack.push_back({left, {r.begin, *mid, r.depth + 1}});
   }
   return t;
 }
@@ -157,12 +152,13 @@ Subtree build_subtree(std::vector<PrimRef>& refs, const Range& root, const NodeB
 // the top nodes, a leaf, or the root of a job's subtree.
 struct TopNode {
   Range range;
-  NodeBounds bounds;
+  NodeBounds bounds;        // inner or leaf (a job computes its root's)
   std::int32_t left = -1;  // inner: the left child's index among the top nodes, the right one next to it
   std::int32_t job = -1;   // the root of subtree `job`
 };
 
-// The bounds of refs[begin, end), computed by `threads` threads over chunks and merged.
+// The bounds of refs[begin, end), computed by `threads` threads over chunks and merged in chunk
+// order (grow keeps the earlier of equal values): those of one pass in range order, bit for bit.
 NodeBounds bounds_of(const std::vector<PrimRef>& refs, std::uint32_t begin, std::uint32_t end, unsigned threads) {
   std::vector<NodeBounds> part(threads);
   const std::size_t chunk = (end - begin + threads - 1) / threads;
@@ -190,12 +186,11 @@ void split_top_node(std::vector<PrimRef>& refs, std::vector<TopNode>& top, std::
     for (unsigned t = 1; t < threads; ++t) bins[0].merge(bins[t]);
     split = bins[0].best(map);
   }
-  NodeBounds left, right;
-  const std::optional<std::uint32_t> mid = split_or_leaf(refs, r, nb, split, nbins, opts, left, right);
+  const std::optional<std::uint32_t> mid = split_or_leaf(refs, r, nb, split, nbins, opts);
   if (!mid) return;  // a leaf: left and job stay -1
   top[i].left = static_cast<std::int32_t>(top.size());
-  top.push_back({{r.begin, *mid, r.depth + 1}, left});
-  top.push_back({{*mid, r.end, r.depth + 1}, right});
+  top.push_back({{r.begin, *mid, r.depth + 1}, {}});
+  top.push_back({{*mid, r.end, r.depth + 1}, {}});
 }
 
 struct Layout {
@@ -286,13 +281,14 @@ void build_binary(Bvh& bvh, std::vector<PrimRef>& refs, unsigned threads, const 
   const std::uint32_t nbins = std::max<std::uint32_t>(2, opts.bins);
   const auto n = static_cast<std::uint32_t>(refs.size());
   const std::uint32_t job_size = threads > 1 ? std::max(kMinParallelPerThread * threads, n / (8 * threads)) : n;
-  std::vector<TopNode> top{{{0, n, 0}, bounds_of(refs, 0, n, threads)}};
+  std::vector<TopNode> top{{{0, n, 0}, {}}};
   std::vector<std::size_t> job_roots;  // the top nodes that are jobs
   for (std::size_t i = 0; i < top.size(); ++i) {
     if (top[i].range.count() <= job_size) {
       top[i].job = static_cast<std::int32_t>(job_roots.size());
       job_roots.push_back(i);
     } else {
+      top[i].bounds = bounds_of(refs, top[i].range.begin, top[i].range.end, threads);
       split_top_node(refs, top, i, threads, nbins, opts);
     }
   }
@@ -304,7 +300,7 @@ void build_binary(Bvh& bvh, std::vector<PrimRef>& refs, unsigned threads, const 
   std::vector<Subtree> jobs(job_roots.size());
   for_each_job(threads, order.size(), [&](std::size_t k) {
     const TopNode& root = top[job_roots[order[k]]];
-    jobs[order[k]] = build_subtree(refs, root.range, root.bounds, nbins, opts);
+    jobs[order[k]] = build_subtree(refs, root.range, nbins, opts);
   });
   std::vector<std::uint32_t> offset(jobs.size()), slot(jobs.size());
   std::size_t total = 0;

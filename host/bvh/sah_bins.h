@@ -10,7 +10,6 @@
 
 #include <algorithm>
 #include <cstdint>
-#include <utility>
 #include <vector>
 
 namespace raysort::sah {
@@ -107,19 +106,6 @@ struct NodeBounds {
     bounds.grow(o.bounds);
     centroids.grow(o.centroids);
   }
-};
-
-// NodeBounds gathered one record at a time on float4s (the partition's two sides).
-struct NodeBounds4 {
-  Box4 bounds, centroids;
-  void add(const PrimRef& r) {
-    __m128 lo, hi;
-    load(r, lo, hi);
-    bounds.grow(lo, hi);
-    const __m128 m = centroid(lo, hi);
-    centroids.grow(m, m);
-  }
-  NodeBounds get() const { return {bounds.box(), centroids.box()}; }
 };
 
 // Which bin a centroid falls in, per axis: floor((c − lo) · bins / extent), clamped. An axis with no
@@ -229,39 +215,5 @@ class SahBins {
   std::vector<std::uint32_t> count_;
   std::vector<float> right_area_;
 };
-
-// std::partition of libstdc++ (bits/stl_algo.h, __partition for bidirectional iterators, the one
-// the serial builder called), step for step, so the records end in the very same order; and on
-// the way, the boxes of both sides. Every record's predicate is evaluated (at least) once, where
-// its box joins its side's bounds (min/max: order and repetition do not matter).
-template <class Pred>
-PrimRef* partition_with_bounds(PrimRef* first, PrimRef* last, Pred pred, NodeBounds& left, NodeBounds& right) {
-  NodeBounds4 l, r;
-  while (true) {
-    while (true) {
-      if (first == last) {
-        left = l.get(), right = r.get();
-        return first;
-      }
-      if (!pred(*first)) break;
-      l.add(*first);
-      ++first;
-    }
-    r.add(*first);
-    --last;
-    while (true) {
-      if (first == last) {
-        left = l.get(), right = r.get();
-        return first;
-      }
-      if (pred(*last)) break;
-      r.add(*last);
-      --last;
-    }
-    l.add(*last);
-    std::iter_swap(first, last);
-    ++first;
-  }
-}
 
 }  // namespace raysort::sah
