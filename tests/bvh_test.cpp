@@ -5,10 +5,15 @@
 #include <cstdio>
 #include <functional>
 
+#include <algorithm>
+#include <array>
 #include <cstring>
+#include <string>
+#include <utility>
 
 #include "bvh/bvh.h"
 #include "scene/load.h"
+#include "test_util.h"
 
 namespace raysort {
 
@@ -275,6 +280,271 @@ TEST(Wide8Bvh, ValidatorCatchesABrokenCollapse) {
   broken = good;
   broken.packets[0].v1x.s[0] += 1.0f;  // a vertex not copied exactly
   EXPECT_NE(validate_wide8(broken, bvh), "");
+}
+
+}  // namespace raysort
+
+// The parallel build (host/bvh/build_sah.cpp) against the serial build it replaced: the same
+// tree, bit for bit, at any thread count.
+namespace raysort {
+
+namespace serial_reference {
+
+// The serial binned SAH build as it was before the build used every core (main e549fcc,
+// host/bvh/build_sah.cpp), kept here verbatim but for names: one stack, one index array, one
+// thread. The parallel build must give exactly its nodes and triangle order.
+struct Box {
+  float lo[3] = {3.0e38f, 3.0e38f, 3.0e38f};
+  float hi[3] = {-3.0e38f, -3.0e38f, -3.0e38f};
+  void grow(const float* p) {
+    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], p[a]), hi[a] = std::max(hi[a], p[a]);
+  }
+  void grow(const Box& b) {
+    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], b.lo[a]), hi[a] = std::max(hi[a], b.hi[a]);
+  }
+  float area() const {
+    float e0 = hi[0] - lo[0], e1 = hi[1] - lo[1], e2 = hi[2] - lo[2];
+    if (e0 < 0.0f) return 0.0f;
+    return 2.0f * (e0 * e1 + e1 * e2 + e2 * e0);
+  }
+};
+
+struct Tree {
+  std::vector<RsBvhNode> nodes;
+  std::vector<std::uint32_t> order;  // triangle ids in leaf order
+};
+
+Tree build(const Scene::Flat& tris, const BvhBuildOptions& opts = {}) {
+  const std::size_t n = tris.size();
+  std::vector<Box> boxes(n);
+  std::vector<std::array<float, 3>> cent(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    boxes[i].grow(tris.v0[i].data());
+    boxes[i].grow(tris.v1[i].data());
+    boxes[i].grow(tris.v2[i].data());
+    for (int a = 0; a < 3; ++a) cent[i][a] = (boxes[i].lo[a] + boxes[i].hi[a]) * 0.5f;
+  }
+  std::vector<std::uint32_t> idx(n);
+  for (std::size_t i = 0; i < n; ++i) idx[i] = static_cast<std::uint32_t>(i);
+  const std::uint32_t nb = std::max<std::uint32_t>(2, opts.bins);
+  struct Task {
+    std::uint32_t node, begin, end, depth;
+  };
+  Tree t;
+  t.nodes.push_back({});
+  std::vector<Task> stack{{0, 0, static_cast<std::uint32_t>(n), 0}};
+  while (!stack.empty()) {
+    Task task = stack.back();
+    stack.pop_back();
+    const std::uint32_t count = task.end - task.begin;
+    Box bounds, cb;
+    for (std::uint32_t i = task.begin; i < task.end; ++i) bounds.grow(boxes[idx[i]]), cb.grow(cent[idx[i]].data());
+    for (int a = 0; a < 3; ++a) t.nodes[task.node].bmin[a] = bounds.lo[a], t.nodes[task.node].bmax[a] = bounds.hi[a];
+    auto make_leaf = [&] { t.nodes[task.node].first = task.begin, t.nodes[task.node].count = count; };
+    if (count == 1) {
+      make_leaf();
+      continue;
+    }
+    int best_axis = -1;
+    std::uint32_t best_bin = 0;
+    float best_cost = 3.0e38f;
+    float scale[3];
+    for (int a = 0; a < 3; ++a) scale[a] = cb.hi[a] - cb.lo[a] > 0.0f ? static_cast<float>(nb) / (cb.hi[a] - cb.lo[a]) : 0.0f;
+    if (task.depth < 32) {
+      std::vector<Box> bin_box(3 * nb);
+      std::vector<std::uint32_t> bin_n(3 * nb), right_n(nb);
+      std::vector<float> right_area(nb);
+      for (std::uint32_t i = task.begin; i < task.end; ++i)
+        for (int a = 0; a < 3; ++a) {
+          if (scale[a] == 0.0f) continue;
+          auto b = std::min(static_cast<std::uint32_t>((cent[idx[i]][a] - cb.lo[a]) * scale[a]), nb - 1);
+          bin_box[a * nb + b].grow(boxes[idx[i]]);
+          ++bin_n[a * nb + b];
+        }
+      for (int a = 0; a < 3; ++a) {
+        if (scale[a] == 0.0f) continue;
+        Box acc, left;
+        std::uint32_t acc_n = 0, left_n = 0;
+        for (std::uint32_t b = nb - 1; b > 0; --b) {
+          acc.grow(bin_box[a * nb + b]);
+          acc_n += bin_n[a * nb + b];
+          right_area[b] = acc.area();
+          right_n[b] = acc_n;
+        }
+        for (std::uint32_t b = 0; b + 1 < nb; ++b) {
+          left.grow(bin_box[a * nb + b]);
+          left_n += bin_n[a * nb + b];
+          if (left_n == 0 || right_n[b + 1] == 0) continue;
+          float cost = left.area() * static_cast<float>(left_n) + right_area[b + 1] * static_cast<float>(right_n[b + 1]);
+          if (cost < best_cost) best_axis = a, best_bin = b, best_cost = cost;
+        }
+      }
+    }
+    std::uint32_t mid = 0;
+    const float parent_area = bounds.area();
+    const float leaf_cost = opts.intersection_cost * static_cast<float>(count);
+    const float split_cost = best_axis >= 0 && parent_area > 0.0f
+                                 ? opts.traversal_cost + opts.intersection_cost * best_cost / parent_area
+                                 : 3.0e38f;
+    if (best_axis >= 0 && (split_cost < leaf_cost || count > opts.max_leaf_size)) {
+      const int a = best_axis;
+      auto it = std::partition(idx.begin() + task.begin, idx.begin() + task.end, [&](std::uint32_t x) {
+        return std::min(static_cast<std::uint32_t>((cent[x][a] - cb.lo[a]) * scale[a]), nb - 1) <= best_bin;
+      });
+      mid = static_cast<std::uint32_t>(it - idx.begin());
+    } else if (count <= opts.max_leaf_size) {
+      make_leaf();
+      continue;
+    }
+    if (mid <= task.begin || mid >= task.end) {
+      int axis = 0;
+      for (int a = 1; a < 3; ++a)
+        if (cb.hi[a] - cb.lo[a] > cb.hi[axis] - cb.lo[axis]) axis = a;
+      mid = task.begin + count / 2;
+      std::nth_element(idx.begin() + task.begin, idx.begin() + mid, idx.begin() + task.end,
+                       [&](std::uint32_t x, std::uint32_t y) {
+                         return cent[x][axis] < cent[y][axis] || (cent[x][axis] == cent[y][axis] && x < y);
+                       });
+    }
+    const auto left = static_cast<std::uint32_t>(t.nodes.size());
+    t.nodes.push_back({});
+    t.nodes.push_back({});
+    t.nodes[task.node].first = left;
+    t.nodes[task.node].count = 0;
+    stack.push_back({left + 1, mid, task.end, task.depth + 1});
+    stack.push_back({left, task.begin, mid, task.depth + 1});
+  }
+  t.order = idx;
+  return t;
+}
+
+}  // namespace serial_reference
+
+namespace {
+std::vector<std::uint32_t> leaf_order(const Bvh& bvh) {
+  std::vector<std::uint32_t> ids;
+  for (const RsTriangle& t : bvh.triangles) ids.push_back(t.id);
+  return ids;
+}
+
+// Byte-for-byte equality of two trees: nodes, triangles (vertices, ids, padding), wide nodes and packets.
+void expect_same_tree(const Bvh& a, const Bvh& b, const std::string& what) {
+  auto same_bytes = [](const auto& x, const auto& y) {
+    return x.size() == y.size() && std::memcmp(x.data(), y.data(), x.size() * sizeof(x[0])) == 0;
+  };
+  EXPECT_TRUE(same_bytes(a.nodes, b.nodes)) << what << ": nodes differ";
+  EXPECT_TRUE(same_bytes(a.triangles, b.triangles)) << what << ": triangles differ";
+  EXPECT_TRUE(same_bytes(a.wide.nodes, b.wide.nodes)) << what << ": wide nodes differ";
+  EXPECT_TRUE(same_bytes(a.wide.packets, b.wide.packets)) << what << ": wide packets differ";
+  EXPECT_EQ(a.depth, b.depth) << what;
+  EXPECT_EQ(a.leaf_count, b.leaf_count) << what;
+  EXPECT_EQ(a.sah_cost, b.sah_cost) << what;
+}
+
+// A scene large enough that 2 and 5 threads split its top levels together (more than 8192
+// triangles per thread at the root) and its subtrees are several jobs: `copies` copies of the
+// landscape, each moved along x, plus runs of identical triangles that force median splits and a
+// wall of signed zeros.
+Scene::Flat large_scene(int copies) {
+  const Scene landscape = load_scene("landscape");
+  const Scene::Flat one = landscape.flatten();
+  const float width = landscape.bounds().extent()[0];
+  Scene::Flat f;
+  for (int c = 0; c < copies; ++c)
+    for (std::size_t i = 0; i < one.size(); ++i) {
+      const float dx = 1.25f * width * static_cast<float>(c);
+      f.v0.push_back({one.v0[i][0] + dx, one.v0[i][1], one.v0[i][2]});
+      f.v1.push_back({one.v1[i][0] + dx, one.v1[i][1], one.v1[i][2]});
+      f.v2.push_back({one.v2[i][0] + dx, one.v2[i][1], one.v2[i][2]});
+      f.material.push_back(0);
+    }
+  for (int i = 0; i < 3000; ++i) {
+    f.v0.push_back({0, 0, 0});
+    f.v1.push_back({1, 0, 0});
+    f.v2.push_back({0, 1, 0});
+    f.material.push_back(0);
+  }
+  // A wall in the plane x = 0 whose vertices carry +0 and -0 in a scattered pattern: a box's min or
+  // max over both zeros is the first one met (std::min keeps the earlier of equals), so the node
+  // boxes are only byte-equal if the build meets the triangles in the serial build's order.
+  for (int i = 0; i < 4000; ++i) {
+    auto zero = [&](int k) { return (i * 7 + k) % 3 == 0 ? -0.0f : 0.0f; };
+    const float y = static_cast<float>(i % 64), z = static_cast<float>(i / 64);
+    f.v0.push_back({zero(0), y, z});
+    f.v1.push_back({zero(1), y + 1, z});
+    f.v2.push_back({zero(2), y, z + 1});
+    f.material.push_back(0);
+  }
+  return f;
+}
+}  // namespace
+
+TEST(BvhThreads, SameTreeOnOneTwoAndFiveThreadsAsTheSerialBuild) {
+  for (const auto& [name, tris] : {std::pair<std::string, Scene::Flat>{"multi-instance", load_scene("multi-instance").flatten()},
+                                   {"landscape x3 + 3000 equal + a wall of +-0", large_scene(3)}}) {
+    ASSERT_GT(tris.size(), 5u * 8192u) << name << " is too small to split its root on 5 threads";
+    const serial_reference::Tree ref = serial_reference::build(tris);
+    BvhBuildOptions opts;
+    opts.threads = 1;
+    const Bvh one = build_bvh(tris, opts);
+    ASSERT_EQ(validate_bvh(one, tris.size()), "") << name;
+    EXPECT_TRUE(one.nodes.size() == ref.nodes.size() &&
+                std::memcmp(one.nodes.data(), ref.nodes.data(), ref.nodes.size() * sizeof(RsBvhNode)) == 0)
+        << name << ": 1 thread's nodes differ from the serial build's";
+    EXPECT_EQ(leaf_order(one), ref.order) << name << ": 1 thread's triangle order differs from the serial build's";
+    Bvh serial_bvh;
+    serial_bvh.nodes = ref.nodes;
+    EXPECT_EQ(one.sah_cost, sah_cost(serial_bvh)) << name;
+    for (unsigned threads : {2u, 5u}) {
+      opts.threads = threads;
+      expect_same_tree(build_bvh(tris, opts), one, name + " on " + std::to_string(threads) + " threads");
+    }
+  }
+}
+
+// The SAH cost by hand: two unit squares in z = 0 (area 2 each, box faces counted twice over),
+// 3 apart in x: root box 4 x 1 x 0, area 8; cost 1 + (1 · 2 + 1 · 2) / 8 = 1.5. (nodes[1] is the
+// left leaf: the builder lays the left child out first.)
+TEST(BvhThreads, SahCostOfATwoLeafTree) {
+  auto f = flat_from({{Vec3{0, 0, 0}, Vec3{1, 0, 0}, Vec3{1, 1, 0}}, {Vec3{3, 0, 0}, Vec3{4, 0, 0}, Vec3{4, 1, 0}}});
+  BvhBuildOptions opts;
+  opts.max_leaf_size = 1;
+  Bvh bvh = build_bvh(f, opts);
+  ASSERT_EQ(bvh.nodes.size(), 3u);
+  EXPECT_DOUBLE_EQ(bvh.sah_cost, 1.5);
+  EXPECT_DOUBLE_EQ(sah_cost(bvh, opts), 1.5);
+  // By hand, with a leaf of two triangles and other constants: the same root over a leaf of 2
+  // (area 2) and one of 1 (area 2), traversal 2, intersection 3: (2 · 8 + 3 · 2 · 2 + 3 · 1 · 2) / 8.
+  bvh.nodes[1].count = 2;
+  opts.traversal_cost = 2.0f;
+  opts.intersection_cost = 3.0f;
+  EXPECT_DOUBLE_EQ(sah_cost(bvh, opts), 34.0 / 8.0);
+}
+
+// `raysort trace --build-rounds N` (host/app/build_timing.h): the build timed in N rounds, with
+// Embree's beside it under --reference embree, the SAH cost on the line, nothing traced; options
+// that only a trace uses are refused in one line before any work.
+TEST(BvhThreads, TraceBuildRoundsTimesTheBuildsAndStops) {
+  using raysort::testing::CliResult;
+  using raysort::testing::run_cli;
+  CliResult r = run_cli({"trace", "--scene", "cornell", "--build-rounds", "6"});
+  ASSERT_EQ(r.code, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find("build    6 rounds alternated, medians with 95 % intervals: ours "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("SAH cost "), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("kernels  built"), std::string::npos) << "nothing is traced:\n" << r.out;
+#ifdef RAYSORT_HAVE_EMBREE
+  r = run_cli({"trace", "--scene", "cornell", "--build-rounds", "6", "--reference", "embree"});
+  ASSERT_EQ(r.code, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find("build quality high, "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("; ours/Embree "), std::string::npos) << r.out;
+#endif
+  r = run_cli({"trace", "--scene", "cornell", "--build-rounds", "6", "--variant", "both", "--adjudicate"});
+  EXPECT_NE(r.code, 0);
+  EXPECT_EQ(r.err.find('\n'), r.err.size() - 1) << "not one line:\n" << r.err;
+  EXPECT_NE(r.err.find("--build-rounds times the BVH builds alone"), std::string::npos) << r.err;
+  r = run_cli({"trace", "--scene", "cornell", "--build-rounds", "0"});
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.err.find("--build-rounds"), std::string::npos) << r.err;
 }
 
 }  // namespace raysort

@@ -5,6 +5,8 @@
 // --reference embree traces every batch with Embree 3 as well, side by side in this process, and
 // prints its MRays/s, ours/Embree, and how many hits agree (docs/trace.md, "Embree anchor");
 // --embree-paths makes each of Embree's paths (single rays, streams, packets) an arm of its own.
+// --build-rounds N times our BVH build (and Embree's, with --reference embree) in N alternated
+// rounds and stops there (app/build_timing.h).
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -14,6 +16,7 @@
 #include <numeric>
 #include <optional>
 
+#include "app/build_timing.h"
 #include "app/commands.h"
 #include "app/options.h"
 #include "bench/protocol.h"
@@ -29,6 +32,7 @@
 #include "util/atomic_file.h"
 #include "util/error.h"
 #include "util/output_name.h"
+#include "util/parallel.h"
 
 namespace raysort {
 
@@ -44,6 +48,7 @@ struct TraceArgs {
   std::optional<std::string> embree_paths;  // --embree-paths; none: "1" (rtcIntersect1 alone, the columns of issue 9)
   bool adjudicate = false;       // judge every ray the answers differ on, exactly (trace/adjudicate.h)
   std::string disagreements;     // with adjudicate: write those rays to DIR/<scene>.json
+  unsigned build_rounds = 0;     // > 0: time the BVH builds in this many rounds and stop
 };
 
 #ifdef RAYSORT_HAVE_EMBREE
@@ -359,8 +364,8 @@ void trace_scene(Runtime& rt, const std::string& scene_name, const TraceArgs& ar
                      fmt::format("scene {} at {}x{}, {} spp", p.scene.name, frame.width, frame.height, frame.spp));
   fmt::print("\nscene    {}: {} triangles, loaded in {:.0f} ms; {}x{} x {} spp\n", p.scene.name, p.tris.size(), p.load_ms,
              frame.width, frame.height, frame.spp);
-  fmt::print("bvh      {} nodes, {} leaves, depth {}, built in {:.0f} ms\n", p.bvh.nodes.size(), p.bvh.leaf_count,
-             p.bvh.depth, p.bvh.build_ms);
+  fmt::print("bvh      {} nodes, {} leaves, depth {}, built in {:.0f} ms on {} threads, SAH cost {:.4f}\n",
+             p.bvh.nodes.size(), p.bvh.leaf_count, p.bvh.depth, p.bvh.build_ms, host_threads(), p.bvh.sah_cost);
   // Two variants are shown fast first, then robust, with their ratio.
   std::vector<TraceVariant> variants = parse_trace_variants(args.variant);
   if (variants.size() == 2) variants = {TraceVariant::Fast, TraceVariant::Robust};
@@ -444,6 +449,21 @@ void trace_scene(Runtime& rt, const std::string& scene_name, const TraceArgs& ar
   }
 }
 
+// --build-rounds: each scene's builds timed side by side, nothing traced.
+int run_build_timing(const TraceArgs& args) {
+  if (args.adjudicate || !args.disagreements.empty() || args.embree_paths)
+    throw Error("--build-rounds times the BVH builds alone: leave out --adjudicate, --disagreements and --embree-paths");
+  for (const auto& scene_name : args.scenes) {
+    const PreparedScene p = prepare_scene(scene_name, args.common.scene_options());
+    fmt::print("\nscene    {}: {} triangles, loaded in {:.0f} ms\n", p.scene.name, p.tris.size(), p.load_ms);
+    const BuildTiming t = time_builds(p.tris, args.build_rounds, args.reference == "embree",
+                                      protocol_seed("build/" + p.scene.name));
+    fmt::print("{}\n", build_timing_text(t));
+    std::fflush(stdout);
+  }
+  return 0;
+}
+
 int run_trace(const TraceArgs& args) {
   if (args.embree_paths && args.reference != "embree")
     throw Error("--embree-paths " + *args.embree_paths + " goes with --reference embree");
@@ -459,6 +479,7 @@ int run_trace(const TraceArgs& args) {
     throw Error("--adjudicate judges the rays on which answers differ: give two, with --variant both and/or "
                 "--reference embree");
   if (!args.disagreements.empty() && !args.adjudicate) throw Error("--disagreements DIR goes with --adjudicate");
+  if (args.build_rounds > 0) return run_build_timing(args);
   Runtime rt(select_device(args.common.device));
   fmt::print("device   {} ({}, {})\n", rt.info().name, rt.info().platform_name, rt.info().driver_version);
   TraceTotals totals;
@@ -521,6 +542,11 @@ void register_trace_command(CLI::App& app) {
   cmd->add_option("--disagreements", args->disagreements,
                   "with --adjudicate: write the telling rays (answers judged differently) to DIR/<scene>.json, a "
                   "regression file");
+  cmd->add_option("--build-rounds", args->build_rounds,
+                  "time our BVH build (and Embree's high-quality build, with --reference embree) in N alternated "
+                  "rounds after one warm-up: medians with 95 % intervals and ours/Embree paired; then stop (no "
+                  "kernels, no traces). 6 or more give intervals")
+      ->check(CLI::Range(1u, 1000u));
   cmd->callback([args] { set_command_exit_code(run_trace(*args)); });
 }
 

@@ -37,7 +37,8 @@ SceneBench::SceneBench(Runtime& rt, PreparedScene scene, const MatrixSpec& matri
   auto say = [&](const std::string& line) {
     if (note) note(line);
   };
-  say(fmt::format("{}: {} triangles, BVH {:.0f} ms; generating batches", name, prepared.tris.size(), bvh.build_ms));
+  say(fmt::format("{}: {} triangles, BVH {:.0f} ms (SAH cost {:.4f}); generating batches", name, prepared.tris.size(),
+                  bvh.build_ms, bvh.sah_cost));
   encoder = std::make_unique<DeviceEncoder>(rt, bvh, prepared.scene.bounds(), spec.params);
   RayGenOptions gen;
   gen.seed = spec.seed;

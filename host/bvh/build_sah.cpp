@@ -1,177 +1,320 @@
-// Binned SAH BVH builder. See bvh.h.
+// Binned SAH BVH builder on every host thread, deterministic. See bvh.h.
+//
+// How the threads share the build without changing the tree. A node's split depends only on the
+// set of triangles in its range, and a node's partition reorders only its own range; so subtrees
+// build independently of each other, in any order, on any thread. The builder therefore
+//  1. splits the top of the tree, node by node, each node's bounds and bins computed by all
+//     threads over chunks of its range and merged in chunk order (exact: min/max keep the first
+//     of equal values, +0 or -0, as one pass in range order does; counts are sums), then
+//     partitions it (std::partition, the one the serial build always used, so the triangle order
+//     is the same);
+//  2. builds each subtree below the top (a node of at most `job_size` triangles) as a job of its
+//     own, numbered locally, the jobs shared among the threads;
+//  3. lays the tree out exactly as the serial depth-first build numbers it: children allocated in
+//     pairs when their parent is visited, the left subtree before the right. A subtree built with
+//     local numbering (root 0, the k-th inner node's children at 1 + 2k) lands unchanged but for
+//     one offset: its nodes 1.. go to next, next + 1, ..., where next is the global pair counter
+//     when the serial build would have reached its root.
+// One thread (or a scene below the first job size) is the serial build itself, a single job.
 #include <algorithm>
-#include <array>
 #include <chrono>
 #include <cmath>
-#include <numeric>
+#include <optional>
 
 #include "bvh/bvh.h"
+#include "bvh/sah_bins.h"
 #include "util/error.h"
+#include "util/parallel.h"
 
 namespace raysort {
 
 namespace {
 
+using sah::BinMap;
+using sah::Box;
+using sah::NodeBounds;
+using sah::PrimRef;
+using sah::SahBins;
+using sah::Split;
+
 // Past this depth nodes split at the object median, so depth <= kMaxSahDepth + log2(N) < 64.
 constexpr std::uint32_t kMaxSahDepth = 32;
+// Nodes above this many triangles per thread are split by all threads together; smaller ones are
+// a job for one thread. Per thread, so a subtree's bins cost more than the threads' start.
+constexpr std::uint32_t kMinParallelPerThread = 8192;
 
-struct Box {
-  float lo[3] = {3.0e38f, 3.0e38f, 3.0e38f};
-  float hi[3] = {-3.0e38f, -3.0e38f, -3.0e38f};
-  void grow(const float* p) {
-    for (int a = 0; a < 3; ++a) {
-      lo[a] = std::min(lo[a], p[a]);
-      hi[a] = std::max(hi[a], p[a]);
-    }
+struct Range {
+  std::uint32_t begin, end, depth;
+  std::uint32_t count() const { return end - begin; }
+};
+
+// What a node becomes once its bounds and best split are known: a leaf (nullopt), or an inner
+// node whose range is now partitioned at the returned middle. The serial builder's rules: SAH
+// split when it is cheaper than a leaf or the leaf would be too big; the object median when no SAH
+// split exists or it leaves a side empty.
+std::optional<std::uint32_t> split_or_leaf(std::vector<PrimRef>& refs, const Range& r, const NodeBounds& nb,
+                                           const Split& split, std::uint32_t nbins, const BvhBuildOptions& opts) {
+  const std::uint32_t count = r.count();
+  if (count == 1) return std::nullopt;
+  const float parent_area = nb.bounds.area();
+  const float leaf_cost = opts.intersection_cost * static_cast<float>(count);
+  const float split_cost = split.axis >= 0 && parent_area > 0.0f
+                               ? opts.traversal_cost + opts.intersection_cost * split.cost / parent_area
+                               : 3.0e38f;
+  std::uint32_t mid = 0;
+  if (split.axis >= 0 && (split_cost < leaf_cost || count > opts.max_leaf_size)) {
+    const BinMap map(nb.centroids, nbins);
+    const int a = split.axis;
+    auto it = std::partition(refs.begin() + r.begin, refs.begin() + r.end,
+                             [&](const PrimRef& p) { return map.bin(p, a) <= split.bin; });
+    mid = static_cast<std::uint32_t>(it - refs.begin());
+  } else if (count <= opts.max_leaf_size) {
+    return std::nullopt;
   }
-  void grow(const Box& b) {
-    for (int a = 0; a < 3; ++a) {
-      lo[a] = std::min(lo[a], b.lo[a]);
-      hi[a] = std::max(hi[a], b.hi[a]);
-    }
+  if (mid <= r.begin || mid >= r.end) {
+    // The object median along the widest centroid axis, ties broken by id so the result is deterministic.
+    const Box& cb = nb.centroids;
+    int axis = 0;
+    for (int a = 1; a < 3; ++a)
+      if (cb.hi[a] - cb.lo[a] > cb.hi[axis] - cb.lo[axis]) axis = a;
+    mid = r.begin + count / 2;
+    std::nth_element(refs.begin() + r.begin, refs.begin() + mid, refs.begin() + r.end,
+                     [&](const PrimRef& x, const PrimRef& y) {
+                       const float cx = x.centroid(axis), cy = y.centroid(axis);
+                       return cx < cy || (cx == cy && x.id < y.id);
+                     });
   }
-  float area() const {
-    float e0 = hi[0] - lo[0], e1 = hi[1] - lo[1], e2 = hi[2] - lo[2];
-    if (e0 < 0.0f) return 0.0f;
-    return 2.0f * (e0 * e1 + e1 * e2 + e2 * e0);
-  }
-};
-
-struct Task {
-  std::uint32_t node, begin, end, depth;
-};
-
-// The triangles' boxes and centroids, and the order the builder partitions (idx).
-struct Primitives {
-  std::vector<Box> boxes;
-  std::vector<std::array<float, 3>> centroids;
-  std::vector<std::uint32_t> idx;
-};
-
-struct Split {
-  int axis = -1;  // -1: no SAH split found
-  std::uint32_t bin = 0;
-  float cost = 3.0e38f;  // left area · count + right area · count
-};
-
-// Binned SAH (Wald 2007): the best split plane among `bins` equal bins of the centroid bounds on
-// each axis, with scratch space kept between nodes.
-class SahBinner {
- public:
-  explicit SahBinner(std::uint32_t bins)
-      : nbins_(std::max<std::uint32_t>(2, bins)), bin_box_(3 * nbins_), bin_count_(3 * nbins_), right_area_(nbins_),
-        right_count_(nbins_) {}
-  std::uint32_t bins() const { return nbins_; }
-
-  Split best(const Primitives& p, const Task& task, const Box& cbounds) {
-    Split best;
-    std::fill(bin_box_.begin(), bin_box_.end(), Box{});
-    std::fill(bin_count_.begin(), bin_count_.end(), 0u);
-    float scale[3];
-    for (int a = 0; a < 3; ++a) {
-      float ext = cbounds.hi[a] - cbounds.lo[a];
-      scale[a] = ext > 0.0f ? static_cast<float>(nbins_) / ext : 0.0f;
-    }
-    for (std::uint32_t i = task.begin; i < task.end; ++i) {
-      const std::uint32_t t = p.idx[i];
-      for (int a = 0; a < 3; ++a) {
-        if (scale[a] == 0.0f) continue;
-        auto b = static_cast<std::uint32_t>((p.centroids[t][a] - cbounds.lo[a]) * scale[a]);
-        b = std::min(b, nbins_ - 1);
-        bin_box_[a * nbins_ + b].grow(p.boxes[t]);
-        ++bin_count_[a * nbins_ + b];
-      }
-    }
-    for (int a = 0; a < 3; ++a) {
-      if (scale[a] == 0.0f) continue;
-      Box acc;
-      std::uint32_t acc_n = 0;
-      for (std::uint32_t b = nbins_ - 1; b > 0; --b) {
-        acc.grow(bin_box_[a * nbins_ + b]);
-        acc_n += bin_count_[a * nbins_ + b];
-        right_area_[b] = acc.area();
-        right_count_[b] = acc_n;
-      }
-      Box left;
-      std::uint32_t left_n = 0;
-      for (std::uint32_t b = 0; b + 1 < nbins_; ++b) {
-        left.grow(bin_box_[a * nbins_ + b]);
-        left_n += bin_count_[a * nbins_ + b];
-        if (left_n == 0 || right_count_[b + 1] == 0) continue;
-        float cost = left.area() * static_cast<float>(left_n) + right_area_[b + 1] * static_cast<float>(right_count_[b + 1]);
-        if (cost < best.cost) best = {a, b, cost};
-      }
-    }
-    return best;
-  }
-
- private:
-  std::uint32_t nbins_;
-  std::vector<Box> bin_box_;
-  std::vector<std::uint32_t> bin_count_;
-  std::vector<float> right_area_;
-  std::vector<std::uint32_t> right_count_;
-};
-
-// Partitions idx[begin, end) at the SAH split; returns the middle.
-std::uint32_t partition_at(Primitives& p, const Task& task, const Box& cbounds, const Split& split,
-                           std::uint32_t nbins) {
-  const int a = split.axis;
-  const float lo = cbounds.lo[a];
-  const float sc = static_cast<float>(nbins) / (cbounds.hi[a] - cbounds.lo[a]);
-  auto it = std::partition(p.idx.begin() + task.begin, p.idx.begin() + task.end, [&](std::uint32_t t) {
-    auto b = static_cast<std::uint32_t>((p.centroids[t][a] - lo) * sc);
-    return std::min(b, nbins - 1) <= split.bin;
-  });
-  return static_cast<std::uint32_t>(it - p.idx.begin());
-}
-
-// No usable SAH split (deep node, all centroids equal, or SAH prefers a too-large leaf): the object
-// median along the widest centroid axis, ties broken by index so the result is deterministic.
-std::uint32_t median_split(Primitives& p, const Task& task, const Box& cbounds) {
-  int axis = 0;
-  for (int a = 1; a < 3; ++a)
-    if (cbounds.hi[a] - cbounds.lo[a] > cbounds.hi[axis] - cbounds.lo[axis]) axis = a;
-  const std::uint32_t mid = task.begin + (task.end - task.begin) / 2;
-  std::nth_element(p.idx.begin() + task.begin, p.idx.begin() + mid, p.idx.begin() + task.end,
-                   [&](std::uint32_t x, std::uint32_t y) {
-                     return p.centroids[x][axis] < p.centroids[y][axis] ||
-                            (p.centroids[x][axis] == p.centroids[y][axis] && x < y);
-                   });
   return mid;
 }
 
-Primitives primitives_of(const Scene::Flat& tris) {
-  const std::size_t n = tris.size();
-  Primitives p;
-  p.boxes.resize(n);
-  p.centroids.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    p.boxes[i].grow(tris.v0[i].data());
-    p.boxes[i].grow(tris.v1[i].data());
-    p.boxes[i].grow(tris.v2[i].data());
-    for (int a = 0; a < 3; ++a) p.centroids[i][a] = (p.boxes[i].lo[a] + p.boxes[i].hi[a]) * 0.5f;
+void set_box(RsBvhNode& node, const Box& b) {
+  for (int a = 0; a < 3; ++a) {
+    node.bmin[a] = b.lo[a];
+    node.bmax[a] = b.hi[a];
   }
-  p.idx.resize(n);
-  std::iota(p.idx.begin(), p.idx.end(), 0u);
-  return p;
+}
+
+// A subtree built by one thread, numbered as the serial build numbers a tree: root 0, children in
+// pairs, depth first, left first. Leaves index the global triangle order.
+struct Subtree {
+  std::vector<RsBvhNode> nodes;
+  std::uint32_t depth = 0, leaves = 0;
+};
+
+// A node waiting to be split: where it goes and its triangles.
+struct Task {
+  std::uint32_t node;
+  Range range;
+};
+
+Subtree build_subtree(std::vector<PrimRef>& refs, const Range& root, std::uint32_t nbins, const BvhBuildOptions& opts) {
+  Subtree t;
+  t.nodes.reserve(2 * root.count() / std::max<std::uint32_t>(1, opts.max_leaf_size / 2) + 1);
+  t.nodes.push_back({});
+  SahBins bins(nbins);
+  std::vector<Task> stack{{0, root}};
+  while (!stack.empty()) {
+    const Task task = stack.back();
+    stack.pop_back();
+    const Range& r = task.range;
+    // In range order, as the serial build: of equal values (+0 and -0) a box keeps the first met.
+    NodeBounds nb;
+    nb.add(refs.data() + r.begin, refs.data() + r.end);
+    set_box(t.nodes[task.node], nb.bounds);
+    t.depth = std::max(t.depth, r.depth);
+    Split split;
+    if (r.count() > 1 && r.depth < kMaxSahDepth) {
+      const BinMap map(nb.centroids, nbins);
+      bins.clear();
+      bins.add(refs.data() + r.begin, refs.data() + r.end, map);
+      split = bins.best(map);
+    }
+    const std::optional<std::uint32_t> mid = split_or_leaf(refs, r, nb, split, nbins, opts);
+    if (!mid) {
+      t.nodes[task.node].first = r.begin;
+      t.nodes[task.node].count = r.count();
+      ++t.leaves;
+      continue;
+    }
+    const auto left = static_cast<std::uint32_t>(t.nodes.size());
+    t.nodes.push_back({});
+    t.nodes.push_back({});
+    t.nodes[task.node].first = left;
+    t.nodes[task.node].count = 0;
+    // Right first on the stack so the left subtree is laid out first (depth-first order).
+    stack.push_back({left + 1, {*mid, r.end, r.depth + 1}});
+    stack.push_back({left, {r.begin, *mid, r.depth + 1}});
+  }
+  return t;
+}
+
+// A node of the top of the tree (split by all threads): an inner node with its two children among
+// the top nodes, a leaf, or the root of a job's subtree.
+struct TopNode {
+  Range range;
+  NodeBounds bounds;        // inner or leaf (a job computes its root's)
+  std::int32_t left = -1;  // inner: the left child's index among the top nodes, the right one next to it
+  std::int32_t job = -1;   // the root of subtree `job`
+};
+
+// The bounds of refs[begin, end), computed by `threads` threads over chunks and merged in chunk
+// order (grow keeps the earlier of equal values): those of one pass in range order, bit for bit.
+NodeBounds bounds_of(const std::vector<PrimRef>& refs, std::uint32_t begin, std::uint32_t end, unsigned threads) {
+  std::vector<NodeBounds> part(threads);
+  const std::size_t chunk = (end - begin + threads - 1) / threads;
+  for_each_chunk_on(threads, end - begin, [&](std::size_t b, std::size_t e) {
+    part[b / chunk].add(refs.data() + begin + b, refs.data() + begin + e);
+  });
+  NodeBounds nb;
+  for (const NodeBounds& p : part) nb.merge(p);
+  return nb;
+}
+
+// A top node's split: its bins computed by `threads` threads over chunks and merged.
+void split_top_node(std::vector<PrimRef>& refs, std::vector<TopNode>& top, std::size_t i, unsigned threads,
+                    std::uint32_t nbins, const BvhBuildOptions& opts) {
+  const Range r = top[i].range;
+  const NodeBounds nb = top[i].bounds;
+  const PrimRef* base = refs.data() + r.begin;
+  std::vector<SahBins> bins(threads, SahBins(nbins));
+  auto chunk_of = [&](std::size_t b) { return static_cast<unsigned>(b / ((r.count() + threads - 1) / threads)); };
+  Split split;
+  if (r.depth < kMaxSahDepth) {
+    const BinMap map(nb.centroids, nbins);
+    for (SahBins& b : bins) b.clear();
+    for_each_chunk_on(threads, r.count(), [&](std::size_t b, std::size_t e) { bins[chunk_of(b)].add(base + b, base + e, map); });
+    for (unsigned t = 1; t < threads; ++t) bins[0].merge(bins[t]);
+    split = bins[0].best(map);
+  }
+  const std::optional<std::uint32_t> mid = split_or_leaf(refs, r, nb, split, nbins, opts);
+  if (!mid) return;  // a leaf: left and job stay -1
+  top[i].left = static_cast<std::int32_t>(top.size());
+  top.push_back({{r.begin, *mid, r.depth + 1}, {}});
+  top.push_back({{*mid, r.end, r.depth + 1}, {}});
+}
+
+struct Layout {
+  std::vector<RsBvhNode>& nodes;
+  const std::vector<TopNode>& top;
+  std::vector<std::uint32_t>& job_offset;  // per job: where its nodes 1.. start (`next` at its root)
+  std::vector<std::uint32_t>& job_slot;    // per job: where its root goes
+  const std::vector<Subtree>& jobs;
+  std::uint32_t next = 1;
+  std::uint32_t leaves = 0;
+
+  // Writes top node i at `slot` and numbers what lies below it, as the serial build would.
+  void place(std::size_t i, std::uint32_t slot) {
+    const TopNode& t = top[i];
+    if (t.job >= 0) {
+      job_slot[t.job] = slot;
+      job_offset[t.job] = next;
+      next += static_cast<std::uint32_t>(jobs[t.job].nodes.size()) - 1;
+      return;
+    }
+    set_box(nodes[slot], t.bounds.bounds);
+    if (t.left < 0) {
+      nodes[slot].first = t.range.begin;
+      nodes[slot].count = t.range.count();
+      ++leaves;
+      return;
+    }
+    const std::uint32_t pair = next;
+    next += 2;
+    nodes[slot].first = pair;
+    nodes[slot].count = 0;
+    place(static_cast<std::size_t>(t.left), pair);
+    place(static_cast<std::size_t>(t.left) + 1, pair + 1);
+  }
+};
+
+// Copies a job's subtree into the tree: root at its slot, nodes 1.. from its offset on, children
+// references moved by the same offset.
+void copy_job(std::vector<RsBvhNode>& nodes, const Subtree& s, std::uint32_t slot, std::uint32_t offset) {
+  for (std::size_t k = 0; k < s.nodes.size(); ++k) {
+    RsBvhNode n = s.nodes[k];
+    if (n.count == 0) n.first = n.first - 1 + offset;
+    nodes[k == 0 ? slot : offset + static_cast<std::uint32_t>(k) - 1] = n;
+  }
+}
+
+std::vector<PrimRef> primitives_of(const Scene::Flat& tris, unsigned threads) {
+  std::vector<PrimRef> refs(tris.size());
+  for_each_chunk_on(threads, tris.size(), [&](std::size_t b, std::size_t e) {
+    for (std::size_t i = b; i < e; ++i) {
+      Box box;
+      box.grow(tris.v0[i].data());
+      box.grow(tris.v1[i].data());
+      box.grow(tris.v2[i].data());
+      PrimRef& r = refs[i];
+      for (int a = 0; a < 3; ++a) {
+        r.lo[a] = box.lo[a];
+        r.hi[a] = box.hi[a];
+      }
+      r.id = static_cast<std::uint32_t>(i);
+      r.pad = 0;
+    }
+  });
+  return refs;
 }
 
 // The triangles in leaf order (what the nodes' first/count index), with their original ids.
-std::vector<RsTriangle> leaf_ordered(const Scene::Flat& tris, const std::vector<std::uint32_t>& idx) {
-  std::vector<RsTriangle> out(idx.size());
-  for (std::size_t k = 0; k < idx.size(); ++k) {
-    const std::uint32_t t = idx[k];
-    RsTriangle& tri = out[k];
-    for (int a = 0; a < 3; ++a) {
-      tri.v0[a] = tris.v0[t][a];
-      tri.v1[a] = tris.v1[t][a];
-      tri.v2[a] = tris.v2[t][a];
+std::vector<RsTriangle> leaf_ordered(const Scene::Flat& tris, const std::vector<PrimRef>& refs, unsigned threads) {
+  std::vector<RsTriangle> out(refs.size());
+  for_each_chunk_on(threads, refs.size(), [&](std::size_t b, std::size_t e) {
+    for (std::size_t k = b; k < e; ++k) {
+      const std::uint32_t t = refs[k].id;
+      RsTriangle& tri = out[k];
+      for (int a = 0; a < 3; ++a) {
+        tri.v0[a] = tris.v0[t][a];
+        tri.v1[a] = tris.v1[t][a];
+        tri.v2[a] = tris.v2[t][a];
+      }
+      tri.id = t;
+      tri.pad0 = tri.pad1 = 0;
     }
-    tri.id = t;
-    tri.pad0 = tri.pad1 = 0;
-  }
+  });
   return out;
+}
+
+// Steps 1-3 of the file comment: the binary tree over refs, which it leaves in leaf order.
+void build_binary(Bvh& bvh, std::vector<PrimRef>& refs, unsigned threads, const BvhBuildOptions& opts) {
+  const std::uint32_t nbins = std::max<std::uint32_t>(2, opts.bins);
+  const auto n = static_cast<std::uint32_t>(refs.size());
+  const std::uint32_t job_size = threads > 1 ? std::max(kMinParallelPerThread * threads, n / (8 * threads)) : n;
+  std::vector<TopNode> top{{{0, n, 0}, {}}};
+  std::vector<std::size_t> job_roots;  // the top nodes that are jobs
+  for (std::size_t i = 0; i < top.size(); ++i) {
+    if (top[i].range.count() <= job_size) {
+      top[i].job = static_cast<std::int32_t>(job_roots.size());
+      job_roots.push_back(i);
+    } else {
+      top[i].bounds = bounds_of(refs, top[i].range.begin, top[i].range.end, threads);
+      split_top_node(refs, top, i, threads, nbins, opts);
+    }
+  }
+  // Largest jobs first, so that the last one to start is small (the threads finish together).
+  auto job_size_of = [&](std::size_t j) { return top[job_roots[j]].range.count(); };
+  std::vector<std::size_t> order(job_roots.size());
+  for (std::size_t j = 0; j < order.size(); ++j) order[j] = j;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) { return job_size_of(x) > job_size_of(y); });
+  std::vector<Subtree> jobs(job_roots.size());
+  for_each_job(threads, order.size(), [&](std::size_t k) {
+    const TopNode& root = top[job_roots[order[k]]];
+    jobs[order[k]] = build_subtree(refs, root.range, nbins, opts);
+  });
+  std::vector<std::uint32_t> offset(jobs.size()), slot(jobs.size());
+  std::size_t total = 0;
+  for (const TopNode& t : top) total += t.job >= 0 ? jobs[t.job].nodes.size() : 1;
+  bvh.nodes.assign(total, RsBvhNode{});
+  Layout layout{bvh.nodes, top, offset, slot, jobs};
+  layout.place(0, 0);
+  bvh.leaf_count = layout.leaves;
+  for (const TopNode& t : top) bvh.depth = std::max(bvh.depth, t.range.depth);
+  for (const Subtree& s : jobs) {
+    bvh.leaf_count += s.leaves;
+    bvh.depth = std::max(bvh.depth, s.depth);
+  }
+  for_each_job(threads, jobs.size(), [&](std::size_t j) { copy_job(bvh.nodes, jobs[j], slot[j], offset[j]); });
 }
 
 }  // namespace
@@ -189,64 +332,14 @@ Bvh build_bvh(const Scene::Flat& tris, const BvhBuildOptions& opts) {
   const std::size_t n = tris.size();
   if (n == 0) throw Error("cannot build a BVH over a scene with no triangles");
   if (n >= 0xFFFFFFF0u) throw Error("scene has too many triangles for 32-bit indices");
-  Primitives p = primitives_of(tris);
-  SahBinner binner(opts.bins);
-
+  const unsigned threads = opts.threads > 0 ? opts.threads : host_threads();
+  std::vector<PrimRef> refs = primitives_of(tris, threads);
   Bvh bvh;
-  bvh.nodes.reserve(2 * n / std::max<std::uint32_t>(1, opts.max_leaf_size / 2) + 1);
-  bvh.nodes.push_back({});
-  std::vector<Task> stack{{0, 0, static_cast<std::uint32_t>(n), 0}};
-  while (!stack.empty()) {
-    Task task = stack.back();
-    stack.pop_back();
-    const std::uint32_t count = task.end - task.begin;
-    Box bounds, cbounds;
-    for (std::uint32_t i = task.begin; i < task.end; ++i) {
-      bounds.grow(p.boxes[p.idx[i]]);
-      cbounds.grow(p.centroids[p.idx[i]].data());
-    }
-    RsBvhNode& node = bvh.nodes[task.node];
-    for (int a = 0; a < 3; ++a) {
-      node.bmin[a] = bounds.lo[a];
-      node.bmax[a] = bounds.hi[a];
-    }
-    bvh.depth = std::max(bvh.depth, task.depth);
-    auto make_leaf = [&] {
-      RsBvhNode& leaf = bvh.nodes[task.node];
-      leaf.first = task.begin;
-      leaf.count = count;
-      ++bvh.leaf_count;
-    };
-    if (count == 1) {
-      make_leaf();
-      continue;
-    }
-    const Split split = task.depth < kMaxSahDepth ? binner.best(p, task, cbounds) : Split{};
-    std::uint32_t mid = 0;
-    const float parent_area = bounds.area();
-    const float leaf_cost = opts.intersection_cost * static_cast<float>(count);
-    const float split_cost = split.axis >= 0 && parent_area > 0.0f
-                                 ? opts.traversal_cost + opts.intersection_cost * split.cost / parent_area
-                                 : 3.0e38f;
-    if (split.axis >= 0 && (split_cost < leaf_cost || count > opts.max_leaf_size)) {
-      mid = partition_at(p, task, cbounds, split, binner.bins());
-    } else if (count <= opts.max_leaf_size) {
-      make_leaf();
-      continue;
-    }
-    if (mid <= task.begin || mid >= task.end) mid = median_split(p, task, cbounds);
-    const auto left = static_cast<std::uint32_t>(bvh.nodes.size());
-    bvh.nodes.push_back({});
-    bvh.nodes.push_back({});
-    bvh.nodes[task.node].first = left;
-    bvh.nodes[task.node].count = 0;
-    // Right first on the stack so the left subtree is laid out first (depth-first order).
-    stack.push_back({left + 1, mid, task.end, task.depth + 1});
-    stack.push_back({left, task.begin, mid, task.depth + 1});
-  }
-  bvh.triangles = leaf_ordered(tris, p.idx);
+  build_binary(bvh, refs, threads, opts);
+  bvh.triangles = leaf_ordered(tris, refs, threads);
   bvh.wide = collapse_to_wide(bvh);
   bvh.build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  bvh.sah_cost = sah_cost(bvh, opts);
   return bvh;
 }
 

@@ -17,6 +17,8 @@ struct BvhBuildOptions {
   std::uint32_t max_leaf_size = 8;   // a leaf never holds more (forced split)
   float traversal_cost = 1.0f;       // SAH constants (relative to one triangle test)
   float intersection_cost = 1.0f;
+  // Build threads; 0: host_threads(). The tree is the same, bit for bit, for every count.
+  unsigned threads = 0;
 };
 
 // The 4-wide form the trace kernels traverse (RsWideNode / RsTriPacket in cl/bvh_layout.h), collapsed
@@ -47,14 +49,23 @@ struct Bvh {
   std::uint32_t leaf_count = 0;
   WideBvh wide;                       // the same tree, 4-wide (what the trace kernels read)
   double build_ms = 0.0;              // binned SAH build + collapse to 4-wide
+  double sah_cost = 0.0;              // of the binary tree (sah_cost below), the build's figure of quality
   Aabb bounds() const;                // the root's box
   bool is_leaf(std::uint32_t n) const { return nodes[n].count > 0; }
 };
 
 // Binned SAH build (Wald 2007, "On fast Construction of SAH-based Bounding Volume Hierarchies")
-// over the flattened triangles. Deterministic: the same triangles give the same tree.
-// Depth stays below RS_STACK_SIZE: past kMaxSahDepth levels, nodes split at the object median.
+// over the flattened triangles, on opts.threads threads (host/bvh/build_sah.cpp says how).
+// Deterministic: the same triangles give the same tree, nodes and triangle order, bit for bit,
+// whatever the thread count. Depth stays below RS_STACK_SIZE: past kMaxSahDepth levels, nodes
+// split at the object median.
 Bvh build_bvh(const Scene::Flat& tris, const BvhBuildOptions& opts = {});
+
+// The tree's SAH cost (MacDonald and Booth 1990; the cost the builder minimises greedily, Wald
+// 2007): over the root's surface area A, the sum of traversal_cost · A(n) over inner nodes and
+// intersection_cost · count · A(n) over leaves, in double, in node order. The expected cost of a
+// random ray through the root in units of one triangle test; lower is a better tree.
+double sah_cost(const Bvh& bvh, const BvhBuildOptions& opts = {});
 
 // Collapses a binary BVH to the 4-wide layout. Throws an Error if a leaf needs more than four
 // packets (max_leaf_size > 16) or the stack bound RS_WIDE_STACK_SIZE could be exceeded.

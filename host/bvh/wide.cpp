@@ -26,6 +26,11 @@ class Collapser {
   explicit Collapser(const Bvh& bvh) : bvh_(bvh), sub_(bvh) {}
 
   WideBvh run() {
+    // Room for the largest possible tree up front (at most a wide node per binary node, a packet
+    // per four triangles plus one per leaf), so that growing never copies the packets nor faults
+    // their pages in twice. Untouched room costs address space only.
+    out_.nodes.reserve(bvh_.nodes.size() + 1);
+    out_.packets.reserve(bvh_.triangles.size() / 4 + std::min<std::size_t>(bvh_.leaf_count, bvh_.nodes.size()) + 1);
     wide_tree::collapse_from_root<4>(
         bvh_, out_, RS_WIDE_STACK_SIZE,
         [&](const std::vector<std::uint32_t>& slots, std::uint32_t depth) { make_node(slots, depth); },

@@ -1,0 +1,219 @@
+#pragma once
+// The binned SAH split search (Wald 2007, "On fast Construction of SAH-based Bounding Volume
+// Hierarchies"): the best split plane among `bins` equal bins of a node's centroid bounds on each
+// axis. Used by the builder (host/bvh/build_sah.cpp) only; inline because its loops are the build.
+//
+// Bins of disjoint parts of a node merge exactly (boxes by min/max, counts by sums), so a node
+// binned by several threads, each over its own chunk, gets the very bins, and the very split, of
+// one thread binning it all: the parallel build stays bit-for-bit the serial one.
+#include <emmintrin.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <vector>
+
+namespace raysort::sah {
+
+struct Box {
+  float lo[3] = {3.0e38f, 3.0e38f, 3.0e38f};
+  float hi[3] = {-3.0e38f, -3.0e38f, -3.0e38f};
+  void grow(const float* p) {
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::min(lo[a], p[a]);
+      hi[a] = std::max(hi[a], p[a]);
+    }
+  }
+  void grow(const float* l, const float* h) {
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::min(lo[a], l[a]);
+      hi[a] = std::max(hi[a], h[a]);
+    }
+  }
+  void grow(const Box& b) { grow(b.lo, b.hi); }
+  float area() const {
+    float e0 = hi[0] - lo[0], e1 = hi[1] - lo[1], e2 = hi[2] - lo[2];
+    if (e0 < 0.0f) return 0.0f;
+    return 2.0f * (e0 * e1 + e1 * e2 + e2 * e0);
+  }
+};
+
+// One triangle as the builder moves it: its box and its index in the scene's flat list. The
+// builder partitions these 32-byte records themselves rather than indices to them, so every pass
+// over a node reads memory in order instead of gathering boxes from all over the scene.
+struct PrimRef {
+  float lo[3];
+  std::uint32_t id;
+  float hi[3];
+  std::uint32_t pad;
+  // The same arithmetic the builder always used for a centroid: (box.lo + box.hi) / 2.
+  float centroid(int a) const { return (lo[a] + hi[a]) * 0.5f; }
+};
+
+// The builder's inner loops on SSE (x86-64's baseline; no -march): a box is two float4 (x, y, z and
+// an unused lane). Exactly the scalar arithmetic lane by lane: adds, multiplies and truncation are
+// IEEE single precision either way, and min/max take their operands in the order of std::min /
+// std::max (minps(a, b) = a < b ? a : b, so std::min(acc, p) = p < acc ? p : acc is minps(p, acc)),
+// so the bins, the splits and the tree are those of the scalar builder bit for bit.
+struct Box4 {
+  __m128 lo = _mm_set1_ps(3.0e38f);
+  __m128 hi = _mm_set1_ps(-3.0e38f);
+  void grow(__m128 l, __m128 h) {
+    lo = _mm_min_ps(l, lo);
+    hi = _mm_max_ps(h, hi);
+  }
+  void grow(const Box4& b) { grow(b.lo, b.hi); }
+  // Box::area() on the float4s: the same products, summed in the same order.
+  float area() const {
+    alignas(16) float e[4];
+    _mm_store_ps(e, _mm_sub_ps(hi, lo));
+    if (e[0] < 0.0f) return 0.0f;
+    return 2.0f * (e[0] * e[1] + e[1] * e[2] + e[2] * e[0]);
+  }
+  Box box() const {
+    alignas(16) float l[4], h[4];
+    _mm_store_ps(l, lo);
+    _mm_store_ps(h, hi);
+    Box b;
+    for (int a = 0; a < 3; ++a) b.lo[a] = l[a], b.hi[a] = h[a];
+    return b;
+  }
+};
+
+// A record's box as two float4, the fourth lanes (its id and padding) zeroed so that no lane ever
+// holds a denormal or NaN pattern.
+inline void load(const PrimRef& r, __m128& lo, __m128& hi) {
+  const __m128 xyz = _mm_castsi128_ps(_mm_set_epi32(0, -1, -1, -1));
+  lo = _mm_and_ps(_mm_loadu_ps(r.lo), xyz);
+  hi = _mm_and_ps(_mm_loadu_ps(r.hi), xyz);
+}
+inline __m128 centroid(__m128 lo, __m128 hi) { return _mm_mul_ps(_mm_add_ps(lo, hi), _mm_set1_ps(0.5f)); }
+
+// A node's boxes: of its triangles, and of their centroids (what the bins divide).
+struct NodeBounds {
+  Box bounds, centroids;
+  void add(const PrimRef* begin, const PrimRef* end) {
+    Box4 b, c;
+    for (const PrimRef* r = begin; r != end; ++r) {
+      __m128 lo, hi;
+      load(*r, lo, hi);
+      b.grow(lo, hi);
+      const __m128 m = centroid(lo, hi);
+      c.grow(m, m);
+    }
+    merge({b.box(), c.box()});
+  }
+  void merge(const NodeBounds& o) {
+    bounds.grow(o.bounds);
+    centroids.grow(o.centroids);
+  }
+};
+
+// Which bin a centroid falls in, per axis: floor((c − lo) · bins / extent), clamped. An axis with no
+// extent has scale 0 and no bins. The split search and the partition both use this one mapping,
+// so a triangle lands on the side its bin was counted on. Coordinates are finite (the scene
+// loader refuses others), so (c − lo) · scale lies in [0, bins · (1 + ε)].
+struct BinMap {
+  float lo[3];
+  float scale[3];
+  std::uint32_t bins;
+  BinMap(const Box& centroids, std::uint32_t nbins) : bins(nbins) {
+    for (int a = 0; a < 3; ++a) {
+      const float ext = centroids.hi[a] - centroids.lo[a];
+      lo[a] = centroids.lo[a];
+      scale[a] = ext > 0.0f ? static_cast<float>(nbins) / ext : 0.0f;
+    }
+  }
+  std::uint32_t bin(const PrimRef& r, int a) const {
+    const auto b = static_cast<std::uint32_t>((r.centroid(a) - lo[a]) * scale[a]);
+    return std::min(b, bins - 1);
+  }
+  // bin() on all three axes at once.
+  void bins3(__m128 lo4, __m128 hi4, std::uint32_t out[4]) const {
+    const __m128 x = _mm_mul_ps(_mm_sub_ps(centroid(lo4, hi4), _mm_set_ps(0.0f, lo[2], lo[1], lo[0])),
+                                _mm_set_ps(0.0f, scale[2], scale[1], scale[0]));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(out), _mm_cvttps_epi32(x));
+    for (int a = 0; a < 3; ++a) out[a] = std::min(out[a], bins - 1);
+  }
+};
+
+struct Split {
+  int axis = -1;  // -1: no SAH split found
+  std::uint32_t bin = 0;
+  float cost = 3.0e38f;  // left area · count + right area · count
+};
+
+// The bins of one node (or of one chunk of it), all three axes.
+class SahBins {
+ public:
+  explicit SahBins(std::uint32_t bins) : nbins_(bins), box_(3 * nbins_), count_(3 * nbins_), right_area_(nbins_) {}
+  SahBins(const SahBins&) = default;
+  std::uint32_t bins() const { return nbins_; }
+
+  void clear() {
+    std::fill(box_.begin(), box_.end(), Box4{});
+    std::fill(count_.begin(), count_.end(), 0u);
+  }
+  void add(const PrimRef* begin, const PrimRef* end, const BinMap& map) {
+    alignas(16) std::uint32_t b[4];
+    for (const PrimRef* r = begin; r != end; ++r) {
+      __m128 lo, hi;
+      load(*r, lo, hi);
+      map.bins3(lo, hi, b);
+      for (std::uint32_t a = 0; a < 3; ++a) {
+        box_[a * nbins_ + b[a]].grow(lo, hi);
+        ++count_[a * nbins_ + b[a]];
+      }
+    }
+  }
+  void merge(const SahBins& o) {
+    for (std::size_t i = 0; i < box_.size(); ++i) {
+      box_[i].grow(o.box_[i]);
+      count_[i] += o.count_[i];
+    }
+  }
+
+  // The cheapest split over all axes (the first found among equal costs: axis x before y before
+  // z, lower bins first), or none when every axis has no extent or leaves one side empty.
+  Split best(const BinMap& map) {
+    Split best;
+    for (int a = 0; a < 3; ++a) {
+      if (map.scale[a] == 0.0f) continue;
+      const Box4* box = &box_[a * nbins_];
+      const std::uint32_t* count = &count_[a * nbins_];
+      // An empty bin changes neither box nor count: right_area_ repeats its neighbour's, and the
+      // plane after it costs what the plane before it cost (not less, so never a new best). Small
+      // nodes, most of the tree, leave most bins empty.
+      Box4 acc;
+      float acc_area = 0.0f;
+      for (std::uint32_t b = nbins_ - 1; b > 0; --b) {
+        if (count[b] != 0) {
+          acc.grow(box[b]);
+          acc_area = acc.area();
+        }
+        right_area_[b] = acc_area;
+      }
+      std::uint32_t total = 0;
+      for (std::uint32_t b = 0; b < nbins_; ++b) total += count[b];
+      Box4 left;
+      std::uint32_t left_n = 0;
+      for (std::uint32_t b = 0; b + 1 < nbins_; ++b) {
+        if (count[b] == 0) continue;
+        left.grow(box[b]);
+        left_n += count[b];
+        const std::uint32_t right_n = total - left_n;
+        if (left_n == 0 || right_n == 0) continue;
+        const float cost = left.area() * static_cast<float>(left_n) + right_area_[b + 1] * static_cast<float>(right_n);
+        if (cost < best.cost) best = {a, b, cost};
+      }
+    }
+    return best;
+  }
+
+ private:
+  std::uint32_t nbins_;
+  std::vector<Box4> box_;
+  std::vector<std::uint32_t> count_;
+  std::vector<float> right_area_;
+};
+
+}  // namespace raysort::sah
