@@ -86,7 +86,7 @@ const cl::Buffer& BatchBench::permuted_rays() {
   return permuted_;
 }
 
-std::size_t BatchBench::max_shared_groups() const {
+std::size_t BatchBench::groups_per_round() const {
   const std::uint64_t per_group = std::max<std::uint64_t>(1, std::uint64_t{n_} * sizeof(std::uint32_t));
   const DeviceInfo& d = s_.rt.info();
   // A CPU device's buffers are host memory (render/frame_memory.h says why its reported size is no
@@ -95,7 +95,7 @@ std::size_t BatchBench::max_shared_groups() const {
   const std::uint64_t spare = d.type == "CPU" ? available_host_memory() / 4
                               : d.global_mem_bytes > frame ? (d.global_mem_bytes - frame) / 2
                                                            : 0;
-  return static_cast<std::size_t>(std::max<std::uint64_t>(1, spare / per_group));
+  return static_cast<std::size_t>(std::clamp<std::uint64_t>(spare / per_group, 1, kGroupsPerRound));
 }
 
 std::vector<Arm> BatchBench::common_arms() {
@@ -512,8 +512,9 @@ std::vector<CellRecord> BatchBench::measure_batch(const std::vector<std::vector<
     else
       fail(g.cells, "failed", g.error);
   }
-  // Chunks of groups whose orders fit the device together; the first one holds the NoSort cell.
-  const std::size_t chunk = max_shared_groups();
+  // Chunks of groups that share rounds (groups_per_round says why a bound); the first one holds the
+  // NoSort cell.
+  const std::size_t chunk = groups_per_round();
   bool with_nosort = nosort.has_value();
   for (std::size_t begin = 0; begin < ready.size() || with_nosort; begin += chunk) {
     const std::vector<SortedGroup*> part(ready.begin() + static_cast<std::ptrdiff_t>(std::min(begin, ready.size())),

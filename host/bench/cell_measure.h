@@ -76,13 +76,21 @@ class BatchBench {
   // Every cell of the batch in shared rounds: `groups` holds, in the plan's order, the NoSort cell
   // (encoder nosort, alone in its group) and the cells of each encoder × key length × top-k, one per
   // access mode (identity fields set). Returns the cells with their figures, in the same order.
-  // Groups whose sorted orders do not fit the device together (max_shared_groups) share rounds in
-  // consecutive chunks, each with the common arms.
+  // The sorted groups share rounds in consecutive chunks of at most groups_per_round(), each chunk
+  // with the common arms (the first one with the NoSort cell).
   std::vector<CellRecord> measure_batch(const std::vector<std::vector<CellRecord>>& groups,
                                         const ProtocolSettings& settings, const PrepareEncoder& prepare);
-  // How many sorted groups' orders (4 bytes per ray each) fit beside the frame: half the device
-  // memory the frame estimate leaves, at least 1.
-  std::size_t max_shared_groups() const;
+  // A round's sorted groups: at most kGroupsPerRound, and as many orders (4 bytes per ray each) as
+  // fit beside the frame (half the device memory the frame estimate leaves; on a CPU device a
+  // quarter of the host's free memory), at least 1.
+  //
+  // Why a bound at all: a paired figure cancels the drift of the machine between the two arms it
+  // compares, and two arms of a round lie a third of the round apart on average; a round of every
+  // group of a batch (47 in paper-1spp's sibenik bounce1) spans minutes. Eight groups keep a round
+  // within a few times an unshared cell's (encode + sort + 3 to 4 traces) while the NoSort and A/A
+  // traces fall from 2 per group to 2 per 8 (docs/measurement.md, "Shared rounds").
+  static constexpr std::size_t kGroupsPerRound = 8;
+  std::size_t groups_per_round() const;
 
  private:
   // One encoder × key length × top-k of the batch: its cells (one per access mode), its own order
