@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "runtime/runtime.h"
+#include "sort/host_lsd_sort.h"
 #include "sort/permute.h"
 #include "sort/radix_sort.h"
 
@@ -253,6 +254,37 @@ TEST(Sort, DeviceBuffersAreSortedInPlaceAndReused) {
     EXPECT_TRUE(std::equal(v.begin(), v.end(), got_v.begin())) << n;
     EXPECT_EQ(got_k[capacity - 1], 0xDEADBEEFu) << "wrote past count";
   }
+}
+
+// sortbench's host anchor (host/sort/host_lsd_sort.h) is checked like ours: std::stable_sort's
+// keys and values, for every shape and width, on 1, 2 and 3 threads (chunk boundaries move).
+TEST(HostLsdSort, MatchesStableSort) {
+  for (unsigned bits : kKeyBits)
+    for (Shape shape : kShapes)
+      for (std::size_t n : {std::size_t(0), std::size_t(1), std::size_t(33), std::size_t(65537),
+                            std::size_t(300007)})
+        for (unsigned threads : {1u, 2u, 3u}) {
+          const std::string what = fmt::format("host LSD, {} threads: {} keys of {} bits, n = {}", threads, name(shape),
+                                               bits, n);
+          auto keys64 = make_keys(shape, n, bits, 3000 * bits + n + static_cast<int>(shape));
+          std::vector<std::uint32_t> values(n), expected_values(n);
+          std::iota(values.begin(), values.end(), 0u);
+          std::iota(expected_values.begin(), expected_values.end(), 0u);
+          if (bits > 32) {
+            std::vector<std::uint64_t> keys = keys64, expected = keys64;
+            HostLsdScratch<std::uint64_t> scratch;
+            reference_sort(expected, expected_values, {bits, 0});
+            host_lsd_sort(keys, values, bits, scratch, threads);
+            EXPECT_TRUE(keys == expected) << what;
+          } else {
+            std::vector<std::uint32_t> keys(keys64.begin(), keys64.end()), expected = keys;
+            HostLsdScratch<std::uint32_t> scratch;
+            reference_sort(expected, expected_values, {bits, 0});
+            host_lsd_sort(keys, values, bits, scratch, threads);
+            EXPECT_TRUE(keys == expected) << what;
+          }
+          EXPECT_TRUE(values == expected_values) << what << ": values differ (not stable?)";
+        }
 }
 
 TEST(Sort, RejectsBadInput) {

@@ -1,6 +1,7 @@
 // raysort sortbench: throughput of our radix sort (host/sort) against the host's std::stable_sort
-// and std::sort, Boost.Compute's sort_by_key on the same device (when its headers are installed),
-// and the device's copy-bandwidth bound. Device times come from profiling events, medians over
+// and std::sort, a plain LSD radix sort on the host's threads (host/sort/host_lsd_sort.h, the
+// anchor a user could write in 60 lines), Boost.Compute's sort_by_key on the same device (when its
+// headers are installed), and the device's copy-bandwidth bound. Device times come from profiling events, medians over
 // --reps after a warm-up; program builds and first launches are reported apart.
 #include <fmt/format.h>
 
@@ -16,7 +17,9 @@
 #include "app/commands.h"
 #include "app/options.h"
 #include "runtime/runtime.h"
+#include "sort/host_lsd_sort.h"
 #include "sort/radix_sort.h"
+#include "util/parallel.h"
 
 #if __has_include(<boost/compute/algorithm/sort_by_key.hpp>)
 #include <boost/compute/algorithm/sort_by_key.hpp>
@@ -37,6 +40,7 @@ struct Options {
   int reps = 10;
   int ref_reps = 3;
   bool large = true;
+  std::vector<unsigned> bits = {32, 64};
 };
 
 double median(std::vector<double> v) {
@@ -78,8 +82,9 @@ struct Row {
   unsigned bits = 0;
   std::string keys;
   SortStats stats;
-  double ours = 0, ours_ms = 0, bound = 0, stable = 0, unstable = 0, boost = -1, boost_first_ms = 0;
-  bool ok = false;
+  double ours = 0, ours_ms = 0, bound = 0, stable = 0, unstable = 0, host_lsd = 0, boost = -1, boost_first_ms = 0;
+  bool ok = false;      // ours equals std::stable_sort
+  bool lsd_ok = false;  // the host LSD anchor equals std::stable_sort
 };
 
 template <class Key>
@@ -112,6 +117,21 @@ Row bench_case(Runtime& rt, RadixSort& sorter, double bandwidth, std::size_t n, 
   const double nk = static_cast<double>(n) * 1e-3;  // keys per ms -> Mkeys/s
   row.stable = nk / median(stable_ms);
   row.unstable = nk / median(unstable_ms);
+
+  // The host LSD anchor on the same keys: separate key and value arrays, as ours sorts them.
+  std::vector<double> lsd_ms;
+  HostLsdScratch<Key> scratch;
+  for (int r = -1; r < opt.ref_reps; ++r) {  // rep -1: touches the scratch pages, not timed
+    std::vector<Key> k = keys;
+    std::vector<std::uint32_t> v = values;
+    const double ms = wall_ms([&] { host_lsd_sort(k, v, bits, scratch); });
+    if (r >= 0) lsd_ms.push_back(ms);
+    if (r == -1) {
+      row.lsd_ok = true;
+      for (std::size_t i = 0; i < n && row.lsd_ok; ++i) row.lsd_ok = k[i] == expected[i].key && v[i] == expected[i].value;
+    }
+  }
+  row.host_lsd = nk / median(lsd_ms);
 
   // Ours: the input kept pristine on the device, copied into the sorted buffers before each rep.
   cl::Buffer src_keys = rt.upload("bench keys", keys), src_values = rt.upload("bench values", values);
@@ -188,27 +208,30 @@ void run_sortbench(const Options& opt) {
   fmt::print("copy bandwidth (clEnqueueCopyBuffer, read + write): {:.1f} GB/s\n", bandwidth * 1e-9);
   fmt::print("ours: median of {} reps, profiling events; host sorts and Boost.Compute: median of {} reps, wall clock\n",
              opt.reps, opt.ref_reps);
+  fmt::print("host LSD: 8-bit digits, stable, {} threads (host/sort/host_lsd_sort.h)\n", host_threads());
 #if !RAYSORT_HAVE_BOOST_COMPUTE
   fmt::print("Boost.Compute: headers not installed (libboost-dev), column left empty\n");
 #endif
   fmt::print("\n| pairs | key bits | keys | passes run/skipped | ours Mkeys/s | ours ms | copy bound Mkeys/s | "
-             "% of bound | std::stable_sort | std::sort | Boost.Compute | x stable_sort | x Boost | ok |\n");
-  fmt::print("|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n");
+             "% of bound | std::stable_sort | std::sort | host LSD | Boost.Compute | x stable_sort | x host LSD | x Boost | ok |\n");
+  fmt::print("|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n");
   std::vector<std::size_t> sizes = {2073600};
   if (opt.large) sizes.push_back(16u << 20);
   std::vector<Row> rows;
   bool all_ok = true;
   for (std::size_t n : sizes)
-    for (unsigned bits : {32u, 64u})
+    for (unsigned bits : opt.bits)
       for (bool few : {false, true}) {
         Row r = bits == 64 ? bench_case<std::uint64_t>(rt, sorter, bandwidth, n, bits, few, opt)
                            : bench_case<std::uint32_t>(rt, sorter, bandwidth, n, bits, few, opt);
-        all_ok = all_ok && r.ok;
+        all_ok = all_ok && r.ok && r.lsd_ok;
         auto boost = [&](double v) { return r.boost < 0 ? std::string("-") : fmt::format("{:.1f}", v); };
-        fmt::print("| {} | {} | {} | {}/{} | {:.1f} | {:.2f} | {:.1f} | {:.0f}% | {:.1f} | {:.1f} | {} | {:.1f} | {} | {} |\n",
-                   r.n, r.bits, r.keys, r.stats.passes_run, r.stats.passes_skipped, r.ours, r.ours_ms, r.bound,
-                   100.0 * r.ours / r.bound, r.stable, r.unstable, boost(r.boost), r.ours / r.stable,
-                   boost(r.ours / r.boost), r.ok ? "yes" : "NO");
+        fmt::print(
+            "| {} | {} | {} | {}/{} | {:.1f} | {:.2f} | {:.1f} | {:.0f}% | {:.1f} | {:.1f} | {:.1f} | {} | {:.1f} | {:.2f} | {} "
+            "| {} |\n",
+            r.n, r.bits, r.keys, r.stats.passes_run, r.stats.passes_skipped, r.ours, r.ours_ms, r.bound,
+            100.0 * r.ours / r.bound, r.stable, r.unstable, r.host_lsd, boost(r.boost), r.ours / r.stable,
+            r.ours / r.host_lsd, boost(r.ours / r.boost), !r.ok ? "NO" : r.lsd_ok ? "yes" : "NO (host LSD)");
         std::fflush(stdout);
         rows.push_back(r);
       }
@@ -218,7 +241,7 @@ void run_sortbench(const Options& opt) {
   fmt::print("\n");
 #endif
   if (!all_ok) {
-    fmt::print("FAILED: a sorted result differs from std::stable_sort\n");
+    fmt::print("FAILED: a sorted result (ours or the host LSD anchor) differs from std::stable_sort\n");
     set_command_exit_code(1);
   }
 }
@@ -233,6 +256,9 @@ void register_sortbench_command(CLI::App& app) {
   whole_number(cmd->add_option("--ref-reps", opt.ref_reps, "repetitions of the host sorts and Boost.Compute per case"), 1,
                100);
   cmd->add_flag("!--no-large", opt.large, "skip the 16 M pair cases");
+  cmd->add_option("--bits", opt.bits, "key widths to run, comma-separated: 32, 64 or both (default both)")
+      ->delimiter(',')
+      ->check(CLI::IsMember({32u, 64u}));
   cmd->callback([] { run_sortbench(opt); });
 }
 
