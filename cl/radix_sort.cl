@@ -338,4 +338,108 @@ __kernel void rs_bucket_sort(__global rs_key* keys_a, __global uint* values_a, _
   }
   rs_bucket_lsd(keys_a, values_a, keys_b, values_b, begin, end, 0, np, shifts, masks, hist);
 }
+
+/* The sort that stops at warp granularity (paper, section "Application in Faster Tracing
+ * Kernels": the order of rays inside one warp does not change how the warp traces, so a sort may
+ * "terminate bucket sorting early"). Its order, exactly: a most-significant-digit-first bucket
+ * sort by 8-bit digits (RS_RADIX_BITS == 8) that splits a range of pairs by its next digit only
+ * while the range holds more than `group` pairs (32: a warp); a range of `group` pairs or fewer,
+ * or one with no digit left, keeps its input order. So the keys are in order except inside runs
+ * of at most `group` pairs that share every digit above where their range stopped, and every
+ * pair lies fewer than `group` places from where the full sort puts it. Digits that
+ * are the same in every key split nothing and are stepped over (`varying`), as in the full sort.
+ *
+ * After the global stable pass on the top varying digit (rs_count, rs_scan, rs_scatter: keys ->
+ * keys_a), one work-item per top-digit bucket walks the bucket's ranges depth first. A range
+ * that splits is scattered by its digit into the other buffer (the same positions), so its
+ * sub-ranges lie in a or b by depth; a range that stops is copied where the result goes, keys_b
+ * (the caller's buffers). The walk keeps, per depth, the scanned bounds of the split range's
+ * sub-ranges and the next one to visit. lo: the lowest sorted bit; digit p covers
+ * [lo + 8 p, lo + 8 p + 8) below hi_bit. */
+#if RS_RADIX_BITS == 8
+#define RS_WARP_DEPTH ((RS_KEY_BITS + 7) / 8)
+
+/* The varying digit (bit set in pass_mask) below pass p; RS_WARP_DEPTH when none is. */
+static inline uint rs_warp_below(uint p, uint pass_mask) {
+  while (p > 0 && !((pass_mask >> (p - 1)) & 1u)) --p;
+  return p > 0 ? p - 1 : RS_WARP_DEPTH;
+}
+
+/* Copies [begin, end) from src to dst (a range that stops where it stands). */
+static inline void rs_warp_copy(__global const rs_key* restrict src_k, __global const uint* restrict src_v,
+                                __global rs_key* restrict dst_k, __global uint* restrict dst_v, uint begin, uint end) {
+  for (uint i = begin; i < end; ++i) {
+    dst_k[i] = src_k[i];
+    dst_v[i] = src_v[i];
+  }
+}
+
+/* Splits [begin, end) by the digit at `shift`: bounds[0 .. RS_RADIX] become the sub-ranges'
+ * limits and the pairs move stably from src to dst. */
+static inline void rs_warp_split(__global const rs_key* restrict src_k, __global const uint* restrict src_v,
+                                 __global rs_key* restrict dst_k, __global uint* restrict dst_v, uint begin, uint end,
+                                 uint shift, uint mask, __local uint* restrict bounds, __local uint* restrict position) {
+  for (uint d = 0; d < RS_RADIX; ++d) position[d] = 0;
+  for (uint i = begin; i < end; ++i) position[rs_digit(src_k[i], shift, mask)] += 1u;
+  uint running = begin;
+  for (uint d = 0; d < RS_RADIX; ++d) {
+    const uint c = position[d];
+    bounds[d] = running;
+    position[d] = running;
+    running += c;
+  }
+  bounds[RS_RADIX] = end;
+  rs_bucket_pass(src_k, src_v, dst_k, dst_v, begin, end, shift, mask, position);
+}
+
+__kernel void rs_warp_sort(__global rs_key* keys_a, __global uint* values_a, __global rs_key* keys_b,
+                           __global uint* values_b, uint n, uint tiles, __global const uint* restrict offsets,
+                           uint lo, uint hi_bit, uint top_pass, uint pass_mask, uint group) {
+  __local uint bounds[RS_WARP_DEPTH * (RS_RADIX + 1)]; /* per depth: the split range's sub-range limits */
+  __local uint position[RS_RADIX];
+  uint next[RS_WARP_DEPTH];   /* per depth: the sub-range to visit next */
+  uint pass_at[RS_WARP_DEPTH]; /* per depth: the digit that split it */
+  const uint d = get_group_id(0);
+  const uint begin = offsets[d * tiles];
+  const uint end = d + 1 < RS_RADIX ? offsets[(d + 1) * tiles] : n;
+  uint pass = rs_warp_below(top_pass, pass_mask);
+  if (end - begin <= group || pass == RS_WARP_DEPTH) {
+    rs_warp_copy(keys_a, values_a, keys_b, values_b, begin, end);
+    return;
+  }
+  /* Depth k's sub-ranges lie in b when k is even (the bucket, depth -1, lies in a). */
+  uint depth = 0;
+  uint shift = lo + pass * 8u;
+  rs_warp_split(keys_a, values_a, keys_b, values_b, begin, end, shift, rs_mask(shift, hi_bit), bounds, position);
+  next[0] = 0;
+  pass_at[0] = pass;
+  for (;;) {
+    if (next[depth] == RS_RADIX) {
+      if (depth == 0) break;
+      --depth;
+      continue;
+    }
+    __local uint* b = bounds + depth * (RS_RADIX + 1);
+    const uint sub = next[depth]++;
+    const uint sb = b[sub], se = b[sub + 1];
+    if (se == sb) continue;
+    const bool in_b = (depth & 1u) == 0;
+    pass = rs_warp_below(pass_at[depth], pass_mask);
+    if (se - sb <= group || pass == RS_WARP_DEPTH) {
+      if (!in_b) rs_warp_copy(keys_a, values_a, keys_b, values_b, sb, se);
+      continue;
+    }
+    ++depth;
+    shift = lo + pass * 8u;
+    if (in_b)
+      rs_warp_split(keys_b, values_b, keys_a, values_a, sb, se, shift, rs_mask(shift, hi_bit),
+                    bounds + depth * (RS_RADIX + 1), position);
+    else
+      rs_warp_split(keys_a, values_a, keys_b, values_b, sb, se, shift, rs_mask(shift, hi_bit),
+                    bounds + depth * (RS_RADIX + 1), position);
+    next[depth] = 0;
+    pass_at[depth] = pass;
+  }
+}
+#endif
 #endif
