@@ -351,10 +351,9 @@ __kernel void rs_bucket_sort(__global rs_key* keys_a, __global uint* values_a, _
  *
  * After the global stable pass on the top varying digit (rs_count, rs_scan, rs_scatter: keys ->
  * keys_a), one work-item per top-digit bucket walks the bucket's ranges depth first. A range
- * that splits is scattered by its digit into the other buffer (the same positions), so its
- * sub-ranges lie in a or b by depth; a range that stops is copied where the result goes, keys_b
- * (the caller's buffers). The walk keeps, per depth, the scanned bounds of the split range's
- * sub-ranges and the next one to visit. lo: the lowest sorted bit; digit p covers
+ * that splits is scattered by its digit from a into b (the same positions), where the result
+ * goes (the caller's buffers), so a range that stops is already in place. lo: the lowest sorted
+ * bit; digit p covers
  * [lo + 8 p, lo + 8 p + 8) below hi_bit. */
 #if RS_RADIX_BITS == 8
 #define RS_WARP_DEPTH ((RS_KEY_BITS + 7) / 8)
@@ -374,31 +373,30 @@ static inline void rs_warp_copy(__global const rs_key* restrict src_k, __global 
   }
 }
 
-/* Splits [begin, end) by the digit at `shift`: bounds[0 .. RS_RADIX] become the sub-ranges'
- * limits and the pairs move stably from src to dst. */
+/* Splits [begin, end) by the digit at `shift`: the pairs move stably from src to dst. */
 static inline void rs_warp_split(__global const rs_key* restrict src_k, __global const uint* restrict src_v,
                                  __global rs_key* restrict dst_k, __global uint* restrict dst_v, uint begin, uint end,
-                                 uint shift, uint mask, __local uint* restrict bounds, __local uint* restrict position) {
-  for (uint d = 0; d < RS_RADIX; ++d) position[d] = 0;
+                                 uint shift, uint mask, __local uint* restrict position) {
+  for (uint d = 0; d <= mask; ++d) position[d] = 0;
   for (uint i = begin; i < end; ++i) position[rs_digit(src_k[i], shift, mask)] += 1u;
   uint running = begin;
-  for (uint d = 0; d < RS_RADIX; ++d) {
+  for (uint d = 0; d <= mask; ++d) {
     const uint c = position[d];
-    bounds[d] = running;
     position[d] = running;
     running += c;
   }
-  bounds[RS_RADIX] = end;
   rs_bucket_pass(src_k, src_v, dst_k, dst_v, begin, end, shift, mask, position);
 }
 
 __kernel void rs_warp_sort(__global rs_key* keys_a, __global uint* values_a, __global rs_key* keys_b,
                            __global uint* values_b, uint n, uint tiles, __global const uint* restrict offsets,
                            uint lo, uint hi_bit, uint top_pass, uint pass_mask, uint group) {
-  __local uint bounds[RS_WARP_DEPTH * (RS_RADIX + 1)]; /* per depth: the split range's sub-range limits */
   __local uint position[RS_RADIX];
-  uint next[RS_WARP_DEPTH];   /* per depth: the sub-range to visit next */
-  uint pass_at[RS_WARP_DEPTH]; /* per depth: the digit that split it */
+  /* Per depth: the range split there, where its next sub-range starts, the digit that split it
+   * and the digit its sub-ranges split by. A sub-range is found by reading the split range's
+   * digits in order (it is sorted by them), so a small range costs its own length, not a walk
+   * over all RS_RADIX digit values. */
+  uint cursor[RS_WARP_DEPTH], stop[RS_WARP_DEPTH], split_pass[RS_WARP_DEPTH], child_pass[RS_WARP_DEPTH];
   const uint d = get_group_id(0);
   const uint begin = offsets[d * tiles];
   const uint end = d + 1 < RS_RADIX ? offsets[(d + 1) * tiles] : n;
@@ -407,38 +405,37 @@ __kernel void rs_warp_sort(__global rs_key* keys_a, __global uint* values_a, __g
     rs_warp_copy(keys_a, values_a, keys_b, values_b, begin, end);
     return;
   }
-  /* Depth k's sub-ranges lie in b when k is even (the bucket, depth -1, lies in a). */
+  /* Every split reads a and writes b, so every sub-range lies in b, where the result goes: a range
+   * that splits again is first copied aside into a (one sequential copy), one that stops stays. */
   uint depth = 0;
   uint shift = lo + pass * 8u;
-  rs_warp_split(keys_a, values_a, keys_b, values_b, begin, end, shift, rs_mask(shift, hi_bit), bounds, position);
-  next[0] = 0;
-  pass_at[0] = pass;
+  rs_warp_split(keys_a, values_a, keys_b, values_b, begin, end, shift, rs_mask(shift, hi_bit), position);
+  cursor[0] = begin;
+  stop[0] = end;
+  split_pass[0] = pass;
+  child_pass[0] = rs_warp_below(pass, pass_mask);
   for (;;) {
-    if (next[depth] == RS_RADIX) {
+    if (cursor[depth] == stop[depth]) {
       if (depth == 0) break;
       --depth;
       continue;
     }
-    __local uint* b = bounds + depth * (RS_RADIX + 1);
-    const uint sub = next[depth]++;
-    const uint sb = b[sub], se = b[sub + 1];
-    if (se == sb) continue;
-    const bool in_b = (depth & 1u) == 0;
-    pass = rs_warp_below(pass_at[depth], pass_mask);
-    if (se - sb <= group || pass == RS_WARP_DEPTH) {
-      if (!in_b) rs_warp_copy(keys_a, values_a, keys_b, values_b, sb, se);
-      continue;
-    }
+    const uint split_shift = lo + split_pass[depth] * 8u, split_mask = rs_mask(split_shift, hi_bit);
+    const uint sb = cursor[depth];
+    const uint digit = rs_digit(keys_b[sb], split_shift, split_mask);
+    uint se = sb + 1;
+    while (se < stop[depth] && rs_digit(keys_b[se], split_shift, split_mask) == digit) ++se;
+    cursor[depth] = se;
+    pass = child_pass[depth];
+    if (se - sb <= group || pass == RS_WARP_DEPTH) continue; /* stops: already in place */
+    rs_warp_copy(keys_b, values_b, keys_a, values_a, sb, se);
     ++depth;
     shift = lo + pass * 8u;
-    if (in_b)
-      rs_warp_split(keys_b, values_b, keys_a, values_a, sb, se, shift, rs_mask(shift, hi_bit),
-                    bounds + depth * (RS_RADIX + 1), position);
-    else
-      rs_warp_split(keys_a, values_a, keys_b, values_b, sb, se, shift, rs_mask(shift, hi_bit),
-                    bounds + depth * (RS_RADIX + 1), position);
-    next[depth] = 0;
-    pass_at[depth] = pass;
+    rs_warp_split(keys_a, values_a, keys_b, values_b, sb, se, shift, rs_mask(shift, hi_bit), position);
+    cursor[depth] = sb;
+    stop[depth] = se;
+    split_pass[depth] = pass;
+    child_pass[depth] = rs_warp_below(pass, pass_mask);
   }
 }
 #endif
