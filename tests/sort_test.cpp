@@ -5,9 +5,12 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <cstring>
 #include <cstdint>
+#include <fstream>
 #include <functional>
 #include <memory>
 #include <numeric>
@@ -19,6 +22,7 @@
 #include "sort/host_lsd_sort.h"
 #include "sort/permute.h"
 #include "sort/radix_sort.h"
+#include "test_util.h"
 
 namespace raysort {
 namespace {
@@ -269,6 +273,26 @@ TEST(Sort, WarpGranularTwinStopsAtGroupsOnly) {
     farthest = std::max(farthest, i > place[vwarp[i]] ? i - place[vwarp[i]] : place[vwarp[i]] - i);
   EXPECT_LT(farthest, 32u);
   EXPECT_GT(farthest, 0u);
+}
+
+// `run --warp-sort` sorts every cell with warp_group 32 (its cells still reproduce NoSort's hits)
+// and records it in meta.json's matrix; without it the entry is absent (sets written before resume).
+TEST(SortCli, RunWarpSortIsRecorded) {
+  for (bool warp : {true, false}) {
+    const std::string out = testing::temp_path(warp ? "warp_sort_set" : "full_sort_set");
+    std::vector<std::string> args = {"run",        "--scenes", "cornell", "--batches", "bounce1", "--encoders",
+                                     "hcc",        "--resolution", "64x36", "--reps", "3", "--max-time", "0.05",
+                                     "--out",      out};
+    if (warp) args.push_back("--warp-sort");
+    const testing::CliResult r = testing::run_cli(args);
+    ASSERT_EQ(r.code, 0) << r.err;
+    std::ifstream meta(out + "/meta.json");
+    const nlohmann::json m = nlohmann::json::parse(meta);
+    if (warp)
+      EXPECT_EQ(m.at("matrix").value("sort_warp_group", 0u), 32u);
+    else
+      EXPECT_FALSE(m.at("matrix").contains("sort_warp_group"));
+  }
 }
 
 TEST(Sort, SkipsPassesWhoseDigitIsConstant) {

@@ -379,6 +379,7 @@ std::vector<CellRecord> BatchBench::measure_sorted(std::vector<CellRecord> cells
     RadixSortConfig cfg;
     cfg.key_bits = bits;
     cfg.top_bits = top;
+    cfg.warp_group = s_.sort_warp_group;
     // The keys in generation order, for their fingerprint (untimed).
     s_.encoder.enqueue(encoder, bits, rays_, identity_, n_, keys, values_).wait();
     const std::vector<std::uint64_t> unsorted = DeviceEncoder::download_keys(s_.rt, keys, bits, n_, "keys");
