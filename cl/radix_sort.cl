@@ -338,4 +338,105 @@ __kernel void rs_bucket_sort(__global rs_key* keys_a, __global uint* values_a, _
   }
   rs_bucket_lsd(keys_a, values_a, keys_b, values_b, begin, end, 0, np, shifts, masks, hist);
 }
+
+/* The sort that stops at warp granularity (paper, section "Application in Faster Tracing
+ * Kernels": the order of rays inside one warp does not change how the warp traces, so a sort may
+ * "terminate bucket sorting early"). Its order, exactly: a most-significant-digit-first bucket
+ * sort by 8-bit digits (RS_RADIX_BITS == 8) that splits a range of pairs by its next digit only
+ * while the range holds more than `group` pairs (32: a warp); a range of `group` pairs or fewer,
+ * or one with no digit left, keeps its input order. So the keys are in order except inside runs
+ * of at most `group` pairs that share every digit above where their range stopped, and every
+ * pair lies fewer than `group` places from where the full sort puts it. Digits that
+ * are the same in every key split nothing and are stepped over (`varying`), as in the full sort.
+ *
+ * After the global stable pass on the top varying digit (rs_count, rs_scan, rs_scatter: keys ->
+ * keys_a), one work-item per top-digit bucket walks the bucket's ranges depth first. A range
+ * that splits is scattered by its digit from a into b (the same positions), where the result
+ * goes (the caller's buffers), so a range that stops is already in place. lo: the lowest sorted
+ * bit; digit p covers
+ * [lo + 8 p, lo + 8 p + 8) below hi_bit. */
+#if RS_RADIX_BITS == 8
+#define RS_WARP_DEPTH ((RS_KEY_BITS + 7) / 8)
+
+/* The varying digit (bit set in pass_mask) below pass p; RS_WARP_DEPTH when none is. */
+static inline uint rs_warp_below(uint p, uint pass_mask) {
+  while (p > 0 && !((pass_mask >> (p - 1)) & 1u)) --p;
+  return p > 0 ? p - 1 : RS_WARP_DEPTH;
+}
+
+/* Copies [begin, end) from src to dst (a range that stops where it stands). */
+static inline void rs_warp_copy(__global const rs_key* restrict src_k, __global const uint* restrict src_v,
+                                __global rs_key* restrict dst_k, __global uint* restrict dst_v, uint begin, uint end) {
+  for (uint i = begin; i < end; ++i) {
+    dst_k[i] = src_k[i];
+    dst_v[i] = src_v[i];
+  }
+}
+
+/* Splits [begin, end) by the digit at `shift`: the pairs move stably from src to dst. */
+static inline void rs_warp_split(__global const rs_key* restrict src_k, __global const uint* restrict src_v,
+                                 __global rs_key* restrict dst_k, __global uint* restrict dst_v, uint begin, uint end,
+                                 uint shift, uint mask, __local uint* restrict position) {
+  for (uint d = 0; d <= mask; ++d) position[d] = 0;
+  for (uint i = begin; i < end; ++i) position[rs_digit(src_k[i], shift, mask)] += 1u;
+  uint running = begin;
+  for (uint d = 0; d <= mask; ++d) {
+    const uint c = position[d];
+    position[d] = running;
+    running += c;
+  }
+  rs_bucket_pass(src_k, src_v, dst_k, dst_v, begin, end, shift, mask, position);
+}
+
+__kernel void rs_warp_sort(__global rs_key* keys_a, __global uint* values_a, __global rs_key* keys_b,
+                           __global uint* values_b, uint n, uint tiles, __global const uint* restrict offsets,
+                           uint lo, uint hi_bit, uint top_pass, uint pass_mask, uint group) {
+  __local uint position[RS_RADIX];
+  /* Per depth: the range split there, where its next sub-range starts, the digit that split it
+   * and the digit its sub-ranges split by. A sub-range is found by reading the split range's
+   * digits in order (it is sorted by them), so a small range costs its own length, not a walk
+   * over all RS_RADIX digit values. */
+  uint cursor[RS_WARP_DEPTH], stop[RS_WARP_DEPTH], split_pass[RS_WARP_DEPTH], child_pass[RS_WARP_DEPTH];
+  const uint d = get_group_id(0);
+  const uint begin = offsets[d * tiles];
+  const uint end = d + 1 < RS_RADIX ? offsets[(d + 1) * tiles] : n;
+  uint pass = rs_warp_below(top_pass, pass_mask);
+  if (end - begin <= group || pass == RS_WARP_DEPTH) {
+    rs_warp_copy(keys_a, values_a, keys_b, values_b, begin, end);
+    return;
+  }
+  /* Every split reads a and writes b, so every sub-range lies in b, where the result goes: a range
+   * that splits again is first copied aside into a (one sequential copy), one that stops stays. */
+  uint depth = 0;
+  uint shift = lo + pass * 8u;
+  rs_warp_split(keys_a, values_a, keys_b, values_b, begin, end, shift, rs_mask(shift, hi_bit), position);
+  cursor[0] = begin;
+  stop[0] = end;
+  split_pass[0] = pass;
+  child_pass[0] = rs_warp_below(pass, pass_mask);
+  for (;;) {
+    if (cursor[depth] == stop[depth]) {
+      if (depth == 0) break;
+      --depth;
+      continue;
+    }
+    const uint split_shift = lo + split_pass[depth] * 8u, split_mask = rs_mask(split_shift, hi_bit);
+    const uint sb = cursor[depth];
+    const uint digit = rs_digit(keys_b[sb], split_shift, split_mask);
+    uint se = sb + 1;
+    while (se < stop[depth] && rs_digit(keys_b[se], split_shift, split_mask) == digit) ++se;
+    cursor[depth] = se;
+    pass = child_pass[depth];
+    if (se - sb <= group || pass == RS_WARP_DEPTH) continue; /* stops: already in place */
+    rs_warp_copy(keys_b, values_b, keys_a, values_a, sb, se);
+    ++depth;
+    shift = lo + pass * 8u;
+    rs_warp_split(keys_a, values_a, keys_b, values_b, sb, se, shift, rs_mask(shift, hi_bit), position);
+    cursor[depth] = sb;
+    stop[depth] = se;
+    split_pass[depth] = pass;
+    child_pass[depth] = rs_warp_below(pass, pass_mask);
+  }
+}
+#endif
 #endif

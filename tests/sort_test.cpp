@@ -5,9 +5,12 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <cstring>
 #include <cstdint>
+#include <fstream>
 #include <functional>
 #include <memory>
 #include <numeric>
@@ -16,8 +19,10 @@
 #include <vector>
 
 #include "runtime/runtime.h"
+#include "sort/host_lsd_sort.h"
 #include "sort/permute.h"
 #include "sort/radix_sort.h"
+#include "test_util.h"
 
 namespace raysort {
 namespace {
@@ -108,20 +113,25 @@ SortStats check(RadixSort& sorter, const std::vector<std::uint64_t>& keys64, Rad
   std::iota(values.begin(), values.end(), 0u);
   std::vector<std::uint32_t> expected_values = values;
   SortStats stats;
+  auto twin = [&cfg](auto& k, auto& v) { cfg.warp_group > 0 ? reference_warp_sort(k, v, cfg) : reference_sort(k, v, cfg); };
   if (cfg.wide_keys()) {
     std::vector<std::uint64_t> keys = keys64, expected = keys64;
-    reference_sort(expected, expected_values, cfg);
+    twin(expected, expected_values);
     stats = sorter.sort(keys, values, cfg);
     EXPECT_TRUE(keys == expected) << what << ": keys differ from std::stable_sort";
   } else {
     std::vector<std::uint32_t> keys(keys64.begin(), keys64.end());
     std::vector<std::uint32_t> expected = keys;
-    reference_sort(expected, expected_values, cfg);
+    twin(expected, expected_values);
     stats = sorter.sort(keys, values, cfg);
     EXPECT_TRUE(keys == expected) << what << ": keys differ from std::stable_sort";
   }
   EXPECT_TRUE(values == expected_values) << what << ": values differ from std::stable_sort (order not stable?)";
-  EXPECT_EQ(stats.passes_run + stats.passes_skipped, sorter.passes(cfg)) << what;
+  // The warp-granular sort runs one global pass and one walk of the buckets.
+  if (cfg.warp_group > 0)
+    EXPECT_LE(stats.passes_run, 2u) << what;
+  else
+    EXPECT_EQ(stats.passes_run + stats.passes_skipped, sorter.passes(cfg)) << what;
   return stats;
 }
 
@@ -206,6 +216,85 @@ TEST(Sort, TopBitsReferenceIsCoarserThanFullSort) {
   EXPECT_TRUE(std::is_sorted(a.begin(), a.end(), [](auto x, auto y) { return (x >> 24) < (y >> 24); }));
 }
 
+// The sort that stops at warp granularity (RadixSortConfig::warp_group) equals its host twin for
+// every shape, size and width, with top-k, on the CPU shape and the hybrid's tuning.
+TEST(Sort, WarpGranularMatchesItsHostTwin) {
+  std::vector<RadixSort*> sorters = {device().cpu_shape.get()};
+  if (device().hybrid) sorters.push_back(device().hybrid.get());
+  for (RadixSort* sorter : sorters)
+    for (unsigned group : {32u, 1u, 7u})
+      for (unsigned bits : kKeyBits)
+        for (Shape shape : kShapes)
+          for (std::size_t n : kSizes) {
+            if (group != 32 && n > 70000) continue;
+            auto keys = make_keys(shape, n, bits, 9000 * bits + n + static_cast<int>(shape) + group);
+            RadixSortConfig cfg{bits, 0};
+            cfg.warp_group = group;
+            check(*sorter, keys, cfg, fmt::format("warp group {}: {} keys of {} bits, n = {}", group, name(shape), bits, n));
+          }
+  for (auto [bits, top] : {std::pair{32u, 13u}, {32u, 24u}, {64u, 21u}, {16u, 9u}}) {
+    auto keys = make_keys(Shape::Uniform, 300007, bits, bits + top);
+    RadixSortConfig cfg{bits, top};
+    cfg.warp_group = 32;
+    check(*device().cpu_shape, keys, cfg, fmt::format("warp group 32, top {} of {} bits", top, bits));
+  }
+  // Clustered keys, as ray keys are: many pairs share long prefixes, so ranges split deep.
+  auto keys = make_keys(Shape::Uniform, 500000, 32, 4242);
+  for (std::size_t i = 0; i < keys.size(); ++i) keys[i] = (keys[i] % 3000) * 0x10101u;
+  RadixSortConfig cfg{32, 0};
+  cfg.warp_group = 32;
+  check(*device().cpu_shape, keys, cfg, "warp group 32, clustered keys");
+  // The GPU shape has no walk: a clear refusal, not a full sort under the warp sort's name.
+  std::vector<std::uint32_t> k(100), v(100);
+  EXPECT_THROW(device().gpu_shape->sort(k, v, cfg), Error);
+}
+
+// Guards the twin itself: coarser than the full sort (else the test above could pass with a full
+// sort), the full sort at group 1, and every pair fewer than `group` places from its full-sort place.
+TEST(Sort, WarpGranularTwinStopsAtGroupsOnly) {
+  // Uniform keys: a top-digit bucket holds ~780 pairs, the next digit splits it into ranges of ~3.
+  auto keys64 = make_keys(Shape::Uniform, 200000, 32, 77);
+  std::vector<std::uint32_t> full(keys64.begin(), keys64.end()), warp = full, one = full;
+  std::vector<std::uint32_t> vfull(full.size()), vwarp(full.size()), vone(full.size());
+  std::iota(vfull.begin(), vfull.end(), 0u);
+  vwarp = vone = vfull;
+  RadixSortConfig cfg{32, 0};
+  reference_sort(full, vfull, cfg);
+  cfg.warp_group = 1;
+  reference_warp_sort(one, vone, cfg);
+  EXPECT_TRUE(one == full && vone == vfull) << "group 1 must be the full sort";
+  cfg.warp_group = 32;
+  reference_warp_sort(warp, vwarp, cfg);
+  EXPECT_FALSE(warp == full) << "group 32 must leave some groups unsorted";
+  std::vector<std::size_t> place(full.size());
+  for (std::size_t i = 0; i < full.size(); ++i) place[vfull[i]] = i;
+  std::size_t farthest = 0;
+  for (std::size_t i = 0; i < warp.size(); ++i)
+    farthest = std::max(farthest, i > place[vwarp[i]] ? i - place[vwarp[i]] : place[vwarp[i]] - i);
+  EXPECT_LT(farthest, 32u);
+  EXPECT_GT(farthest, 0u);
+}
+
+// `run --warp-sort` sorts every cell with warp_group 32 (its cells still reproduce NoSort's hits)
+// and records it in meta.json's matrix; without it the entry is absent (sets written before resume).
+TEST(SortCli, RunWarpSortIsRecorded) {
+  for (bool warp : {true, false}) {
+    const std::string out = testing::temp_path(warp ? "warp_sort_set" : "full_sort_set");
+    std::vector<std::string> args = {"run",        "--scenes", "cornell", "--batches", "bounce1", "--encoders",
+                                     "hcc",        "--resolution", "64x36", "--reps", "3", "--max-time", "0.05",
+                                     "--out",      out};
+    if (warp) args.push_back("--warp-sort");
+    const testing::CliResult r = testing::run_cli(args);
+    ASSERT_EQ(r.code, 0) << r.err;
+    std::ifstream meta(out + "/meta.json");
+    const nlohmann::json m = nlohmann::json::parse(meta);
+    if (warp)
+      EXPECT_EQ(m.at("matrix").value("sort_warp_group", 0u), 32u);
+    else
+      EXPECT_FALSE(m.at("matrix").contains("sort_warp_group"));
+  }
+}
+
 TEST(Sort, SkipsPassesWhoseDigitIsConstant) {
   auto& sorter = *device().cpu_shape;  // 8-bit digits
   ASSERT_EQ(sorter.tuning().radix_bits, 8u);
@@ -253,6 +342,37 @@ TEST(Sort, DeviceBuffersAreSortedInPlaceAndReused) {
     EXPECT_TRUE(std::equal(v.begin(), v.end(), got_v.begin())) << n;
     EXPECT_EQ(got_k[capacity - 1], 0xDEADBEEFu) << "wrote past count";
   }
+}
+
+// sortbench's host anchor (host/sort/host_lsd_sort.h) is checked like ours: std::stable_sort's
+// keys and values, for every shape and width, on 1, 2 and 3 threads (chunk boundaries move).
+TEST(HostLsdSort, MatchesStableSort) {
+  for (unsigned bits : kKeyBits)
+    for (Shape shape : kShapes)
+      for (std::size_t n : {std::size_t(0), std::size_t(1), std::size_t(33), std::size_t(65537),
+                            std::size_t(300007)})
+        for (unsigned threads : {1u, 2u, 3u}) {
+          const std::string what = fmt::format("host LSD, {} threads: {} keys of {} bits, n = {}", threads, name(shape),
+                                               bits, n);
+          auto keys64 = make_keys(shape, n, bits, 3000 * bits + n + static_cast<int>(shape));
+          std::vector<std::uint32_t> values(n), expected_values(n);
+          std::iota(values.begin(), values.end(), 0u);
+          std::iota(expected_values.begin(), expected_values.end(), 0u);
+          if (bits > 32) {
+            std::vector<std::uint64_t> keys = keys64, expected = keys64;
+            HostLsdScratch<std::uint64_t> scratch;
+            reference_sort(expected, expected_values, {bits, 0});
+            host_lsd_sort(keys, values, bits, scratch, threads);
+            EXPECT_TRUE(keys == expected) << what;
+          } else {
+            std::vector<std::uint32_t> keys(keys64.begin(), keys64.end()), expected = keys;
+            HostLsdScratch<std::uint32_t> scratch;
+            reference_sort(expected, expected_values, {bits, 0});
+            host_lsd_sort(keys, values, bits, scratch, threads);
+            EXPECT_TRUE(keys == expected) << what;
+          }
+          EXPECT_TRUE(values == expected_values) << what << ": values differ (not stable?)";
+        }
 }
 
 TEST(Sort, RejectsBadInput) {

@@ -19,11 +19,14 @@ namespace raysort {
 namespace {
 // The largest N of --shard i/N (ShardSpec::parse reads up to six digits).
 constexpr std::uint64_t kMaxShards = 999999;
+// --warp-sort's group: a warp of 32 lanes (the paper's GPUs, and the SIMT model's default width).
+constexpr unsigned kWarpSortGroup = 32;
 
 struct RunArgs {
   std::string preset;
   std::vector<std::string> scenes, batches, encoders;
   std::vector<unsigned> bits, top_bits;
+  bool warp_sort = false;
   CommonOptions common;  // --device, --scene-root, --resolution, --spp, --seed
   std::string variant, access, baseline, layout, gpu_model, embree_paths;
   unsigned reps = 0, warmup = 0;
@@ -56,6 +59,7 @@ MatrixSpec matrix_from(const RunArgs& a, const CLI::App& cmd) {
     spec.key_length_scenes.clear();
   }
   if (!a.top_bits.empty()) spec.top_bits = a.top_bits;
+  if (a.warp_sort) spec.sort_warp_group = kWarpSortGroup;
   const FrameSize frame = a.common.frame();
   if (frame.width) spec.frame.width = frame.width, spec.frame.height = frame.height;
   if (cmd.count("--spp")) spec.frame.spp = a.common.spp;  // given values are taken as given (0 is refused)
@@ -134,6 +138,9 @@ void register_run_command(CLI::App& app) {
   whole_number(cmd->add_option("--bits", a->bits, "key bits, e.g. 16,32,64")->delimiter(','), 1, 64);
   whole_number(cmd->add_option("--top-bits", a->top_bits, "also sort by only the highest k bits (top-k cells)")->delimiter(','),
                1, 64);
+  cmd->add_flag("--warp-sort", a->warp_sort,
+                "sort only down to groups of 32 rays (a warp), leaving each group in generation order: the paper's "
+                "'terminate bucket sorting early' (docs/sort.md; CPU devices; off by default)");
   add_common_options(*cmd, a->common);
   add_protocol_number_options(
       *cmd, a->reps, a->warmup, a->max_noise_pct, a->max_time_s,

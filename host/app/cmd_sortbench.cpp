@@ -1,6 +1,7 @@
 // raysort sortbench: throughput of our radix sort (host/sort) against the host's std::stable_sort
-// and std::sort, Boost.Compute's sort_by_key on the same device (when its headers are installed),
-// and the device's copy-bandwidth bound. Device times come from profiling events, medians over
+// and std::sort, a plain LSD radix sort on the host's threads (host/sort/host_lsd_sort.h, the
+// anchor a user could write in 60 lines), Boost.Compute's sort_by_key on the same device (when its
+// headers are installed), and the device's copy-bandwidth bound. Device times come from profiling events, medians over
 // --reps after a warm-up; program builds and first launches are reported apart.
 #include <fmt/format.h>
 
@@ -16,7 +17,9 @@
 #include "app/commands.h"
 #include "app/options.h"
 #include "runtime/runtime.h"
+#include "sort/host_lsd_sort.h"
 #include "sort/radix_sort.h"
+#include "util/parallel.h"
 
 #if __has_include(<boost/compute/algorithm/sort_by_key.hpp>)
 #include <boost/compute/algorithm/sort_by_key.hpp>
@@ -37,6 +40,7 @@ struct Options {
   int reps = 10;
   int ref_reps = 3;
   bool large = true;
+  std::vector<unsigned> bits = {32, 64};
 };
 
 double median(std::vector<double> v) {
@@ -78,9 +82,146 @@ struct Row {
   unsigned bits = 0;
   std::string keys;
   SortStats stats;
-  double ours = 0, ours_ms = 0, bound = 0, stable = 0, unstable = 0, boost = -1, boost_first_ms = 0;
-  bool ok = false;
+  double ours = 0, ours_ms = 0, bound = 0, stable = 0, unstable = 0, host_lsd = 0, boost = -1, boost_first_ms = 0;
+  double warp = -1;          // the warp-granular sort (group 32), Mkeys/s; -1: this shape has none
+  double warp_saving = 0;    // median over reps of full ms / warp ms, the two sorted back to back
+  bool ok = false;           // ours equals std::stable_sort
+  bool lsd_ok = false;       // the host LSD anchor equals std::stable_sort
+  bool warp_ok = true;       // the warp-granular sort equals its host twin
 };
+
+// The keys of a case; few-distinct: only the 16 highest key bits are random (at most 65536 keys).
+template <class Key>
+std::vector<Key> case_keys(std::size_t n, unsigned bits, bool few) {
+  std::mt19937_64 rng(n * 131 + bits * 7 + few);
+  std::vector<Key> keys(n);
+  for (auto& k : keys) k = few ? static_cast<Key>((rng() & 0xFFFF) << (bits - 16)) : static_cast<Key>(rng());
+  return keys;
+}
+
+// std::stable_sort and std::sort on (key, value) pairs; returns stable_sort's result, the reference.
+template <class Key>
+std::vector<Pair<Key>> host_sorts(const std::vector<Key>& keys, const std::vector<std::uint32_t>& values,
+                                  const Options& opt, Row& row) {
+  const std::size_t n = keys.size();
+  std::vector<Pair<Key>> pairs(n), expected;
+  for (std::size_t i = 0; i < n; ++i) pairs[i] = {keys[i], values[i]};
+  auto by_key = [](const Pair<Key>& a, const Pair<Key>& b) { return a.key < b.key; };
+  std::vector<double> stable_ms, unstable_ms, lsd_ms;
+  for (int r = 0; r < opt.ref_reps; ++r) {
+    auto p = pairs;
+    stable_ms.push_back(wall_ms([&] { std::stable_sort(p.begin(), p.end(), by_key); }));
+    if (r == 0) expected = p;
+    p = pairs;
+    unstable_ms.push_back(wall_ms([&] { std::sort(p.begin(), p.end(), by_key); }));
+  }
+  // The host LSD anchor on the same keys: separate key and value arrays, as ours sorts them.
+  HostLsdScratch<Key> scratch;
+  for (int r = -1; r < opt.ref_reps; ++r) {  // rep -1: touches the scratch pages, not timed
+    std::vector<Key> k = keys;
+    std::vector<std::uint32_t> v = values;
+    const double ms = wall_ms([&] { host_lsd_sort(k, v, row.bits, scratch); });
+    if (r >= 0) lsd_ms.push_back(ms);
+    if (r == -1) {
+      row.lsd_ok = true;
+      for (std::size_t i = 0; i < n && row.lsd_ok; ++i) row.lsd_ok = k[i] == expected[i].key && v[i] == expected[i].value;
+    }
+  }
+  const double nk = static_cast<double>(n) * 1e-3;  // keys per ms -> Mkeys/s
+  row.stable = nk / median(stable_ms);
+  row.unstable = nk / median(unstable_ms);
+  row.host_lsd = nk / median(lsd_ms);
+  return expected;
+}
+
+// The input kept pristine on the device, copied into the buffers a sort works in before each rep.
+template <class Key>
+struct DeviceInput {
+  Runtime& rt;
+  std::size_t n;
+  cl::Buffer src_keys, src_values, work_keys, work_values;
+  DeviceInput(Runtime& r, const std::vector<Key>& keys, const std::vector<std::uint32_t>& values)
+      : rt(r), n(keys.size()), src_keys(r.upload("bench keys", keys)), src_values(r.upload("bench values", values)),
+        work_keys(r.buffer("bench work keys", n * sizeof(Key))), work_values(r.buffer("bench work values", n * 4)) {}
+  void restore() {
+    rt.queue().enqueueCopyBuffer(src_keys, work_keys, 0, 0, n * sizeof(Key));
+    rt.queue().enqueueCopyBuffer(src_values, work_values, 0, 0, n * 4);
+    rt.queue().finish();
+  }
+  // Whether the work buffers hold exactly these pairs.
+  bool holds(const std::vector<Key>& keys, const std::vector<std::uint32_t>& values) {
+    std::vector<Key> got_keys;
+    std::vector<std::uint32_t> got_values;
+    rt.download("sorted keys", work_keys, got_keys, n);
+    rt.download("sorted values", work_values, got_values, n);
+    return got_keys == keys && got_values == values;
+  }
+};
+
+// Ours, the full sort and (on the CPU shape) the warp-granular one, back to back in every rep, in
+// an order that flips every rep; rep -1 is the untimed warm-up whose results are checked.
+template <class Key>
+void time_ours(RadixSort& sorter, DeviceInput<Key>& in, const std::vector<Pair<Key>>& expected,
+               const std::vector<Key>& keys, const std::vector<std::uint32_t>& values, const Options& opt, Row& row) {
+  RadixSortConfig full{row.bits, 0}, warp{row.bits, 0};
+  warp.warp_group = 32;
+  const bool with_warp = sorter.warp_sort_shape();
+  std::vector<double> full_ms, warp_ms, saving;
+  for (int r = -1; r < opt.reps; ++r) {
+    double f = 0, w = 0;
+    for (int i = 0; i < 2; ++i) {
+      const bool warp_now = (i == 1) == (r % 2 == 0);
+      if (warp_now && !with_warp) continue;
+      in.restore();
+      const SortStats s = sorter.sort(in.work_keys, in.work_values, in.n, warp_now ? warp : full);
+      (warp_now ? w : f) = s.ms;
+      if (!warp_now) row.stats = s;
+      if (r == -1 && !warp_now) {
+        std::vector<Key> k(expected.size());
+        std::vector<std::uint32_t> v(expected.size());
+        for (std::size_t j = 0; j < expected.size(); ++j) k[j] = expected[j].key, v[j] = expected[j].value;
+        row.ok = in.holds(k, v);
+      }
+      if (r == -1 && warp_now) {
+        std::vector<Key> k = keys;
+        std::vector<std::uint32_t> v = values;
+        reference_warp_sort(k, v, warp);
+        row.warp_ok = in.holds(k, v);
+      }
+    }
+    if (r < 0) continue;
+    full_ms.push_back(f);
+    if (with_warp) warp_ms.push_back(w), saving.push_back(f / w);
+  }
+  const double nk = static_cast<double>(in.n) * 1e-3;
+  row.ours_ms = median(full_ms);
+  row.ours = nk / row.ours_ms;
+  if (with_warp) row.warp = nk / median(warp_ms), row.warp_saving = median(saving);
+}
+
+template <class Key>
+void time_boost_compute([[maybe_unused]] Runtime& rt, [[maybe_unused]] DeviceInput<Key>& in,
+                        [[maybe_unused]] const Options& opt, [[maybe_unused]] Row& row) {
+#if RAYSORT_HAVE_BOOST_COMPUTE
+  namespace bc = boost::compute;
+  bc::context context(rt.context()(), true);
+  bc::command_queue queue(rt.queue()(), true);
+  bc::buffer bk(in.work_keys(), true), bv(in.work_values(), true);
+  auto boost_sort = [&] {
+    bc::sort_by_key(bc::make_buffer_iterator<Key>(bk, 0), bc::make_buffer_iterator<Key>(bk, in.n),
+                    bc::make_buffer_iterator<std::uint32_t>(bv, 0), queue);
+    queue.finish();
+  };
+  in.restore();
+  row.boost_first_ms = wall_ms(boost_sort);  // builds Boost.Compute's programs: reported apart
+  std::vector<double> boost_ms;
+  for (int r = 0; r < opt.ref_reps; ++r) {
+    in.restore();
+    boost_ms.push_back(wall_ms(boost_sort));
+  }
+  row.boost = static_cast<double>(in.n) * 1e-3 / median(boost_ms);
+#endif
+}
 
 template <class Key>
 Row bench_case(Runtime& rt, RadixSort& sorter, double bandwidth, std::size_t n, unsigned bits, bool few,
@@ -89,80 +230,17 @@ Row bench_case(Runtime& rt, RadixSort& sorter, double bandwidth, std::size_t n, 
   row.n = n;
   row.bits = bits;
   row.keys = few ? "few-distinct" : "random";
-  std::mt19937_64 rng(n * 131 + bits * 7 + few);
-  std::vector<Key> keys(n);
-  // few-distinct: only the 16 highest key bits are random (at most 65536 distinct keys).
-  for (auto& k : keys) k = few ? static_cast<Key>((rng() & 0xFFFF) << (bits - 16)) : static_cast<Key>(rng());
+  const std::vector<Key> keys = case_keys<Key>(n, bits, few);
   std::vector<std::uint32_t> values(n);
   std::iota(values.begin(), values.end(), 0u);
-  const RadixSortConfig cfg{bits, 0};
-
-  // Host references, on (key, value) pairs.
-  std::vector<Pair<Key>> pairs(n), expected;
-  for (std::size_t i = 0; i < n; ++i) pairs[i] = {keys[i], values[i]};
-  auto by_key = [](const Pair<Key>& a, const Pair<Key>& b) { return a.key < b.key; };
-  std::vector<double> stable_ms, unstable_ms;
-  for (int r = 0; r < opt.ref_reps; ++r) {
-    auto p = pairs;
-    stable_ms.push_back(wall_ms([&] { std::stable_sort(p.begin(), p.end(), by_key); }));
-    if (r == 0) expected = p;
-    p = pairs;
-    unstable_ms.push_back(wall_ms([&] { std::sort(p.begin(), p.end(), by_key); }));
-  }
-  const double nk = static_cast<double>(n) * 1e-3;  // keys per ms -> Mkeys/s
-  row.stable = nk / median(stable_ms);
-  row.unstable = nk / median(unstable_ms);
-
-  // Ours: the input kept pristine on the device, copied into the sorted buffers before each rep.
-  cl::Buffer src_keys = rt.upload("bench keys", keys), src_values = rt.upload("bench values", values);
-  cl::Buffer work_keys = rt.buffer("bench work keys", n * sizeof(Key));
-  cl::Buffer work_values = rt.buffer("bench work values", n * 4);
-  auto restore = [&] {
-    rt.queue().enqueueCopyBuffer(src_keys, work_keys, 0, 0, n * sizeof(Key));
-    rt.queue().enqueueCopyBuffer(src_values, work_values, 0, 0, n * 4);
-    rt.queue().finish();
-  };
-  std::vector<double> ms;
-  for (int r = -1; r < opt.reps; ++r) {  // rep -1: warm-up at this size, not timed
-    restore();
-    SortStats s = sorter.sort(work_keys, work_values, n, cfg);
-    if (r >= 0) ms.push_back(s.ms);
-    row.stats = s;
-  }
-  row.ours_ms = median(ms);
-  row.ours = nk / row.ours_ms;
-  std::vector<Key> got_keys;
-  std::vector<std::uint32_t> got_values;
-  rt.download("sorted keys", work_keys, got_keys, n);
-  rt.download("sorted values", work_values, got_values, n);
-  row.ok = true;
-  for (std::size_t i = 0; i < n && row.ok; ++i)
-    row.ok = got_keys[i] == expected[i].key && got_values[i] == expected[i].value;
-
+  const std::vector<Pair<Key>> expected = host_sorts(keys, values, opt, row);
+  DeviceInput<Key> in(rt, keys, values);
+  time_ours(sorter, in, expected, keys, values, opt, row);
   // The copy-bandwidth bound: every pass that runs reads and writes all keys and values once,
   // and the upfront histogram reads the keys once.
   const double bytes = static_cast<double>(n) * (row.stats.passes_run * 2.0 * (sizeof(Key) + 4) + sizeof(Key));
-  row.bound = nk / (bytes / bandwidth * 1e3);
-
-#if RAYSORT_HAVE_BOOST_COMPUTE
-  namespace bc = boost::compute;
-  bc::context context(rt.context()(), true);
-  bc::command_queue queue(rt.queue()(), true);
-  bc::buffer bk(work_keys(), true), bv(work_values(), true);
-  auto boost_sort = [&] {
-    bc::sort_by_key(bc::make_buffer_iterator<Key>(bk, 0), bc::make_buffer_iterator<Key>(bk, n),
-                    bc::make_buffer_iterator<std::uint32_t>(bv, 0), queue);
-    queue.finish();
-  };
-  restore();
-  row.boost_first_ms = wall_ms(boost_sort);  // builds Boost.Compute's programs: reported apart
-  std::vector<double> boost_ms;
-  for (int r = 0; r < opt.ref_reps; ++r) {
-    restore();
-    boost_ms.push_back(wall_ms(boost_sort));
-  }
-  row.boost = nk / median(boost_ms);
-#endif
+  row.bound = static_cast<double>(n) * 1e-3 / (bytes / bandwidth * 1e3);
+  time_boost_compute(rt, in, opt, row);
   return row;
 }
 
@@ -188,27 +266,35 @@ void run_sortbench(const Options& opt) {
   fmt::print("copy bandwidth (clEnqueueCopyBuffer, read + write): {:.1f} GB/s\n", bandwidth * 1e-9);
   fmt::print("ours: median of {} reps, profiling events; host sorts and Boost.Compute: median of {} reps, wall clock\n",
              opt.reps, opt.ref_reps);
+  fmt::print("host LSD: 8-bit digits, stable, {} threads (host/sort/host_lsd_sort.h)\n", host_threads());
+  fmt::print("warp 32: ours stopping at groups of 32 pairs (run --warp-sort, docs/sort.md), sorted back to back with "
+             "the full sort in every rep; full/warp time: the median of the reps' ratios\n");
 #if !RAYSORT_HAVE_BOOST_COMPUTE
   fmt::print("Boost.Compute: headers not installed (libboost-dev), column left empty\n");
 #endif
   fmt::print("\n| pairs | key bits | keys | passes run/skipped | ours Mkeys/s | ours ms | copy bound Mkeys/s | "
-             "% of bound | std::stable_sort | std::sort | Boost.Compute | x stable_sort | x Boost | ok |\n");
-  fmt::print("|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n");
+             "% of bound | std::stable_sort | std::sort | host LSD | Boost.Compute | x stable_sort | x host LSD | x Boost | "
+             "warp 32 Mkeys/s | full/warp time | ok |\n");
+  fmt::print("|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n");
   std::vector<std::size_t> sizes = {2073600};
   if (opt.large) sizes.push_back(16u << 20);
   std::vector<Row> rows;
   bool all_ok = true;
   for (std::size_t n : sizes)
-    for (unsigned bits : {32u, 64u})
+    for (unsigned bits : opt.bits)
       for (bool few : {false, true}) {
         Row r = bits == 64 ? bench_case<std::uint64_t>(rt, sorter, bandwidth, n, bits, few, opt)
                            : bench_case<std::uint32_t>(rt, sorter, bandwidth, n, bits, few, opt);
-        all_ok = all_ok && r.ok;
+        all_ok = all_ok && r.ok && r.lsd_ok && r.warp_ok;
         auto boost = [&](double v) { return r.boost < 0 ? std::string("-") : fmt::format("{:.1f}", v); };
-        fmt::print("| {} | {} | {} | {}/{} | {:.1f} | {:.2f} | {:.1f} | {:.0f}% | {:.1f} | {:.1f} | {} | {:.1f} | {} | {} |\n",
-                   r.n, r.bits, r.keys, r.stats.passes_run, r.stats.passes_skipped, r.ours, r.ours_ms, r.bound,
-                   100.0 * r.ours / r.bound, r.stable, r.unstable, boost(r.boost), r.ours / r.stable,
-                   boost(r.ours / r.boost), r.ok ? "yes" : "NO");
+        fmt::print(
+            "| {} | {} | {} | {}/{} | {:.1f} | {:.2f} | {:.1f} | {:.0f}% | {:.1f} | {:.1f} | {:.1f} | {} | {:.1f} | {:.2f} | {} "
+            "| {} | {} | {} |\n",
+            r.n, r.bits, r.keys, r.stats.passes_run, r.stats.passes_skipped, r.ours, r.ours_ms, r.bound,
+            100.0 * r.ours / r.bound, r.stable, r.unstable, r.host_lsd, boost(r.boost), r.ours / r.stable,
+            r.ours / r.host_lsd, boost(r.ours / r.boost), r.warp < 0 ? "-" : fmt::format("{:.1f}", r.warp),
+            r.warp < 0 ? "-" : fmt::format("{:.2f}", r.warp_saving),
+            !r.ok ? "NO" : !r.lsd_ok ? "NO (host LSD)" : r.warp_ok ? "yes" : "NO (warp sort)");
         std::fflush(stdout);
         rows.push_back(r);
       }
@@ -218,7 +304,7 @@ void run_sortbench(const Options& opt) {
   fmt::print("\n");
 #endif
   if (!all_ok) {
-    fmt::print("FAILED: a sorted result differs from std::stable_sort\n");
+    fmt::print("FAILED: a sorted result (ours, the host LSD anchor, or the warp sort against its twin) differs\n");
     set_command_exit_code(1);
   }
 }
@@ -233,6 +319,9 @@ void register_sortbench_command(CLI::App& app) {
   whole_number(cmd->add_option("--ref-reps", opt.ref_reps, "repetitions of the host sorts and Boost.Compute per case"), 1,
                100);
   cmd->add_flag("!--no-large", opt.large, "skip the 16 M pair cases");
+  cmd->add_option("--bits", opt.bits, "key widths to run, comma-separated: 32, 64 or both (default both)")
+      ->delimiter(',')
+      ->check(CLI::IsMember({32u, 64u}));
   cmd->callback([] { run_sortbench(opt); });
 }
 

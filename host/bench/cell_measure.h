@@ -61,6 +61,8 @@ class BatchBench {
     // (run --embree-paths; null or no path: none). Only a build with Embree sets it.
     const EmbreeScene* embree = nullptr;
     std::vector<EmbreePath> embree_paths;
+    // The sort's warp group (MatrixSpec::sort_warp_group; 0: the full sort).
+    unsigned sort_warp_group = 0;
   };
   // Uploads the batch, traces it once in generation order (untimed) and checks those hits against
   // `reference` (the host traversal of the same variant). A device fault or a mismatch does not

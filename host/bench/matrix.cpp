@@ -69,6 +69,8 @@ nlohmann::json MatrixSpec::to_json() const {
   if (!gpu_model.empty()) j["gpu_model"] = gpu_model;
   // Likewise Embree's paths: part of the matrix (a resume with other paths is another matrix).
   if (!embree_paths.empty()) j["embree_paths"] = embree_paths;
+  // Likewise the warp-granular sort: a set sorted in full has no entry.
+  if (sort_warp_group) j["sort_warp_group"] = sort_warp_group;
   // Likewise the sampling overrides: a set that keeps the scenes' own shadow rays and depth has no entry.
   if (frame.shadow_rays) j["shadow_rays"] = frame.shadow_rays;
   if (frame.bounces) j["bounces"] = frame.bounces;
@@ -86,7 +88,7 @@ void check_matrix_json(const nlohmann::json& matrix, const std::string& file) {
       {"resolution", Text},   {"spp", Count},            {"reps", Count},              {"warmup", Count},
       {"max_noise", Number},  {"max_time_s", Number},    {"seed", Count},              {"variant", Text},
       {"access", Text},       {"baseline", Text},        {"layout", Text},             {"gpu_model", Text},
-      {"shadow_rays", Count}, {"bounces", Count},        {"embree_paths", TextList}};
+      {"shadow_rays", Count}, {"bounces", Count},        {"embree_paths", TextList},   {"sort_warp_group", Count}};
   auto is = [](const nlohmann::json& v, Kind k) {
     switch (k) {
       case Text: return v.is_string();

@@ -30,6 +30,9 @@ struct MatrixSpec {
   std::vector<std::string> key_length_scenes;
   std::vector<unsigned> key_length_bits;
   std::vector<unsigned> top_bits;     // extra top-k sorted cells at the largest key length (0: none)
+  // run --warp-sort: every cell's sort stops at groups of this many pairs (RadixSortConfig::
+  // warp_group, docs/sort.md); 0: the full sort. Recorded in meta.json's matrix only when on.
+  unsigned sort_warp_group = 0;
   FrameSize frame{1920, 1080, 1};     // resolution, spp and (non-zero) shadow-ray / depth overrides of every scene
   unsigned seed = 1;
   std::vector<TraceVariant> variants{TraceVariant::Robust};  // the first is the tables' main one

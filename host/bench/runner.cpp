@@ -475,7 +475,8 @@ RunSummary run_matrix(const MatrixSpec& requested, const RunOptions& opts) {
         continue;
       }
       BatchBench bench({rt, *scene.encoder, sorter, permuter, *scene.tracers.at({first.variant, first.layout}),
-                        gpu ? &*gpu : nullptr, &scene.prepared.tris, scene.embree_scene(), scene.embree_paths},
+                        gpu ? &*gpu : nullptr, &scene.prepared.tris, scene.embree_scene(), scene.embree_paths,
+                        spec.sort_warp_group},
                        scene.bvh, rb->batch, scene.reference(*rb, first.variant, first.layout));
       std::vector<std::vector<CellRecord>> groups;  // → cell: NoSort, then each encoder × key length × top-k
       for (const auto& group : runs_of(batch_cells, sort_group)) {

@@ -98,6 +98,7 @@ RadixSort::RadixSort(Runtime& rt, const RadixSortTuning& tuning) : rt_(rt), tuni
       k.scan = cl::Kernel(program, "rs_scan");
       k.scatter = cl::Kernel(program, "rs_scatter");
       if (tuning_.hybrid()) k.bucket_sort = cl::Kernel(program, "rs_bucket_sort");
+      if (warp_sort_shape()) k.warp_sort = cl::Kernel(program, "rs_warp_sort");
     });
     // Every launch's work-group must fit what the kernel takes on this device: a launch over it
     // fails with CL_INVALID_WORK_GROUP_SIZE in the middle of a sort, and PoCL then aborted the
@@ -199,6 +200,23 @@ struct RadixSort::Passes {
     k.bucket_sort.setArg(9, pass_mask);
     rs.enqueue(k.bucket_sort, radix, 1);
   }
+  // The warp-granular sort's walk of every top-digit bucket (pass_mask: the varying 8-bit digits).
+  void warp_sort(cl_uint lo, cl_uint top_pass, cl_uint pass_mask, cl_uint group, std::size_t radix) {
+    k.warp_sort.setArg(0, *src_keys);
+    k.warp_sort.setArg(1, *src_values);
+    k.warp_sort.setArg(2, *dst_keys);
+    k.warp_sort.setArg(3, *dst_values);
+    k.warp_sort.setArg(4, n);
+    k.warp_sort.setArg(5, static_cast<cl_uint>(tiles));
+    k.warp_sort.setArg(6, rs.counts_);
+    k.warp_sort.setArg(7, lo);
+    k.warp_sort.setArg(8, hi);
+    k.warp_sort.setArg(9, top_pass);
+    k.warp_sort.setArg(10, pass_mask);
+    k.warp_sort.setArg(11, group);
+    rs.enqueue(k.warp_sort, radix, 1);
+    flip();  // every bucket's result lies in the destination buffers
+  }
 };
 
 // The first read of the keys: the tile counts of digit `shift`, and which key bits vary at all
@@ -261,14 +279,34 @@ bool RadixSort::hybrid_passes(Passes& ps, const std::vector<unsigned>& run, int 
   return true;
 }
 
+// The warp-granular sort (cfg.warp_group > 0): one global stable pass on the top varying digit,
+// then every bucket walked depth first by rs_warp_sort, which leaves the result in the buffers the
+// pass read from. Two passes run, whatever the depth of the walk.
+void RadixSort::warp_passes(Passes& ps, const std::vector<unsigned>& run, int counted, cl_uint lo, unsigned group) {
+  if (run.empty()) return;  // every key the same: the input order is the order
+  const unsigned top = run.back();
+  const cl_uint top_shift = lo + top * tuning_.radix_bits;
+  if (static_cast<int>(top) != counted) ps.count(top_shift);
+  ps.scan();
+  ps.scatter(top_shift);  // keys -> scratch, bucketed stably by the top digit
+  cl_uint pass_mask = 0;
+  for (unsigned p : run) pass_mask |= cl_uint(1) << p;
+  ps.warp_sort(lo, top, pass_mask, group, std::size_t(1) << tuning_.radix_bits);
+}
+
 SortStats RadixSort::sort(cl::Buffer& keys, cl::Buffer& values, std::size_t count, const RadixSortConfig& cfg) {
   if (cfg.key_bits < 1 || cfg.key_bits > 64 || cfg.top_bits > cfg.key_bits)
     throw Error(fmt::format("radix sort: key_bits must be 1..64 and top_bits 0..key_bits (got key_bits {}, top_bits {})",
                             cfg.key_bits, cfg.top_bits));
+  if (cfg.warp_group > 0 && !warp_sort_shape())
+    throw Error(fmt::format("radix sort: the sort that stops at groups of {} pairs needs the CPU shape (one work-item "
+                            "per tile, 8-bit digits); this device's shape has {} work-items per tile and {}-bit digits: "
+                            "run it on a CPU device, or without the warp-granular sort",
+                            cfg.warp_group, tuning_.work_group, tuning_.radix_bits));
   SortStats stats;
   stats.count = count;
   const unsigned total_passes = passes(cfg);
-  if (count < 2) {  // nothing to order: every digit is constant
+  if (count < 2 || count <= cfg.warp_group) {  // nothing to order, or one group that keeps its input order
     stats.passes_skipped = total_passes;
     return stats;
   }
@@ -306,7 +344,9 @@ SortStats RadixSort::sort(cl::Buffer& keys, cl::Buffer& values, std::size_t coun
   // The MSD-first hybrid (large N on the CPU shape) wants the most significant digit's counts
   // first; the plain LSD passes the lowest digit's.
   const bool hybrid = t.hybrid() && count >= t.hybrid_min && total_passes >= 2;
-  int counted = hybrid ? static_cast<int>(total_passes) - 1 : 0;  // the pass whose counts are in counts_
+  const bool warp = cfg.warp_group > 0;
+  // the pass whose counts are in counts_
+  int counted = hybrid || warp ? static_cast<int>(total_passes) - 1 : 0;
   const std::uint64_t varying = first_read(k, keys, n, n_items, lo + counted * t.radix_bits, hi, tiles, key_bytes);
   std::vector<unsigned> run;  // the passes that move keys
   for (unsigned p = 0; p < total_passes; ++p) {
@@ -319,7 +359,10 @@ SortStats RadixSort::sort(cl::Buffer& keys, cl::Buffer& values, std::size_t coun
   Passes ps{*this, k, n, n_items, hi, wg, tiles, bins, stats, &keys, &values, &keys_tmp_, &values_tmp_};
   cl_call("running the radix sort passes", [&] {
     bool done = false;
-    if (hybrid && run.size() >= 2) {
+    if (warp) {
+      warp_passes(ps, run, counted, lo, cfg.warp_group);
+      done = true;
+    } else if (hybrid && run.size() >= 2) {
       done = hybrid_passes(ps, run, counted, lo, count);
       counted = -1;  // scanned by the hybrid's check: no pass can use these counts as they are
     }

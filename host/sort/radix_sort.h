@@ -19,6 +19,12 @@ struct RadixSortConfig {
   // 0: sort by all key_bits. k > 0: sort by the highest k of them, bits [key_bits - k, key_bits),
   // keeping the input order among keys that agree there (cheaper, less ordered).
   unsigned top_bits = 0;
+  // 0: a full sort. g > 0: the sort that stops at warp granularity (paper, "Application in Faster
+  // Tracing Kernels"; docs/sort.md): a most-significant-digit-first bucket sort by 8-bit digits
+  // that splits a range only while it holds more than g pairs; a range of g pairs or fewer keeps
+  // its input order. Every pair ends fewer than g places from where the full sort puts it. The
+  // CPU shape only (one work-item per tile, 8-bit digits); reference_warp_sort is its host twin.
+  unsigned warp_group = 0;
 
   bool wide_keys() const { return key_bits > 32; }
   std::size_t key_bytes() const { return wide_keys() ? 8 : 4; }
@@ -28,7 +34,8 @@ struct RadixSortConfig {
 
 struct SortStats {
   std::size_t count = 0;
-  unsigned passes_run = 0;      // counting-sort passes executed
+  // Counting-sort passes executed (the warp-granular sort: its global pass and its walk, 2).
+  unsigned passes_run = 0;
   unsigned passes_skipped = 0;  // passes whose digit is the same for every key
   double ms = 0.0;              // profiling events: first command's start to last command's end
   double kernel_ms = 0.0;       // sum of the commands' own durations (no gaps, no host read-back)
@@ -80,6 +87,8 @@ class RadixSort {
   double warm_up();
 
   const RadixSortTuning& tuning() const { return tuning_; }
+  // Whether this shape runs RadixSortConfig::warp_group > 0 (one work-item per tile, 8-bit digits).
+  bool warp_sort_shape() const { return tuning_.work_group == 1 && tuning_.radix_bits == 8; }
   // Passes a sort with cfg takes before skipping: ceil(sorted_bits / radix_bits).
   unsigned passes(const RadixSortConfig& cfg) const;
 
@@ -87,6 +96,7 @@ class RadixSort {
   struct Kernels {
     cl::Kernel count_bounds, reduce_bounds, count, scan, scatter;
     cl::Kernel bucket_sort;  // the hybrid's per-bucket LSD passes (work_group == 1 only)
+    cl::Kernel warp_sort;    // the warp-granular sort's per-bucket walk (warp_sort_shape() only)
   };
   Kernels& kernels_for(const RadixSortConfig& cfg) { return cfg.wide_keys() ? wide_ : narrow_; }
   void enqueue(cl::Kernel& k, std::size_t global, std::size_t local);
@@ -94,6 +104,7 @@ class RadixSort {
   std::uint64_t first_read(Kernels& k, const cl::Buffer& keys, cl_uint n, cl_uint n_items, cl_uint shift, cl_uint hi,
                            std::size_t tiles, std::size_t key_bytes);
   bool hybrid_passes(Passes& ps, const std::vector<unsigned>& run, int counted, cl_uint lo, std::size_t count);
+  void warp_passes(Passes& ps, const std::vector<unsigned>& run, int counted, cl_uint lo, unsigned group);
   static void ensure(Runtime& rt, cl::Buffer& b, std::size_t& have, std::size_t need, const char* name);
   template <class Key>
   SortStats sort_host(std::vector<Key>& keys, std::vector<std::uint32_t>& values, const RadixSortConfig& cfg);
@@ -127,6 +138,41 @@ void reference_sort(std::vector<Key>& keys, std::vector<std::uint32_t>& values, 
   for (std::size_t i = 0; i < keys.size(); ++i) pairs[i] = {keys[i], values[i]};
   std::stable_sort(pairs.begin(), pairs.end(),
                    [&](const Pair& a, const Pair& b) { return ((a.key >> lo) & mask) < ((b.key >> lo) & mask); });
+  for (std::size_t i = 0; i < keys.size(); ++i) {
+    keys[i] = pairs[i].key;
+    values[i] = pairs[i].value;
+  }
+}
+
+// The host twin of the warp-granular sort (cfg.warp_group > 0, see RadixSortConfig): split a
+// range stably by its next 8-bit digit, from the top of the sorted bits down, while it holds more
+// than cfg.warp_group pairs.
+template <class Key>
+void reference_warp_sort(std::vector<Key>& keys, std::vector<std::uint32_t>& values, const RadixSortConfig& cfg) {
+  struct Pair {
+    Key key;
+    std::uint32_t value;
+  };
+  std::vector<Pair> pairs(keys.size());
+  for (std::size_t i = 0; i < keys.size(); ++i) pairs[i] = {keys[i], values[i]};
+  const unsigned lo = cfg.lo_bit(), hi = cfg.key_bits;
+  auto digit = [&](Key key, unsigned p) {
+    const unsigned shift = lo + 8 * p, width = std::min(8u, hi - shift);
+    return static_cast<unsigned>(key >> shift) & ((1u << width) - 1);
+  };
+  auto split = [&](auto& self, std::size_t b, std::size_t e, unsigned p) -> void {
+    if (e - b <= cfg.warp_group) return;  // a warp's worth or less: input order
+    std::stable_sort(pairs.begin() + b, pairs.begin() + e,
+                     [&](const Pair& x, const Pair& y) { return digit(x.key, p) < digit(y.key, p); });
+    if (p == 0) return;
+    for (std::size_t i = b; i < e;) {
+      std::size_t j = i;
+      while (j < e && digit(pairs[j].key, p) == digit(pairs[i].key, p)) ++j;
+      self(self, i, j, p - 1);
+      i = j;
+    }
+  };
+  if (!pairs.empty()) split(split, 0, pairs.size(), (cfg.sorted_bits() + 7) / 8 - 1);
   for (std::size_t i = 0; i < keys.size(); ++i) {
     keys[i] = pairs[i].key;
     values[i] = pairs[i].value;
