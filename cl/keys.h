@@ -232,6 +232,33 @@ RS_KEY_INLINE rs_u64 rs_morton6(rs_u32 a0, rs_u32 a1, rs_u32 a2, rs_u32 a3, rs_u
          (rs_spread6(a4) << 1) | rs_spread6(a5);
 }
 
+/* The ray rs_prepare_ray (intersect.h) gives, bit for bit, for TwoPoint's scene exit: the same
+ * reciprocal 1/d with |d| < tiny replaced by ±tiny of d's sign, that sign picked by a select
+ * rather than moved with integer operations as rs_safe_rcp does. Why (issue 42): rs_safe_rcp's
+ * integer form (commit 609a4b9, for Oclgrind) gives three identical and/or chains, one per axis,
+ * which PoCL's SLP pass packs two at a time into 2-lane vectors from the adjacent loads of dx and
+ * dy; a vector-typed instruction stops its work-group vectoriser, so TwoPoint ran one ray at a
+ * time, 2-5x HCC's encode (results/history/encoder-kernels.md). The select form is not packed.
+ * Oclgrind cannot run the llvm.copysign.f32 that LLVM's optimiser makes of the select, but the
+ * host builds kernels for simulators with -cl-opt-disable (host/runtime/runtime.cpp), where no
+ * such fold runs. EncodeMath.ExitRayIsThePreparedRay compares with rs_prepare_ray bit for bit;
+ * the ctest spatial_kernels_vectorised checks that PoCL vectorises every spatial kernel. */
+RS_KEY_INLINE float rs_exit_rcp(float d) {
+  const float tiny = 1e-30f;
+  const float sd = rs_abs(d) < tiny ? (d < 0.0f || (d == 0.0f && rs_float_as_int(d) < 0) ? -tiny : tiny) : d;
+  return 1.0f / sd;
+}
+
+RS_KEY_INLINE RsTraversalRay rs_exit_ray(RsRay ray) {
+  RsTraversalRay t;
+  t.o = rs_vec3(ray.o[0], ray.o[1], ray.o[2]);
+  t.d = rs_vec3(ray.d[0], ray.d[1], ray.d[2]);
+  t.inv_d = rs_vec3(rs_exit_rcp(ray.d[0]), rs_exit_rcp(ray.d[1]), rs_exit_rcp(ray.d[2]));
+  t.tmin = ray.tmin;
+  t.tmax = ray.tmax;
+  return t;
+}
+
 /* Far end of a ray's segment inside the scene box: the slab-test exit distance (same reciprocal
  * as traversal), capped by tmax. The far plane of each axis is picked by the sign of inv_d, which
  * equals max((lo − o)·inv, (hi − o)·inv) since lo <= hi and the rounded product is monotone. The y

@@ -56,7 +56,7 @@ RS_KEY_INLINE rs_u64 rs_aila_code(const RsEncodeFrame* f, RsRay r) {
  * a.x a.y a.z b.x of level 10. */
 RS_KEY_INLINE rs_u64 rs_twopoint_code(const RsEncodeFrame* f, RsRay ray) {
   const rs_u32 n = RS_TWOPOINT_LEVELS;
-  RsTraversalRay r = rs_prepare_ray(ray);
+  RsTraversalRay r = rs_exit_ray(ray); /* rs_prepare_ray's bits, in a form PoCL vectorises (keys.h) */
   float len = rs_max(0.0f, rs_min(f->twopoint_length, rs_scene_exit(f, r)));
   RsVec3 b = rs_add(r.o, rs_scale(r.d, len));
   rs_u32 qa[3], qb[3];

@@ -18,29 +18,29 @@
 #ifdef __OPENCL_VERSION__
 typedef float4 rs_f4;
 typedef int4 rs_i4;
-RS_INLINE rs_f4 rs4_splat(float x) { return (float4)(x); }
-RS_INLINE rs_f4 rs4_min(rs_f4 a, rs_f4 b) { return select(b, a, a < b); }
-RS_INLINE rs_f4 rs4_max(rs_f4 a, rs_f4 b) { return select(b, a, a > b); }
-RS_INLINE rs_f4 rs4_select(rs_f4 if_false, rs_f4 if_true, rs_i4 m) { return select(if_false, if_true, m); }
+RS_LANE_INLINE rs_f4 rs4_splat(float x) { return (float4)(x); }
+RS_LANE_INLINE rs_f4 rs4_min(rs_f4 a, rs_f4 b) { return select(b, a, a < b); }
+RS_LANE_INLINE rs_f4 rs4_max(rs_f4 a, rs_f4 b) { return select(b, a, a > b); }
+RS_LANE_INLINE rs_f4 rs4_select(rs_f4 if_false, rs_f4 if_true, rs_i4 m) { return select(if_false, if_true, m); }
 /* The lanes of a -1/0 mask as bits, lane i -> bit i. The traversal branches on these bits at every
  * node, so on x86 devices (PoCL) it is one movmskps; the portable form (AND with 1, 2, 4, 8, then OR
  * the lanes) put a shuffle-and-OR chain on that path, and the trace took 4-13 % longer (sibenik,
  * docs/trace.md). GPUs and other CPUs use the portable form; ClRuntime.MaskBitsFormsAgree compares
  * the two on the device for every mask. */
-RS_INLINE int rs4_bits_portable(rs_i4 m) { return (m.s0 & 1) | (m.s1 & 2) | (m.s2 & 4) | (m.s3 & 8); }
+RS_LANE_INLINE int rs4_bits_portable(rs_i4 m) { return (m.s0 & 1) | (m.s1 & 2) | (m.s2 & 4) | (m.s3 & 8); }
 #if defined(__x86_64__) && defined(__SSE__) && !defined(RS_PORTABLE_MASK_BITS)
 #define RS_MASK_BITS_MOVMSK 1
-RS_INLINE int rs4_bits(rs_i4 m) { return __builtin_ia32_movmskps(as_float4(m)); }
+RS_LANE_INLINE int rs4_bits(rs_i4 m) { return __builtin_ia32_movmskps(as_float4(m)); }
 #else
 #define RS_MASK_BITS_MOVMSK 0
-RS_INLINE int rs4_bits(rs_i4 m) { return rs4_bits_portable(m); }
+RS_LANE_INLINE int rs4_bits(rs_i4 m) { return rs4_bits_portable(m); }
 #endif
-RS_INLINE void rs4_store(rs_f4 a, float* p) { vstore4(a, 0, p); }
+RS_LANE_INLINE void rs4_store(rs_f4 a, float* p) { vstore4(a, 0, p); }
 /* Index of the lowest set bit of x != 0 (OpenCL 1.2 has clz but no ctz). */
-RS_INLINE int rs_lowest_bit(int x) { return 31 - clz(x & -x); }
+RS_LANE_INLINE int rs_lowest_bit(int x) { return 31 - clz(x & -x); }
 /* The same for a 32-bit mask whose top bit may be set (no signed overflow in the negation). */
-RS_INLINE int rs_lowest_bit_u(uint x) { return 31 - (int)clz(x & (0u - x)); }
-RS_INLINE rs_f4 rs4_load(const float* p) { return vload4(0, p); }
+RS_LANE_INLINE int rs_lowest_bit_u(uint x) { return 31 - (int)clz(x & (0u - x)); }
+RS_LANE_INLINE rs_f4 rs4_load(const float* p) { return vload4(0, p); }
 #else
 typedef struct alignas(16) rs_f4 {
   float s[4];
@@ -51,20 +51,20 @@ typedef struct alignas(16) rs_i4 {
 /* Per-lane operators of the host lane structs (N lanes; comparisons give -1 / 0 like OpenCL's).
  * Defined once here and used for the 8- and 16-lane structs below too. */
 #define RS_LANES_BINARY(T, R, N, op)                         \
-  RS_INLINE R operator op(T a, T b) {                        \
+  RS_LANE_INLINE R operator op(T a, T b) {                        \
     R r;                                                     \
     for (int i = 0; i < N; ++i) r.s[i] = a.s[i] op b.s[i];   \
     return r;                                                \
   }
 #define RS_LANES_COMPARE(F, I, N, op)                                          \
-  RS_INLINE I operator op(F a, F b) {                                          \
+  RS_LANE_INLINE I operator op(F a, F b) {                                          \
     I r;                                                                       \
     for (int i = 0; i < N; ++i) r.s[i] = a.s[i] op b.s[i] ? -1 : 0;            \
     return r;                                                                  \
   }
 #define RS4_COMPARE(op)                  \
   RS_LANES_COMPARE(rs_f4, rs_i4, 4, op) \
-  RS_INLINE rs_i4 operator op(rs_f4 a, float b) { return a op rs_f4{{b, b, b, b}}; }
+  RS_LANE_INLINE rs_i4 operator op(rs_f4 a, float b) { return a op rs_f4{{b, b, b, b}}; }
 RS_LANES_BINARY(rs_f4, rs_f4, 4, +)
 RS_LANES_BINARY(rs_f4, rs_f4, 4, -)
 RS_LANES_BINARY(rs_f4, rs_f4, 4, *)
@@ -78,29 +78,29 @@ RS4_COMPARE(>=)
 RS4_COMPARE(==)
 RS4_COMPARE(!=)
 #undef RS4_COMPARE
-RS_INLINE rs_f4 rs4_splat(float x) { return rs_f4{{x, x, x, x}}; }
-RS_INLINE rs_f4 operator*(rs_f4 a, float b) { return a * rs4_splat(b); }
-RS_INLINE rs_f4 operator*(float a, rs_f4 b) { return rs4_splat(a) * b; }
-RS_INLINE rs_f4 operator-(rs_f4 a, float b) { return a - rs4_splat(b); }
-RS_INLINE rs_f4 operator-(float a, rs_f4 b) { return rs4_splat(a) - b; }
-RS_INLINE rs_f4 rs4_select(rs_f4 if_false, rs_f4 if_true, rs_i4 m) {
+RS_LANE_INLINE rs_f4 rs4_splat(float x) { return rs_f4{{x, x, x, x}}; }
+RS_LANE_INLINE rs_f4 operator*(rs_f4 a, float b) { return a * rs4_splat(b); }
+RS_LANE_INLINE rs_f4 operator*(float a, rs_f4 b) { return rs4_splat(a) * b; }
+RS_LANE_INLINE rs_f4 operator-(rs_f4 a, float b) { return a - rs4_splat(b); }
+RS_LANE_INLINE rs_f4 operator-(float a, rs_f4 b) { return rs4_splat(a) - b; }
+RS_LANE_INLINE rs_f4 rs4_select(rs_f4 if_false, rs_f4 if_true, rs_i4 m) {
   rs_f4 r;
   for (int i = 0; i < 4; ++i) r.s[i] = m.s[i] < 0 ? if_true.s[i] : if_false.s[i];
   return r;
 }
-RS_INLINE rs_f4 rs4_min(rs_f4 a, rs_f4 b) { return rs4_select(b, a, a < b); }
-RS_INLINE rs_f4 rs4_max(rs_f4 a, rs_f4 b) { return rs4_select(b, a, a > b); }
-RS_INLINE int rs4_bits(rs_i4 m) { return (m.s[0] & 1) | (m.s[1] & 2) | (m.s[2] & 4) | (m.s[3] & 8); }
-RS_INLINE int rs_lowest_bit(int x) { return std::countr_zero(static_cast<unsigned>(x)); }
-RS_INLINE int rs_lowest_bit_u(rs_u32 x) { return std::countr_zero(x); }
-RS_INLINE void rs4_store(rs_f4 a, float* p) {
+RS_LANE_INLINE rs_f4 rs4_min(rs_f4 a, rs_f4 b) { return rs4_select(b, a, a < b); }
+RS_LANE_INLINE rs_f4 rs4_max(rs_f4 a, rs_f4 b) { return rs4_select(b, a, a > b); }
+RS_LANE_INLINE int rs4_bits(rs_i4 m) { return (m.s[0] & 1) | (m.s[1] & 2) | (m.s[2] & 4) | (m.s[3] & 8); }
+RS_LANE_INLINE int rs_lowest_bit(int x) { return std::countr_zero(static_cast<unsigned>(x)); }
+RS_LANE_INLINE int rs_lowest_bit_u(rs_u32 x) { return std::countr_zero(x); }
+RS_LANE_INLINE void rs4_store(rs_f4 a, float* p) {
   for (int i = 0; i < 4; ++i) p[i] = a.s[i];
 }
-RS_INLINE rs_f4 rs4_load(const float* p) { return rs_f4{{p[0], p[1], p[2], p[3]}}; }
+RS_LANE_INLINE rs_f4 rs4_load(const float* p) { return rs_f4{{p[0], p[1], p[2], p[3]}}; }
 #endif
 
 /* |x| per lane, as max(x, 0 − x): the same bits on both sides (±0 gives +0). */
-RS_INLINE rs_f4 rs4_abs(rs_f4 x) { return rs4_max(x, 0.0f - x); }
+RS_LANE_INLINE rs_f4 rs4_abs(rs_f4 x) { return rs4_max(x, 0.0f - x); }
 
 /* Sixteen-lane vectors in the same style (the encoders' cut-box tests, keys_cut.h): OpenCL's
  * float16/int16 on the device, a 64-byte struct with per-lane IEEE operations on the host. min/max
@@ -110,9 +110,9 @@ RS_INLINE rs_f4 rs4_abs(rs_f4 x) { return rs4_max(x, 0.0f - x); }
 #ifdef __OPENCL_VERSION__
 typedef float16 rs_f16;
 typedef int16 rs_i16;
-RS_INLINE rs_f16 rs16_splat(float x) { return (float16)(x); }
-RS_INLINE rs_f16 rs16_min(rs_f16 a, rs_f16 b) { return select(b, a, a < b); }
-RS_INLINE rs_f16 rs16_max(rs_f16 a, rs_f16 b) { return select(b, a, a > b); }
+RS_LANE_INLINE rs_f16 rs16_splat(float x) { return (float16)(x); }
+RS_LANE_INLINE rs_f16 rs16_min(rs_f16 a, rs_f16 b) { return select(b, a, a < b); }
+RS_LANE_INLINE rs_f16 rs16_max(rs_f16 a, rs_f16 b) { return select(b, a, a > b); }
 /* The lanes of a sixteen- or eight-lane -1/0 mask as bits, lane i -> bit i (the cut-box tests,
  * keys_cut.h rs_cut_bits). On AVX-512 devices (PoCL on such CPUs) the compare's mask register is
  * the answer (kmovd, RS_MASK16_BITS = 1); elsewhere the lanes are ANDed with their bits and ORed
@@ -120,18 +120,18 @@ RS_INLINE rs_f16 rs16_max(rs_f16 a, rs_f16 b) { return select(b, a, a > b); }
  * ClRuntime.MaskBitsFormsAgree checks them on the device. */
 #if defined(__AVX512F__) && defined(__AVX512DQ__) && !defined(RS_PORTABLE_MASK_BITS)
 #define RS_MASK16_BITS 1
-RS_INLINE uint rs16_mask_bits(int16 m) { return (uint)__builtin_ia32_cvtd2mask512(m); }
-RS_INLINE uint rs8_mask_bits(int8 m) { return (uint)__builtin_ia32_movmskps256(as_float8(m)); }
+RS_LANE_INLINE uint rs16_mask_bits(int16 m) { return (uint)__builtin_ia32_cvtd2mask512(m); }
+RS_LANE_INLINE uint rs8_mask_bits(int8 m) { return (uint)__builtin_ia32_movmskps256(as_float8(m)); }
 #else
 #define RS_MASK16_BITS 0
 /* The lanes are ORed one by one, not folded by halves (.lo | .hi): the same bits, but Oclgrind's
  * uninitialised-value check reports the fold of a cut-box mask as uninitialised (a false positive
  * that would hide real findings). GPUs run both forms as the same scalar operations. */
-RS_INLINE uint rs8_mask_bits(int8 m) {
+RS_LANE_INLINE uint rs8_mask_bits(int8 m) {
   const int8 b = m & (int8)(1, 2, 4, 8, 16, 32, 64, 128);
   return (uint)(b.s0 | b.s1 | b.s2 | b.s3 | b.s4 | b.s5 | b.s6 | b.s7);
 }
-RS_INLINE uint rs16_mask_bits(int16 m) {
+RS_LANE_INLINE uint rs16_mask_bits(int16 m) {
   const int16 b = m & (int16)(1, 2, 4, 8, 16, 32, 64, 128, 256, 512, 1024, 2048, 4096, 8192, 16384, 32768);
   return (uint)(b.s0 | b.s1 | b.s2 | b.s3 | b.s4 | b.s5 | b.s6 | b.s7 | b.s8 | b.s9 | b.sa | b.sb | b.sc | b.sd |
                 b.se | b.sf);
@@ -152,23 +152,23 @@ RS_LANES_BINARY(rs_i16, rs_i16, 16, |)
 RS_LANES_COMPARE(rs_f16, rs_i16, 16, <)
 RS_LANES_COMPARE(rs_f16, rs_i16, 16, >)
 RS_LANES_COMPARE(rs_f16, rs_i16, 16, <=)
-RS_INLINE rs_f16 rs16_splat(float x) {
+RS_LANE_INLINE rs_f16 rs16_splat(float x) {
   rs_f16 r;
   for (int i = 0; i < 16; ++i) r.s[i] = x;
   return r;
 }
-RS_INLINE rs_f16 rs16_min(rs_f16 a, rs_f16 b) {
+RS_LANE_INLINE rs_f16 rs16_min(rs_f16 a, rs_f16 b) {
   rs_f16 r;
   for (int i = 0; i < 16; ++i) r.s[i] = a.s[i] < b.s[i] ? a.s[i] : b.s[i];
   return r;
 }
-RS_INLINE rs_f16 rs16_max(rs_f16 a, rs_f16 b) {
+RS_LANE_INLINE rs_f16 rs16_max(rs_f16 a, rs_f16 b) {
   rs_f16 r;
   for (int i = 0; i < 16; ++i) r.s[i] = a.s[i] > b.s[i] ? a.s[i] : b.s[i];
   return r;
 }
 /* Lane i -> bit i (the device's rs16_mask_bits). */
-RS_INLINE rs_u32 rs16_mask_bits(rs_i16 m) {
+RS_LANE_INLINE rs_u32 rs16_mask_bits(rs_i16 m) {
   rs_u32 b = 0;
   for (int i = 0; i < 16; ++i) b |= static_cast<rs_u32>(m.s[i] != 0) << i;
   return b;
@@ -184,19 +184,19 @@ RS_INLINE rs_u32 rs16_mask_bits(rs_i16 m) {
 #ifdef __OPENCL_VERSION__
 typedef float8 rs_f8;
 typedef int8 rs_i8;
-RS_INLINE rs_f8 rs8_splat(float x) { return (float8)(x); }
-RS_INLINE rs_f8 rs8_min(rs_f8 a, rs_f8 b) { return select(b, a, a < b); }
-RS_INLINE rs_f8 rs8_max(rs_f8 a, rs_f8 b) { return select(b, a, a > b); }
-RS_INLINE rs_f8 rs8_select(rs_f8 if_false, rs_f8 if_true, rs_i8 m) { return select(if_false, if_true, m); }
+RS_LANE_INLINE rs_f8 rs8_splat(float x) { return (float8)(x); }
+RS_LANE_INLINE rs_f8 rs8_min(rs_f8 a, rs_f8 b) { return select(b, a, a < b); }
+RS_LANE_INLINE rs_f8 rs8_max(rs_f8 a, rs_f8 b) { return select(b, a, a > b); }
+RS_LANE_INLINE rs_f8 rs8_select(rs_f8 if_false, rs_f8 if_true, rs_i8 m) { return select(if_false, if_true, m); }
 /* Lane i -> bit i: one vmovmskps on an AVX device (the traversal branches on it at every node, as
  * rs4_bits), the portable AND-and-OR of rs8_mask_bits elsewhere. */
 #if defined(__x86_64__) && defined(__AVX__) && !defined(RS_PORTABLE_MASK_BITS)
-RS_INLINE int rs8_bits(rs_i8 m) { return __builtin_ia32_movmskps256(as_float8(m)); }
+RS_LANE_INLINE int rs8_bits(rs_i8 m) { return __builtin_ia32_movmskps256(as_float8(m)); }
 #else
-RS_INLINE int rs8_bits(rs_i8 m) { return (int)rs8_mask_bits(m); }
+RS_LANE_INLINE int rs8_bits(rs_i8 m) { return (int)rs8_mask_bits(m); }
 #endif
-RS_INLINE void rs8_store(rs_f8 a, float* p) { vstore8(a, 0, p); }
-RS_INLINE rs_f8 rs8_load(const float* p) { return vload8(0, p); }
+RS_LANE_INLINE void rs8_store(rs_f8 a, float* p) { vstore8(a, 0, p); }
+RS_LANE_INLINE rs_f8 rs8_load(const float* p) { return vload8(0, p); }
 #else
 /* 16-byte aligned, not 32 as float8: a 32-byte-aligned struct passed by value has another x86-64
  * calling convention with and without AVX (GCC's -Wpsabi note on every operator). The layouts
@@ -209,8 +209,8 @@ typedef struct alignas(16) rs_i8 {
 } rs_i8;
 #define RS8_COMPARE(op)                  \
   RS_LANES_COMPARE(rs_f8, rs_i8, 8, op) \
-  RS_INLINE rs_i8 operator op(rs_f8 a, float b) { return a op rs8_splat(b); }
-RS_INLINE rs_f8 rs8_splat(float x) { return rs_f8{{x, x, x, x, x, x, x, x}}; }
+  RS_LANE_INLINE rs_i8 operator op(rs_f8 a, float b) { return a op rs8_splat(b); }
+RS_LANE_INLINE rs_f8 rs8_splat(float x) { return rs_f8{{x, x, x, x, x, x, x, x}}; }
 RS_LANES_BINARY(rs_f8, rs_f8, 8, +)
 RS_LANES_BINARY(rs_f8, rs_f8, 8, -)
 RS_LANES_BINARY(rs_f8, rs_f8, 8, *)
@@ -224,26 +224,26 @@ RS8_COMPARE(>=)
 RS8_COMPARE(==)
 RS8_COMPARE(!=)
 #undef RS8_COMPARE
-RS_INLINE rs_f8 operator*(rs_f8 a, float b) { return a * rs8_splat(b); }
-RS_INLINE rs_f8 operator*(float a, rs_f8 b) { return rs8_splat(a) * b; }
-RS_INLINE rs_f8 operator-(rs_f8 a, float b) { return a - rs8_splat(b); }
-RS_INLINE rs_f8 operator-(float a, rs_f8 b) { return rs8_splat(a) - b; }
-RS_INLINE rs_f8 rs8_select(rs_f8 if_false, rs_f8 if_true, rs_i8 m) {
+RS_LANE_INLINE rs_f8 operator*(rs_f8 a, float b) { return a * rs8_splat(b); }
+RS_LANE_INLINE rs_f8 operator*(float a, rs_f8 b) { return rs8_splat(a) * b; }
+RS_LANE_INLINE rs_f8 operator-(rs_f8 a, float b) { return a - rs8_splat(b); }
+RS_LANE_INLINE rs_f8 operator-(float a, rs_f8 b) { return rs8_splat(a) - b; }
+RS_LANE_INLINE rs_f8 rs8_select(rs_f8 if_false, rs_f8 if_true, rs_i8 m) {
   rs_f8 r;
   for (int i = 0; i < 8; ++i) r.s[i] = m.s[i] < 0 ? if_true.s[i] : if_false.s[i];
   return r;
 }
-RS_INLINE rs_f8 rs8_min(rs_f8 a, rs_f8 b) { return rs8_select(b, a, a < b); }
-RS_INLINE rs_f8 rs8_max(rs_f8 a, rs_f8 b) { return rs8_select(b, a, a > b); }
-RS_INLINE int rs8_bits(rs_i8 m) {
+RS_LANE_INLINE rs_f8 rs8_min(rs_f8 a, rs_f8 b) { return rs8_select(b, a, a < b); }
+RS_LANE_INLINE rs_f8 rs8_max(rs_f8 a, rs_f8 b) { return rs8_select(b, a, a > b); }
+RS_LANE_INLINE int rs8_bits(rs_i8 m) {
   int b = 0;
   for (int i = 0; i < 8; ++i) b |= (m.s[i] & 1) << i;
   return b;
 }
-RS_INLINE void rs8_store(rs_f8 a, float* p) {
+RS_LANE_INLINE void rs8_store(rs_f8 a, float* p) {
   for (int i = 0; i < 8; ++i) p[i] = a.s[i];
 }
-RS_INLINE rs_f8 rs8_load(const float* p) {
+RS_LANE_INLINE rs_f8 rs8_load(const float* p) {
   rs_f8 r;
   for (int i = 0; i < 8; ++i) r.s[i] = p[i];
   return r;
@@ -253,7 +253,7 @@ RS_INLINE rs_f8 rs8_load(const float* p) {
 #endif
 
 /* |x| per lane, as rs4_abs. */
-RS_INLINE rs_f8 rs8_abs(rs_f8 x) { return rs8_max(x, 0.0f - x); }
+RS_LANE_INLINE rs_f8 rs8_abs(rs_f8 x) { return rs8_max(x, 0.0f - x); }
 
 /* ---------------------------------------------------------------------------------------------
  * Lanes of any width for the host twin of the packet traversal (traverse_packet.h, whose width
@@ -272,14 +272,14 @@ struct alignas(16) rs_lanes_i {
 };
 #define RS_LANES_T_BINARY(T, op)                            \
   template <int N>                                          \
-  RS_INLINE T<N> operator op(T<N> a, T<N> b) {              \
+  RS_LANE_INLINE T<N> operator op(T<N> a, T<N> b) {              \
     T<N> r;                                                 \
     for (int i = 0; i < N; ++i) r.s[i] = a.s[i] op b.s[i];  \
     return r;                                               \
   }
 #define RS_LANES_T_COMPARE(T, op)                                       \
   template <int N>                                                      \
-  RS_INLINE rs_lanes_i<N> operator op(T<N> a, T<N> b) {                 \
+  RS_LANE_INLINE rs_lanes_i<N> operator op(T<N> a, T<N> b) {                 \
     rs_lanes_i<N> r;                                                    \
     for (int i = 0; i < N; ++i) r.s[i] = a.s[i] op b.s[i] ? -1 : 0;     \
     return r;                                                           \
@@ -303,33 +303,33 @@ RS_LANES_T_COMPARE(rs_lanes_i, !=)
 #undef RS_LANES_T_COMPARE
 /* A scalar on either side is splatted first, as OpenCL does (same bits). */
 template <int N>
-RS_INLINE rs_lanes_f<N> rs_lanes_splat(float x) {
+RS_LANE_INLINE rs_lanes_f<N> rs_lanes_splat(float x) {
   rs_lanes_f<N> r;
   for (int i = 0; i < N; ++i) r.s[i] = x;
   return r;
 }
 template <int N>
-RS_INLINE rs_lanes_f<N> operator*(float a, rs_lanes_f<N> b) {
+RS_LANE_INLINE rs_lanes_f<N> operator*(float a, rs_lanes_f<N> b) {
   return rs_lanes_splat<N>(a) * b;
 }
 template <int N>
-RS_INLINE rs_lanes_f<N> operator*(rs_lanes_f<N> a, float b) {
+RS_LANE_INLINE rs_lanes_f<N> operator*(rs_lanes_f<N> a, float b) {
   return a * rs_lanes_splat<N>(b);
 }
 template <int N>
-RS_INLINE rs_lanes_f<N> operator+(rs_lanes_f<N> a, float b) {
+RS_LANE_INLINE rs_lanes_f<N> operator+(rs_lanes_f<N> a, float b) {
   return a + rs_lanes_splat<N>(b);
 }
 template <int N>
-RS_INLINE rs_lanes_f<N> operator-(float a, rs_lanes_f<N> b) {
+RS_LANE_INLINE rs_lanes_f<N> operator-(float a, rs_lanes_f<N> b) {
   return rs_lanes_splat<N>(a) - b;
 }
 template <int N>
-RS_INLINE rs_lanes_f<N> operator/(rs_lanes_f<N> a, float b) {
+RS_LANE_INLINE rs_lanes_f<N> operator/(rs_lanes_f<N> a, float b) {
   return a / rs_lanes_splat<N>(b);
 }
 template <int N>
-RS_INLINE rs_lanes_i<N> operator~(rs_lanes_i<N> a) {
+RS_LANE_INLINE rs_lanes_i<N> operator~(rs_lanes_i<N> a) {
   rs_lanes_i<N> r;
   for (int i = 0; i < N; ++i) r.s[i] = ~a.s[i];
   return r;

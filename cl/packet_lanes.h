@@ -20,26 +20,26 @@
 #ifdef __OPENCL_VERSION__
 typedef RS_PACKET_CAT(float, RS_PACKET_W) rs_pf;
 typedef RS_PACKET_CAT(int, RS_PACKET_W) rs_pi;
-RS_INLINE rs_pf rsp_splat(float x) { return (rs_pf)(x); }
-RS_INLINE rs_pi rsp_splati(int x) { return (rs_pi)(x); }
-RS_INLINE rs_pf rsp_select(rs_pf if_false, rs_pf if_true, rs_pi m) { return select(if_false, if_true, m); }
-RS_INLINE rs_pi rsp_selecti(rs_pi if_false, rs_pi if_true, rs_pi m) { return select(if_false, if_true, m); }
-RS_INLINE rs_pf rsp_load(const float* p) { return RS_PACKET_CAT(vload, RS_PACKET_W)(0, p); }
-RS_INLINE rs_pi rsp_loadi(const int* p) { return RS_PACKET_CAT(vload, RS_PACKET_W)(0, p); }
-RS_INLINE void rsp_store(rs_pf a, float* p) { RS_PACKET_CAT(vstore, RS_PACKET_W)(a, 0, p); }
-RS_INLINE void rsp_storei(rs_pi a, int* p) { RS_PACKET_CAT(vstore, RS_PACKET_W)(a, 0, p); }
+RS_LANE_INLINE rs_pf rsp_splat(float x) { return (rs_pf)(x); }
+RS_LANE_INLINE rs_pi rsp_splati(int x) { return (rs_pi)(x); }
+RS_LANE_INLINE rs_pf rsp_select(rs_pf if_false, rs_pf if_true, rs_pi m) { return select(if_false, if_true, m); }
+RS_LANE_INLINE rs_pi rsp_selecti(rs_pi if_false, rs_pi if_true, rs_pi m) { return select(if_false, if_true, m); }
+RS_LANE_INLINE rs_pf rsp_load(const float* p) { return RS_PACKET_CAT(vload, RS_PACKET_W)(0, p); }
+RS_LANE_INLINE rs_pi rsp_loadi(const int* p) { return RS_PACKET_CAT(vload, RS_PACKET_W)(0, p); }
+RS_LANE_INLINE void rsp_store(rs_pf a, float* p) { RS_PACKET_CAT(vstore, RS_PACKET_W)(a, 0, p); }
+RS_LANE_INLINE void rsp_storei(rs_pi a, int* p) { RS_PACKET_CAT(vstore, RS_PACKET_W)(a, 0, p); }
 /* The lanes of a -1/0 mask as bits, lane i -> bit i: one movmskps / vmovmskps / kmov on x86 (the
  * forms of lanes.h), the portable AND-and-OR elsewhere. */
 #if RS_PACKET_W == 4
-RS_INLINE int rsp_bits(rs_pi m) { return rs4_bits(m); }
-RS_INLINE rs_pi rsp_lane_bits(void) { return (int4)(1, 2, 4, 8); }
+RS_LANE_INLINE int rsp_bits(rs_pi m) { return rs4_bits(m); }
+RS_LANE_INLINE rs_pi rsp_lane_bits(void) { return (int4)(1, 2, 4, 8); }
 #elif RS_PACKET_W == 8
 #if defined(__x86_64__) && defined(__AVX__) && !defined(RS_PORTABLE_MASK_BITS)
-RS_INLINE int rsp_bits(rs_pi m) { return __builtin_ia32_movmskps256(as_float8(m)); }
+RS_LANE_INLINE int rsp_bits(rs_pi m) { return __builtin_ia32_movmskps256(as_float8(m)); }
 #else
-RS_INLINE int rsp_bits(rs_pi m) { return (int)rs8_mask_bits(m); }
+RS_LANE_INLINE int rsp_bits(rs_pi m) { return (int)rs8_mask_bits(m); }
 #endif
-RS_INLINE rs_pi rsp_lane_bits(void) { return (int8)(1, 2, 4, 8, 16, 32, 64, 128); }
+RS_LANE_INLINE rs_pi rsp_lane_bits(void) { return (int8)(1, 2, 4, 8, 16, 32, 64, 128); }
 #else
 #if !defined(RS_MASK16_BITS) || RS_MASK16_BITS == 0
 #if defined(__x86_64__) && defined(__AVX__) && !defined(RS_PORTABLE_MASK_BITS)
@@ -48,57 +48,57 @@ RS_INLINE rs_pi rsp_lane_bits(void) { return (int8)(1, 2, 4, 8, 16, 32, 64, 128)
 #endif
 #endif
 #ifdef RS_PACKET_MASK16_AVX
-RS_INLINE int rsp_bits(rs_pi m) {
+RS_LANE_INLINE int rsp_bits(rs_pi m) {
   return __builtin_ia32_movmskps256(as_float8(m.lo)) | (__builtin_ia32_movmskps256(as_float8(m.hi)) << 8);
 }
 #else
-RS_INLINE int rsp_bits(rs_pi m) { return (int)rs16_mask_bits(m); }
+RS_LANE_INLINE int rsp_bits(rs_pi m) { return (int)rs16_mask_bits(m); }
 #endif
-RS_INLINE rs_pi rsp_lane_bits(void) {
+RS_LANE_INLINE rs_pi rsp_lane_bits(void) {
   return (int16)(1, 2, 4, 8, 16, 32, 64, 128, 256, 512, 1024, 2048, 4096, 8192, 16384, 32768);
 }
 #endif
 #else
 typedef rs_lanes_f<RS_PACKET_W> rs_pf;
 typedef rs_lanes_i<RS_PACKET_W> rs_pi;
-RS_INLINE rs_pf rsp_splat(float x) { return rs_lanes_splat<RS_PACKET_W>(x); }
-RS_INLINE rs_pi rsp_splati(int x) {
+RS_LANE_INLINE rs_pf rsp_splat(float x) { return rs_lanes_splat<RS_PACKET_W>(x); }
+RS_LANE_INLINE rs_pi rsp_splati(int x) {
   rs_pi r;
   for (int i = 0; i < RS_PACKET_W; ++i) r.s[i] = x;
   return r;
 }
-RS_INLINE rs_pf rsp_select(rs_pf if_false, rs_pf if_true, rs_pi m) {
+RS_LANE_INLINE rs_pf rsp_select(rs_pf if_false, rs_pf if_true, rs_pi m) {
   rs_pf r;
   for (int i = 0; i < RS_PACKET_W; ++i) r.s[i] = m.s[i] < 0 ? if_true.s[i] : if_false.s[i];
   return r;
 }
-RS_INLINE rs_pi rsp_selecti(rs_pi if_false, rs_pi if_true, rs_pi m) {
+RS_LANE_INLINE rs_pi rsp_selecti(rs_pi if_false, rs_pi if_true, rs_pi m) {
   rs_pi r;
   for (int i = 0; i < RS_PACKET_W; ++i) r.s[i] = m.s[i] < 0 ? if_true.s[i] : if_false.s[i];
   return r;
 }
-RS_INLINE rs_pf rsp_load(const float* p) {
+RS_LANE_INLINE rs_pf rsp_load(const float* p) {
   rs_pf r;
   for (int i = 0; i < RS_PACKET_W; ++i) r.s[i] = p[i];
   return r;
 }
-RS_INLINE rs_pi rsp_loadi(const int* p) {
+RS_LANE_INLINE rs_pi rsp_loadi(const int* p) {
   rs_pi r;
   for (int i = 0; i < RS_PACKET_W; ++i) r.s[i] = p[i];
   return r;
 }
-RS_INLINE void rsp_store(rs_pf a, float* p) {
+RS_LANE_INLINE void rsp_store(rs_pf a, float* p) {
   for (int i = 0; i < RS_PACKET_W; ++i) p[i] = a.s[i];
 }
-RS_INLINE void rsp_storei(rs_pi a, int* p) {
+RS_LANE_INLINE void rsp_storei(rs_pi a, int* p) {
   for (int i = 0; i < RS_PACKET_W; ++i) p[i] = a.s[i];
 }
-RS_INLINE int rsp_bits(rs_pi m) {
+RS_LANE_INLINE int rsp_bits(rs_pi m) {
   int b = 0;
   for (int i = 0; i < RS_PACKET_W; ++i) b |= (m.s[i] & 1) << i;
   return b;
 }
-RS_INLINE rs_pi rsp_lane_bits(void) {
+RS_LANE_INLINE rs_pi rsp_lane_bits(void) {
   rs_pi r;
   for (int i = 0; i < RS_PACKET_W; ++i) r.s[i] = 1 << i;
   return r;
@@ -106,14 +106,14 @@ RS_INLINE rs_pi rsp_lane_bits(void) {
 #endif
 
 #ifdef __OPENCL_VERSION__
-RS_INLINE int rs_popcount(int x) { return popcount(x); }
+RS_LANE_INLINE int rs_popcount(int x) { return popcount(x); }
 #else
-RS_INLINE int rs_popcount(int x) { return std::popcount(static_cast<unsigned>(x)); }
+RS_LANE_INLINE int rs_popcount(int x) { return std::popcount(static_cast<unsigned>(x)); }
 #endif
 
 /* min/max as selects, as rs4_min/rs4_max (lanes.h): the same bits on both sides. */
-RS_INLINE rs_pf rsp_min(rs_pf a, rs_pf b) { return rsp_select(b, a, a < b); }
-RS_INLINE rs_pf rsp_max(rs_pf a, rs_pf b) { return rsp_select(b, a, a > b); }
-RS_INLINE rs_pf rsp_abs(rs_pf x) { return rsp_max(x, rsp_splat(0.0f) - x); }
+RS_LANE_INLINE rs_pf rsp_min(rs_pf a, rs_pf b) { return rsp_select(b, a, a < b); }
+RS_LANE_INLINE rs_pf rsp_max(rs_pf a, rs_pf b) { return rsp_select(b, a, a > b); }
+RS_LANE_INLINE rs_pf rsp_abs(rs_pf x) { return rsp_max(x, rsp_splat(0.0f) - x); }
 /* Bits -> a -1/0 lane mask (the inverse of rsp_bits). */
-RS_INLINE rs_pi rsp_mask(int bits) { return (rsp_splati(bits) & rsp_lane_bits()) != rsp_splati(0); }
+RS_LANE_INLINE rs_pi rsp_mask(int bits) { return (rsp_splati(bits) & rsp_lane_bits()) != rsp_splati(0); }

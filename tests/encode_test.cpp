@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -178,6 +179,34 @@ TEST(EncodeMath, SceneExitEqualsTheMinMaxForm) {
       far = rs_min(far, rs_max((f.box_min[a] - o) * inv, (f.box_max[a] - o) * inv));
     }
     ASSERT_EQ(rs_scene_exit(&f, r), far) << "ray " << k;  // == treats -0 and +0 as equal
+  }
+}
+
+// TwoPoint's scene exit prepares its ray with rs_exit_ray, a select where rs_safe_rcp moves the sign
+// bit with integer operations (so PoCL vectorises the kernel, cl/keys.h). Every field must have
+// rs_prepare_ray's bits: directions around the ±tiny threshold, ±0, denormals, ±inf, NaN, and
+// random bit patterns.
+TEST(EncodeMath, ExitRayIsThePreparedRay) {
+  const auto bits = [](float x) { return std::bit_cast<std::uint32_t>(x); };
+  std::vector<float> ds = {0.0f, -0.0f, 1e-30f, -1e-30f, 1.0f, -1.0f, std::numeric_limits<float>::infinity(),
+                           -std::numeric_limits<float>::infinity(), std::numeric_limits<float>::quiet_NaN(),
+                           -std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::denorm_min(),
+                           -std::numeric_limits<float>::denorm_min(), std::numeric_limits<float>::max()};
+  for (float t : {1e-30f, -1e-30f})
+    for (int k = -64; k <= 64; ++k) ds.push_back(std::bit_cast<float>(static_cast<std::uint32_t>(bits(t) + k)));
+  std::mt19937 rng(42);
+  for (int i = 0; i < 300000; ++i) ds.push_back(std::bit_cast<float>(static_cast<std::uint32_t>(rng())));
+  for (std::size_t i = 0; i < ds.size(); ++i) {
+    RsRay ray{};
+    for (int a = 0; a < 3; ++a) ray.o[a] = ds[(i + 5 * a) % ds.size()], ray.d[a] = ds[(i + a) % ds.size()];
+    ray.tmin = ds[(i + 7) % ds.size()];
+    ray.tmax = ds[(i + 11) % ds.size()];
+    const RsTraversalRay want = rs_prepare_ray(ray), got = rs_exit_ray(ray);
+    const float w[11] = {want.o.x, want.o.y, want.o.z, want.d.x, want.d.y, want.d.z,
+                         want.inv_d.x, want.inv_d.y, want.inv_d.z, want.tmin, want.tmax};
+    const float g[11] = {got.o.x, got.o.y, got.o.z, got.d.x, got.d.y, got.d.z,
+                         got.inv_d.x, got.inv_d.y, got.inv_d.z, got.tmin, got.tmax};
+    for (int f = 0; f < 11; ++f) ASSERT_EQ(bits(g[f]), bits(w[f])) << "ray " << i << " field " << f << " d=" << ray.d[f % 3];
   }
 }
 

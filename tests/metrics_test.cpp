@@ -1,9 +1,15 @@
 // ANC on known key sequences and the SIMT model on hand-built traversal trails.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <numeric>
+#include <random>
+#include <string>
 
 #include "bench/metrics.h"
+#include "traverse_binary.h"
+#include "traverse_wide.h"
+#include "traverse_wide8.h"
 
 namespace raysort {
 
@@ -104,6 +110,62 @@ TEST(SimtModel, TracedModelMatchesTrailsAndOrderMatters) {
   const SimtModel wide8 = simt_model(bvh, rays, nullptr, false, TraceVariant::Fast, TraceLayout::Wide8);
   EXPECT_EQ(wide8.total_steps, std::accumulate(visits.begin(), visits.end(), std::uint64_t{0}));
   EXPECT_LE(wide8.total_steps, wide.total_steps);
+}
+
+// The traced model counts a warp's distinct nodes by stamping node slots (metrics.cpp,
+// DistinctNodes); it must give exactly what sorting the union of the same trails gives, on every
+// layout, for closest and any hit, rays in a shuffled order, where leaves are shared and missed.
+TEST(SimtModel, TracedDistinctNodesEqualTheSortedUnion) {
+  Scene::Flat f;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(0.0f, 8.0f);
+  for (int i = 0; i < 300; ++i) {
+    const float x = u(rng), y = u(rng), z = u(rng);
+    f.v0.push_back({x, y, z}), f.v1.push_back({x + 0.5f, y, z}), f.v2.push_back({x, y + 0.5f, z + 0.3f});
+    f.material.push_back(0);
+  }
+  const Bvh bvh = build_bvh(f);
+  std::vector<RsRay> rays;
+  std::normal_distribution<float> n(0.0f, 1.0f);
+  for (int i = 0; i < 1000; ++i) {
+    RsRay r{};
+    for (int a = 0; a < 3; ++a) r.o[a] = u(rng), r.d[a] = n(rng);
+    r.tmax = RS_T_FAR;
+    rays.push_back(r);
+  }
+  std::vector<std::uint32_t> order(rays.size());
+  std::iota(order.begin(), order.end(), 0u);
+  std::shuffle(order.begin(), order.end(), rng);
+  WideBvh wide_scratch;
+  const WideBvh& wide = wide_of(bvh, wide_scratch);
+  const Wide8Bvh wide8 = collapse_to_wide8(bvh);
+  for (TraceLayout layout : {TraceLayout::Wide, TraceLayout::Wide8, TraceLayout::Binary})
+    for (int any : {0, 1}) {
+      SCOPED_TRACE(std::string(trace_layout_name(layout)) + (any ? " any hit" : " closest hit"));
+      std::vector<std::vector<std::uint32_t>> trails(rays.size());
+      std::vector<std::uint32_t> buffer(1u << 16);
+      for (std::size_t i = 0; i < rays.size(); ++i) {
+        rs_u32 len = 0;
+        const RsRay& r = rays[order[i]];
+        const rs_u32 cap = static_cast<rs_u32>(buffer.size());
+        if (layout == TraceLayout::Wide)
+          rs_traverse_wide_recorded(wide.nodes.data(), wide.packets.data(), r, 0, any, nullptr, buffer.data(), cap, &len);
+        else if (layout == TraceLayout::Wide8)
+          rs_traverse_wide8_recorded(wide8.nodes.data(), wide8.packets.data(), r, 0, any, nullptr, buffer.data(), cap,
+                                     &len);
+        else
+          rs_traverse_variant_recorded(bvh.nodes.data(), bvh.triangles.data(), r, 0, any, nullptr, buffer.data(), cap,
+                                       &len);
+        trails[i].assign(buffer.begin(), buffer.begin() + len);
+      }
+      const SimtModel want = simt_model_from_trails(trails);
+      const SimtModel got = simt_model(bvh, rays, order.data(), any != 0, TraceVariant::Fast, layout);
+      EXPECT_GT(want.total_steps, 0u);
+      EXPECT_EQ(got.total_steps, want.total_steps);
+      EXPECT_EQ(got.warps, want.warps);
+      EXPECT_EQ(got.lane_efficiency, want.lane_efficiency);
+      EXPECT_EQ(got.distinct_nodes_per_visit, want.distinct_nodes_per_visit);
+    }
 }
 
 }  // namespace raysort
