@@ -371,5 +371,37 @@ TEST(Protocol, SharedRoundsShuffleCommonAndGroupArmsTogether) {
   for (const auto& [name, c] : count) EXPECT_NEAR(c, 500, 90) << name;
 }
 
+// The budget is a group's own: a slow group that never meets the noise bar stops after its own
+// --max-time, while a fast one beside it (which pays only its share of the rest of each round) goes on
+// to max_rounds. A budget pooled over the batch stopped both at the same round.
+TEST(Protocol, SharedRoundsBudgetIsEachGroupsOwn) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> wild(1.0, 10.0);
+  auto group = [&](int sleep_ms) {
+    MeasurementGroup g;
+    g.arms = {{{"trace"}, [&, sleep_ms] {
+                 if (sleep_ms) std::this_thread::sleep_for(std::chrono::milliseconds(sleep_ms));
+                 return std::vector<double>{wild(rng)};
+               }}};
+    g.targets = {[](const Series& s) { return ratio_interval(s.at("base"), s.at("trace")); }};
+    return g;
+  };
+  SharedMeasurement m;
+  m.common = {{{"base"}, [&] { return std::vector<double>{wild(rng)}; }}};
+  m.groups = {group(20), group(0)};
+  ProtocolSettings s;
+  s.warmup = 0;
+  s.min_rounds = 6;
+  s.max_rounds = 60;
+  s.max_noise = 0.0001;
+  s.max_time_s = 0.5;
+  const std::vector<Outcome> o = measure_shared(m, s);
+  EXPECT_EQ(o[0].stop, StopReason::Time);
+  EXPECT_GE(o[0].rounds, 6u);
+  EXPECT_LE(o[0].rounds, 26u);  // 0.5 s of its own 20 ms arms
+  EXPECT_EQ(o[1].stop, StopReason::Rounds);
+  EXPECT_EQ(o[1].rounds, 60u);
+}
+
 }  // namespace
 }  // namespace raysort

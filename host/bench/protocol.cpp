@@ -253,9 +253,14 @@ std::vector<Outcome> measure_shared(const SharedMeasurement& m, const ProtocolSe
                                  seconds_since(start), s.hard_limit_s,
                                  groups > 1 ? fmt::format(" per group × {} groups sharing the rounds", groups) : ""));
   };
-  auto run_arm = [&](const Arm& arm, Series* into) {
+  // Each group's share of the sampling time (the stopping rule's budget is per group): its own
+  // prologue and arms, plus an equal share of the rest of its rounds (the common arms, the checks).
+  std::vector<double> spent_s(groups, 0.0), round_own_s(groups, 0.0);
+  auto run_arm = [&](const Arm& arm, Series* into, std::size_t group) {
     check_hard_limit();
+    const Clock::time_point t0 = Clock::now();
     const std::vector<double> ms = arm.run();
+    if (group < groups) round_own_s[group] += seconds_since(t0);
     if (ms.size() != arm.stages.size())
       throw Error(fmt::format("measure: an arm returned {} stage times for {} stages", ms.size(), arm.stages.size()));
     if (into)
@@ -269,28 +274,43 @@ std::vector<Outcome> measure_shared(const SharedMeasurement& m, const ProtocolSe
     for (std::size_t g = 0; g < groups; ++g)
       if (active[g]) live.push_back(g);
     for (std::size_t i : round_order(live.size(), ~s.seed, round))
-      if (m.groups[live[i]].prologue.run) run_arm(m.groups[live[i]].prologue, timed ? &own[live[i]] : nullptr);
-    std::vector<std::pair<const Arm*, Series*>> arms;
-    for (const Arm& a : m.common) arms.push_back({&a, timed ? &common : nullptr});
+      if (m.groups[live[i]].prologue.run)
+        run_arm(m.groups[live[i]].prologue, timed ? &own[live[i]] : nullptr, live[i]);
+    struct RoundArm {
+      const Arm* arm;
+      Series* into;
+      std::size_t group;  // groups: a common arm
+    };
+    std::vector<RoundArm> arms;
+    for (const Arm& a : m.common) arms.push_back({&a, timed ? &common : nullptr, groups});
     for (std::size_t g : live)
-      for (const Arm& a : m.groups[g].arms) arms.push_back({&a, timed ? &own[g] : nullptr});
-    for (std::size_t i : round_order(arms.size(), s.seed, round)) run_arm(*arms[i].first, arms[i].second);
+      for (const Arm& a : m.groups[g].arms) arms.push_back({&a, timed ? &own[g] : nullptr, g});
+    for (std::size_t i : round_order(arms.size(), s.seed, round)) run_arm(*arms[i].arm, arms[i].into, arms[i].group);
     ++round;
   };
 
   for (unsigned w = 0; w < s.warmup; ++w) run_round(false);
   const Clock::time_point sampling = Clock::now();
+  Clock::time_point mark = sampling;
   const unsigned min_rounds = std::max(1u, s.min_rounds);
-  const double budget_s = s.max_time_s * static_cast<double>(std::max<std::size_t>(1, groups));
   auto retire = [&](std::size_t g, StopReason why) {
     active[g] = false;
     out[g].stop = why;
   };
   for (std::size_t live = groups; live > 0;) {
+    std::fill(round_own_s.begin(), round_own_s.end(), 0.0);
     run_round(true);
-    const bool over_time = seconds_since(sampling) >= budget_s;
+    // The round's wall clock since the last one ended (the checks between them included), shared:
+    // with one group, its spent time is the sampling wall clock, as before shared rounds.
+    const double round_s = seconds_since(mark);
+    mark = Clock::now();
+    double own_s = 0.0;
+    for (std::size_t g = 0; g < groups; ++g) own_s += round_own_s[g];
+    for (std::size_t g = 0; g < groups; ++g)
+      if (active[g]) spent_s[g] += round_own_s[g] + std::max(0.0, round_s - own_s) / static_cast<double>(live);
     for (std::size_t g = 0; g < groups; ++g) {
       if (!active[g]) continue;
+      const bool over_time = spent_s[g] >= s.max_time_s;
       Outcome& o = out[g];
       ++o.rounds;
       if (o.rounds < min_rounds) continue;

@@ -187,9 +187,11 @@ Outcome measure(const Measurement& m, const ProtocolSettings& s);
 //    within max_noise after min_rounds, or at max_rounds; its arms stop, the others go on. So a
 //    group's rounds are the first `rounds` of the batch, and its figures pair its arms with the
 //    common arms of exactly those rounds: the estimates keep their guarantees.
-//  - The sampling budget is max_time_s per group (a cell's budget, as before): once the batch's
-//    sampling time passes max_time_s × groups, every group still active stops ("time"). The hard
-//    limit is hard_limit_s × groups likewise (--timeout stays a cell's).
+//  - The sampling budget is max_time_s per group (a cell's budget, as before): a group's time is its
+//    own prologue and arms plus an equal share, among the groups measuring in that round, of the
+//    rest of the round (the common arms, the checks between rounds). So a noisy group stops after
+//    its own budget, not the batch's, and with one group its time is the sampling wall clock. The
+//    hard limit is hard_limit_s × groups (--timeout stays a cell's).
 // measure() is the case of one group without common arms, round for round the same.
 struct MeasurementGroup {
   Arm prologue;  // optional: runs first in every round the group is active
