@@ -249,6 +249,8 @@ RS_KEY_INLINE float rs_exit_rcp(float d) {
   return 1.0f / sd;
 }
 
+/* Written out, not rs_prepare_ray with inv_d replaced: PoCL does not drop the integer-form
+ * reciprocals in time and the kernel stays scalar (spatial_kernels_vectorised fails that way). */
 RS_KEY_INLINE RsTraversalRay rs_exit_ray(RsRay ray) {
   RsTraversalRay t;
   t.o = rs_vec3(ray.o[0], ray.o[1], ray.o[2]);

@@ -259,7 +259,7 @@ void BatchBench::add_embree_arms(MeasurementGroup& m, SortedGroup& g) {
                               if (g.first_order[i] < n_) back[g.first_order[i]] = hits[i];
                             const HitAgreement a = compare_with_embree(arm.nosort_hits, back, any_hit);
                             const std::size_t differ = a.differences() - a.ties();
-                            g.embree_checked[key] =
+                            g.embree_checked[key].error =
                                 differ == 0 ? ""
                                             : fmt::format("Embree {} ({}): {} of {} rays traced in the sorted order ({}) "
                                                           "differ from the NoSort order beyond ties ({} another triangle "
@@ -267,7 +267,7 @@ void BatchBench::add_embree_arms(MeasurementGroup& m, SortedGroup& g) {
                                                           "sorted order)",
                                                           arm.key, embree_path_name(arm.path, any_hit), differ, n_, access,
                                                           a.other_tri, a.ours_only, a.embree_only);
-                            g.embree_checked[key + ":ties"] = std::to_string(a.ties());
+                            g.embree_checked[key].ties = a.ties();
                           }
                           return std::vector<double>{ms};
                         }});
@@ -298,14 +298,15 @@ std::string BatchBench::fill_embree(CellRecord& c, const Outcome& o, const Sorte
     c.samples["embree:" + arm.key + ":nosort"] = nosort;
     if (so && g) {
       const std::string key = arm.key + ":" + c.access;
-      if (const std::string& why = g->embree_checked.at(key); !why.empty()) return why;
+      const SortedGroup::EmbreeCheck& check = g->embree_checked.at(key);
+      if (!check.error.empty()) return check.error;
       const std::vector<double>& trace = o.series.at("embree:" + key);
       e.trace = Timing::of(trace);
       c.samples["embree:" + arm.key + ":trace"] = trace;
       const Estimate measured = ratio_interval(nosort, trace, settings.confidence);
       // The same rays in the same order: whatever the clock says is noise (as our own speedup).
       e.speedup = so->identity ? Estimate{1.0, 1.0, 1.0, measured.n} : measured;
-      e.ties = std::stoull(g->embree_checked.at(key + ":ties"));
+      e.ties = check.ties;
       e.differ = 0;
     }
     c.embree.push_back(std::move(e));

@@ -107,7 +107,13 @@ class BatchBench {
     std::vector<std::uint32_t> first_order;  // the order of the first sort (downloaded once)
     std::map<std::string, std::size_t> bad;  // by access mode: rays whose hits disagree with NoSort
     std::vector<RsRay> embree_permuted;     // the rays in sorted order, for Embree's permute arms
-    std::map<std::string, std::string> embree_checked;  // by "path:access": "" or why the cells fail
+    // Embree's sorted-order hits against its NoSort-order ones, by "path:access": "" or why the
+    // cells fail, and the rays that met the other triangle of a tie.
+    struct EmbreeCheck {
+      std::string error;
+      std::size_t ties = 0;
+    };
+    std::map<std::string, EmbreeCheck> embree_checked;
     std::string error;                      // why its cells fail before any round
   };
 

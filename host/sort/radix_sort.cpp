@@ -144,6 +144,17 @@ void RadixSort::enqueue(cl::Kernel& k, std::size_t global, std::size_t local) {
                                    nullptr, &events_.back());
 }
 
+namespace {
+
+// Sets a kernel's arguments 0, 1, ... in order.
+template <class... Args>
+void set_args(cl::Kernel& kernel, const Args&... args) {
+  cl_uint index = 0;
+  (kernel.setArg(index++, args), ...);
+}
+
+}  // namespace
+
 // One sort's passes: the kernels' arguments, which buffers hold the pairs now (ping-pong between
 // the caller's and the scratch buffers), and the launches of each kind of pass.
 struct RadixSort::Passes {
@@ -155,17 +166,11 @@ struct RadixSort::Passes {
   cl::Buffer *src_keys, *src_values, *dst_keys, *dst_values;
 
   void count(cl_uint shift) {
-    k.count.setArg(0, *src_keys);
-    k.count.setArg(1, n);
-    k.count.setArg(2, n_items);
-    k.count.setArg(3, shift);
-    k.count.setArg(4, hi);
-    k.count.setArg(5, rs.counts_);
+    set_args(k.count, *src_keys, n, n_items, shift, hi, rs.counts_);
     rs.enqueue(k.count, tiles * wg, wg);
   }
   void scan() {
-    k.scan.setArg(0, rs.counts_);
-    k.scan.setArg(1, static_cast<cl_uint>(bins));
+    set_args(k.scan, rs.counts_, static_cast<cl_uint>(bins));
     rs.enqueue(k.scan, rs.tuning_.scan_work_group, rs.tuning_.scan_work_group);
   }
   void flip() {
@@ -174,46 +179,20 @@ struct RadixSort::Passes {
     ++stats.passes_run;
   }
   void scatter(cl_uint shift) {
-    k.scatter.setArg(0, *src_keys);
-    k.scatter.setArg(1, *src_values);
-    k.scatter.setArg(2, *dst_keys);
-    k.scatter.setArg(3, *dst_values);
-    k.scatter.setArg(4, n);
-    k.scatter.setArg(5, n_items);
-    k.scatter.setArg(6, shift);
-    k.scatter.setArg(7, hi);
-    k.scatter.setArg(8, rs.counts_);
+    set_args(k.scatter, *src_keys, *src_values, *dst_keys, *dst_values, n, n_items, shift, hi, rs.counts_);
     rs.enqueue(k.scatter, tiles * wg, wg);
     flip();
   }
   // The hybrid's LSD passes over the lower digits `pass_mask`, one work-item per top-digit bucket.
   void bucket_sort(cl_uint lo, cl_uint pass_mask, std::size_t radix) {
-    k.bucket_sort.setArg(0, *src_keys);
-    k.bucket_sort.setArg(1, *src_values);
-    k.bucket_sort.setArg(2, *dst_keys);
-    k.bucket_sort.setArg(3, *dst_values);
-    k.bucket_sort.setArg(4, n);
-    k.bucket_sort.setArg(5, static_cast<cl_uint>(tiles));
-    k.bucket_sort.setArg(6, rs.counts_);
-    k.bucket_sort.setArg(7, lo);
-    k.bucket_sort.setArg(8, hi);
-    k.bucket_sort.setArg(9, pass_mask);
+    set_args(k.bucket_sort, *src_keys, *src_values, *dst_keys, *dst_values, n, static_cast<cl_uint>(tiles), rs.counts_,
+             lo, hi, pass_mask);
     rs.enqueue(k.bucket_sort, radix, 1);
   }
   // The warp-granular sort's walk of every top-digit bucket (pass_mask: the varying 8-bit digits).
   void warp_sort(cl_uint lo, cl_uint top_pass, cl_uint pass_mask, cl_uint group, std::size_t radix) {
-    k.warp_sort.setArg(0, *src_keys);
-    k.warp_sort.setArg(1, *src_values);
-    k.warp_sort.setArg(2, *dst_keys);
-    k.warp_sort.setArg(3, *dst_values);
-    k.warp_sort.setArg(4, n);
-    k.warp_sort.setArg(5, static_cast<cl_uint>(tiles));
-    k.warp_sort.setArg(6, rs.counts_);
-    k.warp_sort.setArg(7, lo);
-    k.warp_sort.setArg(8, hi);
-    k.warp_sort.setArg(9, top_pass);
-    k.warp_sort.setArg(10, pass_mask);
-    k.warp_sort.setArg(11, group);
+    set_args(k.warp_sort, *src_keys, *src_values, *dst_keys, *dst_values, n, static_cast<cl_uint>(tiles), rs.counts_,
+             lo, hi, top_pass, pass_mask, group);
     rs.enqueue(k.warp_sort, radix, 1);
     flip();  // every bucket's result lies in the destination buffers
   }
