@@ -98,4 +98,33 @@ typedef struct {
 #define RS_WIDE8_MAX_DEPTH 22
 #define RS_WIDE8_STACK_SIZE (7 * RS_WIDE8_MAX_DEPTH)
 
+/* A node of the compressed 8-wide BVH (the cwbvh trace class, traverse_cwbvh.h), 80 bytes: the
+ * node of Ylitie, Karras and Laine, "Efficient Incoherent Ray Traversal on GPUs Through Compressed
+ * Wide BVHs" (HPG 2017), section 3.1. The eight child boxes are 8-bit offsets on a grid of the
+ * node's own: child box = p + q * 2^(e - 127) per axis, q_lo rounded down and q_hi up so the box
+ * always contains the child's exact box (host/bvh/cwbvh.cpp checks it in the kernels' float
+ * arithmetic), which keeps the robust variant watertight.
+ *   imask bit s: slot s holds an inner node, nodes[child_base + (inner slots below s)];
+ *   meta[s] (not inner): 0 empty, else a leaf of (meta >> 5) triangles (1 to 3) at
+ *                        triangles[triangle_base + (meta & 31)].
+ * A node's inner children are contiguous, and so are its leaves' triangles (at most 8 x 3 = 24).
+ * Children sit in slots by ray octant (the paper's assignment): a ray of octant o (bit a set when
+ * d[a] < 0) visits the slots it enters in the order of s ^ o, which is near to far for most rays
+ * without a sort. Node 0 is the root; RsTriangle is the binary tree's triangle. */
+typedef struct {
+  float p[3];
+  rs_u8 e[3];
+  rs_u8 imask;
+  rs_u32 child_base;
+  rs_u32 triangle_base;
+  rs_u8 meta[8];
+  rs_u8 q_lo_x[8], q_lo_y[8], q_lo_z[8];
+  rs_u8 q_hi_x[8], q_hi_y[8], q_hi_z[8];
+} RsCwbvhNode;
+
+/* The cwbvh traversal's stack holds node groups only (a node's inner children not visited yet),
+ * at most one per level; an inner child lies at least one binary level below its node, and a leaf
+ * of more than three triangles adds one node of its own, so RS_STACK_SIZE + 1 levels suffice. */
+#define RS_CWBVH_STACK_SIZE (RS_STACK_SIZE + 1)
+
 #endif /* RAYSORT_BVH_LAYOUT_H */

@@ -105,11 +105,7 @@ RS_LANE_INLINE rs_pi rsp_lane_bits(void) {
 }
 #endif
 
-#ifdef __OPENCL_VERSION__
-RS_LANE_INLINE int rs_popcount(int x) { return popcount(x); }
-#else
-RS_LANE_INLINE int rs_popcount(int x) { return std::popcount(static_cast<unsigned>(x)); }
-#endif
+/* rs_popcount: lanes.h. */
 
 /* min/max as selects, as rs4_min/rs4_max (lanes.h): the same bits on both sides. */
 RS_LANE_INLINE rs_pf rsp_min(rs_pf a, rs_pf b) { return rsp_select(b, a, a < b); }

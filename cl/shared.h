@@ -25,6 +25,7 @@
 #define RS_LANE_INLINE RS_INLINE
 /* Fully unrolls the short fixed loop that follows (per-axis loops in the traversal). */
 #define RS_UNROLL _Pragma("unroll")
+typedef uchar rs_u8;
 typedef uint rs_u32;
 typedef int rs_i32;
 typedef ulong rs_u64;
@@ -47,6 +48,7 @@ RS_INLINE float rs_int_as_float(rs_i32 i) { return as_float(i); }
  * arithmetic, so the same bits. */
 #define RS_LANE_INLINE inline __attribute__((always_inline))
 #define RS_UNROLL _Pragma("GCC unroll 4")
+typedef std::uint8_t rs_u8;
 typedef std::uint32_t rs_u32;
 typedef std::int32_t rs_i32;
 typedef std::uint64_t rs_u64;

@@ -23,6 +23,9 @@
 #ifdef RS_TRACE_STREAM
 #include "traverse_stream.h"
 #endif
+#ifdef RS_TRACE_CWBVH
+#include "traverse_cwbvh.h"
+#endif
 #ifdef RS_TRACE_PACKET
 #define RS_PACKET_W RS_TRACE_PACKET
 #include "traverse_packet.h"
@@ -88,10 +91,11 @@
 
 /* One trace class per build (host/trace/tracer.cpp passes -DRS_TRACE_BINARY for the binary BVH,
  * -DRS_TRACE_WIDE8 for the 8-wide one, -DRS_TRACE_PACKET=W for packets of W rays, -DRS_TRACE_STREAM
- * for streams; the define of
+ * for streams, -DRS_TRACE_CWBVH for the compressed 8-wide BVH; the define of
  * each class is its row of host/trace/trace_class.cpp), so a run compiles only the kernels it
  * launches. */
-#if !defined(RS_TRACE_BINARY) && !defined(RS_TRACE_PACKET) && !defined(RS_TRACE_WIDE8) && !defined(RS_TRACE_STREAM)
+#if !defined(RS_TRACE_BINARY) && !defined(RS_TRACE_PACKET) && !defined(RS_TRACE_WIDE8) && !defined(RS_TRACE_STREAM) && \
+    !defined(RS_TRACE_CWBVH)
 /* The 4-wide BVH (the default layout). */
 #define NODE RsWideNode
 #define LEAF RsTriPacket
@@ -110,6 +114,17 @@ RS_TRACE_KERNELS(_robust, RS_WIDE_ROBUST)
 #define RS_WIDE8_ROBUST(n, t, r, any, v) rs_traverse_wide8(n, t, r, 1, any, v)
 RS_TRACE_KERNELS(_wide8, RS_WIDE8_FAST)
 RS_TRACE_KERNELS(_wide8_robust, RS_WIDE8_ROBUST)
+#undef NODE
+#undef LEAF
+
+#elif defined(RS_TRACE_CWBVH)
+/* The compressed 8-wide BVH (the cwbvh class, traverse_cwbvh.h): 80-byte nodes of 8-bit boxes. */
+#define NODE RsCwbvhNode
+#define LEAF RsTriangle
+#define RS_CWBVH_FAST(n, t, r, any, v) rs_traverse_cwbvh(n, t, r, 0, any, v)
+#define RS_CWBVH_ROBUST(n, t, r, any, v) rs_traverse_cwbvh(n, t, r, 1, any, v)
+RS_TRACE_KERNELS(_cwbvh, RS_CWBVH_FAST)
+RS_TRACE_KERNELS(_cwbvh_robust, RS_CWBVH_ROBUST)
 #undef NODE
 #undef LEAF
 

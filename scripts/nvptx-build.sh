@@ -46,6 +46,7 @@ BUILDS=(
   "trace-wide|cl/trace.cl|"
   "trace-wide8|cl/trace.cl|-DRS_TRACE_WIDE8"
   "trace-stream|cl/trace.cl|-DRS_TRACE_STREAM"
+  "trace-cwbvh|cl/trace.cl|-DRS_TRACE_CWBVH"
   "trace-binary|cl/trace.cl|-DRS_TRACE_BINARY"
   "trace-packet4|cl/trace.cl|-DRS_TRACE_PACKET=4"
   "trace-packet8|cl/trace.cl|-DRS_TRACE_PACKET=8"

@@ -3,7 +3,7 @@
 # checks each memory access (issue 19, items 1-2). Runs, on tiny inputs, with Oclgrind's data-race,
 # API and uninitialised-value checks on (out-of-bounds accesses and barrier divergence are always
 # checked):
-#   trace        both variants (robust, fast), the classes wide, wide8, binary, packet4, packet16, hybrid8 and stream,
+#   trace        both variants (robust, fast), the classes wide, wide8, binary, packet4, packet16, hybrid8, stream and cwbvh,
 #                closest and any hit
 #   encodebench  every encoder at 16, 32 and 64 bits (the *_k32 and *_k64 kernels), HCC_DIR with 2
 #                direction bits (its two-pass encode_direction_* / encode_box_set_or_* kernels), and
@@ -56,6 +56,7 @@ cases=(
   "trace-wide8|trace ${DEV[*]} --scene cornell --resolution 16x9 ${PROTO[*]} --variant both --layout wide8"
   "trace-packets|trace ${DEV[*]} --scene cornell --resolution 16x9 ${PROTO[*]} --variant both --layout packet4,packet16,hybrid8"
   "trace-stream|trace ${DEV[*]} --scene cornell --resolution 16x9 ${PROTO[*]} --variant both --layout stream"
+  "trace-cwbvh|trace ${DEV[*]} --scene cornell --resolution 16x9 ${PROTO[*]} --variant both --layout cwbvh"
   "encode-all|encodebench ${DEV[*]} --scene cornell --resolution 16x9 ${PROTO[*]} --bits 16,32,64"
   "encode-hcc-dir|encodebench ${DEV[*]} --scene cornell --resolution 16x9 ${PROTO[*]} --bits 16,32,64 --encoders hcc-dir --direction-bits 2"
   "encode-file|encodebench ${DEV[*]} --scene cornell --resolution 16x9 ${PROTO[*]} --bits 16,32,64 --encoders file:docs/examples/morton_zyx.cl"

@@ -169,6 +169,22 @@ TEST(GpuModel, Wide8StepsReadTheirNodesAndPackets) {
   EXPECT_FALSE(map.is_leaf(3));
 }
 
+// The cwbvh class's tree: a node step reads its 80 bytes, a leaf step one 48-byte triangle.
+TEST(GpuModel, CwbvhStepsReadTheirNodesAndTriangles) {
+  CwBvh cw;
+  cw.nodes.resize(100);  // 8,000 bytes: triangles start at 8192
+  cw.triangles.resize(10);
+  const GpuAddressMap map(cw, 64);
+  std::vector<std::uint64_t> lines;
+  map.step_blocks(3, 128, lines);  // node 3: bytes 240-319
+  EXPECT_EQ(lines, (std::vector<std::uint64_t>{1, 2}));
+  lines.clear();
+  map.step_blocks(RS_WIDE_LEAF | (5u << 2), 128, lines);  // triangle 5: bytes 8432-8479
+  EXPECT_EQ(lines, (std::vector<std::uint64_t>{65, 66}));
+  EXPECT_TRUE(map.is_leaf(RS_WIDE_LEAF | (5u << 2)));
+  EXPECT_FALSE(map.is_leaf(3));
+}
+
 // A while-while kernel's issued steps (while_while_steps): per outer iteration the longest run of
 // inner-node steps over the lanes, then the longest run of leaf steps. Lanes whose node and leaf
 // steps interleave differently wait for each other, where lockstep lets them advance together.

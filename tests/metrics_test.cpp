@@ -8,6 +8,7 @@
 
 #include "bench/metrics.h"
 #include "traverse_binary.h"
+#include "traverse_cwbvh.h"
 #include "traverse_wide.h"
 #include "traverse_wide8.h"
 
@@ -88,7 +89,7 @@ TEST(SimtModel, TracedModelMatchesTrailsAndOrderMatters) {
   std::vector<std::uint32_t> sorted(rays.size());
   std::iota(sorted.begin(), sorted.end(), 0u);
   std::stable_sort(sorted.begin(), sorted.end(), [&](auto a, auto b) { return rays[a].o[0] < rays[b].o[0]; });
-  for (TraceLayout layout : {TraceLayout::Wide, TraceLayout::Wide8, TraceLayout::Binary}) {
+  for (TraceLayout layout : {TraceLayout::Wide, TraceLayout::Wide8, TraceLayout::Binary, TraceLayout::Cwbvh}) {
     SCOPED_TRACE(trace_layout_name(layout));
     auto interleaved_model = simt_model(bvh, rays, nullptr, false, TraceVariant::Fast, layout);
     auto sorted_model = simt_model(bvh, rays, sorted.data(), false, TraceVariant::Fast, layout);
@@ -110,6 +111,11 @@ TEST(SimtModel, TracedModelMatchesTrailsAndOrderMatters) {
   const SimtModel wide8 = simt_model(bvh, rays, nullptr, false, TraceVariant::Fast, TraceLayout::Wide8);
   EXPECT_EQ(wide8.total_steps, std::accumulate(visits.begin(), visits.end(), std::uint64_t{0}));
   EXPECT_LE(wide8.total_steps, wide.total_steps);
+  // The cwbvh model walks the compressed tree: its steps are the cwbvh traversal's (nodes and
+  // triangle tests).
+  (void)trace_reference(bvh, rays, nullptr, false, &visits, TraceVariant::Fast, TraceLayout::Cwbvh);
+  const SimtModel cw = simt_model(bvh, rays, nullptr, false, TraceVariant::Fast, TraceLayout::Cwbvh);
+  EXPECT_EQ(cw.total_steps, std::accumulate(visits.begin(), visits.end(), std::uint64_t{0}));
 }
 
 // The traced model counts a warp's distinct nodes by stamping node slots (metrics.cpp,
@@ -139,7 +145,8 @@ TEST(SimtModel, TracedDistinctNodesEqualTheSortedUnion) {
   WideBvh wide_scratch;
   const WideBvh& wide = wide_of(bvh, wide_scratch);
   const Wide8Bvh wide8 = collapse_to_wide8(bvh);
-  for (TraceLayout layout : {TraceLayout::Wide, TraceLayout::Wide8, TraceLayout::Binary})
+  const CwBvh cw = collapse_to_cwbvh(bvh);
+  for (TraceLayout layout : {TraceLayout::Wide, TraceLayout::Wide8, TraceLayout::Binary, TraceLayout::Cwbvh})
     for (int any : {0, 1}) {
       SCOPED_TRACE(std::string(trace_layout_name(layout)) + (any ? " any hit" : " closest hit"));
       std::vector<std::vector<std::uint32_t>> trails(rays.size());
@@ -153,6 +160,8 @@ TEST(SimtModel, TracedDistinctNodesEqualTheSortedUnion) {
         else if (layout == TraceLayout::Wide8)
           rs_traverse_wide8_recorded(wide8.nodes.data(), wide8.packets.data(), r, 0, any, nullptr, buffer.data(), cap,
                                      &len);
+        else if (layout == TraceLayout::Cwbvh)
+          rs_traverse_cwbvh_recorded(cw.nodes.data(), cw.triangles.data(), r, 0, any, nullptr, buffer.data(), cap, &len);
         else
           rs_traverse_variant_recorded(bvh.nodes.data(), bvh.triangles.data(), r, 0, any, nullptr, buffer.data(), cap,
                                        &len);

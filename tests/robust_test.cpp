@@ -210,7 +210,7 @@ void expect_watertight(const char* what, const IndexedMesh& m, const std::vector
       // The packet class, 16 aimed rays per packet, the 8-wide tree (eight boxes and eight
       // triangles per test) and streams of 32 rays over it: watertight too, and equal to their host
       // twins.
-      for (TraceLayout layout : {TraceLayout::Packet16, TraceLayout::Wide8, TraceLayout::Stream}) {
+      for (TraceLayout layout : {TraceLayout::Packet16, TraceLayout::Wide8, TraceLayout::Stream, TraceLayout::Cwbvh}) {
         const char* name = trace_layout_name(layout);
         const auto class_host = trace_reference(bvh, rays, nullptr, false, nullptr, v, layout);
         const auto class_dev = Tracer(testing::runtime(), bvh, v, layout).run(rays, nullptr, false).hits;
@@ -362,7 +362,7 @@ TEST(Robust, SliverSeenEdgeOnIsHitNotSkipped) {
     const Vec3 p{-3.09547f + f * 4.90635f, 0.495951f - 0.5f * f * 0.007071f, -0.734771f - 0.5f * f * 0.002929f};
     rays.push_back(make_ray(p, {0.01f, -0.3f, -0.95f}));
   }
-  for (TraceLayout layout : {TraceLayout::Wide, TraceLayout::Wide8, TraceLayout::Binary}) {
+  for (TraceLayout layout : {TraceLayout::Wide, TraceLayout::Wide8, TraceLayout::Binary, TraceLayout::Cwbvh}) {
     auto host = trace_reference(bvh, rays, nullptr, false, nullptr, TraceVariant::Robust, layout);
     auto dev = Tracer(testing::runtime(), bvh, TraceVariant::Robust, layout).run(rays, nullptr, false).hits;
     EXPECT_EQ(count_hit_mismatches(dev, host), 0u) << trace_layout_name(layout);

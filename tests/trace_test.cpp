@@ -244,13 +244,13 @@ TEST(Trace, PacketKernelsEqualTheirHostTwinAndSingleRays) {
   }
 }
 
-// The wide8 class (cl/traverse_wide8.h, the 8-wide tree of host/bvh/wide8.cpp): each kernel equals
-// its host twin bit for bit, hits and per-ray visit counts, both variants, closest and any hit, with
+// A single-ray class over a tree of its own (wide8: cl/traverse_wide8.h, the 8-wide tree of
+// host/bvh/wide8.cpp; cwbvh: the compressed one): each kernel equals its host twin bit for bit, hits and per-ray visit counts, both variants, closest and any hit, with
 // the rays in a shuffled order; and every ray's hit equals the 4-wide single-ray traversal's up to
 // ties (another triangle at exactly the same t), as between the wide and binary classes. Shadow
 // rays: the same occluded / free answer. Returns the rays compared, so a caller sees it tested some.
 namespace {
-std::size_t expect_wide8_equals_twin_and_wide(const Scene& scene) {
+std::size_t expect_class_equals_twin_and_wide(const Scene& scene, TraceLayout layout) {
   Scene::Flat tris = scene.flatten();
   Bvh bvh = build_bvh(tris);
   const auto batches = generate_batches(scene, tris, bvh, RayGenOptions{});
@@ -258,9 +258,9 @@ std::size_t expect_wide8_equals_twin_and_wide(const Scene& scene) {
   Runtime& rt = testing::runtime();
   std::size_t compared = 0;
   for (TraceVariant v : {TraceVariant::Fast, TraceVariant::Robust}) {
-    Tracer wide8(rt, bvh, v, TraceLayout::Wide8);
-    EXPECT_EQ(wide8.layout(), TraceLayout::Wide8);
-    const std::string what = scene.name + " wide8 " + trace_variant_name(v);
+    Tracer wide8(rt, bvh, v, layout);
+    EXPECT_EQ(wide8.layout(), layout);
+    const std::string what = scene.name + " " + trace_layout_name(layout) + " " + trace_variant_name(v);
     for (const auto& rb : batches) {
       const bool any = rb.batch.any_hit();
       const std::vector<RsRay>& rays = rb.batch.rays;
@@ -268,7 +268,7 @@ std::size_t expect_wide8_equals_twin_and_wide(const Scene& scene) {
       std::iota(order.begin(), order.end(), 0u);
       std::shuffle(order.begin(), order.end(), std::mt19937(11));
       const auto dev = wide8.run(rays, &order, any).hits;
-      const auto host = trace_reference(bvh, rays, order.data(), any, nullptr, v, TraceLayout::Wide8);
+      const auto host = trace_reference(bvh, rays, order.data(), any, nullptr, v, layout);
       EXPECT_EQ(count_hit_mismatches(dev, host), 0u) << what << " " << rb.batch.name;
       const auto single = trace_reference(bvh, rays, order.data(), any, nullptr, v, TraceLayout::Wide);
       std::size_t disagree = 0, hits = 0;
@@ -297,27 +297,37 @@ std::size_t expect_wide8_equals_twin_and_wide(const Scene& scene) {
     std::vector<std::uint32_t> dev_visits, host_visits, wide_visits;
     rt.download("hits", hits_buf, dev_hits, n);
     rt.download("visits", visits_buf, dev_visits, n);
-    const auto host_hits = trace_reference(bvh, b.rays, order.data(), false, &host_visits, v, TraceLayout::Wide8);
+    const auto host_hits = trace_reference(bvh, b.rays, order.data(), false, &host_visits, v, layout);
     EXPECT_EQ(count_hit_mismatches(dev_hits, host_hits), 0u) << what << " counted";
     EXPECT_EQ(dev_visits, host_visits) << what << " counted";
     EXPECT_GT(*std::max_element(host_visits.begin(), host_visits.end()), 1u) << what;
     trace_reference(bvh, b.rays, order.data(), false, &wide_visits, v, TraceLayout::Wide);
     const double w8 = std::accumulate(host_visits.begin(), host_visits.end(), 0.0) / n;
     const double w4 = std::accumulate(wide_visits.begin(), wide_visits.end(), 0.0) / n;
-    std::printf("[ wide8    ] %-12s %-6s %s: %.2f visits per ray (4-wide: %.2f)\n", scene.name.c_str(),
-                trace_variant_name(v), b.name.c_str(), w8, w4);
+    std::printf("[ %-8s ] %-12s %-6s %s: %.2f steps per ray (4-wide: %.2f)\n", trace_layout_name(layout),
+                scene.name.c_str(), trace_variant_name(v), b.name.c_str(), w8, w4);
   }
   return compared;
 }
 }  // namespace
 
 TEST(Trace, Wide8KernelsEqualTheirHostTwinAndWideRays) {
-  EXPECT_GT(expect_wide8_equals_twin_and_wide(load_scene("detail-room", {"", {64, 36, 0}})), 0u);
+  EXPECT_GT(expect_class_equals_twin_and_wide(load_scene("detail-room", {"", {64, 36, 0}}), TraceLayout::Wide8), 0u);
 }
 
 TEST(Trace, Wide8SibenikEqualsItsHostTwinAndWideRays) {
   RAYSORT_REQUIRE_REAL_SCENES();
-  EXPECT_GT(expect_wide8_equals_twin_and_wide(load_scene("sibenik", {"", {80, 45, 0}})), 0u);
+  EXPECT_GT(expect_class_equals_twin_and_wide(load_scene("sibenik", {"", {80, 45, 0}}), TraceLayout::Wide8), 0u);
+}
+
+// The cwbvh class (cl/traverse_cwbvh.h, the compressed tree of host/bvh/cwbvh.cpp): the same checks.
+TEST(Trace, CwbvhKernelsEqualTheirHostTwinAndWideRays) {
+  EXPECT_GT(expect_class_equals_twin_and_wide(load_scene("detail-room", {"", {64, 36, 0}}), TraceLayout::Cwbvh), 0u);
+}
+
+TEST(Trace, CwbvhSibenikEqualsItsHostTwinAndWideRays) {
+  RAYSORT_REQUIRE_REAL_SCENES();
+  EXPECT_GT(expect_class_equals_twin_and_wide(load_scene("sibenik", {"", {80, 45, 0}}), TraceLayout::Cwbvh), 0u);
 }
 
 TEST(Trace, TraceClassNames) {
@@ -333,7 +343,10 @@ TEST(Trace, TraceClassNames) {
   EXPECT_EQ(resolve_trace_layout(TraceLayout::Hybrid, avx512), TraceLayout::Hybrid16);
   EXPECT_EQ(resolve_trace_layout(TraceLayout::Hybrid, gpu), TraceLayout::Hybrid8);
   EXPECT_EQ(parse_trace_layouts("wide,packet8,wide").size(), 2u);
-  EXPECT_EQ(parse_trace_layouts("all").size(), 9u);  // every class but the unresolved packet and hybrid
+  EXPECT_EQ(parse_trace_layouts("all").size(), 10u);  // every class but the unresolved packet and hybrid
+  EXPECT_EQ(tree_kind(TraceLayout::Cwbvh), TreeKind::Compressed8);
+  EXPECT_EQ(tree_width(TraceLayout::Cwbvh), 8);
+  EXPECT_FALSE(walks_wide_tree(TraceLayout::Cwbvh));
   EXPECT_EQ(packet_width(TraceLayout::Stream), 32);
   EXPECT_EQ(tree_width(TraceLayout::Stream), 8);
   EXPECT_TRUE(is_stream(TraceLayout::Stream));

@@ -128,6 +128,13 @@ GpuAddressMap::GpuAddressMap(const Wide8Bvh& wide8, std::size_t rays)
   ray_base_ = prim_base_ + align_up(wide8.packets.size() * sizeof(RsTriPacket8), 4096);
 }
 
+GpuAddressMap::GpuAddressMap(const CwBvh& cw, std::size_t rays)
+    : wide_node_bytes_(sizeof(RsCwbvhNode)), wide_packet_bytes_(sizeof(RsTriangle)) {
+  (void)rays;
+  prim_base_ = align_up(cw.nodes.size() * sizeof(RsCwbvhNode), 4096);
+  ray_base_ = prim_base_ + align_up(cw.triangles.size() * sizeof(RsTriangle), 4096);
+}
+
 GpuAddressMap::GpuAddressMap(const Bvh& binary, std::size_t rays) : binary_(binary.nodes.data()) {
   (void)rays;
   prim_base_ = align_up(binary.nodes.size() * sizeof(RsBvhNode), 4096);

@@ -83,6 +83,8 @@ class GpuAddressMap {
  public:
   GpuAddressMap(const WideBvh& wide, std::size_t rays);
   GpuAddressMap(const Wide8Bvh& wide8, std::size_t rays);
+  // cwbvh: an inner step reads an 80-byte node, a leaf step (RS_WIDE_LEAF | triangle << 2) one triangle.
+  GpuAddressMap(const CwBvh& cw, std::size_t rays);
   GpuAddressMap(const Bvh& binary, std::size_t rays);
   // Appends the blocks (address / block_bytes: lines or sectors) step reference `ref` reads.
   // leaf_reads > 0 on a leaf: only its first leaf_reads packets (wide) or triangles (binary), where

@@ -5,6 +5,7 @@
 #include <thread>
 
 #include "traverse_binary.h"
+#include "traverse_cwbvh.h"
 #include "traverse_wide.h"
 #include "traverse_wide8.h"
 #include "util/parallel.h"
@@ -120,16 +121,18 @@ struct TrailRecorder {
   const Bvh& bvh;
   const WideBvh& wide;
   const Wide8Bvh& wide8;
+  const CwBvh& cw;
   const std::vector<RsRay>& rays;
   const std::uint32_t* order;
   int robust, any;
-  bool wide_layout, wide8_layout;
+  bool wide_layout, wide8_layout, cw_layout;
   rs_u32 cap;
 
   // An any-hit traversal stops in the leaf it hits, right after the packet (wide) or triangle
   // (binary) holding the hit triangle: how many of the leaf's it read (the GPU model's reads of
   // that last step). The leaf's triangles are distinct, so the first one holding the id is it.
   std::uint32_t leaf_reads_until(std::uint32_t tri, std::uint32_t leaf_ref) const {
+    if (cw_layout) return 0;  // a cwbvh step reads one triangle: all of it
     if (wide_layout || wide8_layout) {
       const std::uint32_t first = (leaf_ref & ~RS_WIDE_LEAF) >> 2, count = (leaf_ref & 3u) + 1u;
       for (std::uint32_t k = 0; k < count; ++k)
@@ -150,6 +153,7 @@ struct TrailRecorder {
       std::vector<std::uint32_t> buffer(cap);
       DistinctNodes distinct = wide_layout    ? DistinctNodes(wide.nodes.size(), wide.packets.size())
                                : wide8_layout ? DistinctNodes(wide8.nodes.size(), wide8.packets.size())
+                               : cw_layout    ? DistinctNodes(cw.nodes.size(), cw.triangles.size())
                                               : DistinctNodes(bvh.nodes.size(), 0);
       Lanes lanes;
       for (std::size_t k = tid; k < slots.size(); k += threads) {
@@ -169,6 +173,8 @@ struct TrailRecorder {
                                                          robust, any, nullptr, buffer.data(), cap, &len)
               : wide8_layout ? rs_traverse_wide8_recorded(wide8.nodes.data(), wide8.packets.data(), rays[ray_index],
                                                           robust, any, nullptr, buffer.data(), cap, &len)
+              : cw_layout    ? rs_traverse_cwbvh_recorded(cw.nodes.data(), cw.triangles.data(), rays[ray_index], robust,
+                                                          any, nullptr, buffer.data(), cap, &len)
                              : rs_traverse_variant_recorded(bvh.nodes.data(), bvh.triangles.data(), rays[ray_index],
                                                             robust, any, nullptr, buffer.data(), cap, &len);
           w.lanes[l].assign(buffer.begin(), buffer.begin() + std::min(len, cap));
@@ -195,24 +201,32 @@ SimtModel simt_model(const Bvh& bvh, const std::vector<RsRay>& rays, const std::
   WideBvh scratch;
   // Every class but binary and wide8 walks the 4-wide tree (the packet classes too: the model's warp
   // of 32 lanes is their packet, at a GPU's width); wide8 walks its 8-wide tree, one ray per lane.
-  const bool wide_layout = walks_wide_tree(layout), wide8_layout = tree_width(layout) == 8;
+  const bool wide_layout = walks_wide_tree(layout), wide8_layout = tree_kind(layout) == TreeKind::Wide8;
+  const bool cw_layout = tree_kind(layout) == TreeKind::Compressed8;
   const WideBvh& wide = wide_layout ? wide_of(bvh, scratch) : scratch;
   const Wide8Bvh wide8 = wide8_layout ? collapse_to_wide8(bvh) : Wide8Bvh{};
+  const CwBvh cw = cw_layout ? collapse_to_cwbvh(bvh) : CwBvh{};
   const std::size_t n = rays.size();
   const std::size_t warps = (n + kWarpSize - 1) / kWarpSize;
   const unsigned threads = host_threads();
   // Trails are recorded into a fixed buffer per lane. A step visits a node or a leaf at most once,
   // so a trail is shorter than the node count plus the leaf count (a wide node has at most four, or
   // eight, leaf children); longer trails could only be truncated in the union, never in the step count.
-  const std::size_t most_steps =
-      wide_layout ? wide.nodes.size() * 5 : wide8_layout ? wide8.nodes.size() * 9 : bvh.nodes.size();
+  // (cwbvh: a node or one triangle per step.)
+  const std::size_t most_steps = wide_layout    ? wide.nodes.size() * 5
+                                 : wide8_layout ? wide8.nodes.size() * 9
+                                 : cw_layout    ? cw.nodes.size() + cw.triangles.size()
+                                                : bvh.nodes.size();
   const rs_u32 cap = static_cast<rs_u32>(std::min<std::size_t>(most_steps, 1u << 16));
-  const TrailRecorder recorder{bvh, wide, wide8, rays, order, variant == TraceVariant::Robust ? 1 : 0, any_hit ? 1 : 0,
-                               wide_layout, wide8_layout, cap};
+  const TrailRecorder recorder{bvh,   wide, wide8, cw, rays, order, variant == TraceVariant::Robust ? 1 : 0, any_hit ? 1 : 0,
+                               wide_layout, wide8_layout, cw_layout, cap};
   std::optional<GpuAddressMap> map;
   std::optional<GpuReplay> replay;
   if (gpu) {
-    map = wide_layout ? GpuAddressMap(wide, n) : wide8_layout ? GpuAddressMap(wide8, n) : GpuAddressMap(bvh, n);
+    map = wide_layout    ? GpuAddressMap(wide, n)
+          : wide8_layout ? GpuAddressMap(wide8, n)
+          : cw_layout    ? GpuAddressMap(cw, n)
+                         : GpuAddressMap(bvh, n);
     replay.emplace(*gpu, *map);
   }
   // Warps are recorded a wave at a time (the GPU model's resident set), so the trails of only one

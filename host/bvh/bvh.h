@@ -42,6 +42,17 @@ struct Wide8Bvh {
   bool empty() const { return nodes.empty(); }
 };
 
+// The compressed 8-wide form of the cwbvh trace class (RsCwbvhNode in cl/bvh_layout.h; Ylitie, Karras
+// and Laine 2017), collapsed from the binary tree by host/bvh/cwbvh.cpp: 80-byte nodes with 8-bit
+// child boxes, leaves of at most three triangles, each node's leaf triangles contiguous. Built on
+// demand (collapse_to_cwbvh), not with the BVH: only the cwbvh class walks it.
+struct CwBvh {
+  std::vector<RsCwbvhNode> nodes;     // node 0 is the root
+  std::vector<RsTriangle> triangles;  // in the nodes' leaf order; .id as in Bvh::triangles
+  std::uint32_t depth = 0;            // nodes on the longest root-to-leaf path
+  bool empty() const { return nodes.empty(); }
+};
+
 struct Bvh {
   std::vector<RsBvhNode> nodes;       // node 0 is the root
   std::vector<RsTriangle> triangles;  // leaf order; triangles[k].id = index in the scene's flat list
@@ -83,6 +94,16 @@ Wide8Bvh collapse_to_wide8(const Bvh& bvh);
 
 // validate_wide's checks on the 8-wide tree, with its stack bound (7 * depth <= RS_WIDE8_STACK_SIZE).
 std::string validate_wide8(const Wide8Bvh& wide, const Bvh& bvh);
+
+// Collapses a binary BVH to the compressed 8-wide layout (host/bvh/cwbvh.cpp). Throws an Error if
+// the stack bound RS_CWBVH_STACK_SIZE could be exceeded or a coordinate needs an exponent past 2^127.
+CwBvh collapse_to_cwbvh(const Bvh& bvh);
+
+// Checks the compressed tree against its binary source: every triangle once (vertices and id), every
+// node reached once, leaves of 1 to 3 triangles within the node's 24, every dequantised child box
+// containing all the triangles below it (in the kernels' float arithmetic), the depth within the
+// stack. Returns an empty string when all hold, else a description of the first violation.
+std::string validate_cwbvh(const CwBvh& cw, const Bvh& bvh);
 
 // Zero area in exact arithmetic (differences and products of floats are exact in double): the
 // robust triangle test's degenerate-triangle check (cl/intersect.h), which the wide layouts decide

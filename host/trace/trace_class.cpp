@@ -10,7 +10,7 @@ namespace raysort {
 namespace {
 
 // The trace classes, once: name, rays per work-item, the hybrids' switch, whether the rays walk as a
-// stream, the branching factor of the tree walked, the kernel build's define and the kernels' name
+// stream, the tree walked, the kernel build's define and the kernels' name
 // suffix (cl/trace.cl). The hybrids switch to single rays at a quarter of the packet's lanes.
 struct TraceClass {
   TraceLayout layout;
@@ -18,22 +18,23 @@ struct TraceClass {
   int width;
   int single_at;
   bool stream;
-  int tree;
+  TreeKind tree;
   const char* define;
   const char* suffix;
 };
 constexpr TraceClass kTraceClasses[] = {
-    {TraceLayout::Wide, "wide", 1, 0, false, 4, "", ""},
-    {TraceLayout::Wide8, "wide8", 1, 0, false, 8, "-DRS_TRACE_WIDE8", "_wide8"},
-    {TraceLayout::Binary, "binary", 1, 0, false, 2, "-DRS_TRACE_BINARY", "_binary"},
-    {TraceLayout::Packet4, "packet4", 4, 0, false, 4, "-DRS_TRACE_PACKET=4", "_packet"},
-    {TraceLayout::Packet8, "packet8", 8, 0, false, 4, "-DRS_TRACE_PACKET=8", "_packet"},
-    {TraceLayout::Packet16, "packet16", 16, 0, false, 4, "-DRS_TRACE_PACKET=16", "_packet"},
-    {TraceLayout::Packet, "packet", 0, 0, false, 4, "", ""},
-    {TraceLayout::Hybrid8, "hybrid8", 8, 2, false, 4, "-DRS_TRACE_PACKET=8 -DRS_PACKET_SINGLE_AT=2", "_packet"},
-    {TraceLayout::Hybrid16, "hybrid16", 16, 4, false, 4, "-DRS_TRACE_PACKET=16 -DRS_PACKET_SINGLE_AT=4", "_packet"},
-    {TraceLayout::Hybrid, "hybrid", 0, 0, false, 4, "", ""},
-    {TraceLayout::Stream, "stream", 32, 0, true, 8, "-DRS_TRACE_STREAM", "_stream"},
+    {TraceLayout::Wide, "wide", 1, 0, false, TreeKind::Wide4, "", ""},
+    {TraceLayout::Wide8, "wide8", 1, 0, false, TreeKind::Wide8, "-DRS_TRACE_WIDE8", "_wide8"},
+    {TraceLayout::Binary, "binary", 1, 0, false, TreeKind::Binary, "-DRS_TRACE_BINARY", "_binary"},
+    {TraceLayout::Packet4, "packet4", 4, 0, false, TreeKind::Wide4, "-DRS_TRACE_PACKET=4", "_packet"},
+    {TraceLayout::Packet8, "packet8", 8, 0, false, TreeKind::Wide4, "-DRS_TRACE_PACKET=8", "_packet"},
+    {TraceLayout::Packet16, "packet16", 16, 0, false, TreeKind::Wide4, "-DRS_TRACE_PACKET=16", "_packet"},
+    {TraceLayout::Packet, "packet", 0, 0, false, TreeKind::Wide4, "", ""},
+    {TraceLayout::Hybrid8, "hybrid8", 8, 2, false, TreeKind::Wide4, "-DRS_TRACE_PACKET=8 -DRS_PACKET_SINGLE_AT=2", "_packet"},
+    {TraceLayout::Hybrid16, "hybrid16", 16, 4, false, TreeKind::Wide4, "-DRS_TRACE_PACKET=16 -DRS_PACKET_SINGLE_AT=4", "_packet"},
+    {TraceLayout::Hybrid, "hybrid", 0, 0, false, TreeKind::Wide4, "", ""},
+    {TraceLayout::Stream, "stream", 32, 0, true, TreeKind::Wide8, "-DRS_TRACE_STREAM", "_stream"},
+    {TraceLayout::Cwbvh, "cwbvh", 1, 0, false, TreeKind::Compressed8, "-DRS_TRACE_CWBVH", "_cwbvh"},
 };
 
 const TraceClass& trace_class(TraceLayout l) {
@@ -84,7 +85,17 @@ int packet_single_at(TraceLayout l) { return trace_class(l).single_at; }
 
 bool is_stream(TraceLayout l) { return trace_class(l).stream; }
 
-int tree_width(TraceLayout l) { return trace_class(l).tree; }
+TreeKind tree_kind(TraceLayout l) { return trace_class(l).tree; }
+
+int tree_width(TraceLayout l) {
+  switch (tree_kind(l)) {
+    case TreeKind::Binary: return 2;
+    case TreeKind::Wide4: return 4;
+    case TreeKind::Wide8:
+    case TreeKind::Compressed8: return 8;
+  }
+  return 4;
+}
 
 const char* trace_class_define(TraceLayout l) { return trace_class(l).define; }
 

@@ -17,10 +17,12 @@ namespace raysort {
 // prefers, resolved by resolve_trace_layout before anything runs. Stream: 32 consecutive rays of the
 // order per work-item over the 8-wide collapse, node by node, each ray tested alone against a
 // node's eight boxes (cl/traverse_stream.h): the rays share each node's fetch.
-enum class TraceLayout { Wide, Wide8, Binary, Packet4, Packet8, Packet16, Packet, Hybrid8, Hybrid16, Hybrid, Stream };
+// Cwbvh: one ray per work-item over the compressed 8-wide BVH (host/bvh/cwbvh.cpp,
+// cl/traverse_cwbvh.h; Ylitie et al. 2017), the GPU-class kernel.
+enum class TraceLayout { Wide, Wide8, Binary, Packet4, Packet8, Packet16, Packet, Hybrid8, Hybrid16, Hybrid, Stream, Cwbvh };
 
 // The classes' names, in the order help and errors list them: wide, wide8, binary, packet4, packet8,
-// packet16, packet, hybrid8, hybrid16, hybrid, stream. parse throws an Error naming the accepted values.
+// packet16, packet, hybrid8, hybrid16, hybrid, stream, cwbvh. parse throws an Error naming the accepted values.
 const std::vector<std::string>& trace_layout_names();
 TraceLayout parse_trace_layout(std::string_view name);
 const char* trace_layout_name(TraceLayout l);
@@ -41,10 +43,13 @@ TraceLayout resolve_trace_layout(TraceLayout l, unsigned preferred_float_width);
 // The kernel build's define and the kernels' name suffix (cl/trace.cl) of a resolved class.
 const char* trace_class_define(TraceLayout l);
 const char* trace_class_kernel_suffix(TraceLayout l);
-// The branching factor of the tree a class walks: 2 for Binary (the BVH itself), 8 for Wide8 (its
-// 8-wide collapse), 4 for every other class (the 4-wide collapse).
+// The tree a class walks: the binary BVH itself, its 4-wide collapse (bvh.wide), its 8-wide collapse
+// (wide8, stream) or its compressed 8-wide collapse (cwbvh).
+enum class TreeKind { Binary, Wide4, Wide8, Compressed8 };
+TreeKind tree_kind(TraceLayout l);
+// The branching factor of the tree a class walks: 2, 4 or 8.
 int tree_width(TraceLayout l);
 // The class walks the 4-wide tree (bvh.wide).
-inline bool walks_wide_tree(TraceLayout l) { return tree_width(l) == 4; }
+inline bool walks_wide_tree(TraceLayout l) { return tree_kind(l) == TreeKind::Wide4; }
 
 }  // namespace raysort

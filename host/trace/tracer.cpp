@@ -8,6 +8,7 @@
 #include "trace/packet_twin.h"
 #include "trace/stream_twin.h"
 #include "traverse_binary.h"
+#include "traverse_cwbvh.h"
 #include "traverse_wide.h"
 #include "traverse_wide8.h"
 #include "util/error.h"
@@ -38,10 +39,14 @@ Tracer::Tracer(Runtime& rt, const Bvh& bvh, TraceVariant variant, TraceLayout la
     const WideBvh& wide = wide_of(bvh, scratch);
     nodes_ = rt.upload("4-wide bvh nodes", wide.nodes);
     triangles_ = rt.upload("triangle packets", wide.packets);
-  } else if (tree_width(layout_) == 8) {
+  } else if (tree_kind(layout_) == TreeKind::Wide8) {
     const Wide8Bvh wide8 = collapse_to_wide8(bvh);
     nodes_ = rt.upload("8-wide bvh nodes", wide8.nodes);
     triangles_ = rt.upload("8-triangle packets", wide8.packets);
+  } else if (tree_kind(layout_) == TreeKind::Compressed8) {
+    const CwBvh cw = collapse_to_cwbvh(bvh);
+    nodes_ = rt.upload("compressed 8-wide bvh nodes", cw.nodes);
+    triangles_ = rt.upload("compressed bvh triangles", cw.triangles);
   } else {
     nodes_ = rt.upload("bvh nodes", bvh.nodes);
     triangles_ = rt.upload("triangles", bvh.triangles);
@@ -129,7 +134,8 @@ std::vector<RsHit> trace_reference(const Bvh& bvh, const std::vector<RsRay>& ray
   if (node_visits) node_visits->assign(n, 0);
   WideBvh scratch;
   const WideBvh& wide = walks_wide_tree(layout) ? wide_of(bvh, scratch) : scratch;
-  const Wide8Bvh wide8 = tree_width(layout) == 8 ? collapse_to_wide8(bvh) : Wide8Bvh{};
+  const Wide8Bvh wide8 = tree_kind(layout) == TreeKind::Wide8 ? collapse_to_wide8(bvh) : Wide8Bvh{};
+  const CwBvh cw = tree_kind(layout) == TreeKind::Compressed8 ? collapse_to_cwbvh(bvh) : CwBvh{};
   const int robust = variant == TraceVariant::Robust ? 1 : 0;
   // The classes that trace several consecutive rays at once read them through an order.
   std::vector<std::uint32_t> identity;
@@ -157,6 +163,8 @@ std::vector<RsHit> trace_reference(const Bvh& bvh, const std::vector<RsRay>& ray
         hits[i] = rs_traverse_wide(wide.nodes.data(), wide.packets.data(), ray, robust, any_hit ? 1 : 0, v);
       else if (layout == TraceLayout::Wide8)
         hits[i] = rs_traverse_wide8(wide8.nodes.data(), wide8.packets.data(), ray, robust, any_hit ? 1 : 0, v);
+      else if (layout == TraceLayout::Cwbvh)
+        hits[i] = rs_traverse_cwbvh(cw.nodes.data(), cw.triangles.data(), ray, robust, any_hit ? 1 : 0, v);
       else
         hits[i] = robust ? rs_traverse_robust(bvh.nodes.data(), bvh.triangles.data(), ray, any_hit ? 1 : 0, v)
                          : rs_traverse(bvh.nodes.data(), bvh.triangles.data(), ray, any_hit ? 1 : 0, v);
