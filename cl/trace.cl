@@ -15,6 +15,9 @@
  */
 #include "traverse_binary.h"
 #include "traverse_wide.h"
+#ifdef RS_TRACE_BINARY_WW
+#include "traverse_binary_ww.h"
+#endif
 /* The kernel loader inlines a guarded header at its first #include (host/runtime/runtime.cpp), so
  * the 8-wide traversal comes first under either class that needs it. */
 #if defined(RS_TRACE_WIDE8) || defined(RS_TRACE_STREAM)
@@ -91,11 +94,12 @@
 
 /* One trace class per build (host/trace/tracer.cpp passes -DRS_TRACE_BINARY for the binary BVH,
  * -DRS_TRACE_WIDE8 for the 8-wide one, -DRS_TRACE_PACKET=W for packets of W rays, -DRS_TRACE_STREAM
- * for streams, -DRS_TRACE_CWBVH for the compressed 8-wide BVH; the define of
+ * for streams, -DRS_TRACE_CWBVH for the compressed 8-wide BVH, -DRS_TRACE_BINARY_WW for the binary BVH in
+ * the while-while loop form; the define of
  * each class is its row of host/trace/trace_class.cpp), so a run compiles only the kernels it
  * launches. */
 #if !defined(RS_TRACE_BINARY) && !defined(RS_TRACE_PACKET) && !defined(RS_TRACE_WIDE8) && !defined(RS_TRACE_STREAM) && \
-    !defined(RS_TRACE_CWBVH)
+    !defined(RS_TRACE_CWBVH) && !defined(RS_TRACE_BINARY_WW)
 /* The 4-wide BVH (the default layout). */
 #define NODE RsWideNode
 #define LEAF RsTriPacket
@@ -125,6 +129,17 @@ RS_TRACE_KERNELS(_wide8_robust, RS_WIDE8_ROBUST)
 #define RS_CWBVH_ROBUST(n, t, r, any, v) rs_traverse_cwbvh(n, t, r, 1, any, v)
 RS_TRACE_KERNELS(_cwbvh, RS_CWBVH_FAST)
 RS_TRACE_KERNELS(_cwbvh_robust, RS_CWBVH_ROBUST)
+#undef NODE
+#undef LEAF
+
+#elif defined(RS_TRACE_BINARY_WW)
+/* The binary BVH in the while-while loop form (the binary-ww class, traverse_binary_ww.h). */
+#define NODE RsBvhNode
+#define LEAF RsTriangle
+#define RS_WW_FAST(n, t, r, any, v) rs_traverse_binary_ww(n, t, r, 0, any, v)
+#define RS_WW_ROBUST(n, t, r, any, v) rs_traverse_binary_ww(n, t, r, 1, any, v)
+RS_TRACE_KERNELS(_binary_ww, RS_WW_FAST)
+RS_TRACE_KERNELS(_binary_ww_robust, RS_WW_ROBUST)
 #undef NODE
 #undef LEAF
 

@@ -3,8 +3,10 @@
  * device, and it is what the 4-wide traversal (traverse_wide.h) must agree with.
  *
  * Algorithm: stack-based traversal, one ray per work-item, nearest child first (Aila & Laine 2009,
- * "Understanding the Efficiency of Ray Traversal on GPUs", the "while-while" loop without
- * persistent threads), with the tests of intersect.h. The variant is an int argument (OpenCL C has
+ * "Understanding the Efficiency of Ray Traversal on GPUs"), with the tests of intersect.h. Its loop
+ * is their "if-if" form (one iteration per node, inner or leaf), not the "while-while" form of their
+ * CUDA kernels, which traverse_binary_ww.h writes out (the binary-ww class: the same nodes in the
+ * same order). The variant is an int argument (OpenCL C has
  * no templates); the kernels pass a constant, so each kernel compiles to one variant only.
  */
 #ifndef RAYSORT_TRAVERSE_BINARY_H

@@ -47,6 +47,7 @@ BUILDS=(
   "trace-wide8|cl/trace.cl|-DRS_TRACE_WIDE8"
   "trace-stream|cl/trace.cl|-DRS_TRACE_STREAM"
   "trace-cwbvh|cl/trace.cl|-DRS_TRACE_CWBVH"
+  "trace-binary-ww|cl/trace.cl|-DRS_TRACE_BINARY_WW"
   "trace-binary|cl/trace.cl|-DRS_TRACE_BINARY"
   "trace-packet4|cl/trace.cl|-DRS_TRACE_PACKET=4"
   "trace-packet8|cl/trace.cl|-DRS_TRACE_PACKET=8"

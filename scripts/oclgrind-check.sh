@@ -3,7 +3,8 @@
 # checks each memory access (issue 19, items 1-2). Runs, on tiny inputs, with Oclgrind's data-race,
 # API and uninitialised-value checks on (out-of-bounds accesses and barrier divergence are always
 # checked):
-#   trace        both variants (robust, fast), the classes wide, wide8, binary, packet4, packet16, hybrid8, stream and cwbvh,
+#   trace        both variants (robust, fast), the classes wide, wide8, binary, binary-ww, packet4, packet16, hybrid8, stream and
+#                cwbvh,
 #                closest and any hit
 #   encodebench  every encoder at 16, 32 and 64 bits (the *_k32 and *_k64 kernels), HCC_DIR with 2
 #                direction bits (its two-pass encode_direction_* / encode_box_set_or_* kernels), and
@@ -52,7 +53,7 @@ if [ -n "${KERNELS:-}" ]; then GLOBAL=(--kernels "$(realpath "$KERNELS")"); fi
 PROTO=(--reps 1 --warmup 0 --max-time 0)
 cases=(
   "trace-wide|trace ${DEV[*]} --scene cornell --resolution 16x9 ${PROTO[*]} --variant both --layout wide"
-  "trace-binary|trace ${DEV[*]} --scene cornell --resolution 16x9 ${PROTO[*]} --variant both --layout binary"
+  "trace-binary|trace ${DEV[*]} --scene cornell --resolution 16x9 ${PROTO[*]} --variant both --layout binary,binary-ww"
   "trace-wide8|trace ${DEV[*]} --scene cornell --resolution 16x9 ${PROTO[*]} --variant both --layout wide8"
   "trace-packets|trace ${DEV[*]} --scene cornell --resolution 16x9 ${PROTO[*]} --variant both --layout packet4,packet16,hybrid8"
   "trace-stream|trace ${DEV[*]} --scene cornell --resolution 16x9 ${PROTO[*]} --variant both --layout stream"

@@ -6,6 +6,7 @@
 #include <random>
 #include <string>
 
+#include "bench/gpu_model.h"
 #include "bench/metrics.h"
 #include "traverse_binary.h"
 #include "traverse_cwbvh.h"
@@ -116,6 +117,39 @@ TEST(SimtModel, TracedModelMatchesTrailsAndOrderMatters) {
   (void)trace_reference(bvh, rays, nullptr, false, &visits, TraceVariant::Fast, TraceLayout::Cwbvh);
   const SimtModel cw = simt_model(bvh, rays, nullptr, false, TraceVariant::Fast, TraceLayout::Cwbvh);
   EXPECT_EQ(cw.total_steps, std::accumulate(visits.begin(), visits.end(), std::uint64_t{0}));
+}
+
+// The binary-ww class's GPU model: the same trails as the binary class's (the same traversal order),
+// so the same SIMT figures and while-while count, but it issues the while-while steps, which are
+// more than the lockstep steps where lanes interleave inner and leaf steps differently.
+TEST(SimtModel, WhileWhileClassIssuesItsWhileWhileSteps) {
+  Scene::Flat f;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(0.0f, 8.0f);
+  for (int i = 0; i < 400; ++i) {
+    const float x = u(rng), y = u(rng), z = u(rng);
+    f.v0.push_back({x, y, z}), f.v1.push_back({x + 0.5f, y, z}), f.v2.push_back({x, y + 0.5f, z + 0.3f});
+    f.material.push_back(0);
+  }
+  const Bvh bvh = build_bvh(f);
+  std::vector<RsRay> rays;
+  std::normal_distribution<float> n(0.0f, 1.0f);
+  for (int i = 0; i < 2048; ++i) {
+    RsRay r{};
+    for (int a = 0; a < 3; ++a) r.o[a] = u(rng), r.d[a] = n(rng);
+    r.tmax = RS_T_FAR;
+    rays.push_back(r);
+  }
+  const GpuProfile gpu = load_gpu_profile("rtx3060");
+  GpuCounts binary_counts, ww_counts;
+  const SimtModel binary = simt_model(bvh, rays, nullptr, false, TraceVariant::Fast, TraceLayout::Binary, &gpu, &binary_counts);
+  const SimtModel ww = simt_model(bvh, rays, nullptr, false, TraceVariant::Fast, TraceLayout::BinaryWw, &gpu, &ww_counts);
+  EXPECT_EQ(ww.total_steps, binary.total_steps);
+  EXPECT_EQ(ww.lane_efficiency, binary.lane_efficiency);
+  EXPECT_EQ(ww_counts.ww_steps, binary_counts.ww_steps);
+  EXPECT_EQ(ww_counts.warp_steps, binary_counts.ww_steps);
+  EXPECT_GT(ww_counts.warp_steps, binary_counts.warp_steps);
+  EXPECT_EQ(ww_counts.dram_bytes, binary_counts.dram_bytes);
 }
 
 // The traced model counts a warp's distinct nodes by stamping node slots (metrics.cpp,

@@ -320,6 +320,42 @@ TEST(Trace, Wide8SibenikEqualsItsHostTwinAndWideRays) {
   EXPECT_GT(expect_class_equals_twin_and_wide(load_scene("sibenik", {"", {80, 45, 0}}), TraceLayout::Wide8), 0u);
 }
 
+// The binary-ww class (cl/traverse_binary_ww.h): the binary class's traversal in the while-while loop
+// form visits the same nodes in the same order, so its kernels give the binary kernels' hits and
+// visit counts bit for bit, and equal their host twin, on every batch, both variants.
+TEST(Trace, BinaryWhileWhileEqualsBinaryBitForBit) {
+  const Scene scene = load_scene("detail-room", {"", {64, 36, 0}});
+  Scene::Flat tris = scene.flatten();
+  Bvh bvh = build_bvh(tris);
+  const auto batches = generate_batches(scene, tris, bvh, RayGenOptions{});
+  Runtime& rt = testing::runtime();
+  for (TraceVariant v : {TraceVariant::Fast, TraceVariant::Robust}) {
+    Tracer ww(rt, bvh, v, TraceLayout::BinaryWw), binary(rt, bvh, v, TraceLayout::Binary);
+    for (const auto& rb : batches) {
+      const std::string what = std::string(trace_variant_name(v)) + " " + rb.batch.name;
+      const bool any = rb.batch.any_hit();
+      const auto dev = ww.run(rb.batch.rays, nullptr, any).hits;
+      EXPECT_EQ(count_hit_mismatches(dev, binary.run(rb.batch.rays, nullptr, any).hits), 0u) << what;
+      std::vector<std::uint32_t> visits_ww, visits_binary;
+      const auto host = trace_reference(bvh, rb.batch.rays, nullptr, any, &visits_ww, v, TraceLayout::BinaryWw);
+      trace_reference(bvh, rb.batch.rays, nullptr, any, &visits_binary, v, TraceLayout::Binary);
+      EXPECT_EQ(count_hit_mismatches(dev, host), 0u) << what;
+      EXPECT_EQ(visits_ww, visits_binary) << what;
+      const auto n = static_cast<std::uint32_t>(rb.batch.size());
+      std::vector<std::uint32_t> order(n);
+      std::iota(order.begin(), order.end(), 0u);
+      cl::Buffer rays_buf = rt.upload("rays", rb.batch.rays), order_buf = rt.upload("order", order);
+      cl::Buffer hits_buf = rt.buffer("hits", n * sizeof(RsHit)), visits_buf = rt.buffer("visits", n * sizeof(std::uint32_t));
+      ww.enqueue_counted(rays_buf, order_buf, n, hits_buf, visits_buf).wait();
+      std::vector<std::uint32_t> dev_visits;
+      rt.download("visits", visits_buf, dev_visits, n);
+      if (!any) {
+        EXPECT_EQ(dev_visits, visits_binary) << what << " counted";
+      }
+    }
+  }
+}
+
 // The cwbvh class (cl/traverse_cwbvh.h, the compressed tree of host/bvh/cwbvh.cpp): the same checks.
 TEST(Trace, CwbvhKernelsEqualTheirHostTwinAndWideRays) {
   EXPECT_GT(expect_class_equals_twin_and_wide(load_scene("detail-room", {"", {64, 36, 0}}), TraceLayout::Cwbvh), 0u);
@@ -343,7 +379,10 @@ TEST(Trace, TraceClassNames) {
   EXPECT_EQ(resolve_trace_layout(TraceLayout::Hybrid, avx512), TraceLayout::Hybrid16);
   EXPECT_EQ(resolve_trace_layout(TraceLayout::Hybrid, gpu), TraceLayout::Hybrid8);
   EXPECT_EQ(parse_trace_layouts("wide,packet8,wide").size(), 2u);
-  EXPECT_EQ(parse_trace_layouts("all").size(), 10u);  // every class but the unresolved packet and hybrid
+  EXPECT_EQ(parse_trace_layouts("all").size(), 11u);  // every class but the unresolved packet and hybrid
+  EXPECT_TRUE(loops_while_while(TraceLayout::BinaryWw));
+  EXPECT_FALSE(loops_while_while(TraceLayout::Binary));
+  EXPECT_EQ(tree_kind(TraceLayout::BinaryWw), TreeKind::Binary);
   EXPECT_EQ(tree_kind(TraceLayout::Cwbvh), TreeKind::Compressed8);
   EXPECT_EQ(tree_width(TraceLayout::Cwbvh), 8);
   EXPECT_FALSE(walks_wide_tree(TraceLayout::Cwbvh));

@@ -159,11 +159,9 @@ void register_run_command(CLI::App& app) {
                   "(generation order, default) or shuffled (a fixed-seed permutation, as a path tracer compacting with "
                   "atomics produces), or all; shuffled cells end their id in /shuffled");
   cmd->add_option("--layout", a->layout,
-                  "trace classes, comma-separated (docs/trace.md, \"Trace classes\"): wide (one ray per work-item "
-                  "over the 4-wide BVH, default), wide8 (one ray over an 8-wide BVH), binary, packet4/packet8/packet16 (packets of consecutive rays of "
-                  "each order, one ray per vector lane), hybrid8/hybrid16, packet or hybrid (the device's preferred "
-                  "width), or all; the first is the tables' main one; a cell of another class than wide ends its id "
-                  "in /<class>");
+                  "trace classes, comma-separated (docs/trace.md, \"Trace classes\"): " + trace_layouts_help() +
+                      "; or all; the first is the tables' main one; a cell of another class than wide ends its id in "
+                      "/<class>");
   cmd->add_option("--embree-paths", a->embree_paths,
                   "also trace every cell's rays with these Embree paths, each in NoSort order and in the cell's sorted "
                   "order, as arms of the cell's rounds (docs/measurement.md, \"Embree on sorted orders\"; needs a build "

@@ -514,10 +514,8 @@ void register_trace_command(CLI::App& app) {
                   "(robust,fast or both)")
       ->capture_default_str();
   cmd->add_option("--layout", args->layout,
-                  "trace class (docs/trace.md): wide (one ray over the 4-wide BVH, the default), wide8 (one ray over "
-                  "the 8-wide BVH), binary (one ray over the binary BVH), packet4/packet8/packet16 (packets of consecutive rays over the 4-wide BVH, one "
-                  "ray per vector lane) or packet (the device's preferred vector width, `raysort devices`); several, "
-                  "comma-separated (or all), run side by side in the same rounds")
+                  "trace class (docs/trace.md): " + trace_layouts_help() +
+                      "; several, comma-separated (or all), run side by side in the same rounds")
       ->check([](const std::string& list) {
         try {
           parse_trace_layouts(list);

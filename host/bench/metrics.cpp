@@ -199,8 +199,9 @@ struct TrailRecorder {
 SimtModel simt_model(const Bvh& bvh, const std::vector<RsRay>& rays, const std::uint32_t* order, bool any_hit,
                      TraceVariant variant, TraceLayout layout, const GpuProfile* gpu, GpuCounts* gpu_counts) {
   WideBvh scratch;
-  // Every class but binary and wide8 walks the 4-wide tree (the packet classes too: the model's warp
-  // of 32 lanes is their packet, at a GPU's width); wide8 walks its 8-wide tree, one ray per lane.
+  // Each class's model walks the tree its kernels walk, one ray per lane: the binary tree (binary,
+  // binary-ww), the 8-wide one (wide8, stream), the compressed one (cwbvh), else the 4-wide one (the
+  // packet classes too: the model's warp of 32 lanes is their packet, at a GPU's width).
   const bool wide_layout = walks_wide_tree(layout), wide8_layout = tree_kind(layout) == TreeKind::Wide8;
   const bool cw_layout = tree_kind(layout) == TreeKind::Compressed8;
   const WideBvh& wide = wide_layout ? wide_of(bvh, scratch) : scratch;
@@ -248,6 +249,9 @@ SimtModel simt_model(const Bvh& bvh, const std::vector<RsRay>& rays, const std::
   if (replay && gpu_counts) {
     *gpu_counts = replay->counts();
     gpu_counts->warps = warps;
+    // A while-while kernel issues its while-while steps (the same trails, lanes waiting for the other
+    // kind of step): the count the model's time reads.
+    if (loops_while_while(layout) && !replay->dynamic_fetch()) gpu_counts->warp_steps = gpu_counts->ww_steps;
   }
   return finish(total);
 }

@@ -10,8 +10,9 @@ namespace raysort {
 namespace {
 
 // The trace classes, once: name, rays per work-item, the hybrids' switch, whether the rays walk as a
-// stream, the tree walked, the kernel build's define and the kernels' name
-// suffix (cl/trace.cl). The hybrids switch to single rays at a quarter of the packet's lanes.
+// stream, the tree walked, the kernel build's define and the kernels' name suffix (cl/trace.cl),
+// whether its loop is while-while, and what it is (--help). The hybrids switch to single rays at a
+// quarter of the packet's lanes.
 struct TraceClass {
   TraceLayout layout;
   const char* name;
@@ -21,20 +22,36 @@ struct TraceClass {
   TreeKind tree;
   const char* define;
   const char* suffix;
+  bool while_while;
+  const char* meaning;  // for --help
 };
 constexpr TraceClass kTraceClasses[] = {
-    {TraceLayout::Wide, "wide", 1, 0, false, TreeKind::Wide4, "", ""},
-    {TraceLayout::Wide8, "wide8", 1, 0, false, TreeKind::Wide8, "-DRS_TRACE_WIDE8", "_wide8"},
-    {TraceLayout::Binary, "binary", 1, 0, false, TreeKind::Binary, "-DRS_TRACE_BINARY", "_binary"},
-    {TraceLayout::Packet4, "packet4", 4, 0, false, TreeKind::Wide4, "-DRS_TRACE_PACKET=4", "_packet"},
-    {TraceLayout::Packet8, "packet8", 8, 0, false, TreeKind::Wide4, "-DRS_TRACE_PACKET=8", "_packet"},
-    {TraceLayout::Packet16, "packet16", 16, 0, false, TreeKind::Wide4, "-DRS_TRACE_PACKET=16", "_packet"},
-    {TraceLayout::Packet, "packet", 0, 0, false, TreeKind::Wide4, "", ""},
-    {TraceLayout::Hybrid8, "hybrid8", 8, 2, false, TreeKind::Wide4, "-DRS_TRACE_PACKET=8 -DRS_PACKET_SINGLE_AT=2", "_packet"},
-    {TraceLayout::Hybrid16, "hybrid16", 16, 4, false, TreeKind::Wide4, "-DRS_TRACE_PACKET=16 -DRS_PACKET_SINGLE_AT=4", "_packet"},
-    {TraceLayout::Hybrid, "hybrid", 0, 0, false, TreeKind::Wide4, "", ""},
-    {TraceLayout::Stream, "stream", 32, 0, true, TreeKind::Wide8, "-DRS_TRACE_STREAM", "_stream"},
-    {TraceLayout::Cwbvh, "cwbvh", 1, 0, false, TreeKind::Compressed8, "-DRS_TRACE_CWBVH", "_cwbvh"},
+    {TraceLayout::Wide, "wide", 1, 0, false, TreeKind::Wide4, "", "", false,
+     "one ray per work-item over the 4-wide BVH, the default"},
+    {TraceLayout::Wide8, "wide8", 1, 0, false, TreeKind::Wide8, "-DRS_TRACE_WIDE8", "_wide8", false,
+     "one ray over the 8-wide BVH"},
+    {TraceLayout::Binary, "binary", 1, 0, false, TreeKind::Binary, "-DRS_TRACE_BINARY", "_binary", false,
+     "one ray over the binary BVH, if-if loop"},
+    {TraceLayout::Packet4, "packet4", 4, 0, false, TreeKind::Wide4, "-DRS_TRACE_PACKET=4", "_packet", false,
+     "packets of 4 consecutive rays over the 4-wide BVH, one ray per vector lane"},
+    {TraceLayout::Packet8, "packet8", 8, 0, false, TreeKind::Wide4, "-DRS_TRACE_PACKET=8", "_packet", false,
+     "packets of 8"},
+    {TraceLayout::Packet16, "packet16", 16, 0, false, TreeKind::Wide4, "-DRS_TRACE_PACKET=16", "_packet", false,
+     "packets of 16"},
+    {TraceLayout::Packet, "packet", 0, 0, false, TreeKind::Wide4, "", "", false,
+     "packets of the device's preferred vector width, `raysort devices`"},
+    {TraceLayout::Hybrid8, "hybrid8", 8, 2, false, TreeKind::Wide4, "-DRS_TRACE_PACKET=8 -DRS_PACKET_SINGLE_AT=2", "_packet", false,
+     "packets of 8 that hand subtrees reached by 2 lanes to single rays"},
+    {TraceLayout::Hybrid16, "hybrid16", 16, 4, false, TreeKind::Wide4, "-DRS_TRACE_PACKET=16 -DRS_PACKET_SINGLE_AT=4", "_packet", false,
+     "packets of 16, single rays from 4 lanes"},
+    {TraceLayout::Hybrid, "hybrid", 0, 0, false, TreeKind::Wide4, "", "", false,
+     "hybrids of the device's preferred width"},
+    {TraceLayout::Stream, "stream", 32, 0, true, TreeKind::Wide8, "-DRS_TRACE_STREAM", "_stream", false,
+     "streams of 32 rays over the 8-wide BVH, node by node"},
+    {TraceLayout::Cwbvh, "cwbvh", 1, 0, false, TreeKind::Compressed8, "-DRS_TRACE_CWBVH", "_cwbvh", false,
+     "one ray over the compressed 8-wide BVH of Ylitie et al. 2017, a GPU kernel"},
+    {TraceLayout::BinaryWw, "binary-ww", 1, 0, false, TreeKind::Binary, "-DRS_TRACE_BINARY_WW", "_binary_ww", true,
+     "one ray over the binary BVH, the while-while loop of Aila and Laine 2009"},
 };
 
 const TraceClass& trace_class(TraceLayout l) {
@@ -64,6 +81,12 @@ TraceLayout parse_trace_layout(std::string_view name) {
 
 const char* trace_layout_name(TraceLayout l) { return trace_class(l).name; }
 
+std::string trace_layouts_help() {
+  std::string text;
+  for (const TraceClass& c : kTraceClasses) text += (text.empty() ? "" : ", ") + std::string(c.name) + " (" + c.meaning + ")";
+  return text;
+}
+
 std::vector<TraceLayout> parse_trace_layouts(const std::string& list) {
   std::vector<TraceLayout> out;
   if (list == "all") {
@@ -86,6 +109,8 @@ int packet_single_at(TraceLayout l) { return trace_class(l).single_at; }
 bool is_stream(TraceLayout l) { return trace_class(l).stream; }
 
 TreeKind tree_kind(TraceLayout l) { return trace_class(l).tree; }
+
+bool loops_while_while(TraceLayout l) { return trace_class(l).while_while; }
 
 int tree_width(TraceLayout l) {
   switch (tree_kind(l)) {

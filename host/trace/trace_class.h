@@ -18,14 +18,31 @@ namespace raysort {
 // order per work-item over the 8-wide collapse, node by node, each ray tested alone against a
 // node's eight boxes (cl/traverse_stream.h): the rays share each node's fetch.
 // Cwbvh: one ray per work-item over the compressed 8-wide BVH (host/bvh/cwbvh.cpp,
-// cl/traverse_cwbvh.h; Ylitie et al. 2017), the GPU-class kernel.
-enum class TraceLayout { Wide, Wide8, Binary, Packet4, Packet8, Packet16, Packet, Hybrid8, Hybrid16, Hybrid, Stream, Cwbvh };
+// cl/traverse_cwbvh.h; Ylitie et al. 2017), the GPU-class kernel. BinaryWw: the binary BVH in the
+// while-while loop form of Aila and Laine 2009 (cl/traverse_binary_ww.h; Binary is their if-if form).
+enum class TraceLayout {
+  Wide,
+  Wide8,
+  Binary,
+  Packet4,
+  Packet8,
+  Packet16,
+  Packet,
+  Hybrid8,
+  Hybrid16,
+  Hybrid,
+  Stream,
+  Cwbvh,
+  BinaryWw
+};
 
 // The classes' names, in the order help and errors list them: wide, wide8, binary, packet4, packet8,
-// packet16, packet, hybrid8, hybrid16, hybrid, stream, cwbvh. parse throws an Error naming the accepted values.
+// packet16, packet, hybrid8, hybrid16, hybrid, stream, cwbvh, binary-ww. parse throws an Error naming the accepted values.
 const std::vector<std::string>& trace_layout_names();
 TraceLayout parse_trace_layout(std::string_view name);
 const char* trace_layout_name(TraceLayout l);
+// Every class with what it is, for --help: "wide (one ray per work-item over ...), wide8 (...), ...".
+std::string trace_layouts_help();
 // A command line's class list: "wide,packet" (in that order, repeats dropped), or "all" for every
 // class but the unresolved packet. Throws Error naming an unknown class.
 std::vector<TraceLayout> parse_trace_layouts(const std::string& list);
@@ -49,6 +66,9 @@ enum class TreeKind { Binary, Wide4, Wide8, Compressed8 };
 TreeKind tree_kind(TraceLayout l);
 // The branching factor of the tree a class walks: 2, 4 or 8.
 int tree_width(TraceLayout l);
+// The kernel's loop is while-while (an inner-node loop, then a leaf loop; Aila and Laine 2009): the
+// GPU model issues its while-while step count (GpuCounts::ww_steps) instead of the lockstep one.
+bool loops_while_while(TraceLayout l);
 // The class walks the 4-wide tree (bvh.wide).
 inline bool walks_wide_tree(TraceLayout l) { return tree_kind(l) == TreeKind::Wide4; }
 

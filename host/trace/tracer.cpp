@@ -8,6 +8,7 @@
 #include "trace/packet_twin.h"
 #include "trace/stream_twin.h"
 #include "traverse_binary.h"
+#include "traverse_binary_ww.h"
 #include "traverse_cwbvh.h"
 #include "traverse_wide.h"
 #include "traverse_wide8.h"
@@ -165,6 +166,8 @@ std::vector<RsHit> trace_reference(const Bvh& bvh, const std::vector<RsRay>& ray
         hits[i] = rs_traverse_wide8(wide8.nodes.data(), wide8.packets.data(), ray, robust, any_hit ? 1 : 0, v);
       else if (layout == TraceLayout::Cwbvh)
         hits[i] = rs_traverse_cwbvh(cw.nodes.data(), cw.triangles.data(), ray, robust, any_hit ? 1 : 0, v);
+      else if (layout == TraceLayout::BinaryWw)
+        hits[i] = rs_traverse_binary_ww(bvh.nodes.data(), bvh.triangles.data(), ray, robust, any_hit ? 1 : 0, v);
       else
         hits[i] = robust ? rs_traverse_robust(bvh.nodes.data(), bvh.triangles.data(), ray, any_hit ? 1 : 0, v)
                          : rs_traverse(bvh.nodes.data(), bvh.triangles.data(), ray, any_hit ? 1 : 0, v);
