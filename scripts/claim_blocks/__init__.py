@@ -1,0 +1,21 @@
+"""The generators of scripts/claims.py: block name -> function returning the block's text, computed
+from committed result sets only (claim_blocks/sets.py names them). One list, here."""
+from . import appendix, paper_tex, sampling
+
+GENERATORS = {
+    "paper-inconsistencies": paper_tex.inconsistencies_block,
+    "spp-batches": sampling.batches_block,
+    "spp-table7-anc": sampling.anc_table7_block,
+    "spp-model-error": sampling.model_error_block,
+    "spp-model-table2": sampling.model_table2_block,
+    "spp-model-table3": sampling.model_table3_block,
+    "viewport-lane-ratios": appendix.viewport_block,
+    "hcc-dir-lane-ratios": appendix.hcc_dir_block,
+    "hcc-dir-pocl-range": appendix.hcc_dir_pocl_phrase,
+    "bounces-lane-efficiency": appendix.bounces_block,
+    "bounces-pocl-range": appendix.bounces_pocl_phrase,
+    "sweep-lambda": appendix.lambda_block,
+    "sweep-twopoint": appendix.twopoint_block,
+    "sweep-lambda-command": appendix.sweep_lambda_command_phrase,
+    "sweep-commands": appendix.sweep_commands_block,
+}
