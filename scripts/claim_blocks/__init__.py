@@ -1,9 +1,14 @@
 """The generators of scripts/claims.py: block name -> function returning the block's text, computed
 from committed result sets only (claim_blocks/sets.py names them). One list, here."""
-from . import appendix, paper_tex, sampling
+from . import appendix, packet, paper_tex, sampling
 
 GENERATORS = {
     "paper-inconsistencies": paper_tex.inconsistencies_block,
+    "packet-correlation": packet.correlation_block,
+    "packet-table2": packet.table2_block,
+    "packet-table3": packet.table3_block,
+    "packet-hcc-breakfast": packet.hcc_breakfast_phrase,
+    "packet-shadow-gap": packet.shadow_gap_phrase,
     "spp-batches": sampling.batches_block,
     "spp-table7-anc": sampling.anc_table7_block,
     "spp-model-error": sampling.model_error_block,
