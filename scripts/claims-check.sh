@@ -3,7 +3,7 @@
 # computes from that set (scripts/claims.py; docs/claims.md). Seconds. Skipped (exit 77) without
 # python3, except under CI=true, where a missing python3 fails.
 set -euo pipefail
-cd "$(dirname "$0")/.."
+cd "${0%/*}/.."
 if ! command -v python3 >/dev/null 2>&1; then
   if [ -n "${CI:-}" ]; then
     echo "claims-check: python3 is missing (CI=${CI}): install it (scripts/install-deps.sh)" >&2

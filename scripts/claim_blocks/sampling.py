@@ -1,6 +1,7 @@
 """results/README.md, "The paper at its sampling": the paper preset at 1 and 8 spp side by side
 (paper-1spp-9dab0ed and paper-8spp-9dab0ed/merged), through scripts/spp_compare.py's readers."""
 import csv
+import functools
 
 from spp_compare import batch_table, gpu, load
 from gpu_model_validate import mae, spearman
@@ -11,6 +12,7 @@ from .sets import EIGHT_SPP, ONE_SPP, PAPER_COLUMN, PAPER_ORDER, PAPER_SPEEDUPS
 BATCH = {"2": "bounce1", "3": "shadow0", "6": "bounce1"}
 
 
+@functools.lru_cache(maxsize=None)  # every block reads the same two sets: read each once
 def _sets(bits=32):
     return load(ONE_SPP, "permute", bits), load(EIGHT_SPP, "permute", bits)
 
