@@ -13,6 +13,7 @@ GENERATORS = {
     "packet-table3": packet.table3_block,
     "packet-hcc-breakfast": packet.hcc_breakfast_phrase,
     "packet-shadow-gap": packet.shadow_gap_phrase,
+    "overhead-table5": sampling.overhead_table5_block,
     "spp-batches": sampling.batches_block,
     "spp-table7-anc": sampling.anc_table7_block,
     "spp-model-error": sampling.model_error_block,

@@ -183,3 +183,25 @@ def nosort_shadow_phrase():
 def table6_phrase():
     s = _stats(_model_rows("6"))
     return f"MAE {s[0]:.3f} at 1 spp, {s[1]:.3f} at 8 spp"
+
+
+def overhead_table5_block():
+    """The paper's Table 5 (overhead on Breakfast, bounce1) beside ours at both samplings: encode + sort +
+    permute ms (medians of the rounds), their share of the trace and the net speedup."""
+    one, eight = _sets()
+    paper = {(r["row"], r["column"]): r["value"] for r in paper_tex.printed() if r["table"] == "5"}
+    rays = lambda cells: cells[("breakfast_room", "bounce1", "nosort")]["rays"] / 1e6  # noqa: E731
+    out = [f"| encoder | paper encode + sort ms (% of trace) | ours at 8 spp ({rays(eight):.1f} M rays) | "
+           f"ours at 1 spp ({rays(one):.2f} M rays) |", "|---|---|---|---|"]
+    for i, enc in enumerate(("hcc", "mlhcc", "twopoint", "ppc")):
+        row = "mlhcc32" if enc == "mlhcc" else enc
+        p = (f"{paper[(row, 'encode ms')]} + {paper[(row, 'sort ms')]} "
+             f"({float(paper[(row, 'percentage')]):.1f} %)")
+        ours = []
+        for cells in (eight, one):
+            c = cells[("breakfast_room", "bounce1", enc)]
+            ours.append(f"{c['encode_ms']['median']:.1f} + {c['sort_ms']['median']:.1f} + "
+                        f"{c['permute_ms']['median']:.1f} ({c['overhead_pct']['value']:.0f} %) → "
+                        + ("net " if i == 0 else "") + f"{c['net_speedup']['value']:.2f}")
+        out.append(f"| {enc} | {p} | {ours[0]} | {ours[1]} |")
+    return "\n".join(out)
