@@ -12,6 +12,8 @@ PACKAGES=(
   libcli11-dev nlohmann-json3-dev libtomlplusplus-dev libfmt-dev
   # libgmp-dev: exact rationals for the oracle of `raysort trace --adjudicate`
   libgmp-dev
+  # python3: scripts/claims.py, the ctest `claims` (every quoted figure recomputed) and the result scripts
+  python3
   # libssl-dev: libcrypto's SHA-256, to check real scene files against scenes/sources.toml
   libssl-dev
   # oclgrind: a second OpenCL implementation with race and memory checks (scripts/oclgrind-check.sh);

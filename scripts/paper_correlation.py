@@ -33,26 +33,22 @@ def fisher_interval(r, n):
     return math.tanh(z - 1.96 * se), math.tanh(z + 1.96 * se)
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("sets", nargs="+")
-    ap.add_argument("--bits", default="32")
-    args = ap.parse_args()
-
+def correlation_table(set_dirs, bits="32"):
+    """The markdown table (lines) of main's output; scripts/claims.py quotes it too."""
     paper = {}
     with open(PAPER, newline="") as f:
         for r in csv.DictReader(f):
-            if r["table"] in TABLES and r["bits"] == args.bits:
+            if r["table"] in TABLES and r["bits"] == bits:
                 paper[(r["table"], r["scene"], r["encoder"])] = float(r["paper_speedup"])
 
     cells = {}  # (table, layout, access) -> [(paper, measured, simt ratio, scene, encoder)]
-    for d in args.sets:
+    for d in set_dirs:
         path = os.path.join(d, "cells.csv")
         if not os.path.exists(path):
             sys.exit(f"paper_correlation: {path} is missing: give result set folders (raysort run --out DIR)")
         with open(path, newline="") as f:
             for r in csv.DictReader(f):
-                if r["status"] != "ok" or r["bits"] != args.bits or r["baseline"] != "pixel":
+                if r["status"] != "ok" or r["bits"] != bits or r["baseline"] != "pixel":
                     continue
                 for table, batch in TABLES.items():
                     key = (table, r["scene"], r["encoder"])
@@ -62,10 +58,10 @@ def main():
                              r["encoder"]))
     if not cells:
         sys.exit("paper_correlation: no cell of the sets pairs with the paper's Tables 2 and 3 "
-                 f"(bounce1 / shadow0 at {args.bits} bits on the paper's scene stand-ins)")
+                 f"(bounce1 / shadow0 at {bits} bits on the paper's scene stand-ins)")
 
-    print(f"| table | class | access | cells | Pearson [95 %] | Spearman | SIMT ratio: Pearson | Spearman |")
-    print("|---|---|---|---:|---|---:|---:|---:|")
+    lines = ["| table | class | access | cells | Pearson [95 %] | Spearman | SIMT ratio: Pearson | Spearman |",
+             "|---|---|---|---:|---|---:|---:|---:|"]
     for (table, layout, access), rows in sorted(cells.items()):
         p = [r[0] for r in rows]
         m = [r[1] for r in rows]
@@ -73,9 +69,17 @@ def main():
         r = pearson(p, m)
         lo, hi = fisher_interval(r, len(rows))
         scenes = len({x[3] for x in rows})
-        print(f"| {table} ({TABLES[table]}) | {layout} | {access} | {len(rows)} ({scenes} scenes) | "
+        lines.append(f"| {table} ({TABLES[table]}) | {layout} | {access} | {len(rows)} ({scenes} scenes) | "
               f"{r:.2f} [{lo:.2f}, {hi:.2f}] | {spearman(p, m):.2f} | {pearson(p, s):.2f} | {spearman(p, s):.2f} |")
+    return lines
 
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("sets", nargs="+")
+    ap.add_argument("--bits", default="32")
+    args = ap.parse_args()
+    print("\n".join(correlation_table(args.sets, args.bits)))
 
 if __name__ == "__main__":
     main()

@@ -103,22 +103,11 @@ def long_table(title, rows, at_one, at_eight, with_bits=False):
     return out
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("one")
-    ap.add_argument("eight")
-    ap.add_argument("--access", default="permute", choices=("gather", "permute"))
-    ap.add_argument("--bits", type=int, default=32)
-    ap.add_argument("--paper", default=os.path.join(ROOT, "results/gpu-model/paper_tables.csv"))
-    ap.add_argument("--out")
-    ap.add_argument("--long", action="store_true", help="tables 2 and 3 one row per scene and encoder")
-    ap.add_argument("--key-lengths", action="store_true", help="add the paper's Table 6 (sibenik, 16/32/64 bits)")
-    a = ap.parse_args()
-    one, eight = load(a.one, a.access, a.bits), load(a.eight, a.access, a.bits)
+def batch_table(one, eight):
+    """Per scene and batch both sets hold: rays, ANC and SIMT lane ratios of a few encoders and the GPU
+    model's HCC speedup, each "1 spp -> 8 spp" (markdown lines; scripts/claims.py quotes it too)."""
     batches = sorted({(s, b) for (s, b, e) in eight if e == "nosort" and (s, b, "nosort") in one})
-    lines = [f"Cells: {a.access}, {a.bits}-bit keys; `{os.path.basename(os.path.normpath(a.one))}` (1 spp) → "
-             f"`{os.path.basename(os.path.normpath(a.eight))}` (8 spp).", "",
-             "| scene, batch | rays 1 spp → 8 spp | HCC ANC | TwoPoint ANC | PPC ANC | HCC SIMT lane ratio | "
+    lines = ["| scene, batch | rays 1 spp → 8 spp | HCC ANC | TwoPoint ANC | PPC ANC | HCC SIMT lane ratio | "
              "MLHCC lane ratio | PPC lane ratio | HCC GPU model |",
              "|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for s, b in batches:
@@ -131,6 +120,23 @@ def main():
                      f"{pair('ppc', lambda c: c['anc'])} | {pair('hcc', lambda c: c['simt_lane_efficiency_ratio'])} | "
                      f"{pair('mlhcc', lambda c: c['simt_lane_efficiency_ratio'])} | "
                      f"{pair('ppc', lambda c: c['simt_lane_efficiency_ratio'])} | {pair('hcc', gpu)} |")
+    return lines
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("one")
+    ap.add_argument("eight")
+    ap.add_argument("--access", default="permute", choices=("gather", "permute"))
+    ap.add_argument("--bits", type=int, default=32)
+    ap.add_argument("--paper", default=os.path.join(ROOT, "results/gpu-model/paper_tables.csv"))
+    ap.add_argument("--out")
+    ap.add_argument("--long", action="store_true", help="tables 2 and 3 one row per scene and encoder")
+    ap.add_argument("--key-lengths", action="store_true", help="add the paper's Table 6 (sibenik, 16/32/64 bits)")
+    a = ap.parse_args()
+    one, eight = load(a.one, a.access, a.bits), load(a.eight, a.access, a.bits)
+    lines = [f"Cells: {a.access}, {a.bits}-bit keys; `{os.path.basename(os.path.normpath(a.one))}` (1 spp) → "
+             f"`{os.path.basename(os.path.normpath(a.eight))}` (8 spp).", ""] + batch_table(one, eight)
     with open(a.paper, newline="") as f:
         paper_rows = list(csv.DictReader(f))
     paper = [r for r in paper_rows if r["table"] in ("2", "3") and int(r["bits"]) == a.bits]

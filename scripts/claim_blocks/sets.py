@@ -1,0 +1,23 @@
+"""The committed result sets the quoted figures come from, named once, and the paper's scene columns
+with the stand-in that plays each (docs/paper.md, "Scenes")."""
+import os
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+EPYC = os.path.join(ROOT, "results", "pocl-cpu-pthread-skylake-avx512-amd-epyc")
+XEON = os.path.join(ROOT, "results", "pocl-cpu-pthread-skylake-avx512-intel-xeon")
+
+ONE_SPP = os.path.join(EPYC, "paper-1spp-9dab0ed")
+EIGHT_SPP = os.path.join(EPYC, "paper-8spp-9dab0ed", "merged")
+CLASSES = os.path.join(XEON, "paper-1spp-classes-da8579b")
+VIEWPORT = os.path.join(EPYC, "paper-viewport-1spp-d8b4b22")
+HCC_DIR = os.path.join(EPYC, "paper-hcc-dir-1spp-d8b4b22")
+BOUNCES = os.path.join(EPYC, "paper-bounces-1spp-d8b4b22")
+SWEEPS = os.path.join(EPYC, "sweeps-d8b4b22")
+PAPER_SPEEDUPS = os.path.join(ROOT, "results", "gpu-model", "paper_tables.csv")
+
+# stand-in scene -> the paper's column it is scored against (results/gpu-model/paper_tables.csv pairs
+# them so). `landscape` is scored against the paper's *landscape* column (21.84 M triangles), not Vokselia.
+PAPER_COLUMN = {"breakfast_room": "Breakfast", "grey_white_room": "Living room", "sibenik": "Sibenik",
+                "multi-instance-real": "MultiInstance", "landscape": "landscape"}
+# the order of the paper's columns (Tables 2 and 3), for the stand-ins that have one
+PAPER_ORDER = ["breakfast_room", "grey_white_room", "sibenik", "multi-instance-real", "landscape"]
