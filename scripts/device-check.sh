@@ -8,7 +8,10 @@
 #   4. measures the GPU model's validation matrix (results/gpu-model/README.md: five scenes,
 #      bounce1 and shadow0, eight encoders at 32 bits, gather) on the GPU: a result set whose
 #      speedups are measured, to set beside the model's predictions (scripts/gpu_model_validate.py
-#      --measured).
+#      --measured);
+#   5. every trace class (`--layout all`: the CPU classes too, for the record), both variants, on the
+#      paper's sibenik and breakfast_room batches at 1920x1080: speed per class and mismatches
+#      against each class's host twin, in check.log.
 # Everything goes to $OUT (the device tool's folder; ./device-out elsewhere): check.log and
 # sets.tar.gz (the result sets). Exit status: 0 when every step passed, else the first failure's.
 #
@@ -81,6 +84,14 @@ else
   fail "raysort run"
   [ -d "$work/$set_name" ] && tar -C "$work" -czf "$out/sets.tar.gz" "$set_name"
 fi
+
+step "5. every trace class on this device"
+if [ -n "${DEVICE_CHECK_QUICK:-}" ]; then
+  classes=(--scene cornell --resolution 48x27 --reps 2 --warmup 0 --max-time 0)
+else
+  classes=(--scene sibenik,breakfast_room --resolution 1920x1080 --reps 5 --warmup 1 --max-time 8)
+fi
+"$bin" trace "${classes[@]}" --layout all --variant both || fail "raysort trace --layout all"
 
 echo
 [ "$status" -eq 0 ] && echo "device check: every step passed" || echo "device check: a step failed (above)"
