@@ -302,7 +302,8 @@ void skip_absent_batch(const std::vector<PlannedCell>& batch_cells, std::vector<
 }
 
 // Scene problems a run can find before any work starts: a scene file or OBJ given by path is
-// parsed (it is small next to a run); an embedded scene's OBJ files must exist under the root.
+// parsed (it is small next to a run); an embedded scene's OBJ files must exist under the root; a
+// ray file (--rays) is read and checked against its scene (bench/batch_file.h).
 void check_scenes_before_work(const MatrixSpec& spec, const RunOptions& opts) {
   SceneOptions scene_opts;
   scene_opts.scene_root = opts.scene_root;
@@ -323,6 +324,8 @@ void check_scenes_before_work(const MatrixSpec& spec, const RunOptions& opts) {
                                 name, rel, root));
     }
   }
+  if (!spec.ray_file.empty())  // a bad file, or one of another scene, is refused before the result set is touched
+    (void)read_ray_file_for_scene(spec.ray_file, spec.scenes.at(0), resolve_scene_root(scene_opts));
 }
 
 // Each scene's facts (size, effects), loaded once: the plan and the memory check both read them.
@@ -421,8 +424,6 @@ RunSummary run_matrix(const MatrixSpec& requested, const RunOptions& opts) {
   MatrixSpec spec = requested;
   validate_matrix(spec);
   check_scenes_before_work(spec, opts);
-  if (!spec.ray_file.empty())  // a bad file, or one of another scene, is refused before the result set is touched
-    (void)read_ray_file_for_scene(spec.ray_file, spec.scenes.at(0), resolve_scene_root(SceneOptions{opts.scene_root, {}}));
 
   Runtime rt(select_device(opts.device));
   build_own_programs(rt, spec.encoders);  // an encoder file that does not compile: refused before any work
