@@ -152,8 +152,8 @@ TEST(RayFileCli, ExportedBatchReimportedGivesTheSameRaysKeysOrdersAndHits) {
       << bench.out;
 }
 
-// (b) A truncated file, a bad magic or version, a count that does not match and another scene's
-// batch are each refused in one line naming the file and the fix, exit 1, before any output.
+// (b) A truncated file, a bad magic or version, a count that does not match, another scene's batch
+// and a file that is not there are each refused in one line naming the file and the fix, exit 1, before any output.
 TEST(RayFileCli, RefusesABadFileInOneLine) {
   const std::string good = temp_path("good.rays");
   ASSERT_EQ(run_cli(with_frame({"rays", "--batch", "primary", "--export", good})).code, 0);
@@ -172,11 +172,12 @@ TEST(RayFileCli, RefusesABadFileInOneLine) {
       {"version", bad_version, "format version 9"},
       {"count", bytes + std::string(32, '\0'), "the ray count does not match the file"},
       {"scene", read_file(other_scene), "was exported from another scene"},
+      {"missing", "", "does not exist"},  // not written
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.name);
     const std::string file = temp_path(c.name + ".rays");
-    write_file_atomically(file, c.contents);
+    if (c.name != "missing") write_file_atomically(file, c.contents);
     for (const std::string command : {"trace", "run", "encodebench"}) {
       SCOPED_TRACE(command);
       const std::string out = temp_path(c.name + "-" + command);

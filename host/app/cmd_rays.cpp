@@ -28,6 +28,11 @@ struct RaysArgs {
 };
 
 int run_rays(const RaysArgs& args, const CLI::App& cmd) {
+  // A folder that is not there is refused before the frame is made (seconds at 1920x1080).
+  const std::filesystem::path folder = std::filesystem::absolute(args.export_file).parent_path();
+  if (std::error_code ec; !std::filesystem::is_directory(folder, ec))
+    throw Error(fmt::format("--export {}: the folder {} does not exist; create it or give another path", args.export_file,
+                            folder.string()));
   const SceneOptions options = args.common.scene_options();
   // The scene's checksum first: a scene with a missing file is refused before the frame is made.
   const std::string scene_sha = scene_sha256(args.scene, resolve_scene_root(options));

@@ -5,6 +5,7 @@
 
 #include <bit>
 #include <cstring>
+#include <filesystem>
 
 #include "util/atomic_file.h"
 #include "util/error.h"
@@ -104,7 +105,13 @@ RayFile parse_ray_file(const std::string& in, const std::string& path) {
   return f;
 }
 
-RayFile read_ray_file(const std::string& path) { return parse_ray_file(read_file(path), path); }
+RayFile read_ray_file(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec))
+    throw Error(fmt::format("ray file {} {}; give the path of a file that `raysort rays --export` wrote (docs/rays-format.md)",
+                            path, std::filesystem::exists(path, ec) ? "is not a regular file" : "does not exist"));
+  return parse_ray_file(read_file(path), path);
+}
 
 void write_ray_file(const std::string& path, const RayFile& f) { write_file_atomically(path, ray_file_bytes(f)); }
 
