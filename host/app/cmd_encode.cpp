@@ -11,6 +11,7 @@
 
 #include "app/commands.h"
 #include "app/options.h"
+#include "bench/batch_file.h"
 #include "bench/encode_cost.h"
 #include "bench/matrix.h"
 #include "bench/scene_bench.h"
@@ -33,6 +34,7 @@ struct EncodeBenchArgs {
   // a cost ratio with its interval (issue 21's "encode within 1.5× HCC").
   std::string versus;
   CommonOptions common;
+  std::string rays;  // --rays FILE: the batch from this ray file (bench/batch_file.h) instead of --batch
 };
 
 // encodebench's matrix: one scene and batch, the encoders (the reference among them: its own
@@ -57,7 +59,10 @@ EncodeBenchPlan plan_of(const EncodeBenchArgs& args, const CLI::App& cmd) {
   EncodeBenchPlan plan;
   MatrixSpec& spec = plan.spec;
   spec.scenes = {args.scene};
-  spec.batches = {args.batch};
+  spec.batches = {args.rays.empty() ? args.batch : ray_file_batch_name(args.rays)};
+  spec.ray_file = args.rays;
+  if (!args.rays.empty() && cmd.count("--batch"))
+    throw Error(fmt::format("--rays {} gives the batch: leave out --batch", args.rays));
   spec.encoders = args.encoders.empty() ? all_encoders() : parse_encoders(args.encoders);
   if (!args.versus.empty()) plan.versus = parse_encoders({args.versus}).at(0);
   if (plan.versus && std::find(spec.encoders.begin(), spec.encoders.end(), *plan.versus) == spec.encoders.end())
@@ -137,13 +142,15 @@ bool measure_row(const EncodeBenchArgs& args, const EncodeBenchPlan& plan, Scene
 
 int run_encodebench(const EncodeBenchArgs& args, const CLI::App& cmd) {
   EncodeBenchPlan plan = plan_of(args, cmd);
+  if (!args.rays.empty())  // a bad file, or one of another scene, is refused before any work
+    (void)read_ray_file_for_scene(args.rays, args.scene, resolve_scene_root(args.common.scene_options()));
   Runtime rt(select_device(args.common.device));
   build_own_programs(rt, plan.spec.encoders);  // an encoder file that does not compile: refused before any work
   PreparedScene prepared = prepare_scene(args.scene, args.common.scene_options());
   plan.spec.frame = prepared.frame();
   check_scene_memory(plan.spec, prepared.scene.name, scene_facts_of(prepared.scene, plan.spec.frame), rt.info());
   SceneBench scene(rt, std::move(prepared), plan.spec);
-  const ReferencedBatch& rb = batch_of(scene, args.batch);
+  const ReferencedBatch& rb = batch_of(scene, plan.spec.batches.at(0));
   print_header(rt, scene, rb.batch, plan);
   EncodeCostBench bench(rt, *scene.encoder, *scene.tracers.begin()->second, rb.batch);
   int failures = 0;
@@ -180,6 +187,7 @@ void register_encode_command(CLI::App& app) {
   add_protocol_options(*cmd, args->protocol);
   cmd->add_flag("!--no-verify", args->verify, "skip the comparison with the host twin");
   add_common_options(*cmd, args->common);
+  add_rays_option(*cmd, args->rays);
   cmd->callback([args, cmd] { set_command_exit_code(run_encodebench(*args, *cmd)); });
 }
 

@@ -5,6 +5,7 @@
 
 #include "app/commands.h"
 #include "app/options.h"
+#include "bench/batch_file.h"
 #include "bench/gpu_model.h"
 #include "bench/result_set.h"
 #include "bench/runner.h"
@@ -35,6 +36,7 @@ struct RunArgs {
   double timeout_s = 0;
   std::string shard;
   unsigned shard_plan = 0;
+  std::string rays;  // --rays FILE (bench/batch_file.h)
   RunOptions opts;
 };
 
@@ -52,6 +54,10 @@ MatrixSpec matrix_from(const RunArgs& a, const CLI::App& cmd) {
   auto is_all = [](const std::vector<std::string>& v) { return v.size() == 1 && v[0] == "all"; };
   if (!a.scenes.empty()) spec.scenes = a.scenes;
   if (!a.batches.empty()) spec.batches = is_all(a.batches) ? std::vector<std::string>{} : a.batches;
+  if (!a.rays.empty()) {  // the file's batch alone (validate_matrix refuses --batches beside it)
+    spec.ray_file = a.rays;
+    if (a.batches.empty()) spec.batches = {ray_file_batch_name(a.rays)};
+  }
   if (!a.encoders.empty()) spec.encoders = parse_encoders(a.encoders);
   if (!a.bits.empty()) {
     spec.bits = a.bits;
@@ -189,16 +195,12 @@ void register_run_command(CLI::App& app) {
                                "print which cells each of N shards would run, with their estimated costs, and exit")
                    ->excludes(shard_opt),
                1, kMaxShards);
+  add_rays_option(*cmd, a->rays);
   cmd->callback([a, cmd] {
     MatrixSpec spec = matrix_from(*a, *cmd);
     a->opts.device = a->common.device;
     a->opts.scene_root = a->common.scene_root;
-    // The command line as given, for meta.json.
-    std::string line = "raysort run";
-    for (auto* opt : cmd->get_options())
-      if (opt->count() > 0 && opt->get_name() != "--help")
-        for (auto& r : opt->results()) line += " " + opt->get_name() + " " + r;
-    a->opts.command = line;
+    a->opts.command = command_line_text(*cmd);  // for meta.json
     if (!a->shard.empty()) a->opts.shard = ShardSpec::parse(a->shard);
     if (cmd->count("--shard-plan")) {
       validate_matrix(spec);

@@ -19,6 +19,7 @@
 #include "app/build_timing.h"
 #include "app/commands.h"
 #include "app/options.h"
+#include "bench/batch_file.h"
 #include "bench/protocol.h"
 #include "bvh/prepared_scene.h"
 #include "render/frame_memory.h"
@@ -49,6 +50,7 @@ struct TraceArgs {
   bool adjudicate = false;       // judge every ray the answers differ on, exactly (trace/adjudicate.h)
   std::string disagreements;     // with adjudicate: write those rays to DIR/<scene>.json
   unsigned build_rounds = 0;     // > 0: time the BVH builds in this many rounds and stop
+  std::string rays;              // --rays FILE: trace this batch (bench/batch_file.h) instead of the generated ones
 };
 
 #ifdef RAYSORT_HAVE_EMBREE
@@ -355,9 +357,23 @@ void print_batch_row(const BatchRun& run, const std::vector<Tracer>& tracers, co
   }
 }
 
+// The batches to trace: the file's one batch (read and checked in run_trace), or those the scene's
+// effects imply.
+std::vector<ReferencedBatch> batches_to_trace(const PreparedScene& p, const TraceArgs& args, const RayFile* file) {
+  if (!file) return generate_batches(p.scene, p.tris, p.bvh, args.common.raygen_options());
+  std::vector<ReferencedBatch> one;
+  one.push_back(batch_from_ray_file(*file, args.rays, p.bvh));
+  fmt::print("rays     {} from {}: {} rays, generated as {} by `{}`{}\n", one[0].batch.name, args.rays, file->rays.size(),
+             file->batch_name, file->command,
+             file->has_hits ? fmt::format("; {} rays differ from the file's hits", ray_file_hit_differences(*file, one[0].reference_hits))
+                            : "");
+  return one;
+}
+
 // One scene: its BVH and kernels, then every batch its effects imply, traced by each variant (and
 // Embree) in the rounds of one measurement and checked against the host reference.
-void trace_scene(Runtime& rt, const std::string& scene_name, const TraceArgs& args, TraceTotals& totals) {
+void trace_scene(Runtime& rt, const std::string& scene_name, const TraceArgs& args, const RayFile* file,
+                 TraceTotals& totals) {
   const PreparedScene p = prepare_scene(scene_name, args.common.scene_options());
   const FrameSize frame = p.frame();
   check_frame_memory(estimate_frame_memory(p.scene), &rt.info(),
@@ -416,7 +432,7 @@ void trace_scene(Runtime& rt, const std::string& scene_name, const TraceArgs& ar
                           {"batches", nlohmann::json::array()}};
   if (args.adjudicate) oracle.emplace(p.tris, p.bvh);
   // The pipeline of docs/measurement.md, as far as the scene's effects ask.
-  for (const ReferencedBatch& rb : generate_batches(p.scene, p.tris, p.bvh, args.common.raygen_options())) {
+  for (const ReferencedBatch& rb : batches_to_trace(p, args, file)) {
     const RayBatch& b = rb.batch;
     const BatchRun run = trace_batch(rt, tracers, embree_ref, p.bvh, rb,
                                      args.protocol.settings(protocol_seed(p.scene.name + "/" + b.name)));
@@ -433,6 +449,7 @@ void trace_scene(Runtime& rt, const std::string& scene_name, const TraceArgs& ar
       print_batch_row(run, tracers, b, mismatches, emb_cols);
     }
     for (const auto& note : emb_notes) fmt::print("{}\n", note);
+    fmt::print("{:<9} hits hash {} (FNV-1a of t and triangle per ray, {})\n", "", hits_hash(run.hits[0]), arm_label(tracers[0]));
 #ifdef RAYSORT_HAVE_EMBREE
     if (embree && paths_on_lines) print_path_lines(run, tracers, b, embree_scene->threads(), totals);
 #endif
@@ -480,10 +497,21 @@ int run_trace(const TraceArgs& args) {
                 "--reference embree");
   if (!args.disagreements.empty() && !args.adjudicate) throw Error("--disagreements DIR goes with --adjudicate");
   if (args.build_rounds > 0) return run_build_timing(args);
+  // A ray file is read and checked against its scene before any work: a bad one costs nothing.
+  std::optional<RayFile> file;
+  if (!args.rays.empty()) {
+    if (args.scenes.size() != 1)
+      throw Error(fmt::format("--rays {} is a batch of one scene: give that scene alone with --scene", args.rays));
+    const auto start = std::chrono::steady_clock::now();
+    file = read_ray_file_for_scene(args.rays, args.scenes[0], resolve_scene_root(args.common.scene_options()));
+    fmt::print("rays     read {} ({} bytes) and checked its scene in {:.0f} ms\n", args.rays,
+               std::filesystem::file_size(args.rays),
+               std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+  }
   Runtime rt(select_device(args.common.device));
   fmt::print("device   {} ({}, {})\n", rt.info().name, rt.info().platform_name, rt.info().driver_version);
   TraceTotals totals;
-  for (const auto& scene_name : args.scenes) trace_scene(rt, scene_name, args, totals);
+  for (const auto& scene_name : args.scenes) trace_scene(rt, scene_name, args, file ? &*file : nullptr, totals);
   int code = 0;
   if (totals.mismatches > 0) {
     fmt::print(stderr, "raysort: {} hits differ from the host reference\n", totals.mismatches);
@@ -545,6 +573,7 @@ void register_trace_command(CLI::App& app) {
                   "rounds after one warm-up: medians with 95 % intervals and ours/Embree paired; then stop (no "
                   "kernels, no traces). 6 or more give intervals")
       ->check(CLI::Range(1u, 1000u));
+  add_rays_option(*cmd, args->rays);
   cmd->callback([args] { set_command_exit_code(run_trace(*args)); });
 }
 

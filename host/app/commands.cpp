@@ -22,6 +22,7 @@ void register_commands(CLI::App& app) {
   register_merge_command(app);
   register_report_command(app);
   register_sweep_command(app);
+  register_rays_command(app);
 }
 
 }  // namespace raysort

@@ -18,6 +18,7 @@ void register_compare_command(CLI::App& app);
 void register_merge_command(CLI::App& app);
 void register_report_command(CLI::App& app);
 void register_sweep_command(CLI::App& app);
+void register_rays_command(CLI::App& app);
 
 // The exit codes of every command (docs/errors.md, "Exit codes"): one scheme for the parser's
 // errors, the commands' refusals and their findings.

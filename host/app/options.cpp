@@ -139,6 +139,21 @@ void add_device_option(CLI::App& cmd, CommonOptions& o) {
   cmd.add_option("--device", o.device, "device index, 'cpu', 'gpu' or part of its name (env RAYSORT_DEVICE)");
 }
 
+std::string command_line_text(const CLI::App& cmd) {
+  std::string line = "raysort " + cmd.get_name();
+  for (auto* opt : cmd.get_options())
+    if (opt->count() > 0 && opt->get_name() != "--help")
+      for (auto& r : opt->results()) line += " " + opt->get_name() + " " + r;
+  return line;
+}
+
+CLI::Option* add_rays_option(CLI::App& cmd, std::string& file) {
+  return cmd.add_option("--rays", file,
+                        "trace this ray batch file (written by `raysort rays --export`, docs/rays-format.md) instead of "
+                        "generating the scene's batches; it must come from the same scene (its SHA-256 is checked); its "
+                        "batch is named file:<stem>");
+}
+
 void add_common_options(CLI::App& cmd, CommonOptions& o) {
   add_device_option(cmd, o);
   add_scene_options(cmd, o);

@@ -52,6 +52,14 @@ void add_common_options(CLI::App& cmd, CommonOptions& o);
 // paths, comma-separated).
 CLI::Option* add_scene_list_option(CLI::App& cmd, std::vector<std::string>& scenes, const std::string& help);
 
+// The command line as given ("raysort run --scene sibenik --out r"): recorded in meta.json and in
+// the header of a ray file (render/ray_file.h).
+std::string command_line_text(const CLI::App& cmd);
+
+// --rays FILE of trace, run and encodebench: a ray batch file (docs/rays-format.md) to use instead
+// of generating the batches; one scene only.
+CLI::Option* add_rays_option(CLI::App& cmd, std::string& file);
+
 // The encoders' knobs (encode/encoder_params.h): one option per row, with the row's range (checked
 // as every number is, above) and meaning. `run` and `encodebench` both take them from here, so they
 // take and refuse the same values with the same message. The values land in `given`.

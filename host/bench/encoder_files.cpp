@@ -1,4 +1,4 @@
-// meta.json "encoder_files" (see encoder_files.h).
+// meta.json "encoder_files" and "ray_files" (see encoder_files.h).
 #include "bench/encoder_files.h"
 
 #include <fmt/format.h>
@@ -9,10 +9,11 @@ namespace raysort {
 
 namespace {
 
-// The recorded files, or null when the meta has none (or not as an object).
-const nlohmann::json* recorded(const nlohmann::json& meta) {
+// The recorded files under `key` ("encoder_files", "ray_files"), or null when the meta has none (or
+// not as an object).
+const nlohmann::json* recorded(const nlohmann::json& meta, const char* key = "encoder_files") {
   if (!meta.is_object()) return nullptr;
-  const auto it = meta.find("encoder_files");
+  const auto it = meta.find(key);
   return it != meta.end() && it->is_object() ? &*it : nullptr;
 }
 
@@ -24,11 +25,10 @@ std::string text_of(const nlohmann::json& entry, const char* key) {
 
 std::string short_sha(const std::string& sha) { return sha.empty() ? "no checksum" : sha.substr(0, 12); }
 
-}  // namespace
-
-std::vector<std::string> encoder_file_differences(const nlohmann::json& meta_a, const nlohmann::json& meta_b) {
-  const nlohmann::json* a = recorded(meta_a);
-  const nlohmann::json* b = recorded(meta_b);
+// One line per named file whose SHA-256 differs between the two metas' `key` objects.
+std::vector<std::string> file_differences(const nlohmann::json& meta_a, const nlohmann::json& meta_b, const char* key) {
+  const nlohmann::json* a = recorded(meta_a, key);
+  const nlohmann::json* b = recorded(meta_b, key);
   if (!a && !b) return {};
   std::set<std::string> names;
   for (const nlohmann::json* files : {a, b})
@@ -47,6 +47,16 @@ std::vector<std::string> encoder_file_differences(const nlohmann::json& meta_a, 
     lines.push_back(fmt::format("{}: sha256 {} in A, {} in B", name, short_sha(sa), short_sha(sb)));
   }
   return lines;
+}
+
+}  // namespace
+
+std::vector<std::string> encoder_file_differences(const nlohmann::json& meta_a, const nlohmann::json& meta_b) {
+  return file_differences(meta_a, meta_b, "encoder_files");
+}
+
+std::vector<std::string> ray_file_differences(const nlohmann::json& meta_a, const nlohmann::json& meta_b) {
+  return file_differences(meta_a, meta_b, "ray_files");
 }
 
 std::vector<RecordedEncoderFile> recorded_encoder_files(const nlohmann::json& meta) {

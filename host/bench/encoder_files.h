@@ -16,6 +16,9 @@ namespace raysort {
 // of them records ("file:x: sha256 0123456789ab in A, ba9876543210 in B"); empty when they agree.
 // Never throws: a malformed entry reads as no checksum.
 std::vector<std::string> encoder_file_differences(const nlohmann::json& meta_a, const nlohmann::json& meta_b);
+// The same for the ray file of run --rays (meta.json "ray_files", bench/batch_file.h): a resume with
+// a changed file is refused.
+std::vector<std::string> ray_file_differences(const nlohmann::json& meta_a, const nlohmann::json& meta_b);
 
 // Each recorded file, in name order (the tables); "" for a field that is missing or not text.
 struct RecordedEncoderFile {

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <regex>
 
+#include "bench/batch_file.h"
 #include "embree/embree_reference.h"  // kEmbreePaths only: the keys a matrix may name
 #include "scene/load.h"
 #include "util/error.h"
@@ -269,9 +270,14 @@ void validate_matrix(const MatrixSpec& spec) {
       throw Error(fmt::format("unknown Embree path '{}' in --embree-paths; the paths are {}, or all", path, keys));
     }
   }
+  if (!spec.ray_file.empty() &&
+      (spec.scenes.size() != 1 || spec.batches != std::vector<std::string>{ray_file_batch_name(spec.ray_file)}))
+    throw Error(fmt::format("--rays {} is one batch of one scene: give that scene alone with --scene, and leave out "
+                            "--batches",
+                            spec.ray_file));
   std::regex batch_re("^(primary|shadow[0-9]+|bounce[1-9][0-9]*)$");
   for (auto& b : spec.batches)
-    if (!std::regex_match(b, batch_re))
+    if (spec.ray_file.empty() && !std::regex_match(b, batch_re))
       throw Error(fmt::format("unknown batch '{}'; batches are primary, shadow<k> (k >= 0) and bounce<k> (k >= 1)", b));
   std::vector<unsigned> all_bits = spec.bits;
   all_bits.insert(all_bits.end(), spec.key_length_bits.begin(), spec.key_length_bits.end());

@@ -24,6 +24,9 @@ struct MatrixSpec {
   std::string preset;                 // "", "quick", "paper"
   std::vector<std::string> scenes;    // names, .toml or .obj paths
   std::vector<std::string> batches;   // "primary", "shadow<k>", "bounce<k>"; empty: every batch
+  // --rays FILE: the one batch of every cell comes from this ray file (bench/batch_file.h), named
+  // "file:<stem>" in batches; empty: the batches are generated. One scene only.
+  std::string ray_file;
   std::vector<Encoder> encoders;      // NoSort always runs (every batch has its NoSort cell)
   std::vector<unsigned> bits{32};
   // Scenes that also run key_length_bits (the paper's key-length tables: 16/32/64 on sibenik).

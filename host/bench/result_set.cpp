@@ -370,6 +370,12 @@ ResultSet ResultSet::open_for_run(const std::string& dir, const nlohmann::json& 
                               "comparable (A: when it was started, B: now); restore the file, or choose another --out "
                               "folder",
                               dir, diff.front()));
+    // The ray file of run --rays changed since the set was started: resumed cells would trace other rays.
+    if (const auto diff = ray_file_differences(old, meta); !diff.empty())
+      throw Error(fmt::format("{} was started with another ray file ({}); its cells and new ones would not be "
+                              "comparable (A: when it was started, B: now); restore the file, or choose another --out "
+                              "folder",
+                              dir, diff.front()));
     read_cells(dir, old, rs.cells_);
     // Keep the original meta (first start), but record that the run was resumed.
     rs.meta_ = old;

@@ -19,6 +19,7 @@
 #include <set>
 #include <tuple>
 
+#include "bench/batch_file.h"
 #include "bench/cell_measure.h"
 #include "bench/result_set.h"
 #include "bench/scene_bench.h"
@@ -124,6 +125,24 @@ nlohmann::json encoder_files_meta(const std::vector<Encoder>& encoders) {
   return files.empty() ? nlohmann::json() : files;
 }
 
+// The ray file of run --rays (bench/batch_file.h), for meta.json "ray_files": its batch's name in
+// the cells, the file's path and SHA-256 (a resume with another file is refused, as with an encoder
+// file), and what its header says; null without one.
+nlohmann::json ray_files_meta(const MatrixSpec& spec) {
+  if (spec.ray_file.empty()) return nullptr;
+  const RayFile f = read_ray_file(spec.ray_file);
+  return {{ray_file_batch_name(spec.ray_file),
+           {{"path", spec.ray_file},
+            {"sha256", sha256_file(spec.ray_file)},
+            {"batch", f.batch_name},
+            {"rays", f.rays.size()},
+            {"any_hit", f.any_hit},
+            {"hits", f.has_hits},
+            {"scene_sha256", sha256_hex(f.scene_sha256)},
+            {"command", f.command},
+            {"doc", "docs/rays-format.md"}}}};
+}
+
 // Embree's arms (run --embree-paths): which call and context flag each path makes, on how many
 // threads, and how an arm is timed. Empty without paths (and in a build without Embree, which
 // refuses them in validate_matrix).
@@ -204,6 +223,7 @@ nlohmann::json run_meta(const MatrixSpec& spec, const RunOptions& opts, const De
   };
   if (!spec.embree_paths.empty()) meta["embree"] = embree_meta(spec.embree_paths);
   if (nlohmann::json files = encoder_files_meta(spec.encoders); !files.is_null()) meta["encoder_files"] = std::move(files);
+  if (nlohmann::json files = ray_files_meta(spec); !files.is_null()) meta["ray_files"] = std::move(files);
   return meta;
 }
 
@@ -282,7 +302,8 @@ void skip_absent_batch(const std::vector<PlannedCell>& batch_cells, std::vector<
 }
 
 // Scene problems a run can find before any work starts: a scene file or OBJ given by path is
-// parsed (it is small next to a run); an embedded scene's OBJ files must exist under the root.
+// parsed (it is small next to a run); an embedded scene's OBJ files must exist under the root; a
+// ray file (--rays) is read and checked against its scene (bench/batch_file.h).
 void check_scenes_before_work(const MatrixSpec& spec, const RunOptions& opts) {
   SceneOptions scene_opts;
   scene_opts.scene_root = opts.scene_root;
@@ -303,6 +324,8 @@ void check_scenes_before_work(const MatrixSpec& spec, const RunOptions& opts) {
                                 name, rel, root));
     }
   }
+  if (!spec.ray_file.empty())  // a bad file, or one of another scene, is refused before the result set is touched
+    (void)read_ray_file_for_scene(spec.ray_file, spec.scenes.at(0), resolve_scene_root(scene_opts));
 }
 
 // Each scene's facts (size, effects), loaded once: the plan and the memory check both read them.

@@ -5,6 +5,7 @@
 
 #include <chrono>
 
+#include "bench/batch_file.h"
 #include "render/frame_memory.h"
 
 namespace raysort {
@@ -46,7 +47,12 @@ SceneBench::SceneBench(Runtime& rt, PreparedScene scene, const MatrixSpec& matri
   if (const std::string learners = previous_frame_learners(spec.encoders); !learners.empty())
     say(fmt::format("{}: first a previous frame (seed {}) for {} statistics", name, gen.seed + 1, learners));
   learned_ = std::make_unique<LearnedInputs>(prepared, gen, encoder->scene(), spec.encoders, spec.batches);
-  batches = generate_batches(prepared.scene, prepared.tris, bvh, gen);
+  if (spec.ray_file.empty()) {
+    batches = generate_batches(prepared.scene, prepared.tris, bvh, gen);
+  } else {  // checked against the scene before any work (check_ray_file_of_matrix)
+    say(fmt::format("{}: the batch of {}, its host reference traced", name, spec.ray_file));
+    batches.push_back(batch_from_ray_file(read_ray_file(spec.ray_file), spec.ray_file, bvh));
+  }
 #ifdef RAYSORT_HAVE_EMBREE
   if (!spec.embree_paths.empty()) {
     embree_.emplace(prepared.tris);

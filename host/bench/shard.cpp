@@ -8,6 +8,7 @@
 #include <regex>
 #include <set>
 
+#include "bench/batch_file.h"
 #include "bench/record.h"
 #include "render/batches.h"
 #include "scene/load.h"
@@ -69,6 +70,7 @@ std::vector<PlannedCell> matrix_cells(const MatrixSpec& spec,
     std::vector<std::string> possible;
     for (const PossibleBatch& b : possible_batches(f.shadow_rays_per_bounce > 0, f.max_bounces))
       possible.push_back(b.name);
+    if (!spec.ray_file.empty()) possible = {ray_file_batch_name(spec.ray_file)};  // the file's batch alone
     std::vector<std::string> batches;
     for (const auto& b : spec.batches.empty() ? possible : spec.batches)
       if (std::find(possible.begin(), possible.end(), b) != possible.end()) batches.push_back(b);
