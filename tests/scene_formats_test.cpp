@@ -228,7 +228,7 @@ TEST(SceneFormats, GltfLoadsItsHierarchyMaterialsAndCamera) {
   const std::string json = fmt::format(R"({{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": [0, 3, 4]}}],
 "extensionsUsed": ["KHR_materials_emissive_strength"],
 "nodes": [{{"translation": [10, 0, 0], "children": [1, 2]}}, {{"mesh": 0, "scale": [2, 2, 2]}},
-          {{"mesh": 0, "rotation": [0, {}, 0, {}]}}, {{"camera": 0, "translation": [11, 1, 5]}},
+          {{"mesh": 0, "rotation": [0, -{}, 0, {}]}}, {{"camera": 0, "translation": [11, 1, 5]}},
           {{"mesh": 1, "matrix": [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, -3, 1]}}],
 "cameras": [{{"type": "perspective", "perspective": {{"yfov": 0.8, "aspectRatio": 2.0, "znear": 0.1}}}}],
 "materials": [{{"pbrMetallicRoughness": {{"baseColorFactor": [1, 0, 0, 1]}}}}, {{"pbrMetallicRoughness": {{"baseColorFactor": [0, 0, 1, 1]}}}}],
@@ -251,7 +251,7 @@ TEST(SceneFormats, GltfLoadsItsHierarchyMaterialsAndCamera) {
     EXPECT_EQ(s.instances.size(), 3u);
     const Aabb b = s.bounds();
     expect_near(b.min, {0, 0, -3}, path + " min");
-    expect_near(b.max, {12, 2, 0}, path + " max");
+    expect_near(b.max, {12, 2, 1}, path + " max");  // node 2's quad turned −90° about y reaches z = 1
     ASSERT_EQ(s.materials.size(), 3u);
     EXPECT_EQ(s.materials[1].albedo, (Vec3{1, 0, 0}));
     EXPECT_EQ(s.materials[2].albedo, (Vec3{0, 0, 1}));
