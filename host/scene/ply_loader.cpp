@@ -72,7 +72,7 @@ const PlyType* find_type(std::string_view name) {
   return nullptr;
 }
 
-PlyHeader read_header(const std::string& bytes, const std::string& origin) {
+PlyHeader read_header(const std::string& bytes, const std::string& origin, IgnoredFeatures& ignored) {
   auto fail = [&](std::size_t line, const std::string& why) {
     throw Error(fmt::format("PLY file {}:{}: {}; fix the header (docs/scene-format.md, \"PLY\")", origin, line, why));
   };
@@ -118,8 +118,8 @@ PlyHeader read_header(const std::string& bytes, const std::string& origin) {
       }
       if (!p.type) fail(line, fmt::format("unknown property type in '{}'", text));
       h.elements.back().properties.push_back(std::move(p));
-    } else {
-      fail(line, fmt::format("unknown header keyword '{}'", w[0]));
+    } else {  // a free-text line some exporters write (Blender 2.4: "Created by ..."), as a comment
+      ignored.add("header line that is no PLY keyword");
     }
   }
   if (!have_format) fail(line, "the header has no \"format\" line");
@@ -284,7 +284,7 @@ void read_faces(PlyBody& body, const PlyElement& e, Mesh& mesh) {
 }  // namespace
 
 Mesh parse_ply(const std::string& bytes, const std::string& origin, IgnoredFeatures& ignored) {
-  const PlyHeader header = read_header(bytes, origin);
+  const PlyHeader header = read_header(bytes, origin, ignored);
   PlyBody body(bytes, header, origin);
   Mesh mesh;
   mesh.name = std::filesystem::path(origin).stem().string();
