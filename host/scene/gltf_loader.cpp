@@ -82,11 +82,18 @@ class GltfReader {
     count_ignored();
     std::vector<int> roots;
     if (!model_.scenes.empty()) {
-      roots = model_.scenes[std::size_t(model_.defaultScene >= 0 ? model_.defaultScene : 0)].nodes;
+      // tinygltf leaves "scene" unchecked (found by fuzz/gltf_fuzzer: one past the scenes read freed memory)
+      const int chosen = model_.defaultScene >= 0 ? model_.defaultScene : 0;
+      if (std::size_t(chosen) >= model_.scenes.size())
+        fail(fmt::format("names scene {} as its scene, but has {} scenes", chosen, model_.scenes.size()));
+      roots = model_.scenes[std::size_t(chosen)].nodes;
     } else {  // no scene: every node that is no other's child (glTF 2.0 §3.5.1 leaves this to the loader)
       std::vector<bool> child(model_.nodes.size(), false);
       for (const auto& n : model_.nodes)
-        for (int c : n.children) child.at(std::size_t(c)) = true;
+        for (int c : n.children) {
+          if (c < 0 || std::size_t(c) >= child.size()) fail(fmt::format("names node {} as a child, which does not exist", c));
+          child[std::size_t(c)] = true;
+        }
       for (std::size_t i = 0; i < model_.nodes.size(); ++i)
         if (!child[i]) roots.push_back(int(i));
     }

@@ -51,7 +51,10 @@ PbrtToken PbrtTokenizer::scan() {
     const std::size_t start = ++pos_;
     while (pos_ < text_.size() && text_[pos_] != '"') {
       if (text_[pos_] == '\n') fail(t.line, "a string is not closed before the end of its line (a missing '\"')");
-      pos_ += text_[pos_] == '\\' ? 2 : 1;  // an escaped character (\" or \\) stays in the string
+      // An escaped character (\" or \\) stays in the string; a backslash does not carry a string over a
+      // line end (found by fuzz/pbrt_fuzzer: a string with a newline made a two-line error).
+      const bool escape = text_[pos_] == '\\' && pos_ + 1 < text_.size() && text_[pos_ + 1] != '\n';
+      pos_ += escape ? 2 : 1;
     }
     if (pos_ >= text_.size()) fail(t.line, "a string is not closed before the end of the file (a missing '\"')");
     t.kind = PbrtToken::String;

@@ -305,8 +305,9 @@ Mesh parse_ply(const std::string& bytes, const std::string& origin, IgnoredFeatu
         if (p.name != "vertex_indices" && p.name != "vertex_index")
           ignored.add(fmt::format("face property \"{}\"", p.name));
     } else {
-      // Skipped value by value: its size is only known by reading it (lists).
-      for (std::uint64_t k = 0; k < e.count; ++k)
+      // Skipped value by value: its size is only known by reading it (lists). An element without
+      // properties takes no bytes, whatever its count (found by fuzz/ply_fuzzer: a count of 2^63 spun).
+      for (std::uint64_t k = 0; k < e.count && !e.properties.empty(); ++k)
         for (const auto& p : e.properties) {
           const std::string what = fmt::format("{} {} property {}", e.name, k, p.name);
           std::size_t n = 1;
