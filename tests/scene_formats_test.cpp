@@ -422,6 +422,9 @@ TEST(SceneFormats, MalformedFilesAreRefusedInOneLineWithFilePositionAndFix) {
       {"truncated.ply", truncated, fmt::format("byte {}:", body), "declares 3 records, more than the 20 bytes left"},
       {"json.gltf", "{\"asset\": {\"version\": \"2.0\"},\n  \"nodes\": [}", "line 2", "cannot read glTF file"},
       {"length.glb", glb, "byte 8:", "the header gives the length 999"},
+      // A camera node scaled to 0: no view direction (the file's camera gets the TOML camera's checks).
+      {"camera.gltf", "{\"asset\": {\"version\": \"2.0\"}, \"scenes\": [{\"nodes\": [0, 1]}], \"nodes\": [{\"mesh\": 0}, {\"camera\": 0, \"scale\": [0, 0, 0]}], \"cameras\": [{\"type\": \"perspective\", \"perspective\": {\"yfov\": 0.8, \"znear\": 0.1}}], \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0}}]}], \"buffers\": [{\"byteLength\": 36, \"uri\": \"data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA\"}], \"bufferViews\": [{\"buffer\": 0, \"byteLength\": 36}], \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC3\"}]}",
+       "the file's camera (its look_at)", "equals the camera position"},
       {"index.pbrt", "WorldBegin\nShape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 5]\n",
        "index.pbrt:2:", "index 5"},
       {"string.pbrt", "WorldBegin\n\nShape \"trianglemesh\" \"point3 P [0 0 0 1 0 0 0 1 0]\n", "string.pbrt:3:", "not closed"},

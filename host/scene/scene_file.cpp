@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <optional>
 
@@ -100,6 +101,38 @@ toml::table read_scene_table(const std::string& text, const std::string& origin)
   return resolve_extends(parse_toml_text(text, origin), origin);
 }
 
+// The checks of a camera's basis, for a TOML [camera] and a mesh file's own camera alike: `fail(key,
+// why)` reports a problem with position, look_at or up and does not return.
+using CameraFail = std::function<void(const char* key, const std::string& why)>;
+void check_camera(const Camera& c, const CameraFail& fail) {
+  // The basis make_camera (render/rays.cpp) normalises in float must be normalisable: see load.h.
+  for (const char* key : {"position", "look_at"})
+    for (float x : key[0] == 'p' ? c.position : c.look_at)
+      if (std::fabs(x) > kMaxSceneCoordinate)
+        fail(key, fmt::format("has a coordinate {:g}, outside the ±{:g} that ray tracing in float keeps finite; "
+                                "scale the scene down", x, kMaxSceneCoordinate));
+  Vec3 d{c.look_at[0] - c.position[0], c.look_at[1] - c.position[1], c.look_at[2] - c.position[2]};
+  const auto length = [](const Vec3& v) {
+    return std::sqrt(double(v[0]) * v[0] + double(v[1]) * v[1] + double(v[2]) * v[2]);
+  };
+  const double len = length(d);
+  if (len == 0.0) fail("look_at", "equals the camera position (in float); look at another point");
+  if (len < kMinCameraVector)
+    fail("look_at", fmt::format("is {:.3g} from the camera position, too close to normalise the view direction in "
+                                  "float (at least {:g}); look at a point farther away",
+                                  len, kMinCameraVector));
+  const double ul = length(c.up);
+  if (!(ul >= kMinCameraVector && ul <= kMaxSceneCoordinate))
+    fail("up", fmt::format("is {:.3g} long; it must be between {:g} and {:g} long to normalise in float, e.g. up = "
+                             "[0.0, 1.0, 0.0]",
+                             ul, kMinCameraVector, kMaxSceneCoordinate));
+  const double cross[3] = {double(d[1]) * c.up[2] - double(d[2]) * c.up[1],
+                           double(d[2]) * c.up[0] - double(d[0]) * c.up[2],
+                           double(d[0]) * c.up[1] - double(d[1]) * c.up[0]};
+  const double cl = std::sqrt(cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]);
+  if (cl <= 1e-6 * len * ul) fail("up", "is parallel to the view direction (look_at − position); use another up vector");
+}
+
 Camera read_camera(const TomlTable& t) {
   Camera c;
   c.position = t.vec3("position");
@@ -118,32 +151,7 @@ Camera read_camera(const TomlTable& t) {
     c.width = static_cast<std::uint32_t>(r[0]);
     c.height = static_cast<std::uint32_t>(r[1]);
   }
-  // The basis make_camera (render/rays.cpp) normalises in float must be normalisable: see load.h.
-  for (const char* key : {"position", "look_at"})
-    for (float x : key[0] == 'p' ? c.position : c.look_at)
-      if (std::fabs(x) > kMaxSceneCoordinate)
-        t.fail(key, fmt::format("has a coordinate {:g}, outside the ±{:g} that ray tracing in float keeps finite; "
-                                "scale the scene down", x, kMaxSceneCoordinate));
-  Vec3 d{c.look_at[0] - c.position[0], c.look_at[1] - c.position[1], c.look_at[2] - c.position[2]};
-  const auto length = [](const Vec3& v) {
-    return std::sqrt(double(v[0]) * v[0] + double(v[1]) * v[1] + double(v[2]) * v[2]);
-  };
-  const double len = length(d);
-  if (len == 0.0) t.fail("look_at", "equals the camera position (in float); look at another point");
-  if (len < kMinCameraVector)
-    t.fail("look_at", fmt::format("is {:.3g} from the camera position, too close to normalise the view direction in "
-                                  "float (at least {:g}); look at a point farther away",
-                                  len, kMinCameraVector));
-  const double ul = length(c.up);
-  if (!(ul >= kMinCameraVector && ul <= kMaxSceneCoordinate))
-    t.fail("up", fmt::format("is {:.3g} long; it must be between {:g} and {:g} long to normalise in float, e.g. up = "
-                             "[0.0, 1.0, 0.0]",
-                             ul, kMinCameraVector, kMaxSceneCoordinate));
-  const double cross[3] = {double(d[1]) * c.up[2] - double(d[2]) * c.up[1],
-                           double(d[2]) * c.up[0] - double(d[0]) * c.up[2],
-                           double(d[0]) * c.up[1] - double(d[1]) * c.up[0]};
-  const double cl = std::sqrt(cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]);
-  if (cl <= 1e-6 * len * ul) t.fail("up", "is parallel to the view direction (look_at − position); use another up vector");
+  check_camera(c, [&](const char* key, const std::string& why) { t.fail(key, why); });
   return c;
 }
 
@@ -610,7 +618,15 @@ Scene load_bare_file(const std::string& path) {
     s.sky.horizon = {0.9f, 0.9f, 0.9f};
   }
   s.effects.max_bounces = 1;
-  if (f.has_camera) return s;
+  if (f.has_camera) {
+    if (!(s.camera.fov_y_deg > 0.0f && s.camera.fov_y_deg < 180.0f))
+      throw Error(fmt::format("{}: the file's camera has a field of view of {} degrees; fix the camera in the file "
+                              "(a vertical field of view in (0, 180))", path, s.camera.fov_y_deg));
+    check_camera(s.camera, [&](const char* key, const std::string& why) {
+      throw Error(fmt::format("{}: the file's camera (its {}) {}; fix the camera in the file", path, key, why));
+    });
+    return s;
+  }
   Aabb b = s.bounds();
   Vec3 c = b.center(), e = b.extent();
   double radius = 0.5 * std::sqrt(double(e[0]) * e[0] + double(e[1]) * e[1] + double(e[2]) * e[2]);
