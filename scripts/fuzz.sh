@@ -3,6 +3,8 @@
 # -fsanitize=fuzzer,address,undefined) in a separate build folder, seeds their corpora from
 # scenes/*.toml, the odd-obj folder, the golden result set and fuzz/corpus (the committed corpus
 # grown by long runs), and runs each for FUZZ_SECONDS (default 60), or FUZZ_RUNS executions.
+# The scene-format fuzzers (ply, gltf, pbrt; issue 45) are seeded by scripts/fuzz_seeds.py and the
+# odd-obj folder's PLY files.
 # Installs clang from Debian when missing, so the default build and CI stay free of it.
 # A finding is written as crash-*/leak-*/timeout-*/oom-* into the build folder and fails the run.
 set -euo pipefail
@@ -26,7 +28,9 @@ fi
 
 cmake -S . -B "$BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ -DRAYSORT_FUZZ=ON \
   -DBUILD_TESTING=OFF >/dev/null
-cmake --build "$BUILD" -j "$JOBS" --target obj_fuzzer scene_fuzzer result_set_fuzzer cli_fuzzer
+# FUZZ_TARGETS (default: all) picks some, e.g. FUZZ_TARGETS="ply gltf pbrt": only those are built and run.
+TARGETS="${FUZZ_TARGETS:-obj scene result_set cli ply gltf pbrt}"
+cmake --build "$BUILD" -j "$JOBS" --target $(for t in $TARGETS; do printf '%s_fuzzer ' "$t"; done)
 
 # Seeds: the scene files, and every OBJ of the odd-obj folder under 256 KiB (when it is there).
 mkdir -p "$BUILD/seeds/scene" "$BUILD/seeds/obj" "$BUILD/seeds/result_set" "$BUILD/corpus/scene" "$BUILD/corpus/obj" \
@@ -38,6 +42,12 @@ else
   echo "fuzz: $ODD_OBJ not found; OBJ seeds are a generated cube only"
 fi
 printf 'v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\nf -4 -3 -2\n' > "$BUILD/seeds/obj/quad.obj"
+# Scene-format seeds (issue 45): the odd-obj folder's PLY files (assimp's own test models, from Debian
+# assimp-testmodels) and a small file of each format made here (scripts/fuzz_seeds.py).
+mkdir -p "$BUILD/seeds/ply" "$BUILD/seeds/gltf" "$BUILD/seeds/pbrt" "$BUILD/corpus/ply" "$BUILD/corpus/gltf" \
+  "$BUILD/corpus/pbrt"
+[ -d "$ODD_OBJ" ] && find "$ODD_OBJ" -name '*.ply' -size -256k -exec cp {} "$BUILD/seeds/ply/" \;
+python3 scripts/fuzz_seeds.py "$BUILD/seeds"
 # Result-set seeds: the golden set's cell records (selector byte 0) and meta.json (1), and rules (2).
 for f in tests/golden/quick-tiny/cells/cornell__primary__*.json; do
   { printf '\000'; cat "$f"; } > "$BUILD/seeds/result_set/cell-$(basename "$f")"
@@ -77,7 +87,7 @@ for grown in fuzz/corpus/*-grown.tar.gz; do
 done
 
 status=0
-for target in obj scene result_set cli; do
+for target in $TARGETS; do
   budget=(-max_total_time="$SECONDS_EACH")
   [ -n "$RUNS" ] && budget=(-runs="$RUNS")
   echo "fuzz: ${target}_fuzzer for ${RUNS:+$RUNS runs}${RUNS:-${SECONDS_EACH}s}"

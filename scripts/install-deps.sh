@@ -16,6 +16,8 @@ PACKAGES=(
   python3
   # libssl-dev: libcrypto's SHA-256, to check real scene files against scenes/sources.toml
   libssl-dev
+  # libtinygltf-dev: glTF 2.0 scenes (.gltf, .glb; host/scene/gltf_loader.cpp)
+  libtinygltf-dev
   # oclgrind: a second OpenCL implementation with race and memory checks (scripts/oclgrind-check.sh);
   # clang-15, libclc-15: the NVIDIA (nvptx64-nvidia-nvcl) build of every kernel (scripts/nvptx-build.sh)
   oclgrind clang-15 libclc-15

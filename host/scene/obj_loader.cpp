@@ -1,8 +1,7 @@
 // OBJ loading through tinyobjloader, with the checks it leaves out: every vertex coordinate must
 // be a finite number, every face index in range, and no face is dropped without an error.
-// Polygons are triangulated here (not by tinyobjloader, which skips faces it cannot split):
-// quads along their shorter diagonal (as tinyobjloader does), larger polygons as a fan from
-// their first vertex, so an n-gon always gives n − 2 triangles.
+// Polygons are triangulated here (not by tinyobjloader, which skips faces it cannot split), by the
+// rule every format shares (scene/polygon.h), so an n-gon always gives n − 2 triangles.
 #include <fmt/format.h>
 #include <tiny_obj_loader.h>
 
@@ -16,6 +15,7 @@
 #include <vector>
 
 #include "scene/load.h"
+#include "scene/polygon.h"
 #include "util/error.h"
 #include "util/input_file.h"
 
@@ -282,7 +282,6 @@ Mesh parse_obj(const std::string& text, const std::string& path, const std::stri
     std::size_t offset = 0;
     for (std::size_t f = 0; f < shape.mesh.num_face_vertices.size(); ++f) {
       std::size_t n = shape.mesh.num_face_vertices[f];
-      std::uint32_t idx[3];
       auto vertex_of = [&](std::size_t k) -> std::uint32_t {
         int v = shape.mesh.indices[offset + k].vertex_index;
         if (v < 0 || static_cast<std::size_t>(v) >= nverts)
@@ -299,31 +298,7 @@ Mesh parse_obj(const std::string& text, const std::string& path, const std::stri
         mesh.triangles.push_back({a, b, c});
         mesh.material.push_back(mat);
       };
-      if (n == 4) {
-        std::uint32_t q[4] = {vertex_of(0), vertex_of(1), vertex_of(2), vertex_of(3)};
-        auto dist2 = [&](std::uint32_t a, std::uint32_t b) {
-          double s = 0.0;
-          for (int k = 0; k < 3; ++k) {
-            double d = double(mesh.positions[a][k]) - mesh.positions[b][k];
-            s += d * d;
-          }
-          return s;
-        };
-        if (dist2(q[0], q[2]) < dist2(q[1], q[3])) {
-          emit(q[0], q[1], q[2]);
-          emit(q[0], q[2], q[3]);
-        } else {
-          emit(q[0], q[1], q[3]);
-          emit(q[1], q[2], q[3]);
-        }
-      } else {
-        idx[0] = vertex_of(0);
-        for (std::size_t k = 2; k < n; ++k) {
-          idx[1] = vertex_of(k - 1);
-          idx[2] = vertex_of(k);
-          emit(idx[0], idx[1], idx[2]);
-        }
-      }
+      triangulate_polygon(mesh.positions, n, vertex_of, emit);
       offset += n;
     }
   }

@@ -7,11 +7,13 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <optional>
 
 #include "scene/ground.h"
 #include "scene/load.h"
+#include "scene/mesh_formats.h"
 #include "scene/noise.h"
 #include "scene/procedural.h"
 #include "scene/provenance.h"
@@ -43,7 +45,8 @@ std::vector<std::string> obj_values(const toml::table& root) {
   if (auto meshes = root["mesh"].as_array())
     for (const auto& m : *meshes)
       if (auto t = m.as_table())
-        if (auto obj = (*t)["obj"].value<std::string>()) out.push_back(*obj);
+        for (const char* key : {"obj", "file"})
+          if (auto obj = (*t)[key].value<std::string>()) out.push_back(*obj);
   return out;
 }
 
@@ -98,6 +101,38 @@ toml::table read_scene_table(const std::string& text, const std::string& origin)
   return resolve_extends(parse_toml_text(text, origin), origin);
 }
 
+// The checks of a camera's basis, for a TOML [camera] and a mesh file's own camera alike: `fail(key,
+// why)` reports a problem with position, look_at or up and does not return.
+using CameraFail = std::function<void(const char* key, const std::string& why)>;
+void check_camera(const Camera& c, const CameraFail& fail) {
+  // The basis make_camera (render/rays.cpp) normalises in float must be normalisable: see load.h.
+  for (const char* key : {"position", "look_at"})
+    for (float x : key[0] == 'p' ? c.position : c.look_at)
+      if (std::fabs(x) > kMaxSceneCoordinate)
+        fail(key, fmt::format("has a coordinate {:g}, outside the ±{:g} that ray tracing in float keeps finite; "
+                                "scale the scene down", x, kMaxSceneCoordinate));
+  Vec3 d{c.look_at[0] - c.position[0], c.look_at[1] - c.position[1], c.look_at[2] - c.position[2]};
+  const auto length = [](const Vec3& v) {
+    return std::sqrt(double(v[0]) * v[0] + double(v[1]) * v[1] + double(v[2]) * v[2]);
+  };
+  const double len = length(d);
+  if (len == 0.0) fail("look_at", "equals the camera position (in float); look at another point");
+  if (len < kMinCameraVector)
+    fail("look_at", fmt::format("is {:.3g} from the camera position, too close to normalise the view direction in "
+                                  "float (at least {:g}); look at a point farther away",
+                                  len, kMinCameraVector));
+  const double ul = length(c.up);
+  if (!(ul >= kMinCameraVector && ul <= kMaxSceneCoordinate))
+    fail("up", fmt::format("is {:.3g} long; it must be between {:g} and {:g} long to normalise in float, e.g. up = "
+                             "[0.0, 1.0, 0.0]",
+                             ul, kMinCameraVector, kMaxSceneCoordinate));
+  const double cross[3] = {double(d[1]) * c.up[2] - double(d[2]) * c.up[1],
+                           double(d[2]) * c.up[0] - double(d[0]) * c.up[2],
+                           double(d[0]) * c.up[1] - double(d[1]) * c.up[0]};
+  const double cl = std::sqrt(cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]);
+  if (cl <= 1e-6 * len * ul) fail("up", "is parallel to the view direction (look_at − position); use another up vector");
+}
+
 Camera read_camera(const TomlTable& t) {
   Camera c;
   c.position = t.vec3("position");
@@ -116,32 +151,7 @@ Camera read_camera(const TomlTable& t) {
     c.width = static_cast<std::uint32_t>(r[0]);
     c.height = static_cast<std::uint32_t>(r[1]);
   }
-  // The basis make_camera (render/rays.cpp) normalises in float must be normalisable: see load.h.
-  for (const char* key : {"position", "look_at"})
-    for (float x : key[0] == 'p' ? c.position : c.look_at)
-      if (std::fabs(x) > kMaxSceneCoordinate)
-        t.fail(key, fmt::format("has a coordinate {:g}, outside the ±{:g} that ray tracing in float keeps finite; "
-                                "scale the scene down", x, kMaxSceneCoordinate));
-  Vec3 d{c.look_at[0] - c.position[0], c.look_at[1] - c.position[1], c.look_at[2] - c.position[2]};
-  const auto length = [](const Vec3& v) {
-    return std::sqrt(double(v[0]) * v[0] + double(v[1]) * v[1] + double(v[2]) * v[2]);
-  };
-  const double len = length(d);
-  if (len == 0.0) t.fail("look_at", "equals the camera position (in float); look at another point");
-  if (len < kMinCameraVector)
-    t.fail("look_at", fmt::format("is {:.3g} from the camera position, too close to normalise the view direction in "
-                                  "float (at least {:g}); look at a point farther away",
-                                  len, kMinCameraVector));
-  const double ul = length(c.up);
-  if (!(ul >= kMinCameraVector && ul <= kMaxSceneCoordinate))
-    t.fail("up", fmt::format("is {:.3g} long; it must be between {:g} and {:g} long to normalise in float, e.g. up = "
-                             "[0.0, 1.0, 0.0]",
-                             ul, kMinCameraVector, kMaxSceneCoordinate));
-  const double cross[3] = {double(d[1]) * c.up[2] - double(d[2]) * c.up[1],
-                           double(d[2]) * c.up[0] - double(d[0]) * c.up[2],
-                           double(d[0]) * c.up[1] - double(d[1]) * c.up[0]};
-  const double cl = std::sqrt(cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]);
-  if (cl <= 1e-6 * len * ul) t.fail("up", "is parallel to the view direction (look_at − position); use another up vector");
+  check_camera(c, [&](const char* key, const std::string& why) { t.fail(key, why); });
   return c;
 }
 
@@ -286,12 +296,15 @@ class SceneBuilder {
   // Reads one [[mesh]]; returns its `draw` flag.
   bool read_mesh(Scene& s, const toml::table& table, std::size_t index) {
     TomlTable t(origin_, table, fmt::format("mesh[{}]", index),
-                {"name", "obj", "generator", "seed", "params", "albedo", "material", "draw"});
+                {"name", "obj", "file", "generator", "seed", "params", "albedo", "material", "draw"});
     std::string name = t.string("name");
     if (name.empty()) t.fail("name", "must not be empty");
     if (mesh_names_.count(name))
       t.fail("name", fmt::format("'{}' is already the name of another mesh; mesh names must be unique", name));
-    bool has_obj = t.has("obj"), has_gen = t.has("generator");
+    // `file` names a mesh file of any format (scene/mesh_formats.h); `obj`, the older key, does too.
+    if (t.has("obj") && t.has("file")) t.fail("file", "and 'obj' both name a file; give one");
+    const char* file_key = t.has("file") ? "file" : "obj";
+    bool has_obj = t.has(file_key), has_gen = t.has("generator");
     if (has_obj == has_gen)
       t.fail_table(fmt::format("mesh '{}' needs exactly one of 'obj' (a file) or 'generator' (one of: {})", name,
                                fmt::join(generator_names(), ", ")));
@@ -299,20 +312,26 @@ class SceneBuilder {
     if (has_obj) {
       if (t.has("params")) t.fail("params", "applies to generated meshes only, not to an obj mesh");
       if (t.has("seed")) t.fail("seed", "applies to generated meshes only, not to an obj mesh");
-      std::string rel = t.string("obj");
+      std::string rel = t.string(file_key);
       std::string root = resolve_scene_root(opts_);
       fs::path p = fs::path(rel).is_absolute() ? fs::path(rel) : fs::path(root) / rel;
+      const MeshFormat* format = find_mesh_format(rel);
+      const std::string what = std::string(format && format->name == "Wavefront OBJ" ? "an " : "a ") +
+                               std::string(format ? format->input.what : "mesh file");
       std::error_code ec;
       if (fs::is_directory(p, ec))
-        t.fail("obj", fmt::format("names a directory, not an OBJ file: {}", p.lexically_normal().string()));
-      if (!fs::exists(p, ec))  // a FIFO or device is refused by load_obj, naming its type
-        t.fail("obj", fmt::format("names an OBJ file that does not exist: {} (scene root: {}); pass --scene-root DIR "
-                                  "or set RAYSORT_SCENE_ROOT to the folder that holds '{}'",
-                                  p.lexically_normal().string(), root, rel));
+        t.fail(file_key, fmt::format("names a directory, not {}: {}", what, p.lexically_normal().string()));
+      if (!format)
+        t.fail(file_key, fmt::format("names {}, which is no mesh file raysort reads; give a file ending in {}", rel,
+                                     mesh_format_endings()));
+      if (!fs::exists(p, ec))  // a FIFO or device is refused by the loader, naming its type
+        t.fail(file_key, fmt::format("names {} that does not exist: {} (scene root: {}); pass --scene-root DIR "
+                                     "or set RAYSORT_SCENE_ROOT to the folder that holds '{}'",
+                                     what, p.lexically_normal().string(), root, rel));
       try {
-        mesh = load_obj(p.lexically_normal().string(), s.materials);
+        mesh = load_mesh_file_as_mesh(p.lexically_normal().string(), s.materials);
       } catch (const Error& e) {
-        throw Error(fmt::format("{}: mesh '{}': {}", t.location("obj"), name, e.what()));
+        throw Error(fmt::format("{}: mesh '{}': {}", t.location(file_key), name, e.what()));
       }
     } else {
       std::string gen = t.string("generator");
@@ -583,14 +602,31 @@ void check_scene_extent(const Scene& s, const std::string& origin) {
                             where, largest, kMinSceneExtent));
 }
 
-// A bare OBJ: one mesh, a camera looking at its bounding box from a 3/4 view, and a sky light.
-Scene load_bare_obj(const std::string& path) {
-  Scene s;
+// A bare mesh file (OBJ, PLY, glTF, pbrt-v4): its meshes, its camera or one looking at its bounding
+// box from a 3/4 view, and its lights or a sky light.
+Scene load_bare_file(const std::string& path) {
+  ForeignScene f = load_foreign_file(path);
+  Scene s = std::move(f.scene);
   s.name = safe_file_name(fs::path(path).stem().string());  // the base of output files: a plain name
-  s.description = "bare OBJ " + path;
+  const std::string_view format = find_mesh_format(path)->name;
+  s.description = fmt::format("bare {} {}", format == "Wavefront OBJ" ? "OBJ" : format, path);
   s.file = path;
-  s.meshes.push_back(load_obj(path, s.materials));
   check_scene_extent(s, path);
+  if (!f.has_lights) {
+    s.sky.enabled = true;
+    s.sky.zenith = {0.6f, 0.7f, 0.9f};
+    s.sky.horizon = {0.9f, 0.9f, 0.9f};
+  }
+  s.effects.max_bounces = 1;
+  if (f.has_camera) {
+    if (!(s.camera.fov_y_deg > 0.0f && s.camera.fov_y_deg < 180.0f))
+      throw Error(fmt::format("{}: the file's camera has a field of view of {} degrees; fix the camera in the file "
+                              "(a vertical field of view in (0, 180))", path, s.camera.fov_y_deg));
+    check_camera(s.camera, [&](const char* key, const std::string& why) {
+      throw Error(fmt::format("{}: the file's camera (its {}) {}; fix the camera in the file", path, key, why));
+    });
+    return s;
+  }
   Aabb b = s.bounds();
   Vec3 c = b.center(), e = b.extent();
   double radius = 0.5 * std::sqrt(double(e[0]) * e[0] + double(e[1]) * e[1] + double(e[2]) * e[2]);
@@ -604,10 +640,6 @@ Scene load_bare_obj(const std::string& path) {
   s.camera.up = {0, 1, 0};
   s.camera.width = kDefaultWidth;
   s.camera.height = kDefaultHeight;
-  s.sky.enabled = true;
-  s.sky.zenith = {0.6f, 0.7f, 0.9f};
-  s.sky.horizon = {0.9f, 0.9f, 0.9f};
-  s.effects.max_bounces = 1;
   return s;
 }
 
@@ -644,7 +676,7 @@ Scene parse_scene_toml(const std::string& text, const std::string& origin, const
 }
 
 std::optional<std::string_view> find_embedded_scene(const std::string& name) {
-  if (name.find('/') != std::string::npos || ends_with(name, ".toml") || ends_with(name, ".obj")) return std::nullopt;
+  if (name.find('/') != std::string::npos || ends_with(name, ".toml") || find_mesh_format(name)) return std::nullopt;
   const std::string path = "scenes/" + name + ".toml";
   if (path == kSceneCatalogue) return std::nullopt;
   return find_embedded(path);
@@ -664,13 +696,13 @@ void check_scene_reference(const std::string& name_or_path) {
     check_input_file(name_or_path, kSceneFile);
     return;
   }
-  if (ends_with(name_or_path, ".obj") || ends_with(name_or_path, ".OBJ")) {
-    if (!exists) throw Error(fmt::format("OBJ file not found: {}", name_or_path));
-    check_input_file(name_or_path, kObjFile);
+  if (const MeshFormat* format = find_mesh_format(name_or_path)) {
+    if (!exists) throw Error(fmt::format("{} not found: {}", format->input.what, name_or_path));
+    check_input_file(name_or_path, format->input);
     return;
   }
-  throw Error(fmt::format("unknown scene '{}'; the known scenes are: {} (or give a path to a .toml or .obj file)",
-                          name_or_path, fmt::join(embedded_scene_names(), ", ")));
+  throw Error(fmt::format("unknown scene '{}'; the known scenes are: {} (or give a path to a .toml file or to a mesh file: {})",
+                          name_or_path, fmt::join(embedded_scene_names(), ", "), mesh_format_endings()));
 }
 
 Scene load_scene(const std::string& name_or_path, const SceneOptions& opts) {
@@ -678,7 +710,7 @@ Scene load_scene(const std::string& name_or_path, const SceneOptions& opts) {
   if (auto text = find_embedded_scene(name_or_path))
     return parse_scene_toml(std::string(*text), "embedded:scenes/" + name_or_path + ".toml", opts);
   if (ends_with(name_or_path, ".toml")) return parse_scene_toml(read_text_file(name_or_path), name_or_path, opts);
-  Scene s = load_bare_obj(name_or_path);
+  Scene s = load_bare_file(name_or_path);
   apply_frame_size(s, opts.frame);
   return s;
 }

@@ -28,6 +28,12 @@ inline constexpr InputKind kSceneFile{"scene file", "give the path of a .toml sc
 inline constexpr InputKind kObjFile{"OBJ file", "give the path of the .obj file", std::uint64_t(4) << 30};
 inline constexpr InputKind kMtlFile{"MTL file", "give the path of the .mtl file, or remove the mtllib line", std::uint64_t(64) << 20};
 inline constexpr InputKind kKernelFile{"kernel file", "point --kernels at the repository's cl/ folder", std::uint64_t(16) << 20};
+// Scene files of other formats (scene/mesh_formats.h): a PLY or a glTF binary holds ~50 B per
+// triangle, so the OBJ bound; a pbrt-v4 file (and each file it includes) likewise.
+inline constexpr InputKind kPlyFile{"PLY file", "give the path of the .ply file", std::uint64_t(4) << 30};
+inline constexpr InputKind kGltfFile{"glTF file", "give the path of the .gltf or .glb file", std::uint64_t(4) << 30};
+inline constexpr InputKind kGltfBuffer{"glTF buffer", "give the .bin file the glTF names, beside it", std::uint64_t(4) << 30};
+inline constexpr InputKind kPbrtFile{"pbrt-v4 file", "give the path of the .pbrt file", std::uint64_t(4) << 30};
 // An encoder from a file (--encoders file:PATH): one OpenCL C function, a few KB; the kernel files' bound.
 inline constexpr InputKind kEncoderFile{"encoder file",
                                         "give the path of an OpenCL C file that defines rs_file_code (docs/encoders.md, "
