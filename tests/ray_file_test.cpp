@@ -216,6 +216,13 @@ TEST(RayFileCli, ResumeWithAChangedRayFileIsRefused) {
   EXPECT_EQ(r.code, 1) << r.err;
   EXPECT_NE(r.err.find("was started with another ray file (file:cornell-primary: sha256"), std::string::npos) << r.err;
   EXPECT_EQ(read_file(out + "/meta.json"), meta);
+  // A set of the new file beside the old one: compare says they traced different ray files.
+  const std::string other = temp_path("resume-other");
+  std::vector<std::string> run_other = run;
+  run_other.back() = other;
+  ASSERT_EQ(run_cli(run_other).code, 0);
+  const testing::CliResult cmp = run_cli({"compare", out, other});
+  EXPECT_NE(cmp.err.find("raysort compare: ray files: file:cornell-primary: sha256"), std::string::npos) << cmp.err;
 }
 
 }  // namespace

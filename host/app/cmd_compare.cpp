@@ -48,6 +48,7 @@ void register_compare_command(CLI::App& app) {
       fmt::print(stderr, "raysort compare: scene files: {}\n", line);
     for (const auto& line : res.encoder_files)
       fmt::print(stderr, "raysort compare: encoder files: {}\n", line);
+    for (const auto& line : res.ray_files) fmt::print(stderr, "raysort compare: ray files: {}\n", line);
     if (!res.within_noise.empty())
       fmt::print(stderr, "raysort compare: {} change(s) past a --fail-if threshold on the points stayed within the "
                          "noise (not past it between the 95 % intervals' nearest ends), not counted as regressions\n",

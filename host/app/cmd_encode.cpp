@@ -171,7 +171,7 @@ int run_encodebench(const EncodeBenchArgs& args, const CLI::App& cmd) {
 void register_encode_command(CLI::App& app) {
   auto args = std::make_shared<EncodeBenchArgs>();
   auto* cmd = app.add_subcommand("encodebench", "time every encoder and key length on one ray batch of a scene");
-  cmd->add_option("--scene,--scenes", args->scene, "scene name, .toml or .obj path (one)")->required();
+  cmd->add_option("--scene,--scenes", args->scene, scene_option_help() + " (one)")->required();
   cmd->add_option("--batch", args->batch, "batch name: primary, shadow<k>, bounce<k>")->capture_default_str();
   cmd->add_option("--encoders", args->encoders,
                   "comma-separated encoders (default: all); file:PATH is an encoder from an OpenCL C file "

@@ -70,7 +70,7 @@ int run_rays(const RaysArgs& args, const CLI::App& cmd) {
 void register_rays_command(CLI::App& app) {
   auto args = std::make_shared<RaysArgs>();
   auto* cmd = app.add_subcommand("rays", "write one ray batch of a scene's frame to a file (docs/rays-format.md)");
-  cmd->add_option("--scene", args->scene, "scene name, .toml or .obj path (one)")->required();
+  cmd->add_option("--scene", args->scene, scene_option_help() + " (one)")->required();
   cmd->add_option("--batch", args->batch, "batch name: primary, shadow<k>, bounce<k>")->capture_default_str();
   cmd->add_option("--export", args->export_file, "the ray file to write (replaced only once complete)")->required();
   cmd->add_flag("--hits", args->hits, "also write each ray's hit (t, triangle id) as the host reference traces it");

@@ -157,7 +157,7 @@ void register_render_command(CLI::App& app) {
   auto args = std::make_shared<RenderArgs>();
   auto* cmd = app.add_subcommand("render", "path-trace a scene (EXR + PNG) with a traversal-cost heatmap, optionally "
                                            "with the HCC cut boxes drawn on a preview");
-  cmd->add_option("--scene,--scenes", args->scene, "scene name, .toml or .obj path (one)")->required();
+  cmd->add_option("--scene,--scenes", args->scene, scene_option_help() + " (one)")->required();
   cmd->add_option("--overlay", args->overlay,
                   "boxes to draw on <base>-<overlay>.png: none, hcc (cut nodes), mlhcc (top-level), grid")
       ->capture_default_str();

@@ -135,7 +135,7 @@ void register_run_command(CLI::App& app) {
   cmd->add_option("--preset", a->preset,
                   "quick (what `make bench` runs), paper (the paper's setup: 8 spp, 2 shadow rays per bounce), "
                   "paper-1spp, paper-viewport, paper-hcc-dir or paper-bounces (docs/paper.md)");
-  add_scene_list_option(*cmd, a->scenes, "scenes (names, .toml or .obj paths, comma-separated)");
+  add_scene_list_option(*cmd, a->scenes, "scenes, comma-separated: each a " + scene_option_help());
   cmd->add_option("--batches", a->batches, "batches: primary, shadow<k>, bounce<k>, or all")->delimiter(',');
   cmd->add_option("--encoders", a->encoders,
                   "encoders, or all; file:PATH is an encoder from an OpenCL C file, named file:<its stem> in the "

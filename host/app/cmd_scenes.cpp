@@ -222,12 +222,13 @@ void register_scenes_command(CLI::App& app) {
   auto args = std::make_shared<ScenesArgs>();
   add_scene_options(*cmd, args->common);
   cmd->add_option("--describe", args->describe,
-                  "scene name, .toml or .obj path: print the stages and ray batches its effects imply, with the ray "
-                  "count of each (one frame traced on the host; --resolution, --spp, --seed apply to it)");
+                  scene_option_help() +
+                      ": print the stages and ray batches its effects imply, with the ray count of each (one frame "
+                      "traced on the host; --resolution, --spp, --seed apply to it)");
   cmd->add_flag("--lights", args->lights,
                 "print the light setup of the scenes named by --scenes (default: the paper preset's real scenes and "
                 "landscape) as the paper's Table 1: light index, radius relative to the largest extent, power, sky");
-  add_scene_list_option(*cmd, args->scenes, "scenes for --lights (names, .toml or .obj paths, comma-separated)");
+  add_scene_list_option(*cmd, args->scenes, "scenes for --lights, comma-separated: each a " + scene_option_help());
   cmd->add_flag("--verify", args->verify,
                 "exit 1 when a real scene file is missing or differs from its checksum in scenes/sources.toml");
   cmd->footer(

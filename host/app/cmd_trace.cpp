@@ -534,7 +534,7 @@ int run_trace(const TraceArgs& args) {
 void register_trace_command(CLI::App& app) {
   auto args = std::make_shared<TraceArgs>();
   auto* cmd = app.add_subcommand("trace", "trace a scene's ray batches on the device and verify every hit");
-  add_scene_list_option(*cmd, args->scenes, "scene names, .toml or .obj paths (comma-separated)")->required();
+  add_scene_list_option(*cmd, args->scenes, "scenes, comma-separated: each a " + scene_option_help())->required();
   add_common_options(*cmd, args->common);
   add_protocol_options(*cmd, args->protocol);
   cmd->add_option("--variant", args->variant,

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <limits>
 
+#include "scene/mesh_formats.h"
 #include "util/error.h"
 #include "util/text.h"
 
@@ -191,6 +192,10 @@ void add_protocol_options(CLI::App& cmd, ProtocolOptions& o) {
                               "stop once every figure's 95 % interval is within +-this many percent",
                               "stop after this many seconds of rounds per batch even if --max-noise is not met");
   for (const char* name : {"--reps", "--warmup", "--max-noise", "--max-time"}) cmd.get_option(name)->capture_default_str();
+}
+
+std::string scene_option_help() {
+  return "scene name, .toml path, or a scene file (" + mesh_format_endings() + ")";
 }
 
 }  // namespace raysort

@@ -51,6 +51,9 @@ void add_common_options(CLI::App& cmd, CommonOptions& o);
 // The scenes to work on: `--scene` and `--scenes` name the same option (names, .toml or .obj
 // paths, comma-separated).
 CLI::Option* add_scene_list_option(CLI::App& cmd, std::vector<std::string>& scenes, const std::string& help);
+// What --scene takes, for --help: "scene name, .toml path, or a scene file (.obj, .ply, ...)"; the
+// endings come from the one list of formats (scene/mesh_formats.h).
+std::string scene_option_help();
 
 // The command line as given ("raysort run --scene sibenik --out r"): recorded in meta.json and in
 // the header of a ray file (render/ray_file.h).

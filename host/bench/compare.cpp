@@ -261,11 +261,12 @@ std::string matrix_mismatch(const ResultSet& a, const ResultSet& b) {
 namespace {
 
 // The files the two sets' figures came from, where their checksums differ: scene files (meta.json
-// "scene_files") and encoders from files ("encoder_files"). Such figures are not comparable,
-// whatever the rules say.
+// "scene_files"), encoders from files ("encoder_files") and ray batches from files ("ray_files").
+// Such figures are not comparable, whatever the rules say.
 void add_provenance_notes(const nlohmann::json& meta_a, const nlohmann::json& meta_b, CompareResult& out) {
   out.scene_files = scene_file_differences(meta_a, meta_b);
   out.encoder_files = encoder_file_differences(meta_a, meta_b);
+  out.ray_files = ray_file_differences(meta_a, meta_b);
   auto note = [&](const std::vector<std::string>& lines, const char* what) {
     if (lines.empty()) return;
     out.report += what;
@@ -276,6 +277,8 @@ void add_provenance_notes(const nlohmann::json& meta_a, const nlohmann::json& me
                         "figures on these scenes are not comparable.\n\n");
   note(out.encoder_files, "**The sets ran different encoder files** (meta.json \"encoder_files\", SHA-256): their "
                           "figures for these encoders are not comparable.\n\n");
+  note(out.ray_files, "**The sets traced different ray files** (meta.json \"ray_files\", SHA-256): their figures on "
+                      "these batches are not comparable.\n\n");
 }
 
 }  // namespace

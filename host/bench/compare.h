@@ -47,8 +47,10 @@ struct CompareResult {
   // The scene files the two sets traced, where their checksums differ (meta.json "scene_files",
   // scene/provenance.h): results on different files are not comparable, whatever the rules say.
   std::vector<std::string> scene_files;
-  // Likewise the encoders from files (meta.json "encoder_files", bench/encoder_files.h).
+  // Likewise the encoders from files (meta.json "encoder_files", bench/encoder_files.h) and the ray
+  // batches from files ("ray_files").
   std::vector<std::string> encoder_files;
+  std::vector<std::string> ray_files;
 };
 
 // The two sets must have run one matrix (scenes, batches, encoders, bits, resolution, spp, seed,

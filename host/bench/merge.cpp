@@ -103,6 +103,9 @@ std::map<unsigned, std::string> check_one_run(const std::vector<Input>& sets, st
     if (const std::vector<std::string> d = encoder_file_differences(a, b); !d.empty())
       problems.push_back(fmt::format("{} ran other encoder files than {} ({}); rerun that shard with the same files",
                                      in.dir, ref.dir, d.front()));
+    if (const std::vector<std::string> d = ray_file_differences(a, b); !d.empty())
+      problems.push_back(fmt::format("{} traced other ray files than {} ({}); rerun that shard with the same files",
+                                     in.dir, ref.dir, d.front()));
   }
   std::map<unsigned, std::string> shard_dir;  // shard index -> input folder
   for (const auto& in : sets) {
