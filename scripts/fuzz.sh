@@ -29,7 +29,7 @@ fi
 cmake -S . -B "$BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ -DRAYSORT_FUZZ=ON \
   -DBUILD_TESTING=OFF >/dev/null
 # FUZZ_TARGETS (default: all) picks some, e.g. FUZZ_TARGETS="ply gltf pbrt": only those are built and run.
-TARGETS="${FUZZ_TARGETS:-obj scene result_set cli ply gltf pbrt}"
+TARGETS="${FUZZ_TARGETS:-obj scene result_set cli ply gltf pbrt ray_file}"
 cmake --build "$BUILD" -j "$JOBS" --target $(for t in $TARGETS; do printf '%s_fuzzer ' "$t"; done)
 
 # Seeds: the scene files, and every OBJ of the odd-obj folder under 256 KiB (when it is there).
@@ -45,7 +45,7 @@ printf 'v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\nf -4 -3 -2\n' > "$BUILD/s
 # Scene-format seeds (issue 45): the odd-obj folder's PLY files (assimp's own test models, from Debian
 # assimp-testmodels) and a small file of each format made here (scripts/fuzz_seeds.py).
 mkdir -p "$BUILD/seeds/ply" "$BUILD/seeds/gltf" "$BUILD/seeds/pbrt" "$BUILD/corpus/ply" "$BUILD/corpus/gltf" \
-  "$BUILD/corpus/pbrt"
+  "$BUILD/corpus/pbrt" "$BUILD/seeds/ray_file" "$BUILD/corpus/ray_file"
 [ -d "$ODD_OBJ" ] && find "$ODD_OBJ" -name '*.ply' -size -256k -exec cp {} "$BUILD/seeds/ply/" \;
 python3 scripts/fuzz_seeds.py "$BUILD/seeds"
 # Result-set seeds: the golden set's cell records (selector byte 0) and meta.json (1), and rules (2).

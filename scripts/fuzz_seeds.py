@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Seeds for the scene-format fuzzers (scripts/fuzz.sh): a small file of each format, into
-SEEDS/ply, SEEDS/gltf and SEEDS/pbrt. A quad in PLY ascii and both binary byte orders; a glTF
+SEEDS/ply, SEEDS/gltf, SEEDS/pbrt and SEEDS/ray_file. A quad in PLY ascii and both binary byte orders; a glTF
 with a node hierarchy, a camera and a material as .gltf (buffer as a data URI) and as .glb; a
 pbrt-v4 scene with each directive the loader reads."""
 import base64, json, struct, sys
@@ -71,3 +71,15 @@ AttributeBegin
   ObjectInstance "tri"
 AttributeEnd
 """)
+
+# Ray batch files (docs/rays-format.md): two rays without hits, and two shadow rays with hits.
+def rays_file(flags, name, hits):
+    rays = [(0, 0, 0, 0, 0, 1, 0, 1e30), (1, 2, 3, -0.5, 0.5, 0.7071, 1e-4, 10)]
+    out = b"RSRAYS\r\n" + struct.pack("<IIQ", 1, flags, len(rays)) + bytes(range(32))
+    out += struct.pack("<II", len(name), len(b"raysort rays")) + name + b"raysort rays"
+    out += b"".join(struct.pack("<8f", *r) for r in rays)
+    return out + (b"".join(struct.pack("<fI", t, tri) for t, tri in hits) if flags & 1 else b"")
+
+(seeds / "ray_file").mkdir(parents=True, exist_ok=True)
+(seeds / "ray_file/primary.rays").write_bytes(rays_file(0, b"primary", []))
+(seeds / "ray_file/shadow0-hits.rays").write_bytes(rays_file(3, b"shadow0", [(2.5, 7), (10, 0xFFFFFFFF)]))
