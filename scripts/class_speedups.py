@@ -85,20 +85,14 @@ def svg(path, points, encoders):
         f.write("\n".join(out) + "\n")
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("sets", nargs="+")
-    ap.add_argument("--source", choices=("model", "pocl"), required=True)
-    ap.add_argument("--profile", default=os.path.join(ROOT, "gpu/profiles/rtx3060.toml"))
-    ap.add_argument("--svg", help="write the plot of speedup and net against the class's NoSort speed here")
-    a = ap.parse_args()
-    with open(a.profile, "rb") as f:
-        dram_gbps = tomllib.load(f)["dram_gbps"]
-    nosort, out = rows(a.sets, a.source, dram_gbps)
+def table_lines(paths, source, dram_gbps):
+    """The markdown table, one row per scene, batch and class (fastest NoSort first), and the plot's
+    points [(nosort MRays/s, speedup, net, encoder, class)]."""
+    nosort, out = rows(paths, source, dram_gbps)
     encoders = sorted({r[1] for r in out})
     groups = sorted({r[0] for r in out}, key=lambda k: (k[0], k[1], -nosort.get(k, 0.0)))
-    print(f"| scene | batch | class | NoSort MRays/s | " + " | ".join(f"{e} speedup / net" for e in encoders) + " |")
-    print("|---|---|---|---:|" + "---|" * len(encoders))
+    lines = ["| scene | batch | class | NoSort MRays/s | " + " | ".join(f"{e} speedup / net" for e in encoders) + " |",
+             "|---|---|---|---:|" + "---|" * len(encoders)]
     points = []
     for k in groups:
         if k not in nosort:
@@ -110,7 +104,24 @@ def main():
             cells_text.append(f"{r[4]:.3f} / {r[5]:.3f}" if r else "")
             if r:
                 points.append((nosort[k], r[4], r[5], e, k[2]))
-        print(f"| {k[0]} | {k[1]} | {k[2]} | {nosort[k]:.1f} | " + " | ".join(cells_text) + " |")
+        lines.append(f"| {k[0]} | {k[1]} | {k[2]} | {nosort[k]:.1f} | " + " | ".join(cells_text) + " |")
+    return lines, points, encoders
+
+
+def profile_dram_gbps(path=os.path.join(ROOT, "gpu/profiles/rtx3060.toml")):
+    with open(path, "rb") as f:
+        return tomllib.load(f)["dram_gbps"]
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("sets", nargs="+")
+    ap.add_argument("--source", choices=("model", "pocl"), required=True)
+    ap.add_argument("--profile", default=os.path.join(ROOT, "gpu/profiles/rtx3060.toml"))
+    ap.add_argument("--svg", help="write the plot of speedup and net against the class's NoSort speed here")
+    a = ap.parse_args()
+    lines, points, encoders = table_lines(a.sets, a.source, profile_dram_gbps(a.profile))
+    print("\n".join(lines))
     if a.svg and points:
         svg(a.svg, points, encoders)
     return 0

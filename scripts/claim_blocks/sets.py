@@ -14,6 +14,8 @@ HCC_DIR = os.path.join(EPYC, "paper-hcc-dir-1spp-d8b4b22")
 BOUNCES = os.path.join(EPYC, "paper-bounces-1spp-d8b4b22")
 SWEEPS = os.path.join(EPYC, "sweeps-d8b4b22")
 PAPER_SPEEDUPS = os.path.join(ROOT, "results", "gpu-model", "paper_tables.csv")
+STREAM_CLASSES = os.path.join(XEON, "paper-1spp-stream-23a1a19")
+KERNEL_CLASSES_MODEL = os.path.join(ROOT, "results", "gpu-model", "classes-16c0de1")
 
 # stand-in scene -> the paper's column it is scored against (results/gpu-model/paper_tables.csv pairs
 # them so). `landscape` is scored against the paper's *landscape* column (21.84 M triangles), not Vokselia.
