@@ -1,6 +1,6 @@
 """The generators of scripts/claims.py: block name -> function returning the block's text, computed
 from committed result sets only (claim_blocks/sets.py names them). One list, here."""
-from . import appendix, gpu_model, packet, paper_tex, sampling
+from . import appendix, gpu_model, gpu_model_scoring, packet, paper_tex, sampling
 
 GENERATORS = {
     "paper-inconsistencies": paper_tex.inconsistencies_block,
@@ -8,6 +8,10 @@ GENERATORS = {
     "gpu-model-table3": gpu_model.table3_block,
     "gpu-model-table6": gpu_model.table6_block,
     "gpu-model-loso-per-scene": gpu_model.table2_loso_per_scene_phrase,
+    "gpu-model-heldout": gpu_model_scoring.heldout_block,
+    "gpu-model-mappings": gpu_model_scoring.mappings_block,
+    "gpu-model-mappings-summary": gpu_model_scoring.mappings_summary_phrase,
+    "gpu-model-sets-differ": gpu_model_scoring.sets_differ_phrase,
     "packet-correlation": packet.correlation_block,
     "packet-table2": packet.table2_block,
     "packet-table3": packet.table3_block,
