@@ -1,6 +1,6 @@
 """The generators of scripts/claims.py: block name -> function returning the block's text, computed
 from committed result sets only (claim_blocks/sets.py names them). One list, here."""
-from . import appendix, gpu_model, gpu_model_scoring, packet, paper_tex, sampling
+from . import appendix, gpu_model, gpu_model_appendix, gpu_model_scoring, packet, paper_tex, sampling
 
 GENERATORS = {
     "paper-inconsistencies": paper_tex.inconsistencies_block,
@@ -12,6 +12,11 @@ GENERATORS = {
     "gpu-model-mappings": gpu_model_scoring.mappings_block,
     "gpu-model-mappings-summary": gpu_model_scoring.mappings_summary_phrase,
     "gpu-model-sets-differ": gpu_model_scoring.sets_differ_phrase,
+    "gpu-model-viewport": gpu_model_appendix.viewport_block,
+    "gpu-model-hcc-dir": gpu_model_appendix.hcc_dir_block,
+    "gpu-model-bounces": gpu_model_appendix.bounces_block,
+    "gpu-model-bounces-trend": gpu_model_appendix.bounces_trend_phrase,
+    "gpu-model-bounces-memory": gpu_model_appendix.bounces_memory_phrase,
     "packet-correlation": packet.correlation_block,
     "packet-table2": packet.table2_block,
     "packet-table3": packet.table3_block,
