@@ -4,6 +4,7 @@ only, then scored on Tables 3, 4 and 6, which the fit never saw; and Table 2's v
 plausible choice of stand-in scenes. Predictions are recomputed from the committed result sets' GPU
 counts with scripts/gpu_model_validate.py's time formula, fit and statistics; the paper's speedups are
 its printed ones (results/paper/printed_tables.csv)."""
+import csv
 import os
 import statistics
 import tomllib
@@ -129,7 +130,6 @@ def profile_fit_problem():
 def sets_differ_phrase():
     """How far the committed 1-spp set's predictions (at the profile's constant) are from
     results/gpu-model/cells.csv's, per table: the two were replayed by different commits."""
-    import csv
     with open(os.path.join(ROOT, "results", "gpu-model", "cells.csv"), newline="") as f:
         validation = {(r["table"], r["scene"], r["encoder"], r["bits"]): r for r in csv.DictReader(f)}
     prof, cells = profile(), model_cells(ONE_SPP)
