@@ -11,7 +11,8 @@ generator of scripts/claim_blocks (GENERATORS), which reads committed result set
 text holds a newline spans lines; otherwise it is a phrase inside a sentence (compared with its
 line breaks as spaces, so a paragraph may be reflowed). Also checked: every
 generator is quoted somewhere (a deleted block is noticed), the paper's speedups that results/gpu-model/paper_tables.csv
-holds are the ones the paper prints, and the paper's printed figures
+holds are the ones the paper prints, the rtx3060 profile's step_cycles is the fit on Table 2's
+committed cells, and the paper's printed figures
 (results/paper/printed_tables.csv) are the extraction of its LaTeX when ../shared/reference holds it.
 Standard library only; the ctest `claims` runs the check.
 """
@@ -23,7 +24,7 @@ import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from claim_blocks import GENERATORS  # noqa: E402
-from claim_blocks import paper_tex  # noqa: E402
+from claim_blocks import gpu_model_scoring, paper_tex  # noqa: E402
 from claim_blocks.sets import PAPER_COLUMN, PAPER_SPEEDUPS, ROOT  # noqa: E402
 
 # The documents whose quoted figures are checked (issue 43).
@@ -105,6 +106,9 @@ def main():
     wrong = paper_tex.speedups_match(PAPER_SPEEDUPS, PAPER_COLUMN)
     if wrong:
         problems.append(f"claims: {wrong}: fix the CSV (every model comparison reads it)")
+    unfitted = gpu_model_scoring.profile_fit_problem()
+    if unfitted:
+        problems.append(f"claims: {unfitted}: refit it (scripts/gpu_model_validate.py) or say why it differs")
     for p in problems:
         print(p, file=sys.stderr)
     if problems:

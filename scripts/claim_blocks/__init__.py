@@ -1,6 +1,6 @@
 """The generators of scripts/claims.py: block name -> function returning the block's text, computed
 from committed result sets only (claim_blocks/sets.py names them). One list, here."""
-from . import appendix, gpu_model, kernels, packet, paper_tex, sampling
+from . import appendix, gpu_model, gpu_model_appendix, gpu_model_scoring, kernels, packet, paper_tex, sampling
 
 GENERATORS = {
     "paper-inconsistencies": paper_tex.inconsistencies_block,
@@ -8,6 +8,15 @@ GENERATORS = {
     "gpu-model-table3": gpu_model.table3_block,
     "gpu-model-table6": gpu_model.table6_block,
     "gpu-model-loso-per-scene": gpu_model.table2_loso_per_scene_phrase,
+    "gpu-model-heldout": gpu_model_scoring.heldout_block,
+    "gpu-model-mappings": gpu_model_scoring.mappings_block,
+    "gpu-model-mappings-summary": gpu_model_scoring.mappings_summary_phrase,
+    "gpu-model-sets-differ": gpu_model_scoring.sets_differ_phrase,
+    "gpu-model-viewport": gpu_model_appendix.viewport_block,
+    "gpu-model-hcc-dir": gpu_model_appendix.hcc_dir_block,
+    "gpu-model-bounces": gpu_model_appendix.bounces_block,
+    "gpu-model-bounces-trend": gpu_model_appendix.bounces_trend_phrase,
+    "gpu-model-bounces-memory": gpu_model_appendix.bounces_memory_phrase,
     "packet-correlation": packet.correlation_block,
     "packet-table2": packet.table2_block,
     "packet-table3": packet.table3_block,

@@ -13,6 +13,12 @@ VIEWPORT = os.path.join(EPYC, "paper-viewport-1spp-d8b4b22")
 HCC_DIR = os.path.join(EPYC, "paper-hcc-dir-1spp-d8b4b22")
 BOUNCES = os.path.join(EPYC, "paper-bounces-1spp-d8b4b22")
 SWEEPS = os.path.join(EPYC, "sweeps-d8b4b22")
+# The Table 4, Table 8 and bounces matrices re-run with --gpu-model rtx3060 (issue 43, item 4): the
+# committed sets above have no GPU-model columns.
+GPU_MODEL_SETS = os.path.join(ROOT, "results", "gpu-model")
+GPU_VIEWPORT = os.path.join(GPU_MODEL_SETS, "paper-viewport-1spp-gm-5382d1e")
+GPU_HCC_DIR = os.path.join(GPU_MODEL_SETS, "paper-hcc-dir-1spp-gm-5382d1e")
+GPU_BOUNCES = os.path.join(GPU_MODEL_SETS, "paper-bounces-1spp-gm-5382d1e")
 PAPER_SPEEDUPS = os.path.join(ROOT, "results", "gpu-model", "paper_tables.csv")
 STREAM_CLASSES = os.path.join(XEON, "paper-1spp-stream-23a1a19")
 KERNEL_CLASSES_MODEL = os.path.join(ROOT, "results", "gpu-model", "classes-16c0de1")
