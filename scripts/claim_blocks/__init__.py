@@ -1,6 +1,6 @@
 """The generators of scripts/claims.py: block name -> function returning the block's text, computed
 from committed result sets only (claim_blocks/sets.py names them). One list, here."""
-from . import appendix, gpu_model, packet, paper_tex, sampling
+from . import appendix, audit, gpu_model, packet, paper_tex, sampling
 
 GENERATORS = {
     "paper-inconsistencies": paper_tex.inconsistencies_block,
@@ -35,4 +35,7 @@ GENERATORS = {
     "sweep-twopoint": appendix.twopoint_block,
     "sweep-lambda-command": appendix.sweep_lambda_command_phrase,
     "sweep-commands": appendix.sweep_commands_block,
+    "audit-ppc-order": audit.order_block,
+    "audit-twopoint-bits": audit.twopoint_bits_block,
+    "audit-ppc-batch": audit.batch_block,
 }

@@ -13,6 +13,9 @@ VIEWPORT = os.path.join(EPYC, "paper-viewport-1spp-d8b4b22")
 HCC_DIR = os.path.join(EPYC, "paper-hcc-dir-1spp-d8b4b22")
 BOUNCES = os.path.join(EPYC, "paper-bounces-1spp-d8b4b22")
 SWEEPS = os.path.join(EPYC, "sweeps-d8b4b22")
+AUDIT_ORDER = os.path.join(XEON, "audit-issue43-5382d1e", "sibenik-order")
+AUDIT_TWOPOINT_BITS = os.path.join(XEON, "audit-issue43-5382d1e", "twopoint-bits")
+AUDIT_TWOPOINT_VARIANTS = os.path.join(XEON, "audit-issue43-5382d1e", "twopoint-variants")
 PAPER_SPEEDUPS = os.path.join(ROOT, "results", "gpu-model", "paper_tables.csv")
 
 # stand-in scene -> the paper's column it is scored against (results/gpu-model/paper_tables.csv pairs
