@@ -1,6 +1,6 @@
 """The generators of scripts/claims.py: block name -> function returning the block's text, computed
 from committed result sets only (claim_blocks/sets.py names them). One list, here."""
-from . import appendix, gpu_model, gpu_model_appendix, gpu_model_scoring, kernels, packet, paper_tex, sampling
+from . import appendix, audit, gpu_model, gpu_model_appendix, gpu_model_scoring, kernels, packet, paper_tex, sampling
 
 GENERATORS = {
     "paper-inconsistencies": paper_tex.inconsistencies_block,
@@ -46,4 +46,7 @@ GENERATORS = {
     "sweep-commands": appendix.sweep_commands_block,
     "kernel-classes-model": kernels.model_block,
     "kernel-classes-pocl": kernels.pocl_block,
+    "audit-ppc-order": audit.order_block,
+    "audit-twopoint-bits": audit.twopoint_bits_block,
+    "audit-ppc-batch": audit.batch_block,
 }
