@@ -119,27 +119,43 @@ TEST(SimtModel, TracedModelMatchesTrailsAndOrderMatters) {
   EXPECT_EQ(cw.total_steps, std::accumulate(visits.begin(), visits.end(), std::uint64_t{0}));
 }
 
-// The binary-ww class's GPU model: the same trails as the binary class's (the same traversal order),
-// so the same SIMT figures and while-while count, but it issues the while-while steps, which are
-// more than the lockstep steps where lanes interleave inner and leaf steps differently.
-TEST(SimtModel, WhileWhileClassIssuesItsWhileWhileSteps) {
+namespace {
+
+// `count` small triangles scattered in an 8-unit cube, and rays from points in it in random
+// directions: warps that share some nodes and miss others.
+Scene::Flat scattered_triangles(int count, std::mt19937& rng) {
   Scene::Flat f;
-  std::mt19937 rng(7);
   std::uniform_real_distribution<float> u(0.0f, 8.0f);
-  for (int i = 0; i < 400; ++i) {
+  for (int i = 0; i < count; ++i) {
     const float x = u(rng), y = u(rng), z = u(rng);
     f.v0.push_back({x, y, z}), f.v1.push_back({x + 0.5f, y, z}), f.v2.push_back({x, y + 0.5f, z + 0.3f});
     f.material.push_back(0);
   }
-  const Bvh bvh = build_bvh(f);
-  std::vector<RsRay> rays;
+  return f;
+}
+
+std::vector<RsRay> scattered_rays(int count, std::mt19937& rng) {
+  std::uniform_real_distribution<float> u(0.0f, 8.0f);
   std::normal_distribution<float> n(0.0f, 1.0f);
-  for (int i = 0; i < 2048; ++i) {
+  std::vector<RsRay> rays;
+  for (int i = 0; i < count; ++i) {
     RsRay r{};
     for (int a = 0; a < 3; ++a) r.o[a] = u(rng), r.d[a] = n(rng);
     r.tmax = RS_T_FAR;
     rays.push_back(r);
   }
+  return rays;
+}
+
+}  // namespace
+
+// The binary-ww class's GPU model: the same trails as the binary class's (the same traversal order),
+// so the same SIMT figures and while-while count, but it issues the while-while steps, which are
+// more than the lockstep steps where lanes interleave inner and leaf steps differently.
+TEST(SimtModel, WhileWhileClassIssuesItsWhileWhileSteps) {
+  std::mt19937 rng(7);
+  const Bvh bvh = build_bvh(scattered_triangles(400, rng));
+  const std::vector<RsRay> rays = scattered_rays(2048, rng);
   const GpuProfile gpu = load_gpu_profile("rtx3060");
   GpuCounts binary_counts, ww_counts;
   const SimtModel binary = simt_model(bvh, rays, nullptr, false, TraceVariant::Fast, TraceLayout::Binary, &gpu, &binary_counts);
@@ -156,23 +172,9 @@ TEST(SimtModel, WhileWhileClassIssuesItsWhileWhileSteps) {
 // DistinctNodes); it must give exactly what sorting the union of the same trails gives, on every
 // layout, for closest and any hit, rays in a shuffled order, where leaves are shared and missed.
 TEST(SimtModel, TracedDistinctNodesEqualTheSortedUnion) {
-  Scene::Flat f;
   std::mt19937 rng(5);
-  std::uniform_real_distribution<float> u(0.0f, 8.0f);
-  for (int i = 0; i < 300; ++i) {
-    const float x = u(rng), y = u(rng), z = u(rng);
-    f.v0.push_back({x, y, z}), f.v1.push_back({x + 0.5f, y, z}), f.v2.push_back({x, y + 0.5f, z + 0.3f});
-    f.material.push_back(0);
-  }
-  const Bvh bvh = build_bvh(f);
-  std::vector<RsRay> rays;
-  std::normal_distribution<float> n(0.0f, 1.0f);
-  for (int i = 0; i < 1000; ++i) {
-    RsRay r{};
-    for (int a = 0; a < 3; ++a) r.o[a] = u(rng), r.d[a] = n(rng);
-    r.tmax = RS_T_FAR;
-    rays.push_back(r);
-  }
+  const Bvh bvh = build_bvh(scattered_triangles(300, rng));
+  const std::vector<RsRay> rays = scattered_rays(1000, rng);
   std::vector<std::uint32_t> order(rays.size());
   std::iota(order.begin(), order.end(), 0u);
   std::shuffle(order.begin(), order.end(), rng);
