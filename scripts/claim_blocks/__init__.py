@@ -43,6 +43,7 @@ GENERATORS = {
     "sweep-lambda": appendix.lambda_block,
     "sweep-twopoint": appendix.twopoint_block,
     "sweep-lambda-command": appendix.sweep_lambda_command_phrase,
+    "sweep-lambda-spread": appendix.lambda_spread_phrase,
     "sweep-commands": appendix.sweep_commands_block,
     "kernel-classes-model": kernels.model_block,
     "kernel-classes-pocl": kernels.pocl_block,

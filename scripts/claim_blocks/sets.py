@@ -13,6 +13,9 @@ VIEWPORT = os.path.join(EPYC, "paper-viewport-1spp-d8b4b22")
 HCC_DIR = os.path.join(EPYC, "paper-hcc-dir-1spp-d8b4b22")
 BOUNCES = os.path.join(EPYC, "paper-bounces-1spp-d8b4b22")
 SWEEPS = os.path.join(EPYC, "sweeps-d8b4b22")
+# The λ sweep on the paper's two other stand-ins (issue 43, item 6), on the Xeon: its SIMT ratios are
+# deterministic, so they stand beside the EPYC sets' in one table.
+SWEEPS_MORE = os.path.join(XEON, "sweeps-115dd84")
 # The Table 4, Table 8 and bounces matrices re-run with --gpu-model rtx3060 (issue 43, item 4): the
 # committed sets above have no GPU-model columns.
 GPU_MODEL_SETS = os.path.join(ROOT, "results", "gpu-model")
