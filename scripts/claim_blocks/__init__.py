@@ -50,6 +50,7 @@ GENERATORS = {
     "cwbvh-dram": kernels.cwbvh_dram_block,
     "kernel-classes-model-scenes": kernels.model_scenes_block,
     "cwbvh-gains-more": kernels.cwbvh_gains_phrase,
+    "kernel-classes-net-trend": kernels.net_trend_phrase,
     "audit-ppc-order": audit.order_block,
     "audit-twopoint-bits": audit.twopoint_bits_block,
     "audit-ppc-batch": audit.batch_block,

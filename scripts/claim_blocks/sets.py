@@ -29,6 +29,9 @@ PAPER_SPEEDUPS = os.path.join(ROOT, "results", "gpu-model", "paper_tables.csv")
 STREAM_CLASSES = os.path.join(XEON, "paper-1spp-stream-23a1a19")
 KERNEL_CLASSES_MODEL = os.path.join(ROOT, "results", "gpu-model", "classes-16c0de1")
 CWBVH_DRAM = os.path.join(ROOT, "results", "gpu-model", "cwbvh-dram-9ca3605")
+# The same matrix for the other GPU classes (wide8; binary and binary-ww), one set each.
+CLASSES_WIDE8 = os.path.join(ROOT, "results", "gpu-model", "classes-wide8-dac824d")
+CLASSES_BINARY = os.path.join(ROOT, "results", "gpu-model", "classes-binary-dac824d")
 
 # stand-in scene -> the paper's column it is scored against (results/gpu-model/paper_tables.csv pairs
 # them so). `landscape` is scored against the paper's *landscape* column (21.84 M triangles), not Vokselia.
