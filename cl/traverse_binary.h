@@ -14,6 +14,18 @@
 
 #include "intersect.h"
 
+/* Whether the ray enters the root's box (and, robust, has a valid direction): where the binary
+ * traversals start (this one and the while-while one, traverse_binary_ww.h). */
+RS_INLINE int rs_binary_root_entered(RS_GLOBAL const RsBvhNode* nodes, RsTraversalRay r, const RsRobustRay* rr, int robust,
+                                     float tmax) {
+  int hit;
+  if (robust)
+    rs_intersect_box_robust(rr, &nodes[0], tmax, &hit);
+  else
+    rs_intersect_box(r, &nodes[0], tmax, &hit);
+  return hit && (!robust || rr->valid);
+}
+
 /* Closest hit (any_hit = 0) or first hit found (any_hit = 1, shadow rays), fast (robust = 0) or
  * robust (robust = 1) variant.
  * *node_visits, when not null, counts the nodes whose box was fetched (for cost heatmaps).
@@ -29,13 +41,7 @@ RS_INLINE RsHit rs_traverse_variant_recorded(RS_GLOBAL const RsBvhNode* nodes, R
   RsHit hit = rs_miss(ray.tmax);
   rs_u32 visits = 1;
 
-  int root_hit;
-  if (robust)
-    rs_intersect_box_robust(&rr, &nodes[0], hit.t, &root_hit);
-  else
-    rs_intersect_box(r, &nodes[0], hit.t, &root_hit);
-  if (robust && !rr.valid) root_hit = 0;
-  if (!root_hit) {
+  if (!rs_binary_root_entered(nodes, r, &rr, robust, hit.t)) {
     if (node_visits) *node_visits = visits;
     if (trail_len) *trail_len = 0;
     return hit;

@@ -11,7 +11,7 @@
 #ifndef RAYSORT_TRAVERSE_BINARY_WW_H
 #define RAYSORT_TRAVERSE_BINARY_WW_H
 
-#include "intersect.h"
+#include "traverse_binary.h"
 
 RS_INLINE RsHit rs_traverse_binary_ww(RS_GLOBAL const RsBvhNode* nodes, RS_GLOBAL const RsTriangle* tris, RsRay ray,
                                       int robust, int any_hit, rs_u32* node_visits) {
@@ -19,16 +19,10 @@ RS_INLINE RsHit rs_traverse_binary_ww(RS_GLOBAL const RsBvhNode* nodes, RS_GLOBA
   const RsRobustRay rr = rs_prepare_robust_ray(ray);
   RsHit hit = rs_miss(ray.tmax);
   rs_u32 visits = 1;
-  int root_hit;
-  if (robust)
-    rs_intersect_box_robust(&rr, &nodes[0], hit.t, &root_hit);
-  else
-    rs_intersect_box(r, &nodes[0], hit.t, &root_hit);
-  if (robust && !rr.valid) root_hit = 0;
   rs_u32 stack[RS_STACK_SIZE];
   int sp = 0;
   rs_u32 node = 0;
-  int live = root_hit; /* a node to visit remains */
+  int live = rs_binary_root_entered(nodes, r, &rr, robust, hit.t); /* a node to visit remains */
   while (live) {
     /* Inner nodes, until the ray stands at a leaf or has nowhere left to go. */
     while (live && nodes[node].count == 0) {
