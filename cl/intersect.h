@@ -342,4 +342,22 @@ RS_INLINE int rs_intersect_triangle_robust(const RsRobustRay* r, const float* d,
   return 1;
 }
 
+/* Triangle `tri` against the ray in the variant (fast: r; robust: rr and the ray's direction d),
+ * within (tmin, hit->t): on a hit, *hit becomes it (t, the triangle's id, u, v) and 1 is returned.
+ * What every single-ray leaf of the binary tree's triangles does (traverse_binary.h,
+ * traverse_binary_ww.h, traverse_cwbvh.h). */
+RS_INLINE int rs_take_triangle(RsTraversalRay r, const RsRobustRay* rr, const float* d, RS_GLOBAL const RsTriangle* tri,
+                               int robust, RsHit* hit) {
+  float t, u, v;
+  const int found = robust ? rs_intersect_triangle_robust(rr, d, tri, hit->t, &t, &u, &v)
+                           : rs_intersect_triangle(r, tri, hit->t, &t, &u, &v);
+  if (found) {
+    hit->t = t;
+    hit->tri = tri->id;
+    hit->u = u;
+    hit->v = v;
+  }
+  return found;
+}
+
 #endif /* RAYSORT_INTERSECT_H */

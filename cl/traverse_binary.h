@@ -56,19 +56,10 @@ RS_INLINE RsHit rs_traverse_variant_recorded(RS_GLOBAL const RsBvhNode* nodes, R
     ++steps;
     if (n->count > 0) {
       for (rs_u32 i = n->first; i < n->first + n->count; ++i) {
-        float t, u, v;
-        int found = robust ? rs_intersect_triangle_robust(&rr, ray.d, &tris[i], hit.t, &t, &u, &v)
-                           : rs_intersect_triangle(r, &tris[i], hit.t, &t, &u, &v);
-        if (found) {
-          hit.t = t;
-          hit.tri = tris[i].id;
-          hit.u = u;
-          hit.v = v;
-          if (any_hit) {
-            if (node_visits) *node_visits = visits;
-            if (trail_len) *trail_len = steps;
-            return hit;
-          }
+        if (rs_take_triangle(r, &rr, ray.d, &tris[i], robust, &hit) && any_hit) {
+          if (node_visits) *node_visits = visits;
+          if (trail_len) *trail_len = steps;
+          return hit;
         }
       }
     } else {

@@ -51,15 +51,7 @@ RS_INLINE RsHit rs_traverse_binary_ww(RS_GLOBAL const RsBvhNode* nodes, RS_GLOBA
     while (live && nodes[node].count > 0) {
       RS_GLOBAL const RsBvhNode* n = &nodes[node];
       for (rs_u32 i = n->first; i < n->first + n->count; ++i) {
-        float t, u, v;
-        const int found = robust ? rs_intersect_triangle_robust(&rr, ray.d, &tris[i], hit.t, &t, &u, &v)
-                                 : rs_intersect_triangle(r, &tris[i], hit.t, &t, &u, &v);
-        if (!found) continue;
-        hit.t = t;
-        hit.tri = tris[i].id;
-        hit.u = u;
-        hit.v = v;
-        if (any_hit) {
+        if (rs_take_triangle(r, &rr, ray.d, &tris[i], robust, &hit) && any_hit) {
           if (node_visits) *node_visits = visits;
           return hit;
         }

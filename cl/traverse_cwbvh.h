@@ -121,24 +121,14 @@ RS_INLINE RsHit rs_traverse_cwbvh_recorded(RS_GLOBAL const RsCwbvhNode* nodes, R
       else
         triangles |= ((1u << (meta >> 5)) - 1u) << (meta & 31u);
     }
-    if (triangles) {
-      for (; triangles; triangles &= triangles - 1u) {
-        const rs_u32 i = n->triangle_base + (rs_u32)rs_lowest_bit_u(triangles);
-        if (trail && steps < trail_cap) trail[steps] = RS_WIDE_LEAF | (i << 2);
-        ++steps;
-        float t, u, v;
-        const int found = robust ? rs_intersect_triangle_robust(&rr, ray.d, &tris[i], hit.t, &t, &u, &v)
-                                 : rs_intersect_triangle(r, &tris[i], hit.t, &t, &u, &v);
-        if (!found) continue;
-        hit.t = t;
-        hit.tri = tris[i].id;
-        hit.u = u;
-        hit.v = v;
-        if (any_hit) {
-          if (steps_out) *steps_out = steps;
-          if (trail_len) *trail_len = steps;
-          return hit;
-        }
+    for (; triangles; triangles &= triangles - 1u) {
+      const rs_u32 i = n->triangle_base + (rs_u32)rs_lowest_bit_u(triangles);
+      if (trail && steps < trail_cap) trail[steps] = RS_WIDE_LEAF | (i << 2);
+      ++steps;
+      if (rs_take_triangle(r, &rr, ray.d, &tris[i], robust, &hit) && any_hit) {
+        if (steps_out) *steps_out = steps;
+        if (trail_len) *trail_len = steps;
+        return hit;
       }
     }
     group_base = n->child_base;
