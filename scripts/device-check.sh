@@ -37,6 +37,8 @@ exec > >(tee -a "$out/check.log") 2>&1
 status=0
 step() { echo; echo "== $*"; }
 fail() { echo "FAILED: $*"; [ "$status" -ne 0 ] || status=1; }
+# DEVICE_CHECK_STEPS: the steps from 3 on to run, e.g. "3,5" (default all), for a second lease.
+wanted() { [[ ",${DEVICE_CHECK_STEPS:-3,4,5}," == *",$1,"* ]]; }
 # Runs a step's command under its limit in seconds (0: none); says so when the limit ended it.
 limited() {
   local seconds="$1"; shift
@@ -77,9 +79,12 @@ if [ -z "${DEVICE_CHECK_QUICK:-}" ] && [ -f "$bundle/scenes.tar.gz" ]; then
   export RAYSORT_SCENE_ROOT="$work/$(tar -tzf "$bundle/scenes.tar.gz" | head -n 1 | cut -d/ -f1)"
 fi
 
+if wanted 3; then
 step "3. golden check on this device"
 limited "${DEVICE_CHECK_GOLDEN_S:-0}" bash "$root/scripts/golden.sh" check "$bin" || fail "golden check: a deterministic figure differs from PoCL's, or the step ran past its limit"
+fi
 
+if wanted 4; then
 step "4. every trace class on this device"
 if [ -n "${DEVICE_CHECK_QUICK:-}" ]; then
   classes=(--scene cornell --resolution 48x27 --reps 2 --warmup 0 --max-time 0)
@@ -88,7 +93,9 @@ else
 fi
 limited "${DEVICE_CHECK_CLASSES_S:-0}" "$bin" trace "${classes[@]}" --layout all --variant both 2>&1 | tee "$out/classes.log"
 [ "${PIPESTATUS[0]}" -eq 0 ] || fail "raysort trace --layout all"
+fi
 
+if wanted 5; then
 step "5. the GPU model's validation matrix, measured"
 if [ -n "${DEVICE_CHECK_QUICK:-}" ]; then
   matrix=(--preset quick --resolution 96x54 --scenes cornell,multi-instance --batches bounce1,shadow0
@@ -106,6 +113,7 @@ if limited "${DEVICE_CHECK_MATRIX_S:-0}" "$bin" run "${matrix[@]}" --out "$work/
 else
   fail "raysort run"
   [ -d "$work/$set_name" ] && tar -C "$work" -czf "$out/sets.tar.gz" "$set_name"
+fi
 fi
 
 echo

@@ -161,6 +161,33 @@ TEST(Sort, GpuShapeMatchesStableSort) {
   check(sorter, keys, {64, 0}, "gpu shape: 1M+3 uniform 64-bit keys");
 }
 
+TEST(Sort, ShrinksALaunchToWhatItsKernelTakes) {
+  // NVIDIA's H200 takes 1024 work-items per group but its rs_scan only 256: the device's own shape
+  // must fit itself to each kernel (it once refused to sort there), and a forced shape is refused.
+  // Here a scan of 8192 work-items, more than PoCL's kernels take, stands for that.
+  DeviceInfo gpu = device().rt->info();
+  gpu.type = "GPU";
+  gpu.local_mem_bytes = 48 * 1024;
+  gpu.max_work_group_size = 1024;
+  RadixSortTuning tuning = RadixSortTuning::for_device(gpu);
+  tuning.scan_work_group = 8192;
+  try {
+    RadixSort exact(*device().rt, tuning);
+    ADD_FAILURE() << "a forced scan of 8192 work-items was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("force"), std::string::npos) << e.what();
+  }
+  RadixSort fitted(*device().rt, tuning, RadixSortFit::ShrinkToKernels);
+  const unsigned scan = fitted.tuning().scan_work_group;
+  EXPECT_LT(scan, 8192u);
+  EXPECT_EQ(scan & (scan - 1), 0u) << scan << " is not a power of two";
+  EXPECT_EQ(fitted.tuning().work_group, tuning.work_group);
+  for (unsigned bits : {32u, 64u})
+    for (std::size_t n : {std::size_t(1), std::size_t(1000), std::size_t(65537)})
+      check(fitted, make_keys(Shape::Uniform, n, bits, 31 * bits + n), {bits, 0},
+            fmt::format("scan shrunk to {}: {} keys of {} bits", scan, n, bits));
+}
+
 TEST(Sort, HybridMatchesStableSort) {
   // The MSD-first hybrid (large N on the CPU shape), forced at every size.
   if (!device().hybrid) GTEST_SKIP() << "this device's shape has no hybrid path";

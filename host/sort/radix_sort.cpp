@@ -6,6 +6,7 @@
 #include <cstring>
 #include <limits>
 #include <numeric>
+#include <optional>
 
 namespace raysort {
 
@@ -76,9 +77,10 @@ RadixSortTuning RadixSortTuning::for_device(const DeviceInfo& device) {
   return t;
 }
 
-RadixSort::RadixSort(Runtime& rt) : RadixSort(rt, RadixSortTuning::for_device(rt.info())) {}
+RadixSort::RadixSort(Runtime& rt)
+    : RadixSort(rt, RadixSortTuning::for_device(rt.info()), RadixSortFit::ShrinkToKernels) {}
 
-RadixSort::RadixSort(Runtime& rt, const RadixSortTuning& tuning) : rt_(rt), tuning_(tuning) {
+RadixSort::RadixSort(Runtime& rt, const RadixSortTuning& tuning, RadixSortFit fit) : rt_(rt), tuning_(tuning) {
   auto pow2 = [](unsigned v) { return v >= 1 && (v & (v - 1)) == 0; };
   if (tuning_.radix_bits < 1 || tuning_.radix_bits > 12 || !pow2(tuning_.work_group) || tuning_.items < 1 ||
       !pow2(tuning_.scan_work_group) || tuning_.reduce_work_group < 1 || tuning_.hybrid_skew < 1)
@@ -88,6 +90,25 @@ RadixSort::RadixSort(Runtime& rt, const RadixSortTuning& tuning) : rt_(rt), tuni
     throw Error(fmt::format("radix sort: the tuning needs {} of local memory, device '{}' has {}",
                             human_bytes(tuning_.local_bytes(8)), rt.info().name,
                             human_bytes(rt.info().local_mem_bytes)));
+  // A device's maximum work-group size is not every kernel's: NVIDIA's H200 takes 1024 work-items
+  // per group but rs_scan only 256 (its registers). The device's own shape shrinks the launch that
+  // does not fit and builds again (the sorted result does not depend on the shape); a forced shape
+  // is refused instead, naming the most the kernel takes.
+  for (;;) {
+    const std::optional<KernelOverflow> over = build_kernels(rt);
+    if (!over) break;
+    const bool shrinkable = fit == RadixSortFit::ShrinkToKernels && over->most >= 1;
+    unsigned& shape = over->scan_shape ? tuning_.scan_work_group : tuning_.work_group;
+    if (!shrinkable || floor_pow2(over->most) >= shape)
+      throw Error(fmt::format("radix sort: a work-group of {} work-items (work_group {}, scan_work_group {}) is more "
+                              "than kernel {} takes on device '{}' ({}); force {} or fewer",
+                              over->local, tuning_.work_group, tuning_.scan_work_group, over->name, rt.info().name,
+                              over->most, over->most));
+    shape = floor_pow2(over->most);
+  }
+}
+
+std::optional<RadixSort::KernelOverflow> RadixSort::build_kernels(Runtime& rt) {
   for (unsigned key_bits : {32u, 64u}) {
     cl::Program program = rt.build({"cl/radix_sort.cl"}, program_options(tuning_, key_bits));
     Kernels& k = key_bits == 64 ? wide_ : narrow_;
@@ -102,28 +123,26 @@ RadixSort::RadixSort(Runtime& rt, const RadixSortTuning& tuning) : rt_(rt), tuni
     });
     // Every launch's work-group must fit what the kernel takes on this device: a launch over it
     // fails with CL_INVALID_WORK_GROUP_SIZE in the middle of a sort, and PoCL then aborted the
-    // process at exit (sortcheck --scan-work-group 8192). A forced tuning is refused here instead.
+    // process at exit (sortcheck --scan-work-group 8192).
     struct Launch {
       cl::Kernel* kernel;
       const char* name;
       unsigned local;
+      bool scan_shape;
     };
-    const Launch launches[] = {{&k.count_bounds, "rs_count_bounds", tuning_.work_group},
-                               {&k.count, "rs_count", tuning_.work_group},
-                               {&k.scatter, "rs_scatter", tuning_.work_group},
-                               {&k.scan, "rs_scan", tuning_.scan_work_group},
-                               {&k.reduce_bounds, "rs_reduce_bounds", tuning_.scan_work_group}};
+    const Launch launches[] = {{&k.count_bounds, "rs_count_bounds", tuning_.work_group, false},
+                               {&k.count, "rs_count", tuning_.work_group, false},
+                               {&k.scatter, "rs_scatter", tuning_.work_group, false},
+                               {&k.scan, "rs_scan", tuning_.scan_work_group, true},
+                               {&k.reduce_bounds, "rs_reduce_bounds", tuning_.scan_work_group, true}};
     for (const Launch& l : launches) {
       const std::size_t most = cl_call("querying a radix sort kernel's work-group size", [&] {
         return l.kernel->getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(rt.info().device);
       });
-      if (l.local > most)
-        throw Error(fmt::format("radix sort: a work-group of {} work-items (work_group {}, scan_work_group {}) is more "
-                                "than kernel {} takes on device '{}' ({}); force {} or fewer",
-                                l.local, tuning_.work_group, tuning_.scan_work_group, l.name, rt.info().name, most,
-                                most));
+      if (l.local > most) return KernelOverflow{l.name, l.local, most, l.scan_shape};
     }
   }
+  return std::nullopt;
 }
 
 unsigned RadixSort::passes(const RadixSortConfig& cfg) const {

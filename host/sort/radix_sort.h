@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "runtime/runtime.h"
@@ -67,11 +68,18 @@ struct RadixSortTuning {
   std::size_t local_bytes(std::size_t key_bytes) const;
 };
 
+// What a tuning does when a kernel takes fewer work-items per group on the device than the tuning
+// launches it with (CL_KERNEL_WORK_GROUP_SIZE, below the device's maximum where the kernel needs
+// many registers): a forced tuning is refused (Exact); the device's own shrinks that launch to the
+// largest power of two the kernel takes and builds again (ShrinkToKernels).
+enum class RadixSortFit { Exact, ShrinkToKernels };
+
 class RadixSort {
  public:
-  // Builds the 32- and 64-bit key programs once, shaped by RadixSortTuning::for_device.
+  // Builds the 32- and 64-bit key programs once, shaped by RadixSortTuning::for_device and fitted
+  // to what each kernel takes on the device (RadixSortFit::ShrinkToKernels).
   explicit RadixSort(Runtime& rt);
-  RadixSort(Runtime& rt, const RadixSortTuning& tuning);
+  RadixSort(Runtime& rt, const RadixSortTuning& tuning, RadixSortFit fit = RadixSortFit::Exact);
 
   // Sorts `count` pairs in place: `keys` holds uint32 (cfg.key_bits <= 32) or uint64 keys,
   // `values` uint32. Stable. Blocks until done: after the first read of the keys it reads back
@@ -99,6 +107,14 @@ class RadixSort {
     cl::Kernel warp_sort;    // the warp-granular sort's per-bucket walk (warp_sort_shape() only)
   };
   Kernels& kernels_for(const RadixSortConfig& cfg) { return cfg.wide_keys() ? wide_ : narrow_; }
+  // The first launch whose work-group is more than its kernel takes on the device.
+  struct KernelOverflow {
+    const char* name;
+    unsigned local;
+    std::size_t most;
+    bool scan_shape;  // a launch of scan_work_group (else work_group)
+  };
+  std::optional<KernelOverflow> build_kernels(Runtime& rt);
   void enqueue(cl::Kernel& k, std::size_t global, std::size_t local);
   struct Passes;  // one sort's launches and ping-pong buffers (radix_sort.cpp)
   std::uint64_t first_read(Kernels& k, const cl::Buffer& keys, cl_uint n, cl_uint n_items, cl_uint shift, cl_uint hi,
