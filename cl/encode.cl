@@ -99,8 +99,8 @@ static inline RsRay rs_load_ray(__global const RsRay* rays, uint index) {
     values[i] = i;                                                                                       \
   }
 
-#define RS_SPATIAL_KERNEL_k32(ID, HOST, NAME, CODE, ...) RS_DEFINE_SPATIAL_KERNEL(CODE, k32, uint)
-#define RS_SPATIAL_KERNEL_k64(ID, HOST, NAME, CODE, ...) RS_DEFINE_SPATIAL_KERNEL(CODE, k64, ulong)
+#define RS_SPATIAL_KERNEL_k32(ID, HOST, NAME, CODE, WEIGHT, ALIASES) RS_DEFINE_SPATIAL_KERNEL(CODE, k32, uint)
+#define RS_SPATIAL_KERNEL_k64(ID, HOST, NAME, CODE, WEIGHT, ALIASES) RS_DEFINE_SPATIAL_KERNEL(CODE, k64, ulong)
 #define RS_DEFINE_spatial_KERNELS(SUFFIX, KEY_T) RS_ENCODERS(RS_NO_ROW, RS_SPATIAL_KERNEL_##SUFFIX)
 
 #define RS_DEFINE_box_set_KERNELS(SUFFIX, KEY_T)                                                         \

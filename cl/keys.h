@@ -75,7 +75,7 @@ RS_KEY_INLINE rs_u32 rs_clz64(rs_u64 x) { return (rs_u32)std::countl_zero(x); }
 
 /* Encoder ids, RS_ENC_NOSORT = 0, RS_ENC_ORIGIN, ...: the positions in the encoder list
  * (encoders.h), and the values of the host's enum class Encoder (host/encode/encoder.h). */
-#define RS_ENCODER_ID(ID, ...) RS_ENC_##ID,
+#define RS_ENCODER_ID(ID, HOST, NAME, FAMILY_OR_CODE, WEIGHT, ALIASES) RS_ENC_##ID,
 enum { RS_ENCODERS(RS_ENCODER_ID, RS_ENCODER_ID) RS_ENC_COUNT };
 #undef RS_ENCODER_ID
 

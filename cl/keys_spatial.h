@@ -106,7 +106,7 @@ RS_KEY_INLINE rs_u64 rs_direction_field(RsRay r, rs_u32 d) {
 
 /* The host twin's spatial key: one case per SPATIAL row of the encoder list (encoders.h), each
  * calling that row's rs_<code>_code. The kernels call rs_<code>_code directly (encode.cl). */
-#define RS_SPATIAL_CASE(ID, HOST, NAME, CODE, ...) \
+#define RS_SPATIAL_CASE(ID, HOST, NAME, CODE, WEIGHT, ALIASES) \
   case RS_ENC_##ID:                                \
     return rs_##CODE##_code(f, r);
 RS_KEY_INLINE rs_u64 rs_spatial_code(int encoder, const RsEncodeFrame* f, RsRay r) {

@@ -33,9 +33,11 @@ mkdir -p "$OUT"
 # Runtime::build_options: OpenCL C 1.2, correctly rounded divide/sqrt (NVIDIA's driver reports
 # CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT). __OPENCL_VERSION__ is defined by an OpenCL driver's own
 # compiler (NVIDIA's, PoCL's, Oclgrind's), not by clang for this target; the kernels key on it.
+# -Werror=pedantic: clang accepts language extensions that NVIDIA's compiler refuses (variadic
+# macros stopped every encode kernel on an H200, 9b63aa0); OpenCL C 1.2 as written, nothing more.
 COMMON=(-x cl -cl-std=CL1.2 -cl-fp32-correctly-rounded-divide-sqrt -target nvptx64-nvidia-nvcl -O2 -S
         -Xclang -finclude-default-header -Xclang -mlink-bitcode-file -Xclang "$LIBCLC"
-        -D__OPENCL_VERSION__=120 -Icl)
+        -D__OPENCL_VERSION__=120 -Icl -Werror=pedantic)
 
 # Radix sort shapes (host/sort/radix_sort.cpp): the GPU shape RadixSortTuning::for_device picks for
 # an NVIDIA device (48 KiB local memory, 1024 work-items: 6-bit digits, 128 work-items, 8 keys each,

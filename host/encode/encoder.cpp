@@ -11,13 +11,16 @@
 namespace raysort {
 
 const std::vector<EncoderInfo>& encoder_table() {
-#define RS_FAMILY_ROW(ID, HOST, NAME, FAMILY, WEIGHT, ...) \
-  {Encoder::HOST, NAME, {__VA_ARGS__}, &encoder_family_##FAMILY(), #FAMILY, "encode_" #FAMILY, WEIGHT},
-#define RS_SPATIAL_ROW(ID, HOST, NAME, CODE, WEIGHT, ...) \
-  {Encoder::HOST, NAME, {__VA_ARGS__}, &encoder_family_spatial(), "spatial", "encode_" #CODE, WEIGHT},
+// A row's aliases come in parentheses (cl/encoders.h); RS_UNPAREN opens them into the initializer.
+#define RS_UNPAREN(...) __VA_ARGS__
+#define RS_FAMILY_ROW(ID, HOST, NAME, FAMILY, WEIGHT, ALIASES) \
+  {Encoder::HOST, NAME, {RS_UNPAREN ALIASES}, &encoder_family_##FAMILY(), #FAMILY, "encode_" #FAMILY, WEIGHT},
+#define RS_SPATIAL_ROW(ID, HOST, NAME, CODE, WEIGHT, ALIASES) \
+  {Encoder::HOST, NAME, {RS_UNPAREN ALIASES}, &encoder_family_spatial(), "spatial", "encode_" #CODE, WEIGHT},
   static const std::vector<EncoderInfo> table = {RS_ENCODERS(RS_FAMILY_ROW, RS_SPATIAL_ROW)};
 #undef RS_FAMILY_ROW
 #undef RS_SPATIAL_ROW
+#undef RS_UNPAREN
   return table;
 }
 

@@ -15,7 +15,7 @@ namespace raysort {
 // Encoder::<Host> = RS_ENC_<ID>, one per row of the list, NoSort first. Values from RS_ENC_COUNT on
 // are encoders from files, loaded at run time (encode/encoder_file.h).
 enum class Encoder : int {
-#define RS_HOST_ENUM(ID, HOST, ...) HOST = RS_ENC_##ID,
+#define RS_HOST_ENUM(ID, HOST, NAME, FAMILY_OR_CODE, WEIGHT, ALIASES) HOST = RS_ENC_##ID,
   RS_ENCODERS(RS_HOST_ENUM, RS_HOST_ENUM)
 #undef RS_HOST_ENUM
 };
