@@ -92,6 +92,26 @@ void write_json(const fs::path& p, const nlohmann::json& j) { write_file_atomica
 
 }  // namespace
 
+// A result set names the commit of the binary that made it, not what the checkout holds when it runs:
+// a bundle built at one commit and run beside a checkout of another (the first NVIDIA run) recorded
+// the checkout's. Here git finds no repository at run time (GIT_DIR), so only a commit compiled in
+// can be recorded, and `raysort --version` says the same one.
+TEST(Meta, RecordsTheCommitTheBinaryWasBuiltFrom) {
+  const std::string dir = temp_path("commit");
+  std::vector<std::string> args = matrix();
+  args.insert(args.end(), {"--out", dir});
+  CliResult r = run_cli(args, {"GIT_DIR=/nonexistent-git-dir", "GIT_CEILING_DIRECTORIES=/"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::string recorded = read_json(fs::path(dir) / "meta.json").at("git_commit").get<std::string>();
+  CliResult v = run_cli({"--version"});
+  ASSERT_EQ(v.code, 0) << v.err;
+  EXPECT_TRUE(contains(v.out, "(commit " + recorded + ")")) << v.out << " vs recorded " << recorded;
+  const bool built_in_git = fs::exists(fs::path(RAYSORT_SOURCE_DIR) / ".git");
+  if (built_in_git) {
+    EXPECT_NE(recorded, "unknown") << "built in a git checkout, yet no commit was recorded";
+  }
+}
+
 // Reproduction 1: a resumed run re-runs failed and timed-out cells, counts NoSort, and exits with
 // the state of the whole set.
 TEST(Resume, RetriesCellsThatAreNotOkAndExitsWithTheSetsState) {

@@ -10,6 +10,7 @@
 #include "app/commands.h"
 #include "render/frame_memory.h"
 #include "runtime/runtime.h"
+#include "util/build_commit.h"
 
 namespace {
 
@@ -57,7 +58,7 @@ int main(int argc, char** argv) {
   using namespace raysort;
   CLI::App app{"raysort: ray reordering benchmark suite (encode -> radix sort -> trace) on OpenCL"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", RAYSORT_VERSION);
+  app.set_version_flag("--version", fmt::format("{} (commit {})", RAYSORT_VERSION, build_commit()));
   std::string kernels;
   app.add_option("--kernels", kernels, "read OpenCL kernels from this cl/ folder instead of the embedded copies");
   bool parsed = false;  // past the command line: from here on a std::logic_error is a bug of ours

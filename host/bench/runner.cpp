@@ -28,6 +28,7 @@
 #include "encode/encoder_file.h"
 #include "render/batches.h"
 #include "render/frame_memory.h"
+#include "util/build_commit.h"
 #include "runtime/runtime.h"
 #include "scene/load.h"
 #include "scene/provenance.h"
@@ -62,18 +63,6 @@ std::string host_cpu() {
   while (std::getline(in, line))
     if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
   return "unknown";
-}
-
-std::string git_commit() {
-  std::string cmd = std::string("git -C '") + RAYSORT_SOURCE_DIR + "' rev-parse --short=12 HEAD 2>/dev/null";
-  std::string out;
-  if (FILE* p = popen(cmd.c_str(), "r")) {
-    char buf[64];
-    while (fgets(buf, sizeof buf, p)) out += buf;
-    pclose(p);
-  }
-  while (!out.empty() && (out.back() == '\n' || out.back() == '\r')) out.pop_back();
-  return out.empty() ? "unknown" : out;
 }
 
 std::string utc_now() {
@@ -209,7 +198,7 @@ nlohmann::json run_meta(const MatrixSpec& spec, const RunOptions& opts, const De
         {"compute_units", dev.compute_units},
         {"slug", dev.slug()}}},
       {"host_cpu", host_cpu()},
-      {"git_commit", git_commit()},
+      {"git_commit", build_commit()},  // the binary's, not the checkout's at run time
       {"kernels", kernels_meta()},
       {"command", opts.command},
       {"date", utc_now()},
