@@ -85,11 +85,12 @@ def svg(path, points, encoders):
         f.write("\n".join(out) + "\n")
 
 
-def table_lines(paths, source, dram_gbps):
+def table_lines(paths, source, dram_gbps, encoders=None):
     """The markdown table, one row per scene, batch and class (fastest NoSort first), and the plot's
-    points [(nosort MRays/s, speedup, net, encoder, class)]."""
+    points [(nosort MRays/s, speedup, net, encoder, class)]; encoders: the columns (default every
+    encoder of the sets)."""
     nosort, out = rows(paths, source, dram_gbps)
-    encoders = sorted({r[1] for r in out})
+    encoders = encoders or sorted({r[1] for r in out})
     groups = sorted({r[0] for r in out}, key=lambda k: (k[0], k[1], -nosort.get(k, 0.0)))
     lines = ["| scene | batch | class | NoSort MRays/s | " + " | ".join(f"{e} speedup / net" for e in encoders) + " |",
              "|---|---|---|---:|" + "---|" * len(encoders)]

@@ -1,6 +1,6 @@
 """The generators of scripts/claims.py: block name -> function returning the block's text, computed
 from committed result sets only (claim_blocks/sets.py names them). One list, here."""
-from . import appendix, audit, gpu_model, gpu_model_appendix, gpu_model_scoring, kernels, packet, paper_tex, sampling
+from . import appendix, audit, gpu_model, gpu_model_appendix, gpu_model_scoring, kernels, nvidia, packet, paper_tex, sampling
 
 GENERATORS = {
     "paper-inconsistencies": paper_tex.inconsistencies_block,
@@ -54,4 +54,13 @@ GENERATORS = {
     "audit-ppc-order": audit.order_block,
     "audit-twopoint-bits": audit.twopoint_bits_block,
     "audit-ppc-batch": audit.batch_block,
+    "h200-trace-classes": nvidia.trace_classes_block,
+    "h200-trace-classes-summary": nvidia.trace_classes_phrase,
+    "h200-kernel-classes": nvidia.classes_block,
+    "h200-kernel-classes-trend": nvidia.classes_trend_phrase,
+    "h200-sort-overhead": nvidia.overhead_phrase,
+    "h200-validation": nvidia.validation_block,
+    "h200-model-measured": nvidia.model_block,
+    "h200-sortbench": nvidia.sortbench_phrase,
+    "h200-validation-summary": nvidia.validation_summary_phrase,
 }

@@ -39,3 +39,13 @@ PAPER_COLUMN = {"breakfast_room": "Breakfast", "grey_white_room": "Living room",
                 "multi-instance-real": "MultiInstance", "landscape": "landscape"}
 # the order of the paper's columns (Tables 2 and 3), for the stand-ins that have one
 PAPER_ORDER = ["breakfast_room", "grey_white_room", "sibenik", "multi-instance-real", "landscape"]
+
+# The first NVIDIA run (a lent H200, results/gpu-nvidia-h200/README.md): every trace class on the
+# paper's sibenik and breakfast_room batches, the GPU classes' matrices, the validation matrix.
+H200 = os.path.join(ROOT, "results", "gpu-nvidia-h200")
+H200_TRACE_LOG = os.path.join(H200, "trace-classes-3182779.log")
+H200_CLASSES = [os.path.join(H200, "classes-sb-12e32f2"), os.path.join(H200, "classes-3more-12e32f2")]
+H200_VALIDATION = os.path.join(H200, "gpu-validation-12e32f2")
+# The same matrix run here with --gpu-model h200 (reps 1): the model's predictions for that GPU.
+H200_MODEL = os.path.join(ROOT, "results", "gpu-model", "h200-model-12e32f2")
+H200_SORTBENCH = os.path.join(H200, "sortbench-12e32f2.md")
