@@ -1,6 +1,6 @@
 """The generators of scripts/claims.py: block name -> function returning the block's text, computed
 from committed result sets only (claim_blocks/sets.py names them). One list, here."""
-from . import appendix, audit, gpu_model, gpu_model_appendix, gpu_model_scoring, kernels, nvidia, packet, paper_tex, sampling
+from . import appendix, audit, gpu_model, gpu_model_appendix, gpu_model_scoring, kernels, nvidia, packet, paper_tex, reference_sets, sampling
 
 GENERATORS = {
     "paper-inconsistencies": paper_tex.inconsistencies_block,
@@ -63,4 +63,14 @@ GENERATORS = {
     "h200-model-measured": nvidia.model_block,
     "h200-sortbench": nvidia.sortbench_phrase,
     "h200-validation-summary": nvidia.validation_summary_phrase,
+    "ref-overview": reference_sets.overview_block,
+    "format3-nosort": reference_sets.format3_nosort_block,
+    "format3-encoders": reference_sets.format3_encoders_block,
+    "format3-summary": reference_sets.format3_summary_block,
+    "format3-correlation": reference_sets.format3_correlation_phrase,
+    "baselines-cells": reference_sets.baselines_cells_phrase,
+    "baselines-noise": reference_sets.baselines_noise_phrase,
+    "baselines-table": reference_sets.baselines_block,
+    "baselines-shuffle": reference_sets.baselines_shuffle_phrase,
+    "baselines-origin": reference_sets.baselines_origin_phrase,
 }

@@ -49,3 +49,12 @@ H200_VALIDATION = os.path.join(H200, "gpu-validation-12e32f2")
 # The same matrix run here with --gpu-model h200 (reps 1): the model's predictions for that GPU.
 H200_MODEL = os.path.join(ROOT, "results", "gpu-model", "h200-model-12e32f2")
 H200_SORTBENCH = os.path.join(H200, "sortbench-12e32f2.md")
+
+# results/README.md from "Format 3" to the end (claim_blocks/reference_sets.py): the three format-2
+# reference sets, all from cfebb2c; paper-cfebb2c's SIMT columns walk the binary BVH.
+PAPER_CFEBB2C = os.path.join(EPYC, "paper-cfebb2c")
+PAPER_SIBENIK = os.path.join(EPYC, "paper-sibenik-cfebb2c")
+ACCURACY_COST = os.path.join(EPYC, "accuracy-cost-960x540-cfebb2c")
+# the same paper preset's 1-spp cells on the wide BVH (format 3): binary -> wide
+FORMAT3_WIDE = ONE_SPP
+BASELINES = os.path.join(EPYC, "baselines-bounce1-6c6ecfe")

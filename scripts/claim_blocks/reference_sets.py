@@ -1,0 +1,215 @@
+"""results/README.md from "Format 3" to the end: the three format-2 reference sets (`paper-cfebb2c`,
+`paper-sibenik-cfebb2c`, `accuracy-cost-960x540-cfebb2c`), the binary -> wide comparison, the
+pixel-against-shuffled baselines, and the overview table's rows for those sets. Every figure is read
+from the sets' cells.json / meta.json (the per-cell records `raysort run` writes)."""
+import csv
+import json
+import os
+import statistics
+
+from gpu_model_validate import mae, pearson, spearman
+
+from . import paper_tex
+from .sets import (ACCURACY_COST, BASELINES, FORMAT3_WIDE, PAPER_CFEBB2C, PAPER_COLUMN, PAPER_ORDER, PAPER_SIBENIK,
+                   PAPER_SPEEDUPS, ROOT)
+
+# The paper's encoders in its tables' order, as the README's per-table rows list them.
+PAPER_ENCODERS = ["hcc", "mlhcc", "grid", "twopoint", "aila", "reis", "origin", "ppc"]
+# Format 3's rows: every encoder of the paper preset.
+FORMAT3_ENCODERS = ["hcc", "mlhcc", "hcc-dir", "grid", "twopoint", "aila", "reis", "origin", "costa", "ppc"]
+
+
+def cells(set_dir):
+    """(scene, batch, encoder, bits, access, variant, top_bits, baseline) -> the cell's record, ok cells only.
+    NoSort has bits 0 and one record per baseline (its access is gather)."""
+    with open(os.path.join(set_dir, "cells.json")) as f:
+        return {(c["scene"], c["batch"], c["encoder"], c["bits"], c["access"], c.get("variant", "robust"),
+                 c.get("top_bits", 0), c.get("baseline", "pixel")): c for c in json.load(f) if c["status"] == "ok"}
+
+
+def cell(c, scene, batch, encoder, bits=32, access="permute", variant="robust", top_bits=0, baseline="pixel"):
+    if encoder == "nosort":
+        bits, access, top_bits = 0, "gather", 0
+    return c[(scene, batch, encoder, bits, access, variant, top_bits, baseline)]
+
+
+def meta(set_dir):
+    with open(os.path.join(set_dir, "meta.json")) as f:
+        return json.load(f)
+
+
+def contains_one(iv):
+    return iv["lo"] <= 1.0 <= iv["hi"]
+
+
+def interval(iv, fmt="{:.2f}"):
+    """`1.29 [1.20, 1.39]`, in italics when the interval contains 1 (no effect measurable)."""
+    text = f"{fmt.format(iv['value'])} [{fmt.format(iv['lo'])}, {fmt.format(iv['hi'])}]"
+    return f"*{text}*" if contains_one(iv) else text
+
+
+def span(values, fmt="{:.2f}", sep="–"):
+    return f"{fmt.format(min(values))}{sep}{fmt.format(max(values))}"
+
+
+def ms(c, part):
+    return c[f"{part}_ms"]["median"]
+
+
+# --- the overview table (the top of results/README.md) -------------------------------------------
+
+OVERVIEW = [(PAPER_CFEBB2C, "`raysort run --preset paper` (then 1 spp: today's `--preset paper-1spp`)"),
+            (PAPER_SIBENIK, "`raysort run --preset paper --scenes sibenik` (1 spp, as above)"),
+            (ACCURACY_COST, "see below")]
+
+
+def overview_block():
+    """Cells, A/A calibration and interval widths of the three reference sets, from their meta.json."""
+    out = ["| set | command | cells | A/A intervals containing 1 | speedup half-width, median / 90th pct. |",
+           "|---|---|---:|---:|---:|"]
+    for d, command in OVERVIEW:
+        name, n = os.path.basename(d), meta(d)["noise"]
+        with open(os.path.join(d, "cells.json")) as f:
+            count = len(json.load(f))
+        hw = n["speedup_half_width"]
+        link = f"{os.path.relpath(d, os.path.join(ROOT, 'results'))}/tables.md"
+        out.append(f"| [`{name}`]({link}) | {command} | {count} | {n['aa_containing_one']} of {n['aa_intervals']} "
+                   f"({100 * n['aa_coverage']:.1f} %) | {100 * hw['median']:.1f} % / {100 * hw['p90']:.1f} % |")
+    return "\n".join(out)
+
+
+# --- Format 3: binary -> wide (paper-cfebb2c's binary trails, the 1-spp set's wide ones) ---------------
+
+def _format3():
+    binary, wide = cells(PAPER_CFEBB2C), cells(FORMAT3_WIDE)
+    scenes = meta(PAPER_CFEBB2C)["matrix"]["scenes"]
+    return binary, wide, scenes
+
+
+def format3_nosort_block():
+    binary, wide, scenes = _format3()
+    out = ["| NoSort | " + " | ".join(scenes) + " |", "|---|" + "---:|" * len(scenes)]
+    for field, label in (("simt_lane_efficiency", "lane efficiency"),
+                         ("simt_distinct_per_visit", "distinct nodes per visit")):
+        out.append(f"| {label}, binary → wide | " + " | ".join(
+            f"{cell(binary, s, 'bounce1', 'nosort')[field]:.3f} → {cell(wide, s, 'bounce1', 'nosort')[field]:.3f}"
+            for s in scenes) + " |")
+    return "\n".join(out)
+
+
+def format3_encoders_block():
+    binary, wide, scenes = _format3()
+    out = ["| encoder | " + " | ".join(scenes) + " |", "|---|" + "---:|" * len(scenes)]
+    for e in FORMAT3_ENCODERS:
+        row = []
+        for s in scenes:
+            b, w = cell(binary, s, "bounce1", e, access="gather"), cell(wide, s, "bounce1", e, access="gather")
+            row.append(f"{b['simt_lane_efficiency_ratio']:.2f}→{w['simt_lane_efficiency_ratio']:.2f} · "
+                       f"{b['simt_distinct_per_visit_ratio']:.2f}→{w['simt_distinct_per_visit_ratio']:.2f}")
+        out.append(f"| {e} | " + " | ".join(row) + " |")
+    return "\n".join(out)
+
+
+def format3_summary_block():
+    binary, wide, scenes = _format3()
+    lane, dist, same = [], [], 0
+    for s in scenes:
+        pairs = [(cell(binary, s, "bounce1", e, access="gather"), cell(wide, s, "bounce1", e, access="gather"))
+                 for e in FORMAT3_ENCODERS]
+        lane += [w["simt_lane_efficiency_ratio"] / b["simt_lane_efficiency_ratio"] for b, w in pairs]
+        dist += [w["simt_distinct_per_visit_ratio"] / b["simt_distinct_per_visit_ratio"] for b, w in pairs]
+        best_b = max(zip(pairs, FORMAT3_ENCODERS), key=lambda p: p[0][0]["simt_lane_efficiency_ratio"])[1]
+        best_w = max(zip(pairs, FORMAT3_ENCODERS), key=lambda p: p[0][1]["simt_lane_efficiency_ratio"])[1]
+        same += best_b == best_w
+    return (f"Over the {len(lane)} encoder cells, wide/binary: lane-efficiency ratio median {statistics.median(lane):.3f} "
+            f"(range {span(lane, '{:.3f}')}); distinct-nodes ratio median {statistics.median(dist):.3f} "
+            f"(range {span(dist, '{:.3f}')}).\n"
+            f"Best encoder by lane-efficiency ratio is the same on both layouts in {same} of {len(scenes)} scenes.")
+
+
+def paper_speedups(table):
+    """(scene, encoder) -> the paper's speedup at 32 bits (results/gpu-model/paper_tables.csv)."""
+    with open(PAPER_SPEEDUPS, newline="") as f:
+        return {(r["scene"], r["encoder"]): float(r["paper_speedup"]) for r in csv.DictReader(f)
+                if r["table"] == table and r["bits"] == "32"}
+
+
+def format3_correlation_phrase():
+    """Table 2's 40 cells: the paper's speedup against each layout's two SIMT ratios."""
+    binary, wide, _ = _format3()
+    paper = paper_speedups("2")
+    keys = sorted(paper)
+    truth = [paper[k] for k in keys]
+    figures = {}
+    for name, c in (("binary", binary), ("wide", wide)):
+        rows = [cell(c, s, "bounce1", e, access="gather") for s, e in keys]
+        figures[name] = ([r["simt_lane_efficiency_ratio"] for r in rows],
+                         [1 / r["simt_distinct_per_visit_ratio"] for r in rows])
+    f = lambda stat, i: ", ".join(f"{n} {stat(figures[n][i], truth):.2f}" for n in ("binary", "wide"))  # noqa: E731
+    return (f"Table 2 speedups (the {len(keys)} cells of {len({e for _, e in keys})} encoders × {len({s for s, _ in keys})} "
+            f"scene analogs): Pearson {f(pearson, 0)}; Spearman {f(spearman, 0)}; 1 / distinct-nodes ratio: "
+            f"Pearson {f(pearson, 1)}; Spearman {f(spearman, 1)}")
+
+
+# --- Pixel against shuffled baseline (baselines-bounce1-6c6ecfe, wide BVH) ------------------------
+
+BASELINE_SCENES = ["sibenik", "breakfast_room"]
+BASELINE_ENCODERS = ["origin", "hcc", "mlhcc", "twopoint", "ppc"]
+
+
+def _noise(d):
+    n = meta(d)["noise"]
+    return n, n["speedup_half_width"]
+
+
+def baselines_cells_phrase():
+    with open(os.path.join(BASELINES, "cells.json")) as f:
+        return f"{len(json.load(f))} cells"
+
+
+def baselines_noise_phrase():
+    n, hw = _noise(BASELINES)
+    return (f"speedup half-width median {100 * hw['median']:.1f} %, 90th percentile {100 * hw['p90']:.1f} %; "
+            f"{n['aa_containing_one']} of {n['aa_intervals']} A/A intervals contain 1")
+
+
+def baselines_block():
+    """Model (lane-efficiency ratio · distinct-nodes ratio) and PoCL gather speedup against each baseline."""
+    c = cells(BASELINES)
+    cols = [(s, b) for s in BASELINE_SCENES for b in ("pixel", "shuffled")]
+    out = ["| encoder | " + " | ".join(f"{s} vs {b}" for s, b in cols) + " |", "|---|" + "---:|" * len(cols)]
+    nosort = [cell(c, s, "bounce1", "nosort", baseline=b) for s, b in cols]
+    out.append("| NoSort (LE · DNV, MRays/s) | " + " | ".join(
+        f"{n['simt_lane_efficiency']:.3f} · {n['simt_distinct_per_visit']:.3f}, {n['trace_mrays']:.2f}" for n in nosort) + " |")
+    for e in BASELINE_ENCODERS:
+        row = [cell(c, s, "bounce1", e, access="gather", baseline=b) for s, b in cols]
+        out.append(f"| {e} | " + " | ".join(
+            f"{r['simt_lane_efficiency_ratio']:.2f} · {r['simt_distinct_per_visit_ratio']:.2f}, "
+            f"{interval(r['speedup'], '{:.3f}')}" for r in row) + " |")
+    return "\n".join(out)
+
+
+def _ratios(c, scene, encoder, baseline):
+    r = cell(c, scene, "bounce1", encoder, access="gather", baseline=baseline)
+    return r["simt_lane_efficiency_ratio"], r["simt_distinct_per_visit_ratio"]
+
+
+def baselines_shuffle_phrase():
+    """What the shuffle does to NoSort's distinct nodes and to the encoders' ratios."""
+    c = cells(BASELINES)
+    more = [cell(c, s, "bounce1", "nosort", baseline="shuffled")["simt_distinct_per_visit"]
+            / cell(c, s, "bounce1", "nosort")["simt_distinct_per_visit"] for s in BASELINE_SCENES]
+    d = lambda s, e, b: f"{_ratios(c, s, e, b)[1]:.2f}"  # noqa: E731
+    lane = lambda s, e, b: f"{_ratios(c, s, e, b)[0]:.2f}"  # noqa: E731
+    return (f"the NoSort warps fetch {span(more, '{:.1f}')}× more distinct nodes per visit, and every encoder's "
+            f"distinct-nodes ratio drops accordingly (sibenik HCC {d('sibenik', 'hcc', 'pixel')} → "
+            f"{d('sibenik', 'hcc', 'shuffled')}, PPC {d('sibenik', 'ppc', 'pixel')} → {d('sibenik', 'ppc', 'shuffled')}); "
+            f"on breakfast_room the lane-efficiency ratios rise too (HCC {lane('breakfast_room', 'hcc', 'pixel')} → "
+            f"{lane('breakfast_room', 'hcc', 'shuffled')})")
+
+
+def baselines_origin_phrase():
+    c = cells(BASELINES)
+    f = lambda s, b: " · ".join(f"{v:.2f}" for v in _ratios(c, s, "origin", b))  # noqa: E731
+    return (f"({f('sibenik', 'pixel')}), recovers {f('sibenik', 'shuffled')} on sibenik and "
+            f"{f('breakfast_room', 'shuffled')} on breakfast_room")
