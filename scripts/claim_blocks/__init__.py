@@ -73,4 +73,9 @@ GENERATORS = {
     "baselines-table": reference_sets.baselines_block,
     "baselines-shuffle": reference_sets.baselines_shuffle_phrase,
     "baselines-origin": reference_sets.baselines_origin_phrase,
+    "paper-table2": reference_sets.paper_table2_block,
+    "paper-table3": reference_sets.paper_table3_block,
+    "paper-correlation": reference_sets.paper_correlation_block,
+    "paper-spearman": reference_sets.paper_spearman_phrase,
+    "paper-gpu-model-loso": reference_sets.gpu_model_loso_phrase,
 }

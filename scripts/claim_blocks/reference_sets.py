@@ -9,7 +9,7 @@ import statistics
 
 from gpu_model_validate import mae, pearson, spearman
 
-from . import paper_tex
+from . import gpu_model, paper_tex
 from .sets import (ACCURACY_COST, BASELINES, FORMAT3_WIDE, PAPER_CFEBB2C, PAPER_COLUMN, PAPER_ORDER, PAPER_SIBENIK,
                    PAPER_SPEEDUPS, ROOT)
 
@@ -213,3 +213,67 @@ def baselines_origin_phrase():
     f = lambda s, b: " · ".join(f"{v:.2f}" for v in _ratios(c, s, "origin", b))  # noqa: E731
     return (f"({f('sibenik', 'pixel')}), recovers {f('sibenik', 'shuffled')} on sibenik and "
             f"{f('breakfast_room', 'shuffled')} on breakfast_room")
+
+
+# --- The paper's tables against paper-cfebb2c ---------------------------------------------------------
+
+TABLE_BATCH = {"2": "bounce1", "3": "shadow0"}
+
+
+def _paper_table(table):
+    """Per encoder and stand-in: paper speedup · lane ratio · distinct ratio · gather · permute speedup."""
+    c, paper, batch = cells(PAPER_CFEBB2C), paper_speedups(table), TABLE_BATCH[table]
+    out = ["| encoder | " + " | ".join(f"{s} ({PAPER_COLUMN[s]})" for s in PAPER_ORDER) + " |",
+           "|---|" + "---:|" * len(PAPER_ORDER)]
+    for e in PAPER_ENCODERS:
+        row = []
+        for s in PAPER_ORDER:
+            g, p = cell(c, s, batch, e, access="gather"), cell(c, s, batch, e)
+            row.append(f"{paper[(s, e)]:.2f} · {g['simt_lane_efficiency_ratio']:.2f} · "
+                       f"{g['simt_distinct_per_visit_ratio']:.2f} · {interval(g['speedup'])} · {interval(p['speedup'])}")
+        out.append(f"| {e} | " + " | ".join(row) + " |")
+    return "\n".join(out)
+
+
+def paper_table2_block():
+    return _paper_table("2")
+
+
+def paper_table3_block():
+    return _paper_table("3")
+
+
+def _paired(table):
+    """The paper's speedups and the set's figures over a table's 40 cells."""
+    c, paper, batch = cells(PAPER_CFEBB2C), paper_speedups(table), TABLE_BATCH[table]
+    keys = sorted(paper)
+    gather = [cell(c, s, batch, e, access="gather") for s, e in keys]
+    return ([paper[k] for k in keys], [g["speedup"]["value"] for g in gather],
+            [cell(c, s, batch, e)["speedup"]["value"] for s, e in keys],
+            [g["simt_lane_efficiency_ratio"] for g in gather], [1 / g["simt_distinct_per_visit_ratio"] for g in gather])
+
+
+def _signed(v):
+    return f"{v:.2f}".replace("-", "−")
+
+
+def paper_correlation_block():
+    out = ["| | PoCL gather | PoCL permute | SIMT lane efficiency | SIMT 1 / distinct nodes |", "|---|---:|---:|---:|---:|"]
+    for table, label in (("2", "Table 2 (bounce1)"), ("3", "Table 3 (shadow0)")):
+        truth, *figures = _paired(table)
+        out.append(f"| {label} | " + " | ".join(_signed(pearson(f, truth)) for f in figures) + " |")
+    return "\n".join(out)
+
+
+def paper_spearman_phrase():
+    s = {t: _paired(t) for t in TABLE_BATCH}
+    f = lambda i: " and ".join(_signed(spearman(s[t][i], s[t][0])) for t in TABLE_BATCH)  # noqa: E731
+    return f"Spearman: gather {f(1)}, permute {f(2)}"
+
+
+def gpu_model_loso_phrase():
+    """The GPU model's leave-one-scene-out score on Table 2 (results/gpu-model/cells.csv, its README's table)."""
+    with open(gpu_model.CELLS, newline="") as f:
+        rows = [r for r in csv.DictReader(f) if r["table"] == "2"]
+    pred, truth = [float(r["predicted_loso"]) for r in rows], [float(r["paper_speedup"]) for r in rows]
+    return f"leave-one-scene-out Spearman {spearman(pred, truth):.2f}, MAE {mae(pred, truth):.3f} on Table 2"
