@@ -78,4 +78,9 @@ GENERATORS = {
     "paper-correlation": reference_sets.paper_correlation_block,
     "paper-spearman": reference_sets.paper_spearman_phrase,
     "paper-gpu-model-loso": reference_sets.gpu_model_loso_phrase,
+    "gather-permute-sibenik": reference_sets.gather_permute_sibenik_block,
+    "gather-permute-breakfast": reference_sets.gather_permute_breakfast_block,
+    "gather-permute-cost": reference_sets.gather_permute_phrase,
+    "table5-overhead": reference_sets.table5_block,
+    "key-length-sibenik": reference_sets.key_length_block,
 }

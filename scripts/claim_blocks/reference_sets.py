@@ -277,3 +277,80 @@ def gpu_model_loso_phrase():
         rows = [r for r in csv.DictReader(f) if r["table"] == "2"]
     pred, truth = [float(r["predicted_loso"]) for r in rows], [float(r["paper_speedup"]) for r in rows]
     return f"leave-one-scene-out Spearman {spearman(pred, truth):.2f}, MAE {mae(pred, truth):.3f} on Table 2"
+
+
+GATHER_PERMUTE_ENCODERS = ["origin", "aila", "twopoint", "grid", "hcc", "mlhcc", "ppc"]
+
+
+def _gather_permute(scene):
+    """Bounce1 at 32 bits: both access modes' trace and speedups, the permute kernel, encode + sort, net."""
+    c = cells(PAPER_CFEBB2C)
+    out = [f"| {scene} | trace ms | speedup gather | speedup permute | permute ms (% of trace) | encode + sort ms | "
+           "net gather | net permute |", "|---|---|---:|---:|---:|---:|---:|---:|"]
+    for e in GATHER_PERMUTE_ENCODERS:
+        g, p = cell(c, scene, "bounce1", e, access="gather"), cell(c, scene, "bounce1", e)
+        out.append(f"| {e} | {ms(g, 'trace'):.0f} / {ms(p, 'trace'):.0f} ({ms(g, 'nosort_trace'):.0f}) | "
+                   f"{interval(g['speedup'])} | {interval(p['speedup'])} | "
+                   f"{ms(p, 'permute'):.1f} ({100 * ms(p, 'permute') / ms(p, 'trace'):.1f} %) | "
+                   f"{ms(p, 'encode'):.1f} + {ms(p, 'sort'):.1f} | {interval(g['net_speedup'])} | "
+                   f"{interval(p['net_speedup'])} |")
+    return "\n".join(out)
+
+
+def gather_permute_sibenik_block():
+    return _gather_permute("sibenik")
+
+
+def gather_permute_breakfast_block():
+    return _gather_permute("breakfast_room")
+
+
+def gather_permute_phrase():
+    """The permute kernel's share of a trace and what it buys over gather (the ratio of the two speedups)."""
+    c = cells(PAPER_CFEBB2C)
+    share, gain = [], []
+    for s in ("sibenik", "breakfast_room"):
+        for e in GATHER_PERMUTE_ENCODERS:
+            g, p = cell(c, s, "bounce1", e, access="gather"), cell(c, s, "bounce1", e)
+            share.append(100 * ms(p, "permute") / ms(p, "trace"))
+            gain.append(100 * (p["speedup"]["value"] / g["speedup"]["value"] - 1))
+    return f"costs {span(share, '{:.0f}')} % of a trace and buys {span(gain, '{:.0f}')} % over gather"
+
+
+def _printed(table):
+    return {(r["row"], r["column"]): r["value"] for r in paper_tex.printed() if r["table"] == table}
+
+
+TABLE5_ENCODERS = ["hcc", "mlhcc", "twopoint", "ppc", "origin", "grid"]  # the paper's four, then two it lacks
+
+
+def table5_block():
+    """Overhead on breakfast_room, bounce1, 32 bits: the paper's encode + sort beside ours (the gather cell's
+    share of its trace), the permute kernel and both net speedups."""
+    c, paper = cells(PAPER_CFEBB2C), _printed("5")
+    out = ["| encoder | paper encode + sort ms (% of trace) | ours encode + sort ms (% of trace) | ours permute ms | "
+           "net speedup gather | net speedup permute |", "|---|---|---|---:|---:|---:|"]
+    for e in TABLE5_ENCODERS:
+        row = "mlhcc32" if e == "mlhcc" else e
+        p = (f"{paper[(row, 'encode ms')]} + {paper[(row, 'sort ms')]} ({float(paper[(row, 'percentage')]):.1f} %)"
+             if (row, "encode ms") in paper else "–")
+        g, q = cell(c, "breakfast_room", "bounce1", e, access="gather"), cell(c, "breakfast_room", "bounce1", e)
+        out.append(f"| {e} | {p} | {ms(g, 'encode'):.1f} + {ms(g, 'sort'):.1f} ({g['overhead_pct']['value']:.1f} %) | "
+                   f"{ms(q, 'permute'):.1f} | {interval(g['net_speedup'])} | {interval(q['net_speedup'])} |")
+    return "\n".join(out)
+
+
+KEY_LENGTH_ENCODERS = ["hcc", "mlhcc", "twopoint", "ppc", "grid", "origin"]
+KEY_LENGTHS = (16, 32, 64)
+
+
+def key_length_block():
+    """Sibenik, bounce1, permute: speedup (ANC, lane ratio) per key length, and the paper's Table 7 ANC."""
+    c, paper = cells(PAPER_CFEBB2C), _printed("7")
+    out = ["| encoder | 16 bits | 32 bits | 64 bits | paper ANC 16/32/64 |", "|---|---|---|---|---|"]
+    for e in KEY_LENGTH_ENCODERS:
+        row = [cell(c, "sibenik", "bounce1", e, bits=b) for b in KEY_LENGTHS]
+        anc = "/".join(paper[(e, str(b))] for b in KEY_LENGTHS) if (e, "16") in paper else "–"
+        out.append(f"| {e} | " + " | ".join(f"{interval(r['speedup'])} ({r['anc']:.2f}, {r['simt_lane_efficiency_ratio']:.2f})"
+                                             for r in row) + f" | {anc} |")
+    return "\n".join(out)
