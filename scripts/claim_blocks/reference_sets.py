@@ -354,3 +354,99 @@ def key_length_block():
         out.append(f"| {e} | " + " | ".join(f"{interval(r['speedup'])} ({r['anc']:.2f}, {r['simt_lane_efficiency_ratio']:.2f})"
                                              for r in row) + f" | {anc} |")
     return "\n".join(out)
+
+
+# --- "Which of the paper's conclusions survive their intervals on PoCL": the figures the bullets quote ---
+
+INTERIORS = ["sibenik", "grey_white_room", "multi-instance-real", "breakfast_room"]  # the real interiors
+PATH_KEYS = ["hcc", "mlhcc", "ppc", "twopoint"]
+
+
+def _sp(scene, batch, encoder, bits=32, access="permute", field="speedup"):
+    return cell(cells(PAPER_CFEBB2C), scene, batch, encoder, bits=bits, access=access)[field]
+
+
+def survive_secondary_phrase():
+    """Bounce1, permute: the speedup range over the real interiors, and the cells whose interval reaches 1."""
+    values = [_sp(s, "bounce1", e)["value"] for s in INTERIORS for e in PAPER_ENCODERS]
+    reach = [f"{e} on {s}" for s in PAPER_ORDER for e in PAPER_ENCODERS if _sp(s, "bounce1", e)["lo"] <= 1.0]
+    return (f"{span(values, '{:.1f}')}× in every real interior, every encoder (bounce1, permute: every interval above 1"
+            + (f" except {', '.join(reach)}" if reach else "") + ")")
+
+
+def survive_path_keys_phrase():
+    """Per interior: the path keys' permute range against Origin's."""
+    parts = []
+    for s in INTERIORS:
+        keys = [_sp(s, "bounce1", e)["value"] for e in PATH_KEYS]
+        parts.append(f"{PAPER_COLUMN[s] if s != 'sibenik' else 'sibenik'} ({span(keys)} vs "
+                     f"{_sp(s, 'bounce1', 'origin')['value']:.2f})")
+    return ", ".join(parts[:-1]) + " and " + parts[-1]
+
+
+def survive_cut_grid_phrase():
+    f = lambda s, e: _sp(s, "bounce1", e)["value"]  # noqa: E731
+    return (f"Living room (HCC {interval(_sp('grey_white_room', 'bounce1', 'hcc'))} vs grid "
+            f"{interval(_sp('grey_white_room', 'bounce1', 'grid'))}), MultiInstance ({f('multi-instance-real', 'hcc'):.2f} "
+            f"vs {f('multi-instance-real', 'grid'):.2f}) and landscape ({f('landscape', 'hcc'):.2f} vs {f('landscape', 'grid'):.2f})")
+
+
+def survive_bits_phrase():
+    return (f"HCC on sibenik {interval(_sp('sibenik', 'bounce1', 'hcc', bits=16))} at 16 bits against "
+            f"{interval(_sp('sibenik', 'bounce1', 'hcc'))} at 32")
+
+
+def survive_ppc_phrase():
+    nets = [_sp(s, "bounce1", "ppc", access=a, field="net_speedup")["value"]
+            for s in ("sibenik", "breakfast_room") for a in ("gather", "permute")]
+    encode = [ms(cell(cells(PAPER_CFEBB2C), s, "bounce1", "ppc"), "encode") for s in ("sibenik", "breakfast_room")]
+    return f"net {span(nets)} on bounce1 with either access mode (its encode is a trace of its own, {span(encode, '{:.0f}')} ms here)"
+
+
+def survive_anc_phrase():
+    paper = _printed("7")
+    f = lambda e: "/".join(f"{_sp('sibenik', 'bounce1', e, bits=b, field='anc'):.2f}" for b in KEY_LENGTHS)  # noqa: E731
+    p = lambda e: "/".join(paper[(e, str(b))] for b in KEY_LENGTHS)  # noqa: E731
+    return f"HCC {f('hcc')} (paper {p('hcc')}), MLHCC {f('mlhcc')} ({p('mlhcc')}), PPC {f('ppc')} ({p('ppc')})"
+
+
+def differ_shadow_phrase():
+    sp = lambda s, e: interval(_sp(s, "shadow0", e))  # noqa: E731
+    return (f"On Breakfast shadow0 Aila {sp('breakfast_room', 'aila')} is just above HCC {sp('breakfast_room', 'hcc')} "
+            f"and TwoPoint {sp('breakfast_room', 'twopoint')} touches it; on sibenik TwoPoint {sp('sibenik', 'twopoint')}, "
+            f"Aila {sp('sibenik', 'aila')} and HCC {sp('sibenik', 'hcc')} overlap")
+
+
+def differ_mlhcc_phrase():
+    return f"sibenik {interval(_sp('sibenik', 'bounce1', 'mlhcc'))} vs {interval(_sp('sibenik', 'bounce1', 'hcc'))}"
+
+
+def differ_mlhcc_model_phrase():
+    lane = lambda e: _sp("sibenik", "bounce1", e, access="gather", field="simt_lane_efficiency_ratio")  # noqa: E731
+    return f"{lane('mlhcc'):.2f} vs {lane('hcc'):.2f}"
+
+
+def differ_net_phrase():
+    net = lambda e, a: _sp("breakfast_room", "bounce1", e, access=a, field="net_speedup")  # noqa: E731
+    gather = [net(e, "gather")["value"] for e in GATHER_PERMUTE_ENCODERS]
+    four = [net(e, "permute")["value"] for e in ("hcc", "mlhcc", "twopoint", "aila")]
+    return (f"on Breakfast (net {span(gather)}), with permute most do ({span(four)} for HCC, MLHCC, TwoPoint, Aila; "
+            f"Origin's and the grid's intervals reach 1; PPC {net('ppc', 'permute')['value']:.2f})")
+
+
+def differ_shadow_size_phrase():
+    return f"PoCL's stay at {span([_sp(s, 'shadow0', e)['value'] for s in PAPER_ORDER for e in PAPER_ENCODERS])} with permute"
+
+
+def differ_shadow_lane_phrase():
+    lane = [_sp(s, "shadow0", e, access="gather", field="simt_lane_efficiency_ratio") for s in PAPER_ORDER for e in PAPER_ENCODERS]
+    return f"up to {max(lane):.2f}"
+
+
+def differ_multi_instance_phrase():
+    ppc = lambda f, a="permute": _sp("multi-instance-real", "bounce1", "ppc", access=a, field=f)  # noqa: E731
+    return f"{ppc('speedup')['value']:.2f}, SIMT {ppc('simt_lane_efficiency_ratio', 'gather'):.2f}"
+
+
+def differ_landscape_phrase():
+    return f"{span([_sp('landscape', 'bounce1', e)['value'] for e in PAPER_ENCODERS])} with permute"
