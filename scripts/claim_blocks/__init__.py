@@ -97,4 +97,8 @@ GENERATORS = {
     "differ-multi-instance": reference_sets.differ_multi_instance_phrase,
     "differ-landscape": reference_sets.differ_landscape_phrase,
     "differ-mlhcc-model": reference_sets.differ_mlhcc_model_phrase,
+    "sibenik-cells": reference_sets.sibenik_cells_phrase,
+    "sibenik-noise": reference_sets.sibenik_noise_phrase,
+    "sibenik-table": reference_sets.sibenik_block,
+    "sibenik-shadow": reference_sets.sibenik_shadow_phrase,
 }

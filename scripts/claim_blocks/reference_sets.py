@@ -450,3 +450,56 @@ def differ_multi_instance_phrase():
 
 def differ_landscape_phrase():
     return f"{span([_sp('landscape', 'bounce1', e)['value'] for e in PAPER_ENCODERS])} with permute"
+
+
+# --- The paper preset on sibenik: paper-sibenik-cfebb2c ---------------------------------------------------
+
+SIBENIK_ENCODERS = ["origin", "reis", "costa", "aila", "twopoint", "grid", "hcc", "mlhcc", "ppc", "hcc-dir"]
+
+
+def _all_cells(d):
+    with open(os.path.join(d, "cells.json")) as f:
+        return json.load(f)
+
+
+def sibenik_cells_phrase():
+    every = _all_cells(PAPER_SIBENIK)
+    sorted_cells = [c for c in every if c["encoder"] != "nosort"]
+    failed = sum(c["status"] != "ok" for c in every)
+    return (f"{len(every)} cells ({len({c['encoder'] for c in sorted_cells})} encoders × "
+            f"{'/'.join(str(b) for b in sorted({c['bits'] for c in sorted_cells}))} bits × "
+            f"{len({c['access'] for c in sorted_cells})} access modes × {', '.join(sorted({c['batch'] for c in every}))}, "
+            f"and the {len(every) - len(sorted_cells)} NoSort cells), {failed} failed")
+
+
+def sibenik_noise_phrase():
+    n, hw = _noise(PAPER_SIBENIK)
+    return (f"{n['aa_containing_one']} of {n['aa_intervals']} A/A intervals contain 1.00; the speedup intervals' "
+            f"half-width has a median of {100 * hw['median']:.1f} % (90th percentile {100 * hw['p90']:.1f} %); every "
+            f"cell ran {n['rounds']['min']}–{n['rounds']['max']} rounds")
+
+
+def sibenik_block():
+    c = cells(PAPER_SIBENIK)
+    out = ["| encoder | bounce1 gather | bounce1 permute | net gather | net permute | shadow0 gather | shadow0 permute | "
+           "net gather | net permute |", "|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    for e in SIBENIK_ENCODERS:
+        row = []
+        for b in ("bounce1", "shadow0"):
+            g, p = cell(c, "sibenik", b, e, access="gather"), cell(c, "sibenik", b, e)
+            row += [interval(g["speedup"]), interval(p["speedup"]), interval(g["net_speedup"]), interval(p["net_speedup"])]
+        out.append(f"| {e} | " + " | ".join(row) + " |")
+    return "\n".join(out)
+
+
+def sibenik_shadow_phrase():
+    """Shadow0 on sibenik: the net range, the NoSort trace and what encode + sort + permute cost."""
+    c = cells(PAPER_SIBENIK)
+    nets = [cell(c, "sibenik", "shadow0", e, access=a)["net_speedup"]["value"] for e in SIBENIK_ENCODERS
+            for a in ("gather", "permute")]
+    nosort = cell(c, "sibenik", "shadow0", "nosort")
+    cost = {e: sum(ms(cell(c, "sibenik", "shadow0", e), part) for part in ("encode", "sort", "permute"))
+            for e in SIBENIK_ENCODERS}
+    others = [v for e, v in cost.items() if e != "ppc"]
+    return (f"(net {span(nets)}): a {nosort['rays'] / 1e6:.1f} M-ray shadow batch traces in ~{ms(nosort, 'trace'):.0f} ms, "
+            f"and encode + sort + permute cost {span(others, '{:.0f}')} ms of it (PPC: {cost['ppc']:.0f} ms)")
