@@ -101,4 +101,12 @@ GENERATORS = {
     "sibenik-noise": reference_sets.sibenik_noise_phrase,
     "sibenik-table": reference_sets.sibenik_block,
     "sibenik-shadow": reference_sets.sibenik_shadow_phrase,
+    "accuracy-cells": reference_sets.accuracy_cells_phrase,
+    "accuracy-sibenik": reference_sets.accuracy_sibenik_block,
+    "accuracy-breakfast": reference_sets.accuracy_breakfast_block,
+    "accuracy-bits": reference_sets.accuracy_bits_phrase,
+    "accuracy-permute": reference_sets.accuracy_permute_phrase,
+    "accuracy-top-bits": reference_sets.accuracy_top_bits_phrase,
+    "accuracy-variants": reference_sets.accuracy_variants_phrase,
+    "accuracy-leaks": reference_sets.accuracy_leaks_phrase,
 }

@@ -503,3 +503,91 @@ def sibenik_shadow_phrase():
     others = [v for e, v in cost.items() if e != "ppc"]
     return (f"(net {span(nets)}): a {nosort['rays'] / 1e6:.1f} M-ray shadow batch traces in ~{ms(nosort, 'trace'):.0f} ms, "
             f"and encode + sort + permute cost {span(others, '{:.0f}')} ms of it (PPC: {cost['ppc']:.0f} ms)")
+
+
+# --- What accuracy costs in time: accuracy-cost-960x540-cfebb2c (robust variant, bounce1) ---------------
+
+ACCURACY_ENCODERS = ["hcc", "mlhcc", "twopoint", "ppc", "origin"]
+ACCURACY_COLUMNS = [(16, 0, "16 bits"), (32, 0, "32 bits"), (64, 0, "64 bits"), (64, 8, "top-8 of 64")]
+
+
+def accuracy_cells_phrase():
+    every = _all_cells(ACCURACY_COST)
+    return f"{len(every)} cells, {sum(c['status'] != 'ok' for c in every)} failed"
+
+
+def _value(iv):
+    """A figure without its interval, in italics when the interval contains 1."""
+    return f"*{iv['value']:.2f}*" if contains_one(iv) else f"{iv['value']:.2f}"
+
+
+def _accuracy(scene, encoder, bits, top_bits=0):
+    c = cells(ACCURACY_COST)
+    return (cell(c, scene, "bounce1", encoder, bits=bits, access="gather", top_bits=top_bits),
+            cell(c, scene, "bounce1", encoder, bits=bits, top_bits=top_bits))
+
+
+def _accuracy_block(scene):
+    """encode + sort ms → ANC, SIMT lane-efficiency ratio; speedup gather / permute; net speedup permute."""
+    out = [f"| {scene} | " + " | ".join(label for _, _, label in ACCURACY_COLUMNS) + " |",
+           "|---|" + "---|" * len(ACCURACY_COLUMNS)]
+    for e in ACCURACY_ENCODERS:
+        row = []
+        for bits, top, _ in ACCURACY_COLUMNS:
+            g, p = _accuracy(scene, e, bits, top)
+            row.append(f"{ms(p, 'encode'):.1f}+{ms(p, 'sort'):.1f} → {p['anc']:.2f}, {p['simt_lane_efficiency_ratio']:.2f}; "
+                       f"{_value(g['speedup'])} / {_value(p['speedup'])}; {_value(p['net_speedup'])}")
+        out.append(f"| {e} | " + " | ".join(row) + " |")
+    return "\n".join(out)
+
+
+def accuracy_sibenik_block():
+    return _accuracy_block("sibenik")
+
+
+def accuracy_breakfast_block():
+    return _accuracy_block("breakfast_room")
+
+
+def accuracy_bits_phrase():
+    """How encode, sort and the lane ratio move with the key length (HCC)."""
+    s = {b: _accuracy("sibenik", "hcc", b)[1] for b in KEY_LENGTHS}
+    br = {b: _accuracy("breakfast_room", "hcc", b)[1] for b in KEY_LENGTHS}
+    sort = " → ".join(f"{ms(s[b], 'sort'):.1f}" for b in KEY_LENGTHS)
+    lane = " → ".join(f"{br[b]['simt_lane_efficiency_ratio']:.2f}" for b in KEY_LENGTHS)
+    return (f"the cut codes' encode grows with the bits (HCC {ms(s[16], 'encode'):.1f} → {ms(s[64], 'encode'):.1f} ms on "
+            f"sibenik), so does the sort ({sort} ms), and the modelled warp efficiency rises (breakfast HCC {lane})")
+
+
+def accuracy_permute_phrase():
+    """Sibenik, permute: HCC's speedup per key length, and MLHCC's net at 16 and 64 bits."""
+    hcc = " / ".join(f"{_accuracy('sibenik', 'hcc', b)[1]['speedup']['value']:.2f}" for b in KEY_LENGTHS)
+    net = {b: interval(_accuracy("sibenik", "mlhcc", b)[1]["net_speedup"]) for b in (16, 64)}
+    return (f"(sibenik HCC {hcc}, intervals overlapping), so the cheapest key wins net: 16-bit MLHCC nets {net[16]} on "
+            f"sibenik, 64-bit {net[64]}")
+
+
+def accuracy_top_bits_phrase():
+    """Sibenik HCC: sorting 64-bit keys by their top 8 bits against the whole key."""
+    whole, top = _accuracy("sibenik", "hcc", 64)[1], _accuracy("sibenik", "hcc", 64, 8)[1]
+    return (f"cuts the sort from {ms(whole, 'sort'):.1f} to {ms(top, 'sort'):.1f} ms (sibenik HCC) but the speedup falls "
+            f"from {whole['speedup']['value']:.2f} to {top['speedup']['value']:.2f} and the SIMT ratio to "
+            f"{top['simt_lane_efficiency_ratio']:.2f}")
+
+
+def _nosort(scene, batch, variant):
+    return cell(cells(ACCURACY_COST), scene, batch, "nosort", variant=variant)
+
+
+def accuracy_variants_phrase():
+    """The NoSort cells of the two variants (different times, so no interval): speed ratio robust / fast."""
+    r = lambda s: _nosort(s, "bounce1", "robust")["trace_mrays"] / _nosort(s, "bounce1", "fast")["trace_mrays"]  # noqa: E731
+    return f"sibenik bounce1 robust/fast speed {r('sibenik'):.2f}, breakfast_room {r('breakfast_room'):.2f}"
+
+
+def accuracy_leaks_phrase():
+    """Rays per million that a variant's NoSort shadow trace leaks (its hits differ from the reference's)."""
+    leaks = lambda v: [_nosort(s, "shadow0", v)["leaks_per_million"] for s in ("sibenik", "breakfast_room")]  # noqa: E731
+    fast = "leaked no ray" if not any(leaks("fast")) else "leaked " + " and ".join(f"{x:.1f}" for x in leaks("fast"))
+    return (f"The fast variant {fast} on these batches; robust differs on "
+            f"{' and '.join(f'{x:.1f}' for x in leaks('robust'))} rays per million shadow rays")
