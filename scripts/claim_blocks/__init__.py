@@ -1,6 +1,6 @@
 """The generators of scripts/claims.py: block name -> function returning the block's text, computed
 from committed result sets only (claim_blocks/sets.py names them). One list, here."""
-from . import appendix, audit, gpu_model, gpu_model_appendix, gpu_model_scoring, kernels, nvidia, packet, paper_tex, reference_sets, sampling
+from . import appendix, audit, gpu_model, gpu_model_appendix, gpu_model_rest, gpu_model_scoring, kernels, nvidia, packet, paper_tex, reference_sets, sampling
 
 GENERATORS = {
     "paper-inconsistencies": paper_tex.inconsistencies_block,
@@ -109,4 +109,19 @@ GENERATORS = {
     "accuracy-top-bits": reference_sets.accuracy_top_bits_phrase,
     "accuracy-variants": reference_sets.accuracy_variants_phrase,
     "accuracy-leaks": reference_sets.accuracy_leaks_phrase,
+    "gm-binary": gpu_model_rest.binary_block,
+    "gm-binary-scenes": gpu_model_rest.binary_scenes_phrase,
+    "gm-binary-spearman": gpu_model_rest.binary_spearman_phrase,
+    "gm-binary-other": gpu_model_rest.binary_other_tables_phrase,
+    "gm-living-room": gpu_model_rest.living_room_phrase,
+    "gm-1spp-companion": gpu_model_rest.one_spp_companion_phrase,
+    "gm-8spp": gpu_model_rest.eight_spp_block,
+    "gm-8spp-over": gpu_model_rest.eight_spp_over_phrase,
+    "gm-8spp-refit": gpu_model_rest.eight_spp_refit_phrase,
+    "gm-8spp-shadow": gpu_model_rest.eight_spp_shadow_phrase,
+    "gm-schedules": gpu_model_rest.schedules_block,
+    "gm-refill": gpu_model_rest.refill_phrase,
+    "gm-dynamic-hcc": gpu_model_rest.dynamic_hcc_phrase,
+    "gm-dynamic-landscape": gpu_model_rest.dynamic_landscape_phrase,
+    "gm-dynamic-refit": gpu_model_rest.dynamic_refit_phrase,
 }

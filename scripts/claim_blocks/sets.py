@@ -58,3 +58,10 @@ ACCURACY_COST = os.path.join(EPYC, "accuracy-cost-960x540-cfebb2c")
 # the same paper preset's 1-spp cells on the wide BVH (format 3): binary -> wide
 FORMAT3_WIDE = ONE_SPP
 BASELINES = os.path.join(EPYC, "baselines-bounce1-6c6ecfe")
+# results/gpu-model/README.md from "The same on the binary BVH" on (claim_blocks/gpu_model_rest.py): the
+# validation's committed per-cell predictions (cells.csv) and reports (validation.md), one folder each.
+GPU_VALIDATION_WIDE = GPU_MODEL_SETS
+GPU_VALIDATION_BINARY = os.path.join(GPU_MODEL_SETS, "binary")
+GPU_VALIDATION_8SPP = os.path.join(GPU_MODEL_SETS, "8spp")
+GPU_SCHEDULE_REFILL = os.path.join(GPU_MODEL_SETS, "schedules", "warp-refill")
+GPU_SCHEDULE_DYNAMIC = os.path.join(GPU_MODEL_SETS, "schedules", "dynamic-fetch-20")
