@@ -124,4 +124,6 @@ GENERATORS = {
     "gm-dynamic-hcc": gpu_model_rest.dynamic_hcc_phrase,
     "gm-dynamic-landscape": gpu_model_rest.dynamic_landscape_phrase,
     "gm-dynamic-refit": gpu_model_rest.dynamic_refit_phrase,
+    "gm-occupancy": gpu_model_rest.occupancy_phrase,
+    "gm-time-formula": gpu_model_rest.time_formula_block,
 }

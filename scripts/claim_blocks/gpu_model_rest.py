@@ -187,3 +187,35 @@ def dynamic_landscape_phrase():
 
 def dynamic_refit_phrase():
     return f"swing from {steps_span(GPU_SCHEDULE_DYNAMIC, '2', '{:.0f}').replace('–', ' to ')}"
+
+
+def in_sample_fit(folder, table="2"):
+    """The step_cycles fitted on all of a table's cells, as validation.md prints it."""
+    with open(os.path.join(folder, "validation.md")) as f:
+        text = f.read()
+    section = text.split(f"### Table {table}:")[1]
+    return float(re.search(r"step_cycles fitted on all cells \(([\d.]+); in-sample\)", section).group(1))
+
+
+def occupancy_phrase():
+    """The committed occupancy (the profile's resident warps) on the binary trails: its fit and scores;
+    validation.md prints the in-sample row, cells.csv holds the leave-one-scene-out predictions."""
+    with open(os.path.join(GPU_VALIDATION_BINARY, "validation.md")) as f:
+        section = f.read().split("### Table 2:")[1]
+    k, in_mae = re.search(r"step_cycles fitted on all cells \(([\d.]+); in-sample\) \| [\d.]+ \| [\d.]+ \| ([\d.]+) \|",
+                          section).groups()
+    p, s, m = scores(GPU_VALIDATION_BINARY, "2", "predicted_loso")
+    return (f"at the profiles' {scoring.profile()['resident_warps_per_sm']} warps the binary validation fits step_cycles = "
+            f"{float(k):.1f} on all 40 cells (in-sample MAE {in_mae}) and scores {p:.2f} · {s:.2f} · {m:.3f} "
+            f"(Pearson · Spearman · MAE) leave-one-scene-out")
+
+
+def time_formula_block():
+    """The model's own formula (issue + memory) on both layouts: the one row whose runs are committed."""
+    w, b = scores(GPU_VALIDATION_WIDE, "2", "predicted_loso"), scores(GPU_VALIDATION_BINARY, "2", "predicted_loso")
+    t3 = [scores(f, "3", "predicted_loso")[2] for f in (GPU_VALIDATION_WIDE, GPU_VALIDATION_BINARY)]
+    return "\n".join([
+        "| time = | wide: Table 2 LOSO Pearson · Spearman · MAE | binary: Table 2 LOSO | Table 3 LOSO MAE (wide, binary) |",
+        "|---|---:|---:|---:|",
+        f"| issue + memory (the model) | {w[0]:.2f} · {w[1]:.2f} · {w[2]:.3f} | {b[0]:.2f} · {b[1]:.2f} · {b[2]:.3f} | "
+        f"{t3[0]:.3f}, {t3[1]:.3f} |"])
