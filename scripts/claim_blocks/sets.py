@@ -49,3 +49,19 @@ H200_VALIDATION = os.path.join(H200, "gpu-validation-12e32f2")
 # The same matrix run here with --gpu-model h200 (reps 1): the model's predictions for that GPU.
 H200_MODEL = os.path.join(ROOT, "results", "gpu-model", "h200-model-12e32f2")
 H200_SORTBENCH = os.path.join(H200, "sortbench-12e32f2.md")
+
+# results/README.md from "Format 3" to the end (claim_blocks/reference_sets.py): the three format-2
+# reference sets, all from cfebb2c; paper-cfebb2c's SIMT columns walk the binary BVH.
+PAPER_CFEBB2C = os.path.join(EPYC, "paper-cfebb2c")
+PAPER_SIBENIK = os.path.join(EPYC, "paper-sibenik-cfebb2c")
+ACCURACY_COST = os.path.join(EPYC, "accuracy-cost-960x540-cfebb2c")
+# the same paper preset's 1-spp cells on the wide BVH (format 3): binary -> wide
+FORMAT3_WIDE = ONE_SPP
+BASELINES = os.path.join(EPYC, "baselines-bounce1-6c6ecfe")
+# results/gpu-model/README.md from "The same on the binary BVH" on (claim_blocks/gpu_model_rest.py): the
+# validation's committed per-cell predictions (cells.csv) and reports (validation.md), one folder each.
+GPU_VALIDATION_WIDE = GPU_MODEL_SETS
+GPU_VALIDATION_BINARY = os.path.join(GPU_MODEL_SETS, "binary")
+GPU_VALIDATION_8SPP = os.path.join(GPU_MODEL_SETS, "8spp")
+GPU_SCHEDULE_REFILL = os.path.join(GPU_MODEL_SETS, "schedules", "warp-refill")
+GPU_SCHEDULE_DYNAMIC = os.path.join(GPU_MODEL_SETS, "schedules", "dynamic-fetch-20")
