@@ -49,3 +49,19 @@ H200_VALIDATION = os.path.join(H200, "gpu-validation-12e32f2")
 # The same matrix run here with --gpu-model h200 (reps 1): the model's predictions for that GPU.
 H200_MODEL = os.path.join(ROOT, "results", "gpu-model", "h200-model-12e32f2")
 H200_SORTBENCH = os.path.join(H200, "sortbench-12e32f2.md")
+
+# results/README.md up to "Beyond the paper" and docs/paper.md, their prose and cost figures
+# (claim_blocks/prose_early.py).
+# The format-2 reference sets of the table under the introduction, with the command each quotes.
+REFERENCE_SETS = [
+    (os.path.join(EPYC, "paper-cfebb2c"),
+     "`raysort run --preset paper` (then 1 spp: today's `--preset paper-1spp`)"),
+    (os.path.join(EPYC, "paper-sibenik-cfebb2c"), "`raysort run --preset paper --scenes sibenik` (1 spp, as above)"),
+    (os.path.join(EPYC, "accuracy-cost-960x540-cfebb2c"), "see below"),
+]
+SHARED_ROUNDS = os.path.join(XEON, "shared-rounds-ab")
+OCLGRIND = os.path.join(ROOT, "results", "gpu-oclgrind-simulator", "quick-tiny-binary-5230438")
+EIGHT_SPP_SHARDS = os.path.join(EPYC, "paper-8spp-9dab0ed", "shards")
+# The earlier 8-spp sets (sibenik and breakfast_room; grey_white_room), kept for their history.
+EIGHT_SPP_EARLIER = [os.path.join(EPYC, "paper-8spp-4e8c9eb"), os.path.join(EPYC, "paper-8spp-grey_white_room-d8b4b22")]
+AUDIT_ENCODEBENCH = os.path.join(XEON, "audit-issue43-5382d1e", "encodebench-sibenik-bounce1.txt")
