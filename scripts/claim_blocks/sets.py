@@ -65,3 +65,11 @@ GPU_VALIDATION_BINARY = os.path.join(GPU_MODEL_SETS, "binary")
 GPU_VALIDATION_8SPP = os.path.join(GPU_MODEL_SETS, "8spp")
 GPU_SCHEDULE_REFILL = os.path.join(GPU_MODEL_SETS, "schedules", "warp-refill")
 GPU_SCHEDULE_DYNAMIC = os.path.join(GPU_MODEL_SETS, "schedules", "dynamic-fetch-20")
+# results/README.md up to "Beyond the paper" and docs/paper.md, their prose and cost figures
+# (claim_blocks/prose_early.py).
+SHARED_ROUNDS = os.path.join(XEON, "shared-rounds-ab")
+OCLGRIND = os.path.join(ROOT, "results", "gpu-oclgrind-simulator", "quick-tiny-binary-5230438")
+EIGHT_SPP_SHARDS = os.path.join(EPYC, "paper-8spp-9dab0ed", "shards")
+# The earlier 8-spp sets (sibenik and breakfast_room; grey_white_room), kept for their history.
+EIGHT_SPP_EARLIER = [os.path.join(EPYC, "paper-8spp-4e8c9eb"), os.path.join(EPYC, "paper-8spp-grey_white_room-d8b4b22")]
+AUDIT_ENCODEBENCH = os.path.join(XEON, "audit-issue43-5382d1e", "encodebench-sibenik-bounce1.txt")
