@@ -4,6 +4,7 @@ from . import (appendix, audit, gpu_model, gpu_model_appendix, gpu_model_rest, g
                packet, paper_tex, prose_early, reference_sets, sampling)
 
 GENERATORS = {
+    "table1-lights": prose_early.table1_block,
     "paper-inconsistencies": paper_tex.inconsistencies_block,
     "gpu-model-table2": gpu_model.table2_block,
     "gpu-model-table3": gpu_model.table3_block,

@@ -654,3 +654,43 @@ def paper_cost_one_phrase():
     one_gib = _peak_gib(os.path.join(ONE_SPP, "run-time.txt"))
     return (f"against {duration(_run_time(ONE_SPP), 'min')} at 1 spp, with a peak of {eight_gib:.1f} GiB of host "
             f"memory ({one_gib:.1f} GiB at 1 spp)")
+
+
+# --- Table 1 (light setup), from the scene files ------------------------------------------------------------
+
+# The paper's Table 1 as printed (light index: relative radius), the scenes standing for it here, and what
+# the comparison says; "ours" is read from scenes/<scene>.toml, as `raysort scenes --lights` prints it.
+TABLE1 = [
+    ("Breakfast", "0: 8.3 %; 1-2: 1.6 %", ["breakfast_room"], "same"),
+    ("Salle de Bain", "0: 1.1 %", [], "scene not available"),
+    ("Living room", "0: 5 %", ["grey_white_room"], "another living room, its own lights"),
+    ("Sibenik", "0: 7.5 %; 1-2: 2.5 %; 3-12: 0.5 %", ["sibenik"], "same"),
+    ("Vokselia", "0: 12 %", ["landscape", "jacksboro_terrain"], "open scenes with a sun and a sky"),
+]
+
+
+def _lights(scene):
+    """'0: 8.30 %; 1-2: 1.60 %' (+ ' + sky'): runs of equal radius, as `raysort scenes --lights` groups them."""
+    import tomllib
+
+    with open(os.path.join(ROOT, "scenes", scene + ".toml"), "rb") as f:
+        toml = tomllib.load(f)
+    radii = [float(light["radius"]) for light in toml.get("sphere_light", [])]
+    runs, i = [], 0
+    while i < len(radii):
+        j = i
+        while j + 1 < len(radii) and radii[j + 1] == radii[i]:
+            j += 1
+        runs.append(f"{i if i == j else f'{i}-{j}'}: {100 * radii[i]:.2f} %")
+        i = j + 1
+    return "; ".join(runs) + (" + sky" if "sky" in toml else "")
+
+
+def table1_block():
+    lines = ["| paper scene | paper: light, relative radius | here | ours (`raysort scenes --lights`) | |",
+             "|---|---|---|---|---|"]
+    for paper, printed, scenes, verdict in TABLE1:
+        here = " / ".join(scenes) or "–"
+        ours = " / ".join(_lights(s) for s in scenes) or "–"
+        lines.append(f"| {paper} | {printed} | {here} | {ours} | {verdict} |")
+    return "\n".join(lines)
