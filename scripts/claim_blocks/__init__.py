@@ -1,6 +1,6 @@
 """The generators of scripts/claims.py: block name -> function returning the block's text, computed
 from committed result sets only (claim_blocks/sets.py names them). One list, here."""
-from . import appendix, audit, gpu_model, gpu_model_appendix, gpu_model_scoring, kernels, nvidia, packet, paper_tex, sampling
+from . import appendix, audit, beyond, gpu_model, gpu_model_appendix, gpu_model_scoring, kernels, nvidia, packet, paper_tex, sampling
 
 GENERATORS = {
     "paper-inconsistencies": paper_tex.inconsistencies_block,
@@ -63,4 +63,22 @@ GENERATORS = {
     "h200-model-measured": nvidia.model_block,
     "h200-sortbench": nvidia.sortbench_phrase,
     "h200-validation-summary": nvidia.validation_summary_phrase,
+    "beyond-first-bounce1": beyond.first_bounce1_block,
+    "beyond-first-shadow0": beyond.first_shadow0_block,
+    "beyond-first-encode": beyond.first_encode_block,
+    "beyond-region-knob": beyond.region_knob_block,
+    "beyond-traffic-knob": beyond.traffic_knob_block,
+    "beyond-oracle": beyond.oracle_block,
+    "beyond-cost-study": beyond.cost_study_block,
+    "beyond-mlhcc-cost-bounce1": beyond.mlhcc_cost_bounce1_block,
+    "beyond-mlhcc-cost-shadow0": beyond.mlhcc_cost_shadow0_block,
+    "beyond-mlhcc-cost-encode": beyond.mlhcc_cost_encode_block,
+    "beyond-cost-bits": beyond.cost_bits_block,
+    "beyond-region-v2-bounce1": beyond.region_v2_bounce1_block,
+    "beyond-region-v2-shadow0": beyond.region_v2_shadow0_block,
+    "beyond-region-v2-encode": beyond.region_v2_encode_block,
+    "beyond-region-bits": beyond.region_bits_block,
+    "beyond-blend": beyond.blend_block,
+    "beyond-third-encode": beyond.third_encode_block,
+    "beyond-versus": beyond.versus_block,
 }
