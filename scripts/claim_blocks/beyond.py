@@ -375,3 +375,209 @@ def versus_block():
         over = ", ".join(str(sum(lo > BAR for _, lo, _ in r)) for r in runs)
         out.append(f"| {label} | " + " | ".join(shown) + f" | {under} | {over} |")
     return "\n".join(out)
+
+
+# --- phrases: figures quoted in the prose ---------------------------------------------------------
+
+def signed(x, digits=1):
+    """A signed percentage as the prose prints it (a real minus sign)."""
+    return f"{x:+.{digits}f}".replace("-", "−")
+
+
+def span(values, digits=1, signs=True):
+    """'lo to hi' of percentages (signed) or 'lo–hi' of plain numbers."""
+    lo, hi = min(values), max(values)
+    if f"{lo:.{digits}f}" == f"{hi:.{digits}f}":
+        return signed(lo, digits) if signs else f"{lo:.{digits}f}"
+    return f"{signed(lo, digits)} to {signed(hi, digits)}" if signs else f"{lo:.{digits}f}–{hi:.{digits}f}"
+
+
+def run_facts(set_dir, rss=True):
+    """'N cells, M min S s, peak RSS G GiB' from a set's cells.csv and its /usr/bin/time run-time.txt."""
+    with open(os.path.join(set_dir, "cells.csv")) as f:
+        n = sum(1 for _ in f) - 1
+    text = open(os.path.join(set_dir, "run-time.txt")).read()
+    minutes, seconds = re.search(r"wall clock\) time \(h:mm:ss or m:ss\): (\d+):([\d.]+)", text).groups()
+    kib = int(re.search(r"Maximum resident set size \(kbytes\): (\d+)", text).group(1))
+    out = f"{n} cells, {int(minutes)} min {int(float(seconds))} s"
+    return out + (f", peak RSS {kib / 1024 ** 2:.1f} GiB" if rss else "")
+
+
+def gains(f, scenes=SCENES):
+    """{scene: percentage} of a per-scene ratio function."""
+    return {s: (f(s) - 1) * 100 for s in scenes}
+
+
+def tally(g):
+    """'wins W of N (+a to +b %), ties T, loses L (...)' of per-scene gains; a loss names its scenes when
+    there are at most three."""
+    wins = [v for v in g.values() if v > 0]
+    losses = sorted((v, s) for s, v in g.items() if v < 0)
+    parts = [f"wins {len(wins)} of {len(g)}" + (f" ({span(wins)} %)" if wins else "")]
+    ties = sum(v == 0 for v in g.values())
+    if ties:
+        parts.append(f"ties {ties}")
+    if losses and len(losses) <= 3:
+        parts.append(f"loses {len(losses)} (" + ", ".join(f"{signed(v)} % on {s}" for v, s in losses) + ")")
+    elif losses:
+        parts.append(f"loses {len(losses)} ({span([v for v, _ in losses])} %, worst on {losses[0][1]})")
+    return ", ".join(parts)
+
+
+# the first version (new-encoders-1spp-d8b4b22)
+
+def first_set_phrase():
+    return run_facts(NEW_ENCODERS)
+
+
+def first_verdict_bounce1_phrase():
+    g = {s: _first_version_gain(s, "bounce1") * 100 for s in SCENES}
+    wins = sorted(((v, s) for s, v in g.items() if v >= 0), reverse=True)
+    big = sorted((v, s) for s, v in g.items() if v < -2)
+    return (f"beats both in {len(wins)} of {len(g)} (" + ", ".join(f"{s} {signed(v)} %" for v, s in wins) +
+            f"), and loses by more than 2 % in {len(big)} (" + ", ".join(f"{s} {signed(v)} %" for v, s in big) + ")")
+
+
+def first_verdict_shadow0_phrase():
+    g = [_first_version_gain(s, "shadow0") * 100 for s in SCENES]
+    return f"beats both in {sum(v > 0 for v in g)} of {len(g)}, by at most {max(g):.1f} %"
+
+
+def _knob_best(prefix, encoder, values, scene):
+    """(best value, its lane ratio) of a sweeps-d8b4b22 knob on a scene."""
+    return max(((v, lane(os.path.join(SWEEPS, f"{prefix}-{v}"), scene, "bounce1", encoder)) for v in values),
+               key=lambda t: t[1])
+
+
+def first_region_open_phrase():
+    at3 = [signed(pct_of(NEW_ENCODERS, s, "hcc-region")) for s in OPEN_SCENES]
+    best = [_knob_best("region", "hcc-region", ["1", "2", "3", "4", "5"], s) for s in OPEN_SCENES]
+    at_best = [f"{signed((v / lane(NEW_ENCODERS, s, 'bounce1', 'hcc') - 1) * 100)} % (r = {r})"
+               for s, (r, v) in zip(OPEN_SCENES, best)]
+    return (f"{at3[0]} % on {OPEN_SCENES[0]} and {at3[1]} % on {OPEN_SCENES[1]} at the default r = 3, "
+            f"at best {at_best[0]} and {at_best[1]}")
+
+
+def pct_of(set_dir, scene, encoder, batch="bounce1", base="hcc"):
+    return (lane(set_dir, scene, batch, encoder) / lane(set_dir, scene, batch, base) - 1) * 100
+
+
+def first_region_breakfast_phrase():
+    return f"breakfast_room {signed(pct_of(NEW_ENCODERS, 'breakfast_room', 'hcc-region'))} %"
+
+
+def _first_encode_ratios(encoder):
+    return [encode_ms(NEW_ENCODERS, s, b, encoder) / encode_ms(NEW_ENCODERS, s, b, "hcc") for s in SCENES for b in BATCHES]
+
+
+def first_traffic_encode_phrase():
+    return f"{span(_first_encode_ratios('hcc-traffic'), signs=False)}×"
+
+
+def first_region_encode_phrase():
+    r = _first_encode_ratios("hcc-region")
+    return f"{span(r, signs=False)}× HCC, median {statistics.median(r):.1f}×"
+
+
+def first_cut_phrase():
+    cut = {(s, b): float(_cell(NEW_ENCODERS, s, b, "hcc-traffic")["cut_ms"]) for s in SCENES for b in BATCHES}
+    times = [cut[k] / encode_ms(NEW_ENCODERS, *k, "hcc-traffic") for k in cut]
+    return f"{span([c / 1000 for c in cut.values()], signs=False)} s per batch here (`cut_ms`), {span(times, 0, False)}× its encode"
+
+
+def traffic_best_phrase():
+    """The scenes where some β > 0 beats HCC (β = 0), with the best gain."""
+    out = []
+    for s in sorted({k[0] for k in cells(os.path.join(SWEEPS, "traffic-0.5"))}):
+        beta, v = _knob_best("traffic", "hcc-traffic", ["0.25", "0.5", "0.75", "1.0"], s)
+        gain = (v / lane(NEW_ENCODERS, s, "bounce1", "hcc") - 1) * 100
+        if gain > 0:
+            out.append((gain, s))
+    return ", ".join(f"{s} {signed(g)} %" for g, s in sorted(out, reverse=True))
+
+
+# the order study (results/order-study/bounce1-960x540.txt)
+
+def _study_gains(label, base=("hcc/32",), rows=None):
+    rows = rows or study()
+    return {s: (rows[s][label][0] / max(rows[s][b][0] for b in base) - 1) * 100 for s in SCENES}
+
+
+def oracle_anc_phrase():
+    return span([study()[s]["hcc/32"][2] for s in SCENES], signs=False)
+
+
+STEPS = "oracle: hcc/32, then step count"
+
+
+def oracle_steps_phrase():
+    r = study()
+    return " and ".join(f"from {r[s]['hcc/32'][0]:.2f} to {r[s][STEPS][0]:.2f} on {s}" for s in ("sibenik", "breakfast_room"))
+
+
+def oracle_steps_distinct_phrase():
+    r = study()["sibenik"]
+    return f"{r[STEPS][1]:.2f} against HCC's {r['hcc/32'][1]:.2f} on sibenik"
+
+
+def oracle_steps_alone_phrase():
+    r = study()["sibenik"]["oracle: step count"]
+    return f"{r[0]:.3f} on sibenik, distinct-node ratio {r[1]:.2f}"
+
+
+def oracle_popcount_phrase():
+    label = "hcc/32, then popcount of hcc/64"
+    r = study()
+    return (f"{span(_study_gains(label).values())} % over HCC (sibenik {r['sibenik'][label][0]:.3f}, "
+            f"breakfast_room {r['breakfast_room'][label][0]:.3f})")
+
+
+def oracle_mean_steps_phrase():
+    label = "hcc/32, then origin cell's mean steps"
+    return f"{span(_study_gains(label).values())} %"
+
+
+def oracle_exit_phrase():
+    label, r = "hcc/32, then scene-box exit distance", study()
+    worse = sum(r[s][label][1] > r[s]["hcc/32"][1] for s in SCENES)
+    return (f"{span(_study_gains(label).values())} % while making the distinct-node ratio worse in {worse} of "
+            f"{len(SCENES)} scenes ({r['jacksboro_terrain'][label][1]:.1f} on jacksboro_terrain)")
+
+
+def oracle_short_phrase():
+    label = "hcc/32 over 0.25 of the extent"
+    g = sorted((v, s) for s, v in _study_gains(label).items())
+    worst = ", ".join(f"{signed(v)} % on {s}" for v, s in g[:3])
+    return f"{worst}; at best {signed(g[-1][0])} %"
+
+
+def oracle_hit_phrase():
+    return f"{span(_study_gains('oracle: hcc/32 up to the hit').values())} %"
+
+
+def ml_tp_phrase():
+    return tally(_study_gains("mlhcc/32 | twopoint/32 (64 bits)", ("hcc/32", "mlhcc/32")))
+
+
+def ml_tp_64_phrase():
+    return tally(_study_gains("mlhcc/32 | twopoint/32 (64 bits)", ("mlhcc/64",)))
+
+
+def ml_tp_encode_phrase():
+    """MLHCC's plus TwoPoint's encode over HCC's, bounce1, in the first matrix."""
+    r = [(encode_ms(NEW_ENCODERS, s, "bounce1", "mlhcc") + encode_ms(NEW_ENCODERS, s, "bounce1", "twopoint")) /
+         encode_ms(NEW_ENCODERS, s, "bounce1", "hcc") for s in SCENES]
+    return f"{span(r, signs=False)}×"
+
+
+def _study_tally(label, base):
+    return lambda: tally(_study_gains(label, base))
+
+
+fold_phrase = _study_tally("representative | l | twopoint/11", ("mlhcc/32",))
+hcc24_tp8_phrase = _study_tally("hcc/24 | twopoint/8 (32 bits)", ("hcc/32", "mlhcc/32"))
+ml24_tp8_phrase = _study_tally("mlhcc/24 | twopoint/8 (32 bits)", ("hcc/32", "mlhcc/32"))
+hcc32_tp32_phrase = _study_tally("hcc/32 | twopoint/32 (64 bits)", ("hcc/32", "mlhcc/32"))
+entered_first_phrase = _study_tally("mlhcc/32, representative entered first", ("mlhcc/32",))
+lowest_had_phrase = _study_tally("mlhcc/32, representative of lowest HAD", ("mlhcc/32",))
+busiest_phrase = _study_tally("mlhcc/32, busiest representative", ("mlhcc/32",))
