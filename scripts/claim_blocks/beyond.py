@@ -581,3 +581,171 @@ hcc32_tp32_phrase = _study_tally("hcc/32 | twopoint/32 (64 bits)", ("hcc/32", "m
 entered_first_phrase = _study_tally("mlhcc/32, representative entered first", ("mlhcc/32",))
 lowest_had_phrase = _study_tally("mlhcc/32, representative of lowest HAD", ("mlhcc/32",))
 busiest_phrase = _study_tally("mlhcc/32, busiest representative", ("mlhcc/32",))
+
+
+# mlhcc-cost: the order study's rows, then mlhcc-cost-1spp-f82d974 (C = 4) and -fbcf847 (C = 8)
+
+ISSUE_SCENES = SCENES[:8]  # issue 21's eight scenes; landscape is the ninth
+PREV, ORACLE_TABLE = "prev-frame cost table: hcc/32 | est", "oracle cost table: hcc/32 | est"
+COST_ROWS = {"4": "mlhcc-cost/32 (16 | 12 | 4)", "8": "mlhcc-cost/32 (16 | 8 | 8)", "12": "mlhcc-cost/32 (16 | 4 | 12)"}
+
+
+def cost_prev_frame_phrase():
+    r = study()
+    below = {s: (1 - r[s][PREV][0] / r[s][ORACLE_TABLE][0]) * 100 for s in SCENES}
+    kept = [(r[s][PREV][0] - r[s]["hcc/32"][0]) / (r[s][ORACLE_TABLE][0] - r[s]["hcc/32"][0]) * 100 for s in SCENES]
+    return (f"{span(below.values(), signs=False)} % below the oracle table's ({max(below, key=below.get)} the most), "
+            f"and it keeps {span(kept, 0, False)} %")
+
+
+def cost_split_phrase():
+    b = study()["breakfast_room"]
+    return f"keeps {b['mlhcc/32 split 24 | 8'][0]:.3f} with 24 | 8 but drops to {b['mlhcc/32 split 8 | 24'][0]:.3f} with 8 | 24"
+
+
+def _cost_vs_best(label, scene):
+    return _study_gains(label, ("hcc/32", "mlhcc/32"))[scene]
+
+
+def cost_ml24_phrase():
+    label = "prev-frame cost table: mlhcc/24 | est/8"
+    return f"loses {-_cost_vs_best(label, 'breakfast_room'):.1f} % there ({study()['breakfast_room'][label][0]:.3f})"
+
+
+def cost_c4_c8_phrase():
+    loss = [f"{-_cost_vs_best(COST_ROWS[c], 'breakfast_room'):.1f} %" for c in ("4", "8")]
+    wins = [sum(_cost_vs_best(COST_ROWS[c], s) > 0 for s in SCENES if s != "breakfast_room") for c in ("4", "8")]
+    return f"loses {loss[0]} or {loss[1]} and wins in {wins[0]} and {wins[1]} of the other eight scenes"
+
+
+def cost_c12_phrase():
+    return f"lose {-_cost_vs_best(COST_ROWS['12'], 'breakfast_room'):.1f} % on breakfast_room"
+
+
+def cost_distinct_phrase():
+    r = study()["jacksboro_terrain"]
+    moved = max(r[COST_ROWS[c]][0] for c in COST_ROWS) / min(r[COST_ROWS[c]][0] for c in COST_ROWS) - 1
+    return (f"from MLHCC's {r['mlhcc/32'][1]:.2f} to " + ", ".join(f"{r[COST_ROWS[c]][1]:.2f} (C = {c})" for c in COST_ROWS) +
+            f" on jacksboro_terrain, for a lane ratio that moves by {moved * 100:.1f} %")
+
+
+def cost_ml_ppc_phrase():
+    ppc = _set_encode_ratios(MLHCC_COST, "ppc")
+    return (f"against MLHCC/64 it {tally(_study_gains('mlhcc/32 | ppc/32 (64 bits)', ('mlhcc/64',)))}), but costs PPC's "
+            f"encode, {span(ppc, 0, False)}× HCC's on PoCL (both batches of the matrix below")
+
+
+def mlhcc_cost_set_phrase():
+    return run_facts(MLHCC_COST)
+
+
+def mlhcc_cost_c8_set_phrase():
+    return run_facts(MLHCC_COST_C8)
+
+
+DETERMINISTIC = ["simt_lane_efficiency_ratio", "simt_distinct_per_visit_ratio", "anc"]
+
+
+def same_cells_phrase():
+    """The paper's encoders' (and NoSort's) cells whose lane, distinct-node ratios and ANC are the same
+    string in both mlhcc-cost sets and in new-encoders-1spp-d8b4b22; and how far their GPU model moved."""
+    sets = [cells(d) for d in (MLHCC_COST, MLHCC_COST_C8, NEW_ENCODERS)]
+    keys = [k for k in sets[0] if k[2] in PAPER + ["nosort"]]
+    same = sum(all(s[k][c] == sets[0][k][c] for s in sets for c in DETERMINISTIC) for k in keys)
+    moved = max(abs(float(sets[0][k]["gpu_model_speedup"]) - float(sets[2][k]["gpu_model_speedup"])) for k in keys)
+    return f"{same} of their {len(keys)} cells; their GPU-model speedups differ from that older set by at most {moved:.4f}"
+
+
+def _cost_gains(batch, f, scenes=SCENES, d=MLHCC_COST):
+    return gains(lambda s: f(d, s, batch, "mlhcc-cost") / max(f(MLHCC_COST, s, batch, e) for e in ("hcc", "mlhcc")), scenes)
+
+
+def mlhcc_cost_bounce1_phrase():
+    return (f"on the lane ratio it {tally(_cost_gains('bounce1', lane))}; on the GPU model it "
+            f"{tally(_cost_gains('bounce1', gpu))}")
+
+
+def mlhcc_cost_c8_phrase():
+    c4, c8 = _cost_gains("bounce1", lane), _cost_gains("bounce1", lane, d=MLHCC_COST_C8)
+    larger = sum(c8[s] > c4[s] for s in SCENES)
+    below = [s for s in SCENES if gpu(MLHCC_COST_C8, s, "bounce1", "mlhcc-cost") < gpu(MLHCC_COST, s, "bounce1", "mlhcc")]
+    j = "jacksboro_terrain"
+    return (f"larger in {larger} scenes (up to {signed(max(c8.values()))} %), but the GPU model puts it below MLHCC in "
+            f"{len(below)} ({j} {gpu(MLHCC_COST_C8, j, 'bounce1', 'mlhcc-cost'):.2f} against "
+            f"{gpu(MLHCC_COST, j, 'bounce1', 'mlhcc'):.2f})")
+
+
+def mlhcc_cost_shadow0_phrase():
+    ppc_best = sum(max(PAPER + ["mlhcc-cost"], key=lambda e: lane(MLHCC_COST, s, "shadow0", e)) == "ppc" for s in SCENES)
+    sib = [gpu(d, "sibenik", "shadow0", "mlhcc-cost") for d in (MLHCC_COST_C8, MLHCC_COST)]
+    return (f"on the lane ratio it {tally(_cost_gains('shadow0', lane))}; on the GPU model it "
+            f"{tally(_cost_gains('shadow0', gpu))}; C = 8 is the better width there (sibenik {sib[0]:.2f} against "
+            f"{sib[1]:.2f}); PPC has the best lane ratio in {ppc_best} scenes")
+
+
+def mlhcc_cost_encode_drift_phrase():
+    r = [encode_ms(MLHCC_COST, s, b, e) / encode_ms(NEW_ENCODERS, s, b, e) for s in SCENES for b in BATCHES for e in PAPER]
+    return f"{span(r, 2, False)}×"
+
+
+def _sweep_minutes(root, dirs):
+    """'M min S s to M min S s' of the sweep sets' run-time.txt (either /usr/bin/time or 'elapsed Ns')."""
+    secs = []
+    for d in dirs:
+        text = open(os.path.join(root, d, "run-time.txt")).read()
+        m = re.search(r"m:ss\): (\d+):([\d.]+)", text)
+        secs.append(int(m.group(1)) * 60 + int(float(m.group(2))) if m else int(re.search(r"elapsed (\d+)s", text).group(1)))
+    return " to ".join(f"{t // 60} min {t % 60} s" for t in (min(secs), max(secs)))
+
+
+def cost_bits_phrase():
+    sets = {c: os.path.join(COST_BITS_SWEEP, f"cost-{c}") for c in ("4", "8", "12")}
+    best8 = sum(max(sets, key=lambda c: lane(sets[c], s, "bounce1", "mlhcc-cost")) == "8" for s in SCENES)
+    gpu4 = sum(gpu(sets["4"], s, "bounce1", "mlhcc-cost") > gpu(MLHCC_COST, s, "bounce1", "mlhcc") for s in SCENES)
+    loss12 = 1 - lane(sets["12"], "breakfast_room", "bounce1", "mlhcc-cost") / lane(MLHCC_COST, "breakfast_room", "bounce1", "mlhcc")
+    return (f"Eight cost bits give the best lane ratio in {best8} scenes, but four keep the distinct nodes close to "
+            f"MLHCC's and beat MLHCC on the GPU model in {gpu4}; twelve leave the low-level cut four nodes and lose "
+            f"{loss12 * 100:.1f} % on breakfast_room")
+
+
+def cost_bits_time_phrase():
+    return _sweep_minutes(COST_BITS_SWEEP, ["cost-4", "cost-8", "cost-12"]) + " a set"
+
+
+def cost_verdict_lane_phrase():
+    g, land = _cost_gains("bounce1", lane, ISSUE_SCENES), _cost_gains("bounce1", lane)["landscape"]
+    return f"{tally(g)}; landscape, the ninth, {signed(land)} %"
+
+
+def cost_verdict_gpu_phrase():
+    return tally(_cost_gains("bounce1", gpu, ISSUE_SCENES))
+
+
+def first_region_open_short_phrase():
+    return " and ".join(f"{signed(pct_of(NEW_ENCODERS, s, 'hcc-region'))} %" for s in OPEN_SCENES)
+
+
+def cost_open_phrase():
+    parts, over = [], []
+    for s in OPEN_SCENES:
+        c, h, m = (lane(MLHCC_COST, s, "bounce1", e) for e in ("mlhcc-cost", "hcc", "mlhcc"))
+        parts.append(f"{signed((c / h - 1) * 100)} % on {s} ({c:.3f} against {h:.3f})")
+        over.append(f"{signed((c / m - 1) * 100)} %")
+    return " and ".join(parts) + f", of which {' and '.join(over)} over MLHCC"
+
+
+def _set_encode_ratios(set_dir, encoder, base="hcc"):
+    return [encode_ms(set_dir, s, b, encoder) / encode_ms(set_dir, s, b, base) for s in SCENES for b in BATCHES]
+
+
+def cost_verdict_encode_phrase():
+    c, m = _set_encode_ratios(MLHCC_COST, "mlhcc-cost"), _set_encode_ratios(MLHCC_COST, "mlhcc")
+    cm = _set_encode_ratios(MLHCC_COST, "mlhcc-cost", "mlhcc")
+    return (f"{span(c, signs=False)}× HCC's kernel time here, median {statistics.median(c):.1f}× (MLHCC itself is "
+            f"{span(m, signs=False)}× HCC in the same set, median {statistics.median(m):.1f}×, so a two-level key cannot meet "
+            f"this bar on PoCL); mlhcc-cost is a median {statistics.median(cm):.1f}× MLHCC")
+
+
+def cost_verdict_cut_phrase():
+    cut = [float(_cell(MLHCC_COST, s, b, "mlhcc-cost")["cut_ms"]) / 1000 for s in SCENES for b in BATCHES]
+    return f"{span(cut, signs=False)} s"
