@@ -749,3 +749,247 @@ def cost_verdict_encode_phrase():
 def cost_verdict_cut_phrase():
     cut = [float(_cell(MLHCC_COST, s, b, "mlhcc-cost")["cut_ms"]) / 1000 for s in SCENES for b in BATCHES]
     return f"{span(cut, signs=False)} s"
+
+
+# hcc-region, second version: the region study, region-v2-1spp-7547e16, sweeps-7547e16
+
+def _rs(scene, label):
+    return study(REGION_STUDY)[scene][label if "/" in label else f"r = 4: {label}"][0]
+
+
+def region_study_traffic_phrase():
+    up = sum(_rs(s, "halved + traffic") > _rs(s, "halved + HAD") for s in SCENES)
+    return f"lifts {up} of {len(SCENES)} scenes: " + ", ".join(
+        f"{s} from {_rs(s, 'halved + HAD'):.3f} to {_rs(s, 'halved + traffic'):.3f}" for s in ("breakfast_room", "jacksboro_terrain"))
+
+
+def region_study_median_phrase():
+    g = {s: (_rs(s, "median + traffic (hcc-region)") / _rs(s, "halved + traffic") - 1) * 100 for s in SCENES}
+    shown = ", ".join(f"{s} {_rs(s, 'median + traffic (hcc-region)'):.3f} ({signed(g[s])} %)"
+                      for s in ("breakfast_room", "jacksboro_terrain", "landscape"))
+    flat = [s for s in SCENES if abs(g[s]) < 0.3]
+    return (f"add up to {max(g.values()):.1f} % on top of it: {shown}. On {', '.join(flat[:-1])} and {flat[-1]} they "
+            f"change less than 0.3 %")
+
+
+def region_study_median_had_phrase():
+    return tally({s: (_rs(s, "median + HAD") / _rs(s, "halved + HAD") - 1) * 100 for s in SCENES})
+
+
+def region_study_grey_phrase():
+    return f"{_rs('grey_white_room', 'hcc/32'):.3f} here, {lane(REGION_V2, 'grey_white_room', 'bounce1', 'hcc'):.3f} below"
+
+
+def region_v2_set_phrase():
+    return run_facts(REGION_V2)
+
+
+def region_v2_moved_phrase():
+    """The cells region-v2 shares with new-encoders-1spp-d8b4b22 whose GPU-model speedup moved."""
+    old, new = cells(NEW_ENCODERS), cells(REGION_V2)
+    moved = [(k, abs(float(new[k]["gpu_model_speedup"]) - float(old[k]["gpu_model_speedup"]))) for k in old
+             if k[2] != "hcc-region" and new[k]["gpu_model_speedup"] != old[k]["gpu_model_speedup"]]
+    batches = " and ".join(sorted({k[1] for k, _ in moved}))
+    return f"{len(moved)} {batches} GPU-model speedups of that older set moved, by at most {max(d for _, d in moved):.4f}"
+
+
+def _v2_gains(batch, encoder, f=lane, scenes=ISSUE_SCENES):
+    return gains(lambda s: f(REGION_V2, s, batch, encoder) / max(f(REGION_V2, s, batch, e) for e in ("hcc", "mlhcc")), scenes)
+
+
+def region_v2_bounce1_phrase():
+    land = _v2_gains("bounce1", "hcc-region", scenes=["landscape"])["landscape"]
+    return (f"hcc-region {tally(_v2_gains('bounce1', 'hcc-region'))} of the issue's scenes; landscape, the ninth, "
+            f"{signed(land)} %. mlhcc-cost {tally(_v2_gains('bounce1', 'mlhcc-cost'))}")
+
+
+def region_v2_landscape_phrase():
+    g = lambda e: gpu(REGION_V2, "landscape", "bounce1", e)
+    d = lambda e: distinct(REGION_V2, "landscape", "bounce1", e)
+    return (f"{g('hcc-region'):.2f} against PPC's {g('ppc'):.2f} and HCC's {g('hcc'):.2f}. Its distinct-nodes ratio there is "
+            f"{d('hcc-region'):.2f}, against HCC's {d('hcc'):.2f} and PPC's {d('ppc'):.2f}")
+
+
+def region_v2_shadow0_phrase():
+    return tally(_v2_gains("shadow0", "hcc-region"))
+
+
+def v2_encode(encoder, base="hcc"):
+    return _set_encode_ratios(REGION_V2, encoder, base)
+
+
+def region_v2_encode_phrase():
+    r = v2_encode("hcc-region")
+    cut = lambda e: span([float(_cell(REGION_V2, s, b, e)["cut_ms"]) / 1000 for s in SCENES for b in BATCHES], signs=False)
+    return (f"hcc-traffic runs HCC's kernel (median {statistics.median(v2_encode('hcc-traffic')):.2f}× HCC). hcc-region "
+            f"costs {span(r, signs=False)}× HCC, median {statistics.median(r):.2f}×, against "
+            f"{statistics.median(_first_encode_ratios('hcc-region')):.1f}× for the first version in its own set")
+
+
+def region_v2_encode_others_phrase():
+    cut = lambda e: span([float(_cell(REGION_V2, s, b, e)["cut_ms"]) / 1000 for s in SCENES for b in BATCHES], signs=False)
+    return (f"MLHCC is a median {statistics.median(v2_encode('mlhcc')):.2f}× HCC in the same rows. mlhcc-cost is a median "
+            f"{statistics.median(v2_encode('mlhcc-cost')):.2f}×. The previous frame's statistics cost a host traversal: "
+            f"{cut('hcc-region')} s per batch for hcc-region (it counts the traffic of each region's rays) and "
+            f"{cut('mlhcc-cost')} s for mlhcc-cost")
+
+
+def _region_bits(r, scene):
+    return lane(os.path.join(REGION_SWEEPS, f"region-{r}"), scene, "bounce1", "hcc-region")
+
+
+def region_bits_phrase():
+    over = lambda r, s: (_region_bits(r, s) / lane(REGION_V2, s, "bounce1", "hcc") - 1) * 100
+    first = next(r for r in "23456" if all(over(r, s) >= 10 for s in OPEN_SCENES))
+    before = str(int(first) - 1)
+    return (f"r = {first} is the smallest region count at which both open scenes pass +10 % over HCC (r = {before}: "
+            + " and ".join(f"{signed(over(before, s))} %" for s in OPEN_SCENES) + ")")
+
+
+def region_bits_more_phrase():
+    return f"jacksboro_terrain {_region_bits('6', 'jacksboro_terrain'):.3f} at r = 6"
+
+
+def _blend(name, scene, f=lane):
+    return f(os.path.join(REGION_SWEEPS, name), scene, "bounce1", "hcc-region")
+
+
+def blend_zero_phrase():
+    off = max(abs(_blend("blend-0", s) - lane(REGION_V2, s, "bounce1", "hcc")) for s in SCENES)
+    return f"to within {off:.3f} in every scene (" + ", ".join(f"{s} {_blend('blend-0', s):.3f}" for s in OPEN_SCENES) + ")"
+
+
+def blend_zero_gpu_phrase():
+    return f"landscape {_blend('blend-0', 'landscape', gpu):.2f} against {gpu(REGION_V2, 'landscape', 'bounce1', 'hcc'):.2f}"
+
+
+def blend_quarter_phrase():
+    return " and ".join(f"{signed((_blend('blend-0.25', s) / lane(REGION_V2, s, 'bounce1', 'hcc') - 1) * 100)} %" for s in OPEN_SCENES)
+
+
+def blend_more_phrase():
+    b0, b1 = _blend("blend-0", "breakfast_room"), _blend("blend-1", "breakfast_room")
+    return (f"up to β = 0.75 (" + ", ".join(f"{_blend('blend-0.75', s):.3f}" for s in OPEN_SCENES) + "), while Breakfast "
+            f"falls from {b0:.3f} at β = 0 to {b1:.3f} at β = 1 ({signed((b1 / b0 - 1) * 100)} %)")
+
+
+def blend_mean_phrase():
+    mean = lambda d: statistics.mean(_blend(d, s) for s in SCENES)
+    return f"{mean('region-4'):.3f}, against {mean('blend-0.25'):.3f} at 0.25 and {mean('blend-0.75'):.3f} at 0.75"
+
+
+def v2_verdict_bar1_phrase():
+    lane_g, gpu_g = _v2_gains("bounce1", "mlhcc-cost"), _v2_gains("bounce1", "mlhcc-cost", gpu)
+    region = _v2_gains("bounce1", "hcc-region")
+    return (f"on the lane-efficiency ratio it {tally(lane_g)}; on the GPU model it {tally(gpu_g)}. hcc-region "
+            f"{tally(region)}")
+
+
+def v2_verdict_open_phrase():
+    parts = [f"{signed(pct_of(REGION_V2, s, 'hcc-region'))} % on {s} ({lane(REGION_V2, s, 'bounce1', 'hcc-region'):.3f} "
+             f"against {lane(REGION_V2, s, 'bounce1', 'hcc'):.3f})" for s in OPEN_SCENES]
+    g = [(gpu(REGION_V2, s, "bounce1", "hcc-region"), gpu(REGION_V2, s, "bounce1", "hcc")) for s in OPEN_SCENES]
+    return (" and ".join(parts) + ". On the GPU model the gain is " + " and ".join(f"{signed((a / b - 1) * 100, 0)} %" for a, b in g)
+            + " (" + ", ".join(f"{a:.2f} against {b:.2f}" for a, b in g) + ")")
+
+
+def v2_verdict_encode_phrase():
+    m = lambda e: statistics.median(v2_encode(e))
+    return f"hcc-region is {m('hcc-region'):.2f}× and mlhcc-cost {m('mlhcc-cost'):.2f}× (medians), and MLHCC itself is {m('mlhcc'):.2f}×"
+
+
+# the third kernel: region-cells-1spp-0a53899 (run 1) and encode-cost-1spp-fa55adf (run 2)
+
+def region_cells_set_phrase():
+    return run_facts(REGION_CELLS)
+
+
+def encode_cost_set_phrase():
+    return run_facts(ENCODE_COST, rss=False)
+
+
+SAME_KEYS = ["anc", "simt_lane_efficiency_ratio", "simt_distinct_per_visit_ratio", "gpu_model_speedup", "gpu_warp_steps",
+             "gpu_idle_lanes", "gpu_l1_hits", "gpu_l1_misses", "gpu_l2_hits", "gpu_l2_misses", "gpu_dram_bytes",
+             "gpu_replayed_warps", "keys_hash", "order_hash"]
+
+
+def third_same_phrase():
+    """How many cells of each third-kernel run have region-v2's deterministic columns, string for string."""
+    v2 = cells(REGION_V2)
+    counts = []
+    for run in THIRD_RUNS:
+        c = cells(run)
+        counts.append(f"{sum(all(c[k][f] == v2[k][f] for f in SAME_KEYS) for k in c)} of {len(c)} cells")
+    return " and ".join(counts)
+
+
+def _third_region():
+    return [third_ratios("hcc-region", r) for r in THIRD_RUNS]
+
+
+def third_median_phrase():
+    return f"{statistics.median(_third_region()[0] + _third_region()[1]):.2f}× HCC"
+
+
+def third_runs_phrase():
+    r1, r2 = _third_region()
+    under = lambda r: sum(x <= BAR for x in r)
+    second = v2_encode("hcc-region")
+    return (f"the median of the {len(r1) + len(r2)} rows of both runs. Run 1 has a median of {statistics.median(r1):.2f}×, "
+            f"with {under(r1)} of its {len(r1)} rows at or under 1.5×; run 2 has {statistics.median(r2):.2f}×, with "
+            f"{under(r2)} of {len(r2)}. The range is {span(r1 + r2, 2, False)}×, where the second kernel cost "
+            f"{statistics.median(second):.2f}× ({span(second, 2, False)}×)")
+
+
+def third_others_phrase():
+    m = lambda e: [f"{statistics.median(third_ratios(e, r)):.2f}×" for r in THIRD_RUNS]
+    worst = max(third_ratios("mlhcc", ENCODE_COST))
+    return (f"MLHCC {m('mlhcc')[0]} against {m('mlhcc')[1]}, and mlhcc-cost {m('mlhcc-cost')[0]} against "
+            f"{m('mlhcc-cost')[1]}. MLHCC's {worst:.2f}×")
+
+
+def third_traffic_phrase():
+    return " and ".join(f"{statistics.median(third_ratios('hcc-traffic', r)):.2f}×" for r in THIRD_RUNS)
+
+
+def third_verdict_phrase():
+    both = _third_region()[0] + _third_region()[1]
+    above = sum(x > BAR for x in both)
+    return f"its median is {statistics.median(both):.2f}×, and {above} of the {len(both)} rows are above"
+
+
+# the paired encode cost: encode-versus-hcc-b53a04f
+
+def _versus_all(encoder):
+    return [versus_rows(encoder, run) for run in ("run1", "run2")]
+
+
+def versus_median_phrase():
+    return f"{statistics.median(x for x, _, _ in versus_rows('hcc-region', 'run1').values()):.2f}×"
+
+
+def versus_region_phrase():
+    runs = _versus_all("hcc-region")
+    rows = [v for r in runs for v in r.values()]
+    under, over = sum(hi < BAR for _, _, hi in rows), sum(lo > BAR for _, lo, _ in rows)
+    name, (x, lo, hi) = max(runs[0].items(), key=lambda kv: kv[1][0])
+    x2, lo2, hi2 = runs[1][name]
+    scene, batch = name.rsplit("-", 1)
+    return (f"{under} of the {len(rows)} rows. The other {len(rows) - under - over} contain 1.5, and {over or 'none'} lies wholly "
+            f"over it. Its largest point estimate is {x:.3f} ({scene}, {batch}, run 1: [{lo:.3f}, {hi:.3f}]; run 2 gives "
+            f"{x2:.3f} [{lo2:.3f}, {hi2:.3f}] for the same batch)")
+
+
+def versus_moves_phrase():
+    move = lambda e: max(abs(a[0] - _versus_all(e)[1][k][0]) for k, a in _versus_all(e)[0].items())
+    return (f"{move('hcc-region'):.3f} for hcc-region, {move('hcc-traffic'):.3f} for hcc-traffic, {move('mlhcc'):.3f} for "
+            f"MLHCC and {move('mlhcc-cost'):.3f} for mlhcc-cost")
+
+
+def versus_mlhcc_phrase():
+    xs = [x for r in _versus_all("mlhcc") for x, _, _ in r.values()]
+    return f"{span(xs, 2, False)}×"
+
+
+def blend_time_phrase():
+    return _sweep_minutes(REGION_SWEEPS, [d for d, _ in BLEND if d.startswith("blend")])
