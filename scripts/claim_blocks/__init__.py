@@ -161,4 +161,8 @@ GENERATORS = {
     "beyond-versus-region": beyond.versus_region_phrase,
     "beyond-versus-moves": beyond.versus_moves_phrase,
     "beyond-versus-mlhcc": beyond.versus_mlhcc_phrase,
+    "beyond-verdict": beyond.verdict_block,
+    "beyond-verdict-regions": beyond.verdict_regions_phrase,
+    "beyond-verdict-traffic": beyond.verdict_traffic_phrase,
+    "beyond-verdict-mlhcc": beyond.verdict_mlhcc_phrase,
 }

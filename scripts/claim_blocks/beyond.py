@@ -993,3 +993,59 @@ def versus_mlhcc_phrase():
 
 def blend_time_phrase():
     return _sweep_minutes(REGION_SWEEPS, [d for d, _ in BLEND if d.startswith("blend")])
+
+
+# the verdict on issue 21: the three bars, each new encoder (region-v2-1spp-7547e16, encode-versus-hcc-b53a04f)
+
+def _bar_bounce1(encoder):
+    g = _v2_gains("bounce1", encoder)
+    wins, (worst, scene) = sum(v > 0 for v in g.values()), min((v, s) for s, v in g.items())
+    met = wins >= 6 and worst > -2
+    return f"{'**yes**' if met else 'no'}: {wins} of {len(g)}, worst {signed(worst)} % ({scene})"
+
+
+def _bar_open(encoder):
+    g = {s: pct_of(REGION_V2, s, encoder) for s in OPEN_SCENES}
+    shown = ", ".join(f"{signed(v)} % ({s})" for s, v in g.items())
+    if encoder == "mlhcc-cost":
+        return f"not a region code, but {shown}"
+    return f"{'**yes**' if all(v >= 10 for v in g.values()) else 'no'}: {shown}"
+
+
+def _bar_encode(encoder):
+    rows = [v for r in _versus_all(encoder) for v in r.values()]
+    med = statistics.median(x for x, _, _ in rows)
+    under, over = sum(hi < BAR for _, _, hi in rows), sum(lo > BAR for _, lo, _ in rows)
+    met = med <= BAR and over == 0
+    return (f"{'**yes**' if met else 'no'}: {med:.2f}×, {under} of {len(rows)} intervals wholly under, "
+            f"{over or 'none'} over")
+
+
+def verdict_block():
+    encs = ["hcc-traffic", "hcc-region", "mlhcc-cost"]
+    bars = [("bounce1: beats HCC and MLHCC on the lane-efficiency ratio in ≥ 6 of 8 scenes, losing none by > 2 %", _bar_bounce1),
+            ("open scenes: ≥ +10 % over HCC", _bar_open), ("encode within 1.5× HCC (paired, above)", _bar_encode)]
+    out = ["| bar | " + " | ".join(encs) + " |", "|---|---|---|---|"]
+    for text, bar in bars:
+        out.append(f"| {text} | " + " | ".join(bar(e) for e in encs) + " |")
+    return "\n".join(out)
+
+
+def verdict_regions_phrase():
+    rows = [v for r in _versus_all("hcc-region") for v in r.values()]
+    g = _v2_gains("bounce1", "hcc-region")
+    return (" and ".join(f"{signed(pct_of(REGION_V2, s, 'hcc-region'))} %" for s in OPEN_SCENES) +
+            f" there, at {statistics.median(x for x, _, _ in rows):.2f}× HCC's encode. They also beat HCC and MLHCC on "
+            f"{sum(v > 0 for v in g.values())} of the {len(g)} scenes. They lose "
+            f"{-pct_of(REGION_V2, 'breakfast_room', 'hcc-region', base='mlhcc'):.1f} % to MLHCC on breakfast_room")
+
+
+def verdict_traffic_phrase():
+    g = {s: pct_of(REGION_V2, s, "hcc-traffic") for s in SCENES}
+    best = max(g, key=g.get)
+    return (f"at most {signed(g[best])} % over HCC on the lane-efficiency ratio ({best}), and it loses "
+            f"{-g['breakfast_room']:.1f} % to HCC on breakfast_room")
+
+
+def verdict_mlhcc_phrase():
+    return f"{statistics.median(x for r in _versus_all('mlhcc') for x, _, _ in r.values()):.2f}×"
