@@ -165,4 +165,6 @@ GENERATORS = {
     "beyond-verdict-regions": beyond.verdict_regions_phrase,
     "beyond-verdict-traffic": beyond.verdict_traffic_phrase,
     "beyond-verdict-mlhcc": beyond.verdict_mlhcc_phrase,
+    "beyond-versus-batches": beyond.versus_batches_phrase,
+    "beyond-versus-min-rounds": beyond.versus_min_rounds_phrase,
 }

@@ -1049,3 +1049,13 @@ def verdict_traffic_phrase():
 
 def verdict_mlhcc_phrase():
     return f"{statistics.median(x for r in _versus_all('mlhcc') for x, _, _ in r.values()):.2f}×"
+
+
+def versus_batches_phrase():
+    return f"all {len(glob.glob(os.path.join(ENCODE_VERSUS, 'run1', '*.txt')))} batches"
+
+
+def versus_min_rounds_phrase():
+    rounds = [r["rounds"] for run in ("run1", "run2") for path in glob.glob(os.path.join(ENCODE_VERSUS, run, "*.txt"))
+              for r in read_versus(path)[1].values()]
+    return f"at least {min(rounds)} rounds each"
