@@ -820,7 +820,6 @@ def v2_encode(encoder, base="hcc"):
 
 def region_v2_encode_phrase():
     r = v2_encode("hcc-region")
-    cut = lambda e: span([float(_cell(REGION_V2, s, b, e)["cut_ms"]) / 1000 for s in SCENES for b in BATCHES], signs=False)
     return (f"hcc-traffic runs HCC's kernel (median {statistics.median(v2_encode('hcc-traffic')):.2f}× HCC). hcc-region "
             f"costs {span(r, signs=False)}× HCC, median {statistics.median(r):.2f}×, against "
             f"{statistics.median(_first_encode_ratios('hcc-region')):.1f}× for the first version in its own set")
