@@ -167,4 +167,9 @@ GENERATORS = {
     "beyond-verdict-mlhcc": beyond.verdict_mlhcc_phrase,
     "beyond-versus-batches": beyond.versus_batches_phrase,
     "beyond-versus-min-rounds": beyond.versus_min_rounds_phrase,
+    "beyond-region-study": beyond.region_study_block,
+    "beyond-region-study-traffic": beyond.region_study_traffic_phrase,
+    "beyond-region-study-median": beyond.region_study_median_phrase,
+    "beyond-region-study-median-had": beyond.region_study_median_had_phrase,
+    "beyond-region-study-grey": beyond.region_study_grey_phrase,
 }
