@@ -73,3 +73,16 @@ EIGHT_SPP_SHARDS = os.path.join(EPYC, "paper-8spp-9dab0ed", "shards")
 # The earlier 8-spp sets (sibenik and breakfast_room; grey_white_room), kept for their history.
 EIGHT_SPP_EARLIER = [os.path.join(EPYC, "paper-8spp-4e8c9eb"), os.path.join(EPYC, "paper-8spp-grey_white_room-d8b4b22")]
 AUDIT_ENCODEBENCH = os.path.join(XEON, "audit-issue43-5382d1e", "encodebench-sibenik-bounce1.txt")
+# Issue 21's encoders (results/README.md, "Beyond the paper"): the matrices, sweeps, studies and the
+# paired encode cost, one path each.
+NEW_ENCODERS = os.path.join(EPYC, "new-encoders-1spp-d8b4b22")
+MLHCC_COST = os.path.join(EPYC, "mlhcc-cost-1spp-f82d974")          # C = 4, the default
+MLHCC_COST_C8 = os.path.join(EPYC, "mlhcc-cost-1spp-fbcf847")       # C = 8, the default then
+COST_BITS_SWEEP = os.path.join(EPYC, "sweeps-fbcf847")
+REGION_V2 = os.path.join(EPYC, "region-v2-1spp-7547e16")
+REGION_SWEEPS = os.path.join(EPYC, "sweeps-7547e16")
+REGION_CELLS = os.path.join(EPYC, "region-cells-1spp-0a53899")      # the third kernel, run 1
+ENCODE_COST = os.path.join(EPYC, "encode-cost-1spp-fa55adf")        # the third kernel, run 2
+ENCODE_VERSUS = os.path.join(EPYC, "encode-versus-hcc-b53a04f")
+ORDER_STUDY = os.path.join(ROOT, "results", "order-study", "bounce1-960x540.txt")
+REGION_STUDY = os.path.join(ROOT, "results", "region-study", "bounce1-1920x1080.txt")
