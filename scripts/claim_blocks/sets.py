@@ -73,3 +73,7 @@ EIGHT_SPP_SHARDS = os.path.join(EPYC, "paper-8spp-9dab0ed", "shards")
 # The earlier 8-spp sets (sibenik and breakfast_room; grey_white_room), kept for their history.
 EIGHT_SPP_EARLIER = [os.path.join(EPYC, "paper-8spp-4e8c9eb"), os.path.join(EPYC, "paper-8spp-grey_white_room-d8b4b22")]
 AUDIT_ENCODEBENCH = os.path.join(XEON, "audit-issue43-5382d1e", "encodebench-sibenik-bounce1.txt")
+# results/gpu-model/README.md, "What holds, and what does not" (claim_blocks/gpu_model_holds.py): the model
+# against the shuffled baseline order, the run and its validation (gpu_model_validate.py --baseline shuffled).
+GPU_SHUFFLED_SET = os.path.join(EPYC, "gpu-model-shuffled-1spp-66f45e6")
+GPU_MODEL_SHUFFLED = os.path.join(GPU_MODEL_SETS, "shuffled")
