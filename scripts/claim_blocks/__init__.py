@@ -1,7 +1,7 @@
 """The generators of scripts/claims.py: block name -> function returning the block's text, computed
 from committed result sets only (claim_blocks/sets.py names them). One list, here."""
-from . import (appendix, audit, beyond, gpu_model, gpu_model_appendix, gpu_model_rest, gpu_model_scoring, kernels,
-               nvidia, packet, paper_tex, prose_early, reference_sets, sampling)
+from . import (appendix, audit, beyond, gpu_model, gpu_model_appendix, gpu_model_holds, gpu_model_rest,
+               gpu_model_scoring, kernels, nvidia, packet, paper_tex, prose_early, reference_sets, sampling)
 
 GENERATORS = {
     "table1-lights": prose_early.table1_block,
@@ -128,6 +128,23 @@ GENERATORS = {
     "gm-dynamic-refit": gpu_model_rest.dynamic_refit_phrase,
     "gm-occupancy": gpu_model_rest.occupancy_phrase,
     "gm-time-formula": gpu_model_rest.time_formula_block,
+    "gm-holds-spearman": gpu_model_holds.spearman_phrase,
+    "gm-holds-mae": gpu_model_holds.mae_phrase,
+    "gm-holds-best": gpu_model_holds.best_variant_phrase,
+    "gm-holds-schedules": gpu_model_holds.other_schedules_phrase,
+    "gm-holds-largest": gpu_model_holds.largest_errors_phrase,
+    "gm-holds-sibenik-lane": gpu_model_holds.sibenik_lane_phrase,
+    "gm-holds-sibenik-distinct": gpu_model_holds.sibenik_distinct_phrase,
+    "gm-holds-simt-mae": gpu_model_holds.simt_mae_phrase,
+    "gm-holds-simt-spearman": gpu_model_holds.simt_spearman_phrase,
+    "gm-fails-table3": gpu_model_holds.table3_error_phrase,
+    "gm-fails-table3-paper": gpu_model_holds.table3_paper_phrase,
+    "gm-fails-any-hit": gpu_model_holds.any_hit_phrase,
+    "gm-fails-shuffled": gpu_model_holds.shuffled_phrase,
+    "gm-fails-shuffled-origin": gpu_model_holds.shuffled_origin_phrase,
+    "gm-fails-shuffled-cells": gpu_model_holds.shuffled_cells_phrase,
+    "gm-fails-ppc": gpu_model_holds.ppc_under_phrase,
+    "gm-fails-multi-instance": gpu_model_holds.multi_instance_over_phrase,
     "packet-cost": prose_early.packet_cost_phrase,
     "packet-aa": prose_early.packet_aa_phrase,
     "packet-gap": prose_early.packet_gap_phrase,

@@ -86,3 +86,7 @@ ENCODE_COST = os.path.join(EPYC, "encode-cost-1spp-fa55adf")        # the third 
 ENCODE_VERSUS = os.path.join(EPYC, "encode-versus-hcc-b53a04f")
 ORDER_STUDY = os.path.join(ROOT, "results", "order-study", "bounce1-960x540.txt")
 REGION_STUDY = os.path.join(ROOT, "results", "region-study", "bounce1-1920x1080.txt")
+# results/gpu-model/README.md, "What holds, and what does not" (claim_blocks/gpu_model_holds.py): the model
+# against the shuffled baseline order, the run and its validation (gpu_model_validate.py --baseline shuffled).
+GPU_SHUFFLED_SET = os.path.join(EPYC, "gpu-model-shuffled-1spp-66f45e6")
+GPU_MODEL_SHUFFLED = os.path.join(GPU_MODEL_SETS, "shuffled")
