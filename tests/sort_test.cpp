@@ -188,6 +188,31 @@ TEST(Sort, ShrinksALaunchToWhatItsKernelTakes) {
             fmt::format("scan shrunk to {}: {} keys of {} bits", scan, n, bits));
 }
 
+TEST(Sort, StatsSayWhereTheTimeGoesByCommand) {
+  // sortbench's "where the time goes" table (issue 42: on an H200 the sort cost more than the trace):
+  // every profiled command is counted once under its name, and the commands add up to kernel_ms.
+  for (RadixSort* sorter : {device().cpu_shape.get(), device().gpu_shape.get()}) {
+    const bool gpu = sorter == device().gpu_shape.get();
+    auto keys = make_keys(Shape::Uniform, 65537, 32, 5);
+    const SortStats st = check(*sorter, keys, {32, 0}, gpu ? "gpu shape, by command" : "cpu shape, by command");
+    ASSERT_FALSE(st.commands.empty());
+    double sum = 0.0;
+    unsigned launches = 0, scatters = 0;
+    for (const SortCommandTime& c : st.commands) {
+      EXPECT_FALSE(c.name.empty());
+      EXPECT_EQ(c.name.find('\0'), std::string::npos) << "a NUL in the command name " << c.name;
+      EXPECT_GE(c.launches, 1u) << c.name;
+      sum += c.ms, launches += c.launches;
+      if (c.name == "rs_scatter") scatters = c.launches;
+    }
+    EXPECT_NEAR(sum, st.kernel_ms, 1e-9 * std::max(1.0, st.kernel_ms));
+    EXPECT_GE(launches, 3u);  // the first read's kernels and its read-back at least
+    if (gpu) {
+      EXPECT_EQ(scatters, st.passes_run) << "one rs_scatter per pass that moved keys";
+    }
+  }
+}
+
 TEST(Sort, HybridMatchesStableSort) {
   // The MSD-first hybrid (large N on the CPU shape), forced at every size.
   if (!device().hybrid) GTEST_SKIP() << "this device's shape has no hybrid path";

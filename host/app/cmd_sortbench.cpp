@@ -88,6 +88,7 @@ struct Row {
   bool ok = false;           // ours equals std::stable_sort
   bool lsd_ok = false;       // the host LSD anchor equals std::stable_sort
   bool warp_ok = true;       // the warp-granular sort equals its host twin
+  std::vector<SortStats> full_reps;  // the full sort's stats of every timed rep (where the time goes)
 };
 
 // The keys of a case; few-distinct: only the 16 highest key bits are random (at most 65536 keys).
@@ -190,6 +191,7 @@ void time_ours(RadixSort& sorter, DeviceInput<Key>& in, const std::vector<Pair<K
       }
     }
     if (r < 0) continue;
+    row.full_reps.push_back(row.stats);
     full_ms.push_back(f);
     if (with_warp) warp_ms.push_back(w), saving.push_back(f / w);
   }
@@ -197,6 +199,32 @@ void time_ours(RadixSort& sorter, DeviceInput<Key>& in, const std::vector<Pair<K
   row.ours_ms = median(full_ms);
   row.ours = nk / row.ours_ms;
   if (with_warp) row.warp = nk / median(warp_ms), row.warp_saving = median(saving);
+}
+
+// Where the time of a case's full sort goes: per command (kernel, read-back, copy) its launches
+// and the median over the reps of its summed device time, then the gaps between commands (the sort's
+// span less its commands: launch latency and the host's waits for a read-back).
+void print_time_by_command(const Row& r) {
+  if (r.full_reps.empty()) return;
+  fmt::print("\nwhere the time goes, {} {} {}-bit keys (median of {} reps, profiling events):\n\n", r.n, r.keys,
+             r.bits, r.full_reps.size());
+  fmt::print("| command | launches | ms | % of the sort |\n|---|---:|---:|---:|\n");
+  const double total = median([&] {
+    std::vector<double> v;
+    for (const SortStats& s : r.full_reps) v.push_back(s.ms);
+    return v;
+  }());
+  for (const SortCommandTime& c : r.full_reps.front().commands) {
+    std::vector<double> ms;
+    for (const SortStats& s : r.full_reps)
+      for (const SortCommandTime& d : s.commands)
+        if (d.name == c.name) ms.push_back(d.ms);
+    fmt::print("| {} | {} | {:.3f} | {:.0f}% |\n", c.name, c.launches, median(ms), 100.0 * median(ms) / total);
+  }
+  std::vector<double> gaps;
+  for (const SortStats& s : r.full_reps) gaps.push_back(s.ms - s.kernel_ms);
+  fmt::print("| gaps between commands | | {:.3f} | {:.0f}% |\n", median(gaps), 100.0 * median(gaps) / total);
+  fmt::print("| the sort (first command's start to last's end) | | {:.3f} | 100% |\n", total);
 }
 
 template <class Key>
@@ -298,6 +326,8 @@ void run_sortbench(const Options& opt) {
         std::fflush(stdout);
         rows.push_back(r);
       }
+  // The first case (2 M random keys of the first width): the batch size the matrix sorts.
+  if (!rows.empty()) print_time_by_command(rows.front());
 #if RAYSORT_HAVE_BOOST_COMPUTE
   fmt::print("\nBoost.Compute first call (program builds) per case, ms:");
   for (auto& r : rows) fmt::print(" {:.0f}", r.boost_first_ms);

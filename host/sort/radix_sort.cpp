@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstring>
 #include <limits>
@@ -16,6 +17,13 @@ unsigned floor_pow2(std::size_t v) {
   unsigned p = 1;
   while (p * 2 <= v && p < (1u << 30)) p *= 2;
   return p;
+}
+
+// A kernel's function name, without the terminating NUL some OpenCL headers keep in the string.
+std::string kernel_name(const cl::Kernel& k) {
+  std::string name = k.getInfo<CL_KERNEL_FUNCTION_NAME>();
+  while (!name.empty() && name.back() == '\0') name.pop_back();
+  return name;
 }
 
 std::string program_options(const RadixSortTuning& t, unsigned key_bits) {
@@ -157,10 +165,15 @@ void RadixSort::ensure(Runtime& rt, cl::Buffer& b, std::size_t& have, std::size_
   have = std::max<std::size_t>(need, 4);
 }
 
-void RadixSort::enqueue(cl::Kernel& k, std::size_t global, std::size_t local) {
+cl::Event& RadixSort::record(std::string name) {
   events_.emplace_back();
+  event_names_.push_back(std::move(name));
+  return events_.back();
+}
+
+void RadixSort::enqueue(cl::Kernel& k, std::size_t global, std::size_t local) {
   rt_.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(Runtime::padded(global, local)), cl::NDRange(local),
-                                   nullptr, &events_.back());
+                                   nullptr, &record(kernel_name(k)));
 }
 
 namespace {
@@ -236,8 +249,7 @@ std::uint64_t RadixSort::first_read(Kernels& k, const cl::Buffer& keys, cl_uint 
     k.reduce_bounds.setArg(2, bounds_);
     enqueue(k.reduce_bounds, tuning_.scan_work_group, tuning_.scan_work_group);
     std::uint64_t bounds[2] = {0, 0};  // OR, AND of all keys
-    events_.emplace_back();
-    rt_.queue().enqueueReadBuffer(bounds_, CL_TRUE, 0, 2 * key_bytes, bounds, nullptr, &events_.back());
+    rt_.queue().enqueueReadBuffer(bounds_, CL_TRUE, 0, 2 * key_bytes, bounds, nullptr, &record("read key bounds"));
     if (key_bytes == 4) {
       std::uint32_t b32[2];
       std::memcpy(b32, bounds, sizeof b32);
@@ -261,8 +273,8 @@ bool RadixSort::hybrid_passes(Passes& ps, const std::vector<unsigned>& run, int 
   if (static_cast<int>(top) != counted) ps.count(top_shift);
   ps.scan();
   bucket_offsets_.resize(ps.bins);  // the scanned counts: bucket d starts at [d * tiles]
-  events_.emplace_back();
-  rt_.queue().enqueueReadBuffer(counts_, CL_TRUE, 0, ps.bins * 4, bucket_offsets_.data(), nullptr, &events_.back());
+  rt_.queue().enqueueReadBuffer(counts_, CL_TRUE, 0, ps.bins * 4, bucket_offsets_.data(), nullptr,
+                                &record("read bucket offsets"));
   std::size_t largest = 0;
   for (std::size_t d = 0; d < radix; ++d) {
     const std::size_t end = d + 1 < radix ? bucket_offsets_[(d + 1) * ps.tiles] : count;
@@ -339,6 +351,7 @@ SortStats RadixSort::sort(cl::Buffer& keys, cl::Buffer& values, std::size_t coun
   const cl_uint n = static_cast<cl_uint>(count), n_items = static_cast<cl_uint>(items);
   const cl_uint lo = cfg.lo_bit(), hi = cfg.key_bits;
   events_.clear();
+  event_names_.clear();
   // The MSD-first hybrid (large N on the CPU shape) wants the most significant digit's counts
   // first; the plain LSD passes the lowest digit's.
   const bool hybrid = t.hybrid() && count >= t.hybrid_min && total_passes >= 2;
@@ -374,16 +387,22 @@ SortStats RadixSort::sort(cl::Buffer& keys, cl::Buffer& values, std::size_t coun
       }
     }
     if (stats.passes_run % 2 == 1) {  // the result is in the scratch buffers: copy it home
-      events_.emplace_back();
-      rt_.queue().enqueueCopyBuffer(keys_tmp_, keys, 0, 0, count * key_bytes, nullptr, &events_.back());
-      events_.emplace_back();
-      rt_.queue().enqueueCopyBuffer(values_tmp_, values, 0, 0, count * 4, nullptr, &events_.back());
+      rt_.queue().enqueueCopyBuffer(keys_tmp_, keys, 0, 0, count * key_bytes, nullptr, &record("copy result home"));
+      rt_.queue().enqueueCopyBuffer(values_tmp_, values, 0, 0, count * 4, nullptr, &record("copy result home"));
     }
     events_.back().wait();
   });
   cl_call("reading the radix sort's profiling events", [&] {
     stats.ms = event_span_ms(events_.front(), events_.back());
-    for (auto& e : events_) stats.kernel_ms += event_ms(e);
+    for (std::size_t i = 0; i < events_.size(); ++i) {
+      const double ms = event_ms(events_[i]);
+      stats.kernel_ms += ms;
+      auto same = [&](const SortCommandTime& c) { return c.name == event_names_[i]; };
+      auto it = std::find_if(stats.commands.begin(), stats.commands.end(), same);
+      if (it == stats.commands.end()) it = stats.commands.insert(it, SortCommandTime{event_names_[i], 0, 0.0});
+      it->launches += 1;
+      it->ms += ms;
+    }
   });
   return stats;
 }

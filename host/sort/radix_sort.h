@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "runtime/runtime.h"
@@ -33,6 +34,14 @@ struct RadixSortConfig {
   unsigned lo_bit() const { return key_bits - sorted_bits(); }
 };
 
+// One kind of command of a sort (a kernel by its name, a read-back, the final copy): how often it
+// ran and its summed device time (profiling events). The commands' times add up to kernel_ms.
+struct SortCommandTime {
+  std::string name;
+  unsigned launches = 0;
+  double ms = 0.0;
+};
+
 struct SortStats {
   std::size_t count = 0;
   // Counting-sort passes executed (the warp-granular sort: its global pass and its walk, 2).
@@ -40,6 +49,7 @@ struct SortStats {
   unsigned passes_skipped = 0;  // passes whose digit is the same for every key
   double ms = 0.0;              // profiling events: first command's start to last command's end
   double kernel_ms = 0.0;       // sum of the commands' own durations (no gaps, no host read-back)
+  std::vector<SortCommandTime> commands;  // kernel_ms by command, in the order each first ran
   double mkeys_per_s() const { return ms > 0.0 ? static_cast<double>(count) / ms * 1e-3 : 0.0; }
 };
 
@@ -116,6 +126,8 @@ class RadixSort {
   };
   std::optional<KernelOverflow> build_kernels(Runtime& rt);
   void enqueue(cl::Kernel& k, std::size_t global, std::size_t local);
+  // A new profiling event for a command of kind `name` (SortStats::commands).
+  cl::Event& record(std::string name);
   struct Passes;  // one sort's launches and ping-pong buffers (radix_sort.cpp)
   std::uint64_t first_read(Kernels& k, const cl::Buffer& keys, cl_uint n, cl_uint n_items, cl_uint shift, cl_uint hi,
                            std::size_t tiles, std::size_t key_bytes);
@@ -136,6 +148,7 @@ class RadixSort {
   cl::Buffer keys_io_, values_io_;
   std::size_t keys_io_bytes_ = 0, values_io_bytes_ = 0;
   std::vector<cl::Event> events_;
+  std::vector<std::string> event_names_;  // each event's command (SortCommandTime::name)
   std::vector<std::uint32_t> bucket_offsets_;
 };
 
