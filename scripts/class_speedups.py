@@ -109,6 +109,20 @@ def table_lines(paths, source, dram_gbps, encoders=None):
     return lines, points, encoders
 
 
+def class_trend(paths, source, dram_gbps, encoder="hcc", figure="net"):
+    """Over the sets' scene and batch pairs: in how many the fastest class (its own NoSort speed) has the
+    encoder's lowest `figure` ("speedup" or "net"), in how many the slowest has the highest, and the pairs."""
+    nosort, out = rows(paths, source, dram_gbps)
+    pick = 4 if figure == "speedup" else 5
+    pairs = sorted({(k[0], k[1]) for k, *_ in out})
+    low = high = 0
+    for sc, b in pairs:
+        cls = sorted((nosort[r[0]], r[pick]) for r in out if r[0][0] == sc and r[0][1] == b and r[1] == encoder)
+        low += cls[-1][1] == min(v for _, v in cls)
+        high += cls[0][1] == max(v for _, v in cls)
+    return low, high, len(pairs)
+
+
 def profile_dram_gbps(path=os.path.join(ROOT, "gpu/profiles/rtx3060.toml")):
     with open(path, "rb") as f:
         return tomllib.load(f)["dram_gbps"]

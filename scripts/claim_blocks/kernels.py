@@ -1,7 +1,7 @@
 """results/README.md, "What ordering buys as the kernel gets faster" (issue 46) and the CWBVH's DRAM bytes: each trace class's own
 NoSort speed beside each encoder's speedup and net speedup, in the GPU model (results/gpu-model/
 classes-16c0de1) and measured on PoCL (paper-1spp-stream-23a1a19), with scripts/class_speedups.py."""
-from class_speedups import profile_dram_gbps, rows, table_lines
+from class_speedups import class_trend, profile_dram_gbps, rows, table_lines
 
 import csv
 import os
@@ -31,14 +31,8 @@ def cwbvh_gains_phrase():
 def net_trend_phrase():
     """Over every scene-batch pair of the five-class sets: how often the fastest class (its own NoSort)
     has the lowest net speedup, and the slowest the highest."""
-    nosort, out = rows([CWBVH_DRAM, CLASSES_WIDE8, CLASSES_BINARY], "model", profile_dram_gbps())
-    pairs = sorted({(k[0], k[1]) for k, *_ in out})
-    low = high = 0
-    for sc, b in pairs:
-        cls = sorted((nosort[k], net) for k, enc, _, _, _, net in out if k[0] == sc and k[1] == b and enc == "hcc")
-        low += cls[-1][1] == min(n for _, n in cls)
-        high += cls[0][1] == max(n for _, n in cls)
-    return (f"the fastest class has the lowest net in {low} of the {len(pairs)} scene and batch pairs, "
+    low, high, n = class_trend([CWBVH_DRAM, CLASSES_WIDE8, CLASSES_BINARY], "model", profile_dram_gbps())
+    return (f"the fastest class has the lowest net in {low} of the {n} scene and batch pairs, "
             f"the slowest the highest in {high}")
 
 

@@ -7,7 +7,7 @@ import os
 import re
 import statistics
 
-from class_speedups import profile_dram_gbps, rows, table_lines
+from class_speedups import class_trend, profile_dram_gbps, table_lines
 
 from .sets import H200_CLASSES, H200_MODEL, H200_SORTBENCH, H200_TRACE_LOG, H200_VALIDATION, PAPER_SPEEDUPS, ROOT
 
@@ -66,14 +66,8 @@ def classes_block():
 def classes_trend_phrase():
     """Over the scene-batch pairs: how often HCC's speedup is lowest on the fastest class and highest on
     the slowest (each class's own NoSort speed, measured)."""
-    nosort, out = rows(H200_CLASSES, "pocl", profile_dram_gbps())
-    pairs = sorted({(k[0], k[1]) for k, *_ in out})
-    low = high = 0
-    for sc, b in pairs:
-        cls = sorted((nosort[k], s) for k, enc, _, _, s, _ in out if k[0] == sc and k[1] == b and enc == "hcc")
-        low += cls[-1][1] == min(s for _, s in cls)
-        high += cls[0][1] == max(s for _, s in cls)
-    return (f"HCC's speedup is lowest on the fastest class in {low} of the {len(pairs)} scene and batch pairs, "
+    low, high, n = class_trend(H200_CLASSES, "pocl", profile_dram_gbps(), figure="speedup")
+    return (f"HCC's speedup is lowest on the fastest class in {low} of the {n} scene and batch pairs, "
             f"highest on the slowest in {high}")
 
 
