@@ -59,3 +59,10 @@ fi
   | paste -sd' ' > "$out/commit"
 "$out/raysort" --version
 du -sh "$out"/lib "$out"/raysort.bin "$out"/scenes.tar.gz 2>/dev/null || true
+# The device tool sends the checkout's tracked files with the bundle, at most 64 MiB in all
+# (docs/gpu-runs.md): say when results/ must be moved out for the call.
+tree_mib=$(( ($(git -C "$root" ls-files -z | (cd "$root" && xargs -0 cat 2>/dev/null) | wc -c) + $(du -sk "$out" | cut -f1) * 1024) / 1048576 ))
+if [ "$tree_mib" -gt 60 ]; then
+  echo "device-bundle: the checkout's tracked files and the bundle come to about $tree_mib MiB, over the device tool's 64:"
+  echo "  move results/ out of the checkout for the call (mv results ../results-hold; back after)"
+fi
