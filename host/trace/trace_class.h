@@ -33,7 +33,8 @@ enum class TraceLayout {
   Hybrid,
   Stream,
   Cwbvh,
-  BinaryWw
+  BinaryWw,
+  Wide8Merged  // issue 40 experiment: wide8 over the collapse with merged child pairs (temporary)
 };
 
 // The classes' names, in the order help and errors list them: wide, wide8, binary, packet4, packet8,
