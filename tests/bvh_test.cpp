@@ -250,7 +250,7 @@ class ProceduralWide8Bvh : public ::testing::TestWithParam<std::string> {};
 TEST_P(ProceduralWide8Bvh, CollapseKeepsEveryTriangleAndBox) {
   Scene::Flat tris = load_scene(GetParam()).flatten();
   Bvh bvh = build_bvh(tris);
-  const Wide8Bvh w = collapse_to_wide8(bvh, true);
+  const Wide8Bvh w = collapse_to_wide8(bvh, 1);
   EXPECT_EQ(validate_wide8(w, bvh), "");
   // Three binary levels per wide level at least: the bound the kernels' stack relies on.
   EXPECT_LE(w.depth, (bvh.depth + 2) / 3 + 1);
@@ -270,9 +270,12 @@ TEST(Wide8Bvh, MergedNodesOnSibenikAndBreakfastRoom) {
   for (const char* name : {"sibenik", "breakfast_room"}) {
     Scene::Flat tris = load_scene(name).flatten();
     Bvh bvh = build_bvh(tris);
-    const Wide8Bvh before = collapse_to_wide8(bvh, false);
+    const Wide8Bvh before = collapse_to_wide8(bvh, 0);
     wide8_figures(std::string(name) + " (unmerged)", bvh, before);
-    const Wide8Bvh w = collapse_to_wide8(bvh, true);
+    const Wide8Bvh s = collapse_to_wide8(bvh, 2);
+    ASSERT_EQ(validate_wide8(s, bvh), "") << name;
+    wide8_figures(std::string(name) + " (SAH)", bvh, s);
+    const Wide8Bvh w = collapse_to_wide8(bvh, 1);
     ASSERT_EQ(validate_wide8(w, bvh), "") << name;
     const Wide8Figures f = wide8_figures(name, bvh, w);
     EXPECT_EQ(f.mergeable_pairs, 0u) << name;
@@ -298,7 +301,7 @@ TEST(Wide8Bvh, OneLeafAndEmptyTrees) {
 TEST(Wide8Bvh, ValidatorCatchesABrokenCollapse) {
   Scene::Flat tris = load_scene("detail-room").flatten();  // cornell's 8-wide tree is one node
   Bvh bvh = build_bvh(tris);
-  const Wide8Bvh good = collapse_to_wide8(bvh, true);
+  const Wide8Bvh good = collapse_to_wide8(bvh, 1);
   ASSERT_EQ(validate_wide8(good, bvh), "");
   Wide8Bvh broken = good;
   for (auto& pk : broken.packets)

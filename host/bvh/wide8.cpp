@@ -21,7 +21,7 @@ namespace {
 
 class Collapser8 {
  public:
-  Collapser8(const Bvh& bvh, bool merge) : bvh_(bvh), sub_(bvh), merge_(merge) {}
+  Collapser8(const Bvh& bvh, int merge) : bvh_(bvh), sub_(bvh), merge_(merge) {}
 
   Wide8Bvh run() {
     wide_tree::collapse_from_root<8>(
@@ -101,13 +101,21 @@ class Collapser8 {
   // where one of six does. The merged node stays one level below the parent and its children two,
   // so the depth (and RS_WIDE8_STACK_SIZE's bound) cannot grow; its own inner children (from both)
   // are merged in turn.
+  // Experiment arm wide8s: merge only where the union's surface area is at most the two boxes'
+  // (a random ray then enters no more nodes than before).
+  bool sah_agrees(const Child& a, const Child& b) const {
+    if (merge_ != 2) return true;
+    RsBvhNode u = a.box;
+    for (int k = 0; k < 3; ++k) u.bmin[k] = std::min(u.bmin[k], b.box.bmin[k]), u.bmax[k] = std::max(u.bmax[k], b.box.bmax[k]);
+    return node_surface_area(u) <= node_surface_area(a.box) + node_surface_area(b.box);
+  }
   void merge_pairs(std::vector<Child>& children) const {
     for (;;) {
       std::size_t a = children.size(), b = children.size(), fewest = 9;
       for (std::size_t i = 0; i < children.size(); ++i)
         for (std::size_t j = i + 1; j < children.size(); ++j)
           if (!children[i].is_leaf && !children[j].is_leaf &&
-              children[i].children.size() + children[j].children.size() < fewest)
+              children[i].children.size() + children[j].children.size() < fewest && sah_agrees(children[i], children[j]))
             a = i, b = j, fewest = children[i].children.size() + children[j].children.size();
       if (fewest > 8) return;
       Child& m = children[a];
@@ -139,13 +147,13 @@ class Collapser8 {
 
   const Bvh& bvh_;
   const wide_tree::Subtrees sub_;
-  const bool merge_;
+  const int merge_;  // 0 none, 1 pairs, 2 pairs where SAH agrees (issue 40 experiment)
   Wide8Bvh out_;
 };
 
 }  // namespace
 
-Wide8Bvh collapse_to_wide8(const Bvh& bvh, bool merge_pairs) { return Collapser8(bvh, merge_pairs).run(); }
+Wide8Bvh collapse_to_wide8(const Bvh& bvh, int merge_pairs) { return Collapser8(bvh, merge_pairs).run(); }
 
 std::string validate_wide8(const Wide8Bvh& wide, const Bvh& bvh) {
   return wide_tree::validate<8>(wide, bvh, RS_WIDE8_STACK_SIZE);

@@ -34,7 +34,8 @@ enum class TraceLayout {
   Stream,
   Cwbvh,
   BinaryWw,
-  Wide8Merged  // issue 40 experiment: wide8 over the collapse with merged child pairs (temporary)
+  Wide8Merged,  // issue 40 experiment (temporary): wide8 over the merged collapse
+  Wide8Sah      // issue 40 experiment (temporary): merged only where SAH agrees
 };
 
 // The classes' names, in the order help and errors list them: wide, wide8, binary, packet4, packet8,
