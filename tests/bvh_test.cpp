@@ -10,7 +10,6 @@
 #include <cstring>
 #include <string>
 #include <utility>
-#include <vector>
 
 #include "bvh/bvh.h"
 #include "scene/load.h"
@@ -202,86 +201,37 @@ TEST(WideBvh, ValidatorCatchesABrokenCollapse) {
 }  // namespace raysort
 
 // The 8-wide tree of the wide8 trace class (host/bvh/wide8.cpp): every triangle in exactly one
-// packet lane, every child box inside its parent's lane (the validator), inner children at least
-// three binary levels down (the stack bound), the lanes mostly used, and no two inner children of a
-// node left apart whose children would fit one node (the merge).
+// packet lane, every child box inside its parent's lane and equal to a binary node's box (the
+// validator), inner children at least three binary levels down (the stack bound), and the lanes
+// mostly used.
 namespace raysort {
-
-namespace {
-
-struct Wide8Figures {
-  double children_per_node = 0, triangles_per_packet = 0;
-  std::size_t triangle_lanes = 0;
-  std::size_t mergeable_pairs = 0;  // nodes with two inner children whose lanes together fit in eight
-};
-
-std::size_t valid_lanes(const RsWide8Node& n) {
-  std::size_t lanes = 0;
-  for (int k = 0; k < 8; ++k) lanes += n.valid.s[k] != 0;
-  return lanes;
-}
-
-Wide8Figures wide8_figures(const std::string& name, const Bvh& bvh, const Wide8Bvh& w) {
-  Wide8Figures f;
-  std::size_t lanes = 0;
-  for (const RsWide8Node& n : w.nodes) {
-    lanes += valid_lanes(n);
-    std::vector<std::size_t> inner;  // the inner children's lane counts
-    for (int k = 0; k < 8; ++k)
-      if (n.valid.s[k] && !(n.child[k] & RS_WIDE_LEAF)) inner.push_back(valid_lanes(w.nodes[n.child[k]]));
-    std::sort(inner.begin(), inner.end());
-    if (inner.size() >= 2 && inner[0] + inner[1] <= 8) ++f.mergeable_pairs;
-  }
-  for (const RsTriPacket8& p : w.packets)
-    for (int k = 0; k < 8; ++k) f.triangle_lanes += p.valid.s[k] != 0;
-  f.children_per_node = double(lanes) / double(w.nodes.size());
-  f.triangles_per_packet = double(f.triangle_lanes) / double(w.packets.size());
-  std::printf("[ wide8    ] %-14s %zu nodes (4-wide: %zu), depth %u (4-wide %u, binary %u), %.2f children per node, "
-              "%.2f triangles per packet, %zu nodes with a mergeable pair\n",
-              name.c_str(), w.nodes.size(), bvh.wide.nodes.size(), w.depth, bvh.wide.depth, bvh.depth,
-              f.children_per_node, f.triangles_per_packet, f.mergeable_pairs);
-  return f;
-}
-
-}  // namespace
 
 class ProceduralWide8Bvh : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(ProceduralWide8Bvh, CollapseKeepsEveryTriangleAndBox) {
   Scene::Flat tris = load_scene(GetParam()).flatten();
   Bvh bvh = build_bvh(tris);
-  const Wide8Bvh w = collapse_to_wide8(bvh, 1);
+  const Wide8Bvh w = collapse_to_wide8(bvh);
   EXPECT_EQ(validate_wide8(w, bvh), "");
   // Three binary levels per wide level at least: the bound the kernels' stack relies on.
   EXPECT_LE(w.depth, (bvh.depth + 2) / 3 + 1);
   EXPECT_LE(7 * w.depth, static_cast<std::uint32_t>(RS_WIDE8_STACK_SIZE));
-  const Wide8Figures f = wide8_figures(GetParam(), bvh, w);
-  EXPECT_EQ(f.triangle_lanes, tris.v0.size());
-  EXPECT_GT(f.children_per_node, 4.0) << "the greedy fill should use more than half of the lanes";
-  EXPECT_EQ(f.mergeable_pairs, 0u) << "two inner children whose lanes fit one node were left apart";
+  std::size_t lanes = 0, tri_lanes = 0;
+  for (const RsWide8Node& n : w.nodes)
+    for (int k = 0; k < 8; ++k) lanes += n.valid.s[k] != 0;
+  for (const RsTriPacket8& p : w.packets)
+    for (int k = 0; k < 8; ++k) tri_lanes += p.valid.s[k] != 0;
+  EXPECT_EQ(tri_lanes, tris.v0.size());
+  const double per_node = double(lanes) / double(w.nodes.size()), per_packet = double(tri_lanes) / double(w.packets.size());
+  std::printf("[ wide8    ] %-14s %zu nodes (4-wide: %zu), depth %u (4-wide %u, binary %u), %.2f children per node, "
+              "%.2f triangles per packet\n",
+              GetParam().c_str(), w.nodes.size(), bvh.wide.nodes.size(), w.depth, bvh.wide.depth, bvh.depth, per_node,
+              per_packet);
+  EXPECT_GT(per_node, 4.0) << "the greedy fill should use more than half of the lanes";
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, ProceduralWide8Bvh,
                          ::testing::Values("cornell", "detail-room", "landscape", "multi-instance"));
-
-// The merge on the paper's two scenes here: no pair left that fits one node, and fuller nodes.
-TEST(Wide8Bvh, MergedNodesOnSibenikAndBreakfastRoom) {
-  RAYSORT_REQUIRE_REAL_SCENES();
-  for (const char* name : {"sibenik", "breakfast_room"}) {
-    Scene::Flat tris = load_scene(name).flatten();
-    Bvh bvh = build_bvh(tris);
-    const Wide8Bvh before = collapse_to_wide8(bvh, 0);
-    wide8_figures(std::string(name) + " (unmerged)", bvh, before);
-    const Wide8Bvh s = collapse_to_wide8(bvh, 2);
-    ASSERT_EQ(validate_wide8(s, bvh), "") << name;
-    wide8_figures(std::string(name) + " (SAH)", bvh, s);
-    const Wide8Bvh w = collapse_to_wide8(bvh, 1);
-    ASSERT_EQ(validate_wide8(w, bvh), "") << name;
-    const Wide8Figures f = wide8_figures(name, bvh, w);
-    EXPECT_EQ(f.mergeable_pairs, 0u) << name;
-    EXPECT_LE(w.depth, before.depth) << name;
-  }
-}
 
 TEST(Wide8Bvh, OneLeafAndEmptyTrees) {
   Bvh one = build_bvh(flat_from({{{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}}}));
@@ -301,7 +251,7 @@ TEST(Wide8Bvh, OneLeafAndEmptyTrees) {
 TEST(Wide8Bvh, ValidatorCatchesABrokenCollapse) {
   Scene::Flat tris = load_scene("detail-room").flatten();  // cornell's 8-wide tree is one node
   Bvh bvh = build_bvh(tris);
-  const Wide8Bvh good = collapse_to_wide8(bvh, 1);
+  const Wide8Bvh good = collapse_to_wide8(bvh);
   ASSERT_EQ(validate_wide8(good, bvh), "");
   Wide8Bvh broken = good;
   for (auto& pk : broken.packets)

@@ -90,7 +90,7 @@ std::string validate_wide(const WideBvh& wide, const Bvh& bvh);
 
 // Collapses a binary BVH to the 8-wide layout (host/bvh/wide8.cpp). Throws an Error if a leaf needs
 // more than four packets (max_leaf_size > 32) or the stack bound RS_WIDE8_STACK_SIZE could be exceeded.
-Wide8Bvh collapse_to_wide8(const Bvh& bvh, int merge_pairs = 0);  // merge_pairs: issue 40 experiment (wide8m)
+Wide8Bvh collapse_to_wide8(const Bvh& bvh);
 
 // validate_wide's checks on the 8-wide tree, with its stack bound (7 * depth <= RS_WIDE8_STACK_SIZE).
 std::string validate_wide8(const Wide8Bvh& wide, const Bvh& bvh);

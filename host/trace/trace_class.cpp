@@ -52,10 +52,6 @@ constexpr TraceClass kTraceClasses[] = {
      "one ray over the compressed 8-wide BVH of Ylitie et al. 2017, a GPU kernel"},
     {TraceLayout::BinaryWw, "binary-ww", 1, 0, false, TreeKind::Binary, "-DRS_TRACE_BINARY_WW", "_binary_ww", true,
      "one ray over the binary BVH, the while-while loop of Aila and Laine 2009"},
-    {TraceLayout::Wide8Merged, "wide8m", 1, 0, false, TreeKind::Wide8, "-DRS_TRACE_WIDE8", "_wide8", false,
-     "wide8 over the 8-wide BVH with merged child pairs (issue 40 experiment)"},
-    {TraceLayout::Wide8Sah, "wide8s", 1, 0, false, TreeKind::Wide8, "-DRS_TRACE_WIDE8", "_wide8", false,
-     "wide8 over the 8-wide BVH with merged child pairs where SAH agrees (issue 40 experiment)"},
 };
 
 const TraceClass& trace_class(TraceLayout l) {

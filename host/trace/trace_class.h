@@ -33,9 +33,7 @@ enum class TraceLayout {
   Hybrid,
   Stream,
   Cwbvh,
-  BinaryWw,
-  Wide8Merged,  // issue 40 experiment (temporary): wide8 over the merged collapse
-  Wide8Sah      // issue 40 experiment (temporary): merged only where SAH agrees
+  BinaryWw
 };
 
 // The classes' names, in the order help and errors list them: wide, wide8, binary, packet4, packet8,

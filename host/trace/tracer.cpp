@@ -41,7 +41,7 @@ Tracer::Tracer(Runtime& rt, const Bvh& bvh, TraceVariant variant, TraceLayout la
     nodes_ = rt.upload("4-wide bvh nodes", wide.nodes);
     triangles_ = rt.upload("triangle packets", wide.packets);
   } else if (tree_kind(layout_) == TreeKind::Wide8) {
-    const Wide8Bvh wide8 = collapse_to_wide8(bvh, layout_ == TraceLayout::Wide8Merged ? 1 : layout_ == TraceLayout::Wide8Sah ? 2 : 0);
+    const Wide8Bvh wide8 = collapse_to_wide8(bvh);
     nodes_ = rt.upload("8-wide bvh nodes", wide8.nodes);
     triangles_ = rt.upload("8-triangle packets", wide8.packets);
   } else if (tree_kind(layout_) == TreeKind::Compressed8) {
@@ -135,7 +135,7 @@ std::vector<RsHit> trace_reference(const Bvh& bvh, const std::vector<RsRay>& ray
   if (node_visits) node_visits->assign(n, 0);
   WideBvh scratch;
   const WideBvh& wide = walks_wide_tree(layout) ? wide_of(bvh, scratch) : scratch;
-  const Wide8Bvh wide8 = tree_kind(layout) == TreeKind::Wide8 ? collapse_to_wide8(bvh, layout == TraceLayout::Wide8Merged ? 1 : layout == TraceLayout::Wide8Sah ? 2 : 0) : Wide8Bvh{};
+  const Wide8Bvh wide8 = tree_kind(layout) == TreeKind::Wide8 ? collapse_to_wide8(bvh) : Wide8Bvh{};
   const CwBvh cw = tree_kind(layout) == TreeKind::Compressed8 ? collapse_to_cwbvh(bvh) : CwBvh{};
   const int robust = variant == TraceVariant::Robust ? 1 : 0;
   // The classes that trace several consecutive rays at once read them through an order.
@@ -162,7 +162,7 @@ std::vector<RsHit> trace_reference(const Bvh& bvh, const std::vector<RsRay>& ray
       rs_u32* v = node_visits ? &visits : nullptr;
       if (layout == TraceLayout::Wide)
         hits[i] = rs_traverse_wide(wide.nodes.data(), wide.packets.data(), ray, robust, any_hit ? 1 : 0, v);
-      else if (layout == TraceLayout::Wide8 || layout == TraceLayout::Wide8Merged || layout == TraceLayout::Wide8Sah)
+      else if (layout == TraceLayout::Wide8)
         hits[i] = rs_traverse_wide8(wide8.nodes.data(), wide8.packets.data(), ray, robust, any_hit ? 1 : 0, v);
       else if (layout == TraceLayout::Cwbvh)
         hits[i] = rs_traverse_cwbvh(cw.nodes.data(), cw.triangles.data(), ray, robust, any_hit ? 1 : 0, v);
