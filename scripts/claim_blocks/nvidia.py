@@ -9,7 +9,7 @@ import statistics
 
 from class_speedups import class_trend, profile_dram_gbps, table_lines
 
-from .sets import H200_CLASSES, H200_MODEL, H200_SORTBENCH, H200_TRACE_LOG, H200_VALIDATION, PAPER_SPEEDUPS, ROOT
+from .sets import H200_CLASSES, H200_MODEL, H200_PAPER, H200_SORTBENCH, H200_TRACE_LOG, H200_VALIDATION, PAPER_SPEEDUPS, ROOT
 
 # The GPU-class kernels first, then the CPU classes' narrowest packet and the stream, for the record.
 TRACE_COLUMNS = ["wide", "wide8", "binary", "binary-ww", "cwbvh", "packet4", "stream"]
@@ -157,3 +157,29 @@ def validation_summary_phrase():
     aa = [r for r in cells if r["encoder"] == "nosort"]
     inside = sum(float(r["aa_lo"]) <= 1.0 <= float(r["aa_hi"]) for r in aa)
     return f"{len(cells)} cells, A/A {inside} of {len(aa)}"
+
+
+def table6_block():
+    """The paper's Table 6 (key lengths on Sibenik, secondary rays) measured on the H200 (the paper preset on
+    sibenik and breakfast_room, gather), beside the paper's RTX 3060 speedups, and their Pearson."""
+    import gpu_model_validate as v
+
+    with open(os.path.join(H200_PAPER, "cells.csv"), newline="") as f:
+        cells = {(r["encoder"], r["bits"]): r for r in csv.DictReader(f)
+                 if r["status"] == "ok" and r["scene"] == "sibenik" and r["batch"] == "bounce1" and r["access"] == "gather"}
+    with open(PAPER_SPEEDUPS, newline="") as f:
+        paper = {(p["encoder"], p["bits"]): float(p["paper_speedup"]) for p in csv.DictReader(f) if p["table"] == "6"}
+    encoders = sorted({e for e, _ in paper}, key=["hcc", "mlhcc", "twopoint", "ppc"].index)
+    lines = ["| encoder | 16 bits: H200 (paper) | 32 bits | 64 bits | H200 ANC 16 / 32 / 64 |", "|---|---:|---:|---:|---:|"]
+    ours, theirs = [], []
+    for e in encoders:
+        row = []
+        for bits in ("16", "32", "64"):
+            s = float(cells[(e, bits)]["speedup"])
+            ours.append(s), theirs.append(paper[(e, bits)])
+            row.append(f"{s:.2f} ({paper[(e, bits)]:.2f})")
+        anc = " / ".join(f"{float(cells[(e, b)]['anc']):.2f}" for b in ("16", "32", "64"))
+        lines.append(f"| {e} | " + " | ".join(row) + f" | {anc} |")
+    lines.append(f"\nPearson of the {len(ours)} cells, H200 against the paper: {v.pearson(ours, theirs):.2f}, "
+                 f"Spearman {v.spearman(ours, theirs):.2f}")
+    return "\n".join(lines)

@@ -46,6 +46,7 @@ H200 = os.path.join(ROOT, "results", "gpu-nvidia-h200")
 H200_TRACE_LOG = os.path.join(H200, "trace-classes-3182779.log")
 H200_CLASSES = [os.path.join(H200, "classes-sb-12e32f2"), os.path.join(H200, "classes-3more-12e32f2")]
 H200_VALIDATION = os.path.join(H200, "gpu-validation-12e32f2")
+H200_PAPER = os.path.join(H200, "paper-1spp-sb-12e32f2")
 # The same matrix run here with --gpu-model h200 (reps 1): the model's predictions for that GPU.
 H200_MODEL = os.path.join(ROOT, "results", "gpu-model", "h200-model-12e32f2")
 H200_SORTBENCH = os.path.join(H200, "sortbench-12e32f2.md")
