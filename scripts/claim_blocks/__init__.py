@@ -64,6 +64,7 @@ GENERATORS = {
     "h200-validation": nvidia.validation_block,
     "h200-model-measured": nvidia.model_block,
     "h200-table6": nvidia.table6_block,
+    "h200-same-orders": nvidia.same_orders_phrase,
     "h200-sortbench": nvidia.sortbench_phrase,
     "h200-validation-summary": nvidia.validation_summary_phrase,
     "ref-overview": reference_sets.overview_block,

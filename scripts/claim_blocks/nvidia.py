@@ -9,7 +9,7 @@ import statistics
 
 from class_speedups import class_trend, profile_dram_gbps, table_lines
 
-from .sets import H200_CLASSES, H200_MODEL, H200_PAPER, H200_SORTBENCH, H200_TRACE_LOG, H200_VALIDATION, PAPER_SPEEDUPS, ROOT
+from .sets import SHARED_ROUNDS, H200_CLASSES, H200_MODEL, H200_PAPER, H200_SORTBENCH, H200_TRACE_LOG, H200_VALIDATION, PAPER_SPEEDUPS, ROOT
 
 # The GPU-class kernels first, then the CPU classes' narrowest packet and the stream, for the record.
 TRACE_COLUMNS = ["wide", "wide8", "binary", "binary-ww", "cwbvh", "packet4", "stream"]
@@ -183,3 +183,16 @@ def table6_block():
     lines.append(f"\nPearson of the {len(ours)} cells, H200 against the paper: {v.pearson(ours, theirs):.2f}, "
                  f"Spearman {v.spearman(ours, theirs):.2f}")
     return "\n".join(lines)
+
+
+def same_orders_phrase():
+    """Device independence at the paper's scale: the H200's sibenik cells of the paper preset against the same
+    preset's cells on the Xeon (PoCL; the shared-rounds set of be9b74a): order hash and ANC per cell."""
+    def cells(path):
+        with open(os.path.join(path, "cells.csv"), newline="") as f:
+            return {(r["scene"], r["batch"], r["encoder"], r["bits"], r["access"]): r for r in csv.DictReader(f)
+                    if r["status"] == "ok" and r["encoder"] != "nosort"}
+    gpu, cpu = cells(H200_PAPER), cells(os.path.join(SHARED_ROUNDS, "shared-be9b74a"))
+    common = [k for k in gpu if k in cpu]
+    same = sum(gpu[k]["order_hash"] == cpu[k]["order_hash"] and gpu[k]["anc"] == cpu[k]["anc"] for k in common)
+    return f"{same} of the {len(common)} sibenik cells"
