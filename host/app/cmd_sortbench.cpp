@@ -209,11 +209,9 @@ void print_time_by_command(const Row& r) {
   fmt::print("\nwhere the time goes, {} {} {}-bit keys (median of {} reps, profiling events):\n\n", r.n, r.keys,
              r.bits, r.full_reps.size());
   fmt::print("| command | launches | ms | % of the sort |\n|---|---:|---:|---:|\n");
-  const double total = median([&] {
-    std::vector<double> v;
-    for (const SortStats& s : r.full_reps) v.push_back(s.ms);
-    return v;
-  }());
+  std::vector<double> spans, gaps;
+  for (const SortStats& s : r.full_reps) spans.push_back(s.ms), gaps.push_back(s.ms - s.kernel_ms);
+  const double total = median(spans);
   for (const SortCommandTime& c : r.full_reps.front().commands) {
     std::vector<double> ms;
     for (const SortStats& s : r.full_reps)
@@ -221,8 +219,6 @@ void print_time_by_command(const Row& r) {
         if (d.name == c.name) ms.push_back(d.ms);
     fmt::print("| {} | {} | {:.3f} | {:.0f}% |\n", c.name, c.launches, median(ms), 100.0 * median(ms) / total);
   }
-  std::vector<double> gaps;
-  for (const SortStats& s : r.full_reps) gaps.push_back(s.ms - s.kernel_ms);
   fmt::print("| gaps between commands | | {:.3f} | {:.0f}% |\n", median(gaps), 100.0 * median(gaps) / total);
   fmt::print("| the sort (first command's start to last's end) | | {:.3f} | 100% |\n", total);
 }

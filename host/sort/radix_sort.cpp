@@ -19,13 +19,6 @@ unsigned floor_pow2(std::size_t v) {
   return p;
 }
 
-// A kernel's function name, without the terminating NUL some OpenCL headers keep in the string.
-std::string kernel_name(const cl::Kernel& k) {
-  std::string name = k.getInfo<CL_KERNEL_FUNCTION_NAME>();
-  while (!name.empty() && name.back() == '\0') name.pop_back();
-  return name;
-}
-
 std::string program_options(const RadixSortTuning& t, unsigned key_bits) {
   return fmt::format("-DRS_KEY_BITS={} -DRS_RADIX_BITS={} -DRS_WG={} -DRS_MAX_ITEMS={} -DRS_SCAN_WG={}", key_bits,
                      t.radix_bits, t.work_group, t.items, t.scan_work_group);
@@ -105,14 +98,12 @@ RadixSort::RadixSort(Runtime& rt, const RadixSortTuning& tuning, RadixSortFit fi
   for (;;) {
     const std::optional<KernelOverflow> over = build_kernels(rt);
     if (!over) break;
-    const bool shrinkable = fit == RadixSortFit::ShrinkToKernels && over->most >= 1;
-    unsigned& shape = over->scan_shape ? tuning_.scan_work_group : tuning_.work_group;
-    if (!shrinkable || floor_pow2(over->most) >= shape)
+    if (fit == RadixSortFit::Exact)
       throw Error(fmt::format("radix sort: a work-group of {} work-items (work_group {}, scan_work_group {}) is more "
                               "than kernel {} takes on device '{}' ({}); force {} or fewer",
                               over->local, tuning_.work_group, tuning_.scan_work_group, over->name, rt.info().name,
                               over->most, over->most));
-    shape = floor_pow2(over->most);
+    (over->scan_shape ? tuning_.scan_work_group : tuning_.work_group) = floor_pow2(over->most);  // < the launch
   }
 }
 
@@ -165,15 +156,15 @@ void RadixSort::ensure(Runtime& rt, cl::Buffer& b, std::size_t& have, std::size_
   have = std::max<std::size_t>(need, 4);
 }
 
-cl::Event& RadixSort::record(std::string name) {
+cl::Event& RadixSort::record(const char* name) {
   events_.emplace_back();
-  event_names_.push_back(std::move(name));
+  event_names_.push_back(name);
   return events_.back();
 }
 
-void RadixSort::enqueue(cl::Kernel& k, std::size_t global, std::size_t local) {
+void RadixSort::enqueue(cl::Kernel& k, const char* name, std::size_t global, std::size_t local) {
   rt_.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(Runtime::padded(global, local)), cl::NDRange(local),
-                                   nullptr, &record(kernel_name(k)));
+                                   nullptr, &record(name));
 }
 
 namespace {
@@ -199,11 +190,11 @@ struct RadixSort::Passes {
 
   void count(cl_uint shift) {
     set_args(k.count, *src_keys, n, n_items, shift, hi, rs.counts_);
-    rs.enqueue(k.count, tiles * wg, wg);
+    rs.enqueue(k.count, "rs_count", tiles * wg, wg);
   }
   void scan() {
     set_args(k.scan, rs.counts_, static_cast<cl_uint>(bins));
-    rs.enqueue(k.scan, rs.tuning_.scan_work_group, rs.tuning_.scan_work_group);
+    rs.enqueue(k.scan, "rs_scan", rs.tuning_.scan_work_group, rs.tuning_.scan_work_group);
   }
   void flip() {
     std::swap(src_keys, dst_keys);
@@ -212,20 +203,20 @@ struct RadixSort::Passes {
   }
   void scatter(cl_uint shift) {
     set_args(k.scatter, *src_keys, *src_values, *dst_keys, *dst_values, n, n_items, shift, hi, rs.counts_);
-    rs.enqueue(k.scatter, tiles * wg, wg);
+    rs.enqueue(k.scatter, "rs_scatter", tiles * wg, wg);
     flip();
   }
   // The hybrid's LSD passes over the lower digits `pass_mask`, one work-item per top-digit bucket.
   void bucket_sort(cl_uint lo, cl_uint pass_mask, std::size_t radix) {
     set_args(k.bucket_sort, *src_keys, *src_values, *dst_keys, *dst_values, n, static_cast<cl_uint>(tiles), rs.counts_,
              lo, hi, pass_mask);
-    rs.enqueue(k.bucket_sort, radix, 1);
+    rs.enqueue(k.bucket_sort, "rs_bucket_sort", radix, 1);
   }
   // The warp-granular sort's walk of every top-digit bucket (pass_mask: the varying 8-bit digits).
   void warp_sort(cl_uint lo, cl_uint top_pass, cl_uint pass_mask, cl_uint group, std::size_t radix) {
     set_args(k.warp_sort, *src_keys, *src_values, *dst_keys, *dst_values, n, static_cast<cl_uint>(tiles), rs.counts_,
              lo, hi, top_pass, pass_mask, group);
-    rs.enqueue(k.warp_sort, radix, 1);
+    rs.enqueue(k.warp_sort, "rs_warp_sort", radix, 1);
     flip();  // every bucket's result lies in the destination buffers
   }
 };
@@ -243,11 +234,11 @@ std::uint64_t RadixSort::first_read(Kernels& k, const cl::Buffer& keys, cl_uint 
     k.count_bounds.setArg(4, hi);
     k.count_bounds.setArg(5, counts_);
     k.count_bounds.setArg(6, tile_bounds_);
-    enqueue(k.count_bounds, tiles * tuning_.work_group, tuning_.work_group);
+    enqueue(k.count_bounds, "rs_count_bounds", tiles * tuning_.work_group, tuning_.work_group);
     k.reduce_bounds.setArg(0, tile_bounds_);
     k.reduce_bounds.setArg(1, static_cast<cl_uint>(tiles));
     k.reduce_bounds.setArg(2, bounds_);
-    enqueue(k.reduce_bounds, tuning_.scan_work_group, tuning_.scan_work_group);
+    enqueue(k.reduce_bounds, "rs_reduce_bounds", tuning_.scan_work_group, tuning_.scan_work_group);
     std::uint64_t bounds[2] = {0, 0};  // OR, AND of all keys
     rt_.queue().enqueueReadBuffer(bounds_, CL_TRUE, 0, 2 * key_bytes, bounds, nullptr, &record("read key bounds"));
     if (key_bytes == 4) {

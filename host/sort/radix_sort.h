@@ -125,9 +125,10 @@ class RadixSort {
     bool scan_shape;  // a launch of scan_work_group (else work_group)
   };
   std::optional<KernelOverflow> build_kernels(Runtime& rt);
-  void enqueue(cl::Kernel& k, std::size_t global, std::size_t local);
-  // A new profiling event for a command of kind `name` (SortStats::commands).
-  cl::Event& record(std::string name);
+  // Launches kernel k (its function name: what SortStats::commands counts it as).
+  void enqueue(cl::Kernel& k, const char* name, std::size_t global, std::size_t local);
+  // A new profiling event for a command of kind `name`, a string literal (SortStats::commands).
+  cl::Event& record(const char* name);
   struct Passes;  // one sort's launches and ping-pong buffers (radix_sort.cpp)
   std::uint64_t first_read(Kernels& k, const cl::Buffer& keys, cl_uint n, cl_uint n_items, cl_uint shift, cl_uint hi,
                            std::size_t tiles, std::size_t key_bytes);
@@ -148,7 +149,7 @@ class RadixSort {
   cl::Buffer keys_io_, values_io_;
   std::size_t keys_io_bytes_ = 0, values_io_bytes_ = 0;
   std::vector<cl::Event> events_;
-  std::vector<std::string> event_names_;  // each event's command (SortCommandTime::name)
+  std::vector<const char*> event_names_;  // each event's command (SortCommandTime::name)
   std::vector<std::uint32_t> bucket_offsets_;
 };
 
