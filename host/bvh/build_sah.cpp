@@ -3,13 +3,14 @@
 // How the threads share the build without changing the tree. A node's split depends only on the
 // set of triangles in its range, and a node's partition reorders only its own range; so subtrees
 // build independently of each other, in any order, on any thread. The builder therefore
-//  1. splits the top of the tree, node by node, each node's bounds and bins computed by all
-//     threads over chunks of its range and merged in chunk order (exact: min/max keep the first
-//     of equal values, +0 or -0, as one pass in range order does; counts are sums), then
-//     partitions it (std::partition, the one the serial build always used, so the triangle order
-//     is the same);
+//  1. splits the top of the tree, node by node, on this thread: a node's bins computed by all
+//     threads over chunks of its range and merged in chunk order while no job runs yet (exact:
+//     min/max keep the first of equal values, +0 or -0, as one pass in range order does; counts
+//     are sums), then partitioned in std::partition's order, the one the serial build always used
+//     (partition_bounded, which bounds both sides on the way), so the triangle order is the same;
 //  2. builds each subtree below the top (a node of at most `job_size` triangles) as a job of its
-//     own, numbered locally, the jobs shared among the threads;
+//     own, numbered locally, started on the other threads as soon as a split makes its root
+//     (JobStream), and on this thread too once the top is split;
 //  3. lays the tree out exactly as the serial depth-first build numbers it: children allocated in
 //     pairs when their parent is visited, the left subtree before the right. A subtree built with
 //     local numbering (root 0, the k-th inner node's children at 1 + 2k) lands unchanged but for
@@ -19,11 +20,14 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstddef>
+#include <deque>
 #include <optional>
 
 #include "bvh/bvh.h"
 #include "bvh/sah_bins.h"
 #include "util/error.h"
+#include "util/huge_pages.h"
 #include "util/parallel.h"
 
 namespace raysort {
@@ -32,6 +36,7 @@ namespace {
 
 using sah::BinMap;
 using sah::Box;
+using sah::Box4;
 using sah::NodeBounds;
 using sah::PrimRef;
 using sah::SahBins;
@@ -48,12 +53,102 @@ struct Range {
   std::uint32_t count() const { return end - begin; }
 };
 
+// The bounds of both sides of a split, found by the partition that made it (partition_bounded):
+// the children's NodeBounds without a pass of their own over their ranges.
+struct SideBounds {
+  NodeBounds side[2];
+  bool known = false;  // false: the object median split the node (its sides were not bounded)
+};
+
+// Whether a box has a coordinate equal to zero. Of equal values a box keeps the first it meets
+// (the builder's rule: +0 or -0, as a pass in range order), and only for zero can two equal floats
+// differ in their bits; so a box with no zero coordinate is the same whatever order its records
+// were met in.
+bool has_zero(const Box& b) {
+  for (int a = 0; a < 3; ++a)
+    if (b.lo[a] == 0.0f || b.hi[a] == 0.0f) return true;
+  return false;
+}
+
+// std::partition as libstdc++ writes it (bits/stl_algo.h, the bidirectional __partition: Hoare's
+// scheme, the one that built every tree so far), written out so that the same pass bounds both
+// sides: each record is tested once, and is then known to stay on its side or to move to the other
+// in one swap. The records end in std::partition's order on any standard library. The sides'
+// boxes are those of passes in range order over them unless a coordinate is zero (has_zero); such
+// a side is bounded again by that pass, so the tree is the one of separate passes, bit for bit.
+// Fusing the pass saved a read of every record of every node (docs/trace.md, "BVH build").
+static_assert(sizeof(PrimRef) == 32 && offsetof(PrimRef, hi) == 16, "a record is two float4 rows: lo + id, hi + pad");
+
+template <class Pred>
+PrimRef* partition_bounded(PrimRef* first, PrimRef* last, Pred pred, SideBounds& sides) {
+  PrimRef* const begin = first;
+  PrimRef* const end = last;
+  Box4 box[2], cen[2];
+  const __m128 xyz = _mm_castsi128_ps(_mm_set_epi32(0, -1, -1, -1));  // as sah::load
+  auto add_rows = [&](__m128 lo_row, __m128 hi_row, int side) {
+    const __m128 lo = _mm_and_ps(lo_row, xyz), hi = _mm_and_ps(hi_row, xyz);
+    box[side].grow(lo, hi);
+    const __m128 m = sah::centroid(lo, hi);
+    cen[side].grow(m, m);
+  };
+  auto rows = [](const PrimRef* r, __m128& lo_row, __m128& hi_row) {
+    lo_row = _mm_loadu_ps(reinterpret_cast<const float*>(r));
+    hi_row = _mm_loadu_ps(reinterpret_cast<const float*>(r) + 4);
+  };
+  auto add = [&](const PrimRef& r, int side) {
+    __m128 lo_row, hi_row;
+    rows(&r, lo_row, hi_row);
+    add_rows(lo_row, hi_row, side);
+  };
+  PrimRef* mid = nullptr;
+  while (!mid) {
+    while (first != last && pred(*first)) add(*first++, 0);
+    if (first == last) {
+      mid = first;
+      break;
+    }
+    --last;  // *first is on the right side (not yet counted), as std::partition found it
+    while (first != last && !pred(*last)) add(*last--, 1);
+    if (first == last) {
+      add(*first, 1);
+      mid = first;
+      break;
+    }
+    // std::iter_swap through registers, each record bounded from the rows it was swapped with: a
+    // record read back right after its swap waited on store forwarding (one instruction after it
+    // held 21 % of the partition's samples).
+    __m128 f_lo, f_hi, l_lo, l_hi;
+    rows(first, f_lo, f_hi);
+    rows(last, l_lo, l_hi);
+    _mm_storeu_ps(reinterpret_cast<float*>(first), l_lo);
+    _mm_storeu_ps(reinterpret_cast<float*>(first) + 4, l_hi);
+    _mm_storeu_ps(reinterpret_cast<float*>(last), f_lo);
+    _mm_storeu_ps(reinterpret_cast<float*>(last) + 4, f_hi);
+    add_rows(l_lo, l_hi, 0);
+    add_rows(f_lo, f_hi, 1);
+    ++first;
+  }
+  const PrimRef* range[2][2] = {{begin, mid}, {mid, end}};
+  for (int k = 0; k < 2; ++k) {
+    sides.side[k] = NodeBounds{box[k].box(), cen[k].box()};
+    if (has_zero(sides.side[k].bounds) || has_zero(sides.side[k].centroids)) {
+      sides.side[k] = NodeBounds{};
+      sides.side[k].add(range[k][0], range[k][1]);
+    }
+  }
+  sides.known = true;
+  return mid;
+}
+
 // What a node becomes once its bounds and best split are known: a leaf (nullopt), or an inner
-// node whose range is now partitioned at the returned middle. The serial builder's rules: SAH
-// split when it is cheaper than a leaf or the leaf would be too big; the object median when no SAH
-// split exists or it leaves a side empty.
+// node whose range is now partitioned at the returned middle, with its sides' bounds in `sides`
+// when the SAH split made it. The serial builder's rules: SAH split when it is cheaper than a leaf
+// or the leaf would be too big; the object median when no SAH split exists or it leaves a side
+// empty.
 std::optional<std::uint32_t> split_or_leaf(std::vector<PrimRef>& refs, const Range& r, const NodeBounds& nb,
-                                           const Split& split, std::uint32_t nbins, const BvhBuildOptions& opts) {
+                                           const Split& split, std::uint32_t nbins, const BvhBuildOptions& opts,
+                                           SideBounds& sides) {
+  sides.known = false;
   const std::uint32_t count = r.count();
   if (count == 1) return std::nullopt;
   const float parent_area = nb.bounds.area();
@@ -65,13 +160,14 @@ std::optional<std::uint32_t> split_or_leaf(std::vector<PrimRef>& refs, const Ran
   if (split.axis >= 0 && (split_cost < leaf_cost || count > opts.max_leaf_size)) {
     const BinMap map(nb.centroids, nbins);
     const int a = split.axis;
-    auto it = std::partition(refs.begin() + r.begin, refs.begin() + r.end,
-                             [&](const PrimRef& p) { return map.bin(p, a) <= split.bin; });
-    mid = static_cast<std::uint32_t>(it - refs.begin());
+    PrimRef* it = partition_bounded(refs.data() + r.begin, refs.data() + r.end,
+                                    [&](const PrimRef& p) { return map.bin(p, a) <= split.bin; }, sides);
+    mid = static_cast<std::uint32_t>(it - refs.data());
   } else if (count <= opts.max_leaf_size) {
     return std::nullopt;
   }
   if (mid <= r.begin || mid >= r.end) {
+    sides.known = false;
     // The object median along the widest centroid axis, ties broken by id so the result is deterministic.
     const Box& cb = nb.centroids;
     int axis = 0;
@@ -101,25 +197,34 @@ struct Subtree {
   std::uint32_t depth = 0, leaves = 0;
 };
 
-// A node waiting to be split: where it goes and its triangles.
+// A node waiting to be split: where it goes, its triangles and, when its parent's partition found
+// them, their bounds.
 struct Task {
   std::uint32_t node;
   Range range;
+  NodeBounds bounds;
+  bool bounded = false;
 };
 
-Subtree build_subtree(std::vector<PrimRef>& refs, const Range& root, std::uint32_t nbins, const BvhBuildOptions& opts) {
+// root_bounds: the root's bounds when known (else computed here).
+Subtree build_subtree(std::vector<PrimRef>& refs, const Range& root, const NodeBounds* root_bounds, std::uint32_t nbins,
+                      const BvhBuildOptions& opts) {
   Subtree t;
-  t.nodes.reserve(2 * root.count() / std::max<std::uint32_t>(1, opts.max_leaf_size / 2) + 1);
+  reserve_huge(t.nodes, 2 * root.count() / std::max<std::uint32_t>(1, opts.max_leaf_size / 2) + 1);
   t.nodes.push_back({});
   SahBins bins(nbins);
-  std::vector<Task> stack{{0, root}};
+  SideBounds sides;
+  std::vector<Task> stack{{0, root, root_bounds ? *root_bounds : NodeBounds{}, root_bounds != nullptr}};
   while (!stack.empty()) {
     const Task task = stack.back();
     stack.pop_back();
     const Range& r = task.range;
     // In range order, as the serial build: of equal values (+0 and -0) a box keeps the first met.
     NodeBounds nb;
-    nb.add(refs.data() + r.begin, refs.data() + r.end);
+    if (task.bounded)
+      nb = task.bounds;
+    else
+      nb.add(refs.data() + r.begin, refs.data() + r.end);
     set_box(t.nodes[task.node], nb.bounds);
     t.depth = std::max(t.depth, r.depth);
     Split split;
@@ -129,7 +234,7 @@ Subtree build_subtree(std::vector<PrimRef>& refs, const Range& root, std::uint32
       bins.add(refs.data() + r.begin, refs.data() + r.end, map);
       split = bins.best(map);
     }
-    const std::optional<std::uint32_t> mid = split_or_leaf(refs, r, nb, split, nbins, opts);
+    const std::optional<std::uint32_t> mid = split_or_leaf(refs, r, nb, split, nbins, opts, sides);
     if (!mid) {
       t.nodes[task.node].first = r.begin;
       t.nodes[task.node].count = r.count();
@@ -142,8 +247,8 @@ Subtree build_subtree(std::vector<PrimRef>& refs, const Range& root, std::uint32
     t.nodes[task.node].first = left;
     t.nodes[task.node].count = 0;
     // Right first on the stack so the left subtree is laid out first (depth-first order).
-    stack.push_back({left + 1, {*mid, r.end, r.depth + 1}});
-    stack.push_back({left, {r.begin, *mid, r.depth + 1}});
+    stack.push_back({left + 1, {*mid, r.end, r.depth + 1}, sides.side[1], sides.known});
+    stack.push_back({left, {r.begin, *mid, r.depth + 1}, sides.side[0], sides.known});
   }
   return t;
 }
@@ -152,7 +257,8 @@ Subtree build_subtree(std::vector<PrimRef>& refs, const Range& root, std::uint32
 // the top nodes, a leaf, or the root of a job's subtree.
 struct TopNode {
   Range range;
-  NodeBounds bounds;        // inner or leaf (a job computes its root's)
+  NodeBounds bounds;        // when bounded: from the parent's partition, or computed for the node
+  bool bounded = false;
   std::int32_t left = -1;  // inner: the left child's index among the top nodes, the right one next to it
   std::int32_t job = -1;   // the root of subtree `job`
 };
@@ -186,11 +292,12 @@ void split_top_node(std::vector<PrimRef>& refs, std::vector<TopNode>& top, std::
     for (unsigned t = 1; t < threads; ++t) bins[0].merge(bins[t]);
     split = bins[0].best(map);
   }
-  const std::optional<std::uint32_t> mid = split_or_leaf(refs, r, nb, split, nbins, opts);
+  SideBounds sides;
+  const std::optional<std::uint32_t> mid = split_or_leaf(refs, r, nb, split, nbins, opts, sides);
   if (!mid) return;  // a leaf: left and job stay -1
   top[i].left = static_cast<std::int32_t>(top.size());
-  top.push_back({{r.begin, *mid, r.depth + 1}, {}});
-  top.push_back({{*mid, r.end, r.depth + 1}, {}});
+  top.push_back({{r.begin, *mid, r.depth + 1}, sides.side[0], sides.known});
+  top.push_back({{*mid, r.end, r.depth + 1}, sides.side[1], sides.known});
 }
 
 struct Layout {
@@ -198,7 +305,7 @@ struct Layout {
   const std::vector<TopNode>& top;
   std::vector<std::uint32_t>& job_offset;  // per job: where its nodes 1.. start (`next` at its root)
   std::vector<std::uint32_t>& job_slot;    // per job: where its root goes
-  const std::vector<Subtree>& jobs;
+  const std::deque<Subtree>& jobs;
   std::uint32_t next = 1;
   std::uint32_t leaves = 0;
 
@@ -238,7 +345,7 @@ void copy_job(std::vector<RsBvhNode>& nodes, const Subtree& s, std::uint32_t slo
 }
 
 std::vector<PrimRef> primitives_of(const Scene::Flat& tris, unsigned threads) {
-  std::vector<PrimRef> refs(tris.size());
+  std::vector<PrimRef> refs = huge_vector<PrimRef>(tris.size());
   for_each_chunk_on(threads, tris.size(), [&](std::size_t b, std::size_t e) {
     for (std::size_t i = b; i < e; ++i) {
       Box box;
@@ -259,7 +366,7 @@ std::vector<PrimRef> primitives_of(const Scene::Flat& tris, unsigned threads) {
 
 // The triangles in leaf order (what the nodes' first/count index), with their original ids.
 std::vector<RsTriangle> leaf_ordered(const Scene::Flat& tris, const std::vector<PrimRef>& refs, unsigned threads) {
-  std::vector<RsTriangle> out(refs.size());
+  std::vector<RsTriangle> out = huge_vector<RsTriangle>(refs.size());
   for_each_chunk_on(threads, refs.size(), [&](std::size_t b, std::size_t e) {
     for (std::size_t k = b; k < e; ++k) {
       const std::uint32_t t = refs[k].id;
@@ -281,31 +388,35 @@ void build_binary(Bvh& bvh, std::vector<PrimRef>& refs, unsigned threads, const 
   const std::uint32_t nbins = std::max<std::uint32_t>(2, opts.bins);
   const auto n = static_cast<std::uint32_t>(refs.size());
   const std::uint32_t job_size = threads > 1 ? std::max(kMinParallelPerThread * threads, n / (8 * threads)) : n;
-  std::vector<TopNode> top{{{0, n, 0}, {}}};
-  std::vector<std::size_t> job_roots;  // the top nodes that are jobs
-  for (std::size_t i = 0; i < top.size(); ++i) {
-    if (top[i].range.count() <= job_size) {
-      top[i].job = static_cast<std::int32_t>(job_roots.size());
-      job_roots.push_back(i);
-    } else {
-      top[i].bounds = bounds_of(refs, top[i].range.begin, top[i].range.end, threads);
-      split_top_node(refs, top, i, threads, nbins, opts);
+  std::vector<TopNode> top{{{0, n, 0}, {}, false}};
+  // A job starts as soon as a split makes its root, while this thread goes on splitting the top:
+  // the other threads build subtrees instead of waiting for the top's partitions (one thread
+  // each, std::partition's order). Until the first job exists, a top node is binned by all
+  // threads. (A deque: its elements stay where they are while jobs are added.)
+  std::deque<Subtree> jobs;
+  {
+    JobStream stream(threads);
+    for (std::size_t i = 0; i < top.size(); ++i) {
+      TopNode& t = top[i];
+      if (t.range.count() <= job_size) {
+        t.job = static_cast<std::int32_t>(jobs.size());
+        Subtree& out = jobs.emplace_back();
+        stream.add(t.range.count(), [&refs, &out, &opts, nbins, range = t.range, bounds = t.bounds, bounded = t.bounded] {
+          out = build_subtree(refs, range, bounded ? &bounds : nullptr, nbins, opts);
+        });
+        continue;
+      }
+      const unsigned top_threads = jobs.empty() ? threads : 1;
+      if (!t.bounded) t.bounds = bounds_of(refs, t.range.begin, t.range.end, top_threads);
+      t.bounded = true;
+      split_top_node(refs, top, i, top_threads, nbins, opts);
     }
+    stream.finish();
   }
-  // Largest jobs first, so that the last one to start is small (the threads finish together).
-  auto job_size_of = [&](std::size_t j) { return top[job_roots[j]].range.count(); };
-  std::vector<std::size_t> order(job_roots.size());
-  for (std::size_t j = 0; j < order.size(); ++j) order[j] = j;
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) { return job_size_of(x) > job_size_of(y); });
-  std::vector<Subtree> jobs(job_roots.size());
-  for_each_job(threads, order.size(), [&](std::size_t k) {
-    const TopNode& root = top[job_roots[order[k]]];
-    jobs[order[k]] = build_subtree(refs, root.range, nbins, opts);
-  });
   std::vector<std::uint32_t> offset(jobs.size()), slot(jobs.size());
   std::size_t total = 0;
   for (const TopNode& t : top) total += t.job >= 0 ? jobs[t.job].nodes.size() : 1;
-  bvh.nodes.assign(total, RsBvhNode{});
+  bvh.nodes = huge_vector<RsBvhNode>(total);
   Layout layout{bvh.nodes, top, offset, slot, jobs};
   layout.place(0, 0);
   bvh.leaf_count = layout.leaves;

@@ -18,79 +18,50 @@ namespace raysort {
 
 namespace {
 
-class Collapser8 {
- public:
-  explicit Collapser8(const Bvh& bvh) : bvh_(bvh), sub_(bvh) {}
+// A subtree of at most eight triangles becomes one leaf (one full packet) when SAH agrees: the
+// 4-wide collapse's rule (wide.cpp) at the 8-wide packet's size. The SAH builder's leaves hold
+// about two triangles; merged, a leaf test fills more of the eight lanes.
+constexpr std::uint32_t kMergeTriangles = 8;
 
-  Wide8Bvh run() {
-    wide_tree::collapse_from_root<8>(
-        bvh_, out_, RS_WIDE8_STACK_SIZE,
-        [&](const std::vector<std::uint32_t>& slots, std::uint32_t depth) { make_node(slots, depth); },
-        [&](std::uint32_t n) { return slots_of(n); });
-    return std::move(out_);
-  }
-
- private:
-  // A subtree of at most eight triangles becomes one leaf (one full packet) when SAH agrees: the
-  // 4-wide collapse's rule (wide.cpp) at the 8-wide packet's size. The SAH builder's leaves hold
-  // about two triangles; merged, a leaf test fills more of the eight lanes.
-  static constexpr std::uint32_t kMergeTriangles = 8;
-  bool leafish(std::uint32_t n) const { return sub_.leafish(n, kMergeTriangles); }
-
-  // The binary nodes an 8-wide node over inner binary node n holds (see the top of the file).
-  std::vector<std::uint32_t> slots_of(std::uint32_t n) const {
-    std::vector<std::uint32_t> slots{bvh_.nodes[n].first, bvh_.nodes[n].first + 1}, deeper;
-    for (int level = 2; level <= 3; ++level) {  // every inner slot down to three levels below n
-      deeper.clear();
-      for (std::uint32_t s : slots) {
-        if (leafish(s)) {
-          deeper.push_back(s);
-        } else {
-          deeper.push_back(bvh_.nodes[s].first);
-          deeper.push_back(bvh_.nodes[s].first + 1);
-        }
+// The binary nodes an 8-wide node over inner binary node n holds (see the top of the file).
+std::vector<std::uint32_t> slots_of(const Bvh& bvh, const wide_tree::Subtrees& sub, std::uint32_t n) {
+  std::vector<std::uint32_t> slots{bvh.nodes[n].first, bvh.nodes[n].first + 1}, deeper;
+  for (int level = 2; level <= 3; ++level) {  // every inner slot down to three levels below n
+    deeper.clear();
+    for (std::uint32_t s : slots) {
+      if (sub.leafish(s, kMergeTriangles)) {
+        deeper.push_back(s);
+      } else {
+        deeper.push_back(bvh.nodes[s].first);
+        deeper.push_back(bvh.nodes[s].first + 1);
       }
-      slots.swap(deeper);
     }
-    while (slots.size() < 8) {  // free lanes: open the largest inner slot, its children in its place
-      std::size_t best = slots.size();
-      double best_area = -1.0;
-      for (std::size_t i = 0; i < slots.size(); ++i) {
-        if (leafish(slots[i])) continue;
-        const double a = node_surface_area(bvh_.nodes[slots[i]]);
-        if (a > best_area) best = i, best_area = a;
-      }
-      if (best == slots.size()) break;
-      const std::uint32_t c = bvh_.nodes[slots[best]].first;
-      slots[best] = c;
-      slots.insert(slots.begin() + static_cast<std::ptrdiff_t>(best) + 1, c + 1);
-    }
-    return slots;
+    slots.swap(deeper);
   }
-
-  std::uint32_t make_node(const std::vector<std::uint32_t>& slots, std::uint32_t depth) {
-    out_.depth = std::max(out_.depth, depth);
-    const auto index = static_cast<std::uint32_t>(out_.nodes.size());
-    out_.nodes.push_back(RsWide8Node{});
-    RsWide8Node w{};  // lanes past slots.size(): valid = 0, empty boxes, child 0 (never read)
+  while (slots.size() < 8) {  // free lanes: open the largest inner slot, its children in its place
+    std::size_t best = slots.size();
+    double best_area = -1.0;
     for (std::size_t i = 0; i < slots.size(); ++i) {
-      wide_tree::set_box(w, static_cast<int>(i), bvh_.nodes[slots[i]]);
-      w.valid.s[i] = -1;
-      w.child[i] = leafish(slots[i]) ? wide_tree::append_leaf<8>(bvh_, sub_.as_leaf(slots[i]), out_.packets)
-                                     : make_node(slots_of(slots[i]), depth + 1);
+      if (sub.leafish(slots[i], kMergeTriangles)) continue;
+      const double a = node_surface_area(bvh.nodes[slots[i]]);
+      if (a > best_area) best = i, best_area = a;
     }
-    out_.nodes[index] = w;  // after the children: the vector may have grown meanwhile
-    return index;
+    if (best == slots.size()) break;
+    const std::uint32_t c = bvh.nodes[slots[best]].first;
+    slots[best] = c;
+    slots.insert(slots.begin() + static_cast<std::ptrdiff_t>(best) + 1, c + 1);
   }
-
-  const Bvh& bvh_;
-  const wide_tree::Subtrees sub_;
-  Wide8Bvh out_;
-};
+  return slots;
+}
 
 }  // namespace
 
-Wide8Bvh collapse_to_wide8(const Bvh& bvh) { return Collapser8(bvh).run(); }
+Wide8Bvh collapse_to_wide8(const Bvh& bvh) {
+  const wide_tree::Subtrees sub(bvh);
+  return wide_tree::collapse<8, Wide8Bvh>(
+      bvh, sub, RS_WIDE8_STACK_SIZE, [&](std::uint32_t n) { return sub.leafish(n, kMergeTriangles); },
+      [&](std::uint32_t n) { return slots_of(bvh, sub, n); });
+}
 
 std::string validate_wide8(const Wide8Bvh& wide, const Bvh& bvh) {
   return wide_tree::validate<8>(wide, bvh, RS_WIDE8_STACK_SIZE);

@@ -7,12 +7,14 @@
 #include <cstdint>
 #include <cstring>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
 #include "bvh/bvh.h"
 #include "bvh/had.h"
 #include "util/error.h"
+#include "util/huge_pages.h"
 
 namespace raysort::wide_tree {
 
@@ -105,19 +107,49 @@ void set_box(Node& w, int lane, const RsBvhNode& b) {
 // The collapse from the root, for both widths: an empty tree gets a root with no valid child (every
 // ray misses), a one-leaf tree still an inner root, any other the wide node over the binary root's
 // slots; a tree whose nodes, each pushing up to W - 1 children, could overflow the kernels' stack
-// of stack_size entries is refused. make_node(slots, depth) writes a node and raises out.depth.
-template <int W, class Tree, class MakeNode, class SlotsOf>
-void collapse_from_root(const Bvh& bvh, Tree& out, std::uint32_t stack_size, MakeNode make_node, SlotsOf slots_of) {
+// of stack_size entries is refused. Wide nodes are numbered depth first (a node before its
+// children, its slots in order), and a leaf's packets are appended when the walk meets the leaf.
+// slots_of(n): the binary nodes a wide node over inner binary node n holds; leafish(n): whether
+// binary node n becomes one wide leaf (sub.as_leaf(n)). The collapses differ only in these two.
+//
+// (Tried: the subtrees below the top collapsed by all threads, each into a tree of its own, then
+// copied into place. On a 322 K-triangle scene the collapse went from 15-27 ms to 70-93 ms: a
+// subtree's own vectors fault their pages in again, 2 MiB pages or 4 KiB ones.)
+template <int W, class Tree, class LeafishFn, class SlotsOfFn>
+Tree collapse(const Bvh& bvh, const Subtrees& sub, std::uint32_t stack_size, LeafishFn leafish, SlotsOfFn slots_of) {
+  using Node = std::decay_t<decltype(std::declval<Tree&>().nodes[0])>;
+  Tree out;
   if (bvh.triangles.empty() || bvh.nodes.empty()) {
     out.nodes.emplace_back();
     out.depth = 1;
-    return;
+    return out;
   }
-  make_node(bvh.is_leaf(0) ? std::vector<std::uint32_t>{0u} : slots_of(0), 1u);
+  // Room for the largest possible tree up front (at most a wide node per binary node, a packet per
+  // W triangles plus one per leaf), so that growing never copies the packets nor faults their pages
+  // in twice; 2 MiB pages where the kernel lends them (util/huge_pages.h). Untouched room costs
+  // address space only.
+  reserve_huge(out.nodes, bvh.nodes.size() + 1);
+  reserve_huge(out.packets, bvh.triangles.size() / W + std::min<std::size_t>(bvh.leaf_count, bvh.nodes.size()) + 1);
+  auto make_node = [&](auto& self, const std::vector<std::uint32_t>& slots, std::uint32_t depth) -> std::uint32_t {
+    out.depth = std::max(out.depth, depth);
+    const auto index = static_cast<std::uint32_t>(out.nodes.size());
+    out.nodes.push_back(Node{});
+    Node w{};  // lanes past slots.size(): valid = 0, empty boxes, child 0 (never read)
+    for (std::size_t i = 0; i < slots.size(); ++i) {
+      set_box(w, static_cast<int>(i), bvh.nodes[slots[i]]);
+      w.valid.s[i] = -1;
+      w.child[i] = leafish(slots[i]) ? append_leaf<W>(bvh, sub.as_leaf(slots[i]), out.packets)
+                                     : self(self, slots_of(slots[i]), depth + 1);
+    }
+    out.nodes[index] = w;  // after the children: the vector may have grown meanwhile
+    return index;
+  };
+  make_node(make_node, bvh.is_leaf(0) ? std::vector<std::uint32_t>{0u} : slots_of(0), 1u);
   if ((W - 1) * out.depth > stack_size)
     throw Error(std::to_string(W) + "-wide BVH of depth " + std::to_string(out.depth) +
                 " could overflow the trace stack (" + std::to_string(stack_size) +
                 " entries); the binary BVH is deeper than its bound");
+  return out;
 }
 
 // The checks of validate_wide / validate_wide8 (bvh.h) on a W-wide tree whose nodes push at most

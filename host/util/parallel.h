@@ -3,9 +3,14 @@
 // and the host encoders run the same per-item code on every core, and the items are independent,
 // so any split gives the same results). for_each_job: jobs of uneven size (the BVH builder's
 // subtrees), each thread taking the next job when its last is done; every job writes only its
-// own outputs, so which thread ran which job never shows in the result.
+// own outputs, so which thread ran which job never shows in the result. JobStream: the same for
+// jobs that appear while the threads already run the first ones (the BVH builder's subtrees, made
+// by the splits of the top of the tree).
 #include <algorithm>
 #include <atomic>
+#include <condition_variable>
+#include <cstdint>
+#include <functional>
 #include <cstddef>
 #include <exception>
 #include <mutex>
@@ -72,5 +77,90 @@ void for_each_job(unsigned threads, std::size_t n, Job&& job) {
   for (auto& th : pool) th.join();
   if (failure) std::rethrow_exception(failure);
 }
+
+// Jobs run by `threads` - 1 workers as they are added, and by this thread too from finish() on:
+// each thread takes the largest pending job (the last to start is then small, so the threads
+// finish together). finish() returns when every job added has run, and rethrows the first
+// exception a job threw (no job starts after it). Destroying a stream without finish() (the
+// producer threw) drops the pending jobs and waits for the running ones.
+class JobStream {
+ public:
+  explicit JobStream(unsigned threads) {
+    for (unsigned t = 1; t < threads; ++t) workers_.emplace_back([this] { work(); });
+  }
+  JobStream(const JobStream&) = delete;
+  JobStream& operator=(const JobStream&) = delete;
+  ~JobStream() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      closed_ = true;
+      pending_.clear();
+    }
+    join();
+  }
+
+  void add(std::uint64_t size, std::function<void()> job) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (failure_) return;
+      pending_.push_back({size, added_++, std::move(job)});
+    }
+    ready_.notify_one();
+  }
+
+  void finish() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      closed_ = true;
+    }
+    ready_.notify_all();
+    work();
+    join();
+    if (failure_) std::rethrow_exception(failure_);
+  }
+
+ private:
+  struct Pending {
+    std::uint64_t size, order;
+    std::function<void()> job;
+  };
+
+  void work() {
+    for (;;) {
+      std::function<void()> job;
+      {
+        std::unique_lock<std::mutex> lock(mutex_);
+        ready_.wait(lock, [this] { return !pending_.empty() || closed_; });
+        if (pending_.empty()) return;
+        auto largest = std::min_element(pending_.begin(), pending_.end(), [](const Pending& a, const Pending& b) {
+          return a.size != b.size ? a.size > b.size : a.order < b.order;
+        });
+        job = std::move(largest->job);
+        pending_.erase(largest);
+      }
+      try {
+        job();
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (!failure_) failure_ = std::current_exception();
+        pending_.clear();
+      }
+    }
+  }
+
+  void join() {
+    ready_.notify_all();
+    for (auto& th : workers_) th.join();
+    workers_.clear();
+  }
+
+  std::mutex mutex_;
+  std::condition_variable ready_;
+  std::vector<Pending> pending_;
+  std::uint64_t added_ = 0;
+  bool closed_ = false;
+  std::exception_ptr failure_;
+  std::vector<std::thread> workers_;
+};
 
 }  // namespace raysort
