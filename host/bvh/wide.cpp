@@ -31,8 +31,8 @@ namespace {
 constexpr std::uint32_t kMergeTriangles = 4;
 
 // The binary nodes a wide node over inner binary node n holds: its children, or their children.
-std::vector<std::uint32_t> slots_of(const Bvh& bvh, const wide_tree::Subtrees& sub, std::uint32_t n) {
-  std::vector<std::uint32_t> slots;
+wide_tree::Slots slots_of(const Bvh& bvh, const wide_tree::Subtrees& sub, std::uint32_t n) {
+  wide_tree::Slots slots;
   for (std::uint32_t c = bvh.nodes[n].first; c < bvh.nodes[n].first + 2; ++c) {
     if (sub.leafish(c, kMergeTriangles)) {
       slots.push_back(c);

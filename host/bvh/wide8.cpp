@@ -24,8 +24,8 @@ namespace {
 constexpr std::uint32_t kMergeTriangles = 8;
 
 // The binary nodes an 8-wide node over inner binary node n holds (see the top of the file).
-std::vector<std::uint32_t> slots_of(const Bvh& bvh, const wide_tree::Subtrees& sub, std::uint32_t n) {
-  std::vector<std::uint32_t> slots{bvh.nodes[n].first, bvh.nodes[n].first + 1}, deeper;
+wide_tree::Slots slots_of(const Bvh& bvh, const wide_tree::Subtrees& sub, std::uint32_t n) {
+  wide_tree::Slots slots{bvh.nodes[n].first, bvh.nodes[n].first + 1}, deeper;
   for (int level = 2; level <= 3; ++level) {  // every inner slot down to three levels below n
     deeper.clear();
     for (std::uint32_t s : slots) {
@@ -36,7 +36,7 @@ std::vector<std::uint32_t> slots_of(const Bvh& bvh, const wide_tree::Subtrees& s
         deeper.push_back(bvh.nodes[s].first + 1);
       }
     }
-    slots.swap(deeper);
+    std::swap(slots, deeper);
   }
   while (slots.size() < 8) {  // free lanes: open the largest inner slot, its children in its place
     std::size_t best = slots.size();
@@ -49,7 +49,7 @@ std::vector<std::uint32_t> slots_of(const Bvh& bvh, const wide_tree::Subtrees& s
     if (best == slots.size()) break;
     const std::uint32_t c = bvh.nodes[slots[best]].first;
     slots[best] = c;
-    slots.insert(slots.begin() + static_cast<std::ptrdiff_t>(best) + 1, c + 1);
+    slots.insert(best + 1, c + 1);
   }
   return slots;
 }

@@ -4,6 +4,8 @@
 // count W, so both widths write and check their trees with one piece of code; the collapses differ
 // only in which binary nodes become a wide node's children (their slot rules).
 #include <algorithm>
+#include <array>
+#include <initializer_list>
 #include <cstdint>
 #include <cstring>
 #include <string>
@@ -27,12 +29,15 @@ class Subtrees {
     first_.assign(bvh.nodes.size(), 0);
     count_.assign(bvh.nodes.size(), 0);
     leaf_area_.assign(bvh.nodes.size(), 0.0);
+    small_and_sah_agrees_.assign(bvh.nodes.size(), 0);
     if (!bvh.triangles.empty() && !bvh.nodes.empty()) ranges(0);
   }
   // A binary leaf, or a subtree of at most max_triangles whose box's surface area is at most the
   // sum of its binary leaves' (SAH: a random ray then tests no more packets than before).
   bool leafish(std::uint32_t n, std::uint32_t max_triangles) const {
-    return bvh_.is_leaf(n) || (count_[n] <= max_triangles && node_surface_area(bvh_.nodes[n]) <= leaf_area_[n]);
+    if (bvh_.is_leaf(n)) return true;
+    if (count_[n] > max_triangles) return false;
+    return max_triangles <= kKnownMerge ? small_and_sah_agrees_[n] != 0 : sah_agrees(n);
   }
   // Subtree n as one leaf: its box over all its triangles.
   RsBvhNode as_leaf(std::uint32_t n) const {
@@ -57,11 +62,45 @@ class Subtrees {
     leaf_area_[n] = leaf_area_[l] + leaf_area_[r];
     const std::uint32_t end = std::max(first_[l] + count_[l], first_[r] + count_[r]);
     if (end - first_[n] != count_[n]) count_[n] = 0xffffffffu;  // not contiguous: never merged
+    small_and_sah_agrees_[n] = count_[n] <= kKnownMerge && sah_agrees(n);
   }
+  bool sah_agrees(std::uint32_t n) const { return node_surface_area(bvh_.nodes[n]) <= leaf_area_[n]; }
 
+  // leafish() asks each slot several times during a collapse: below this many triangles the
+  // answer is worked out once, here (the 8-wide packet's size, the largest merge of the collapses).
+  static constexpr std::uint32_t kKnownMerge = 8;
   const Bvh& bvh_;
   std::vector<std::uint32_t> first_, count_;
   std::vector<double> leaf_area_;  // sum of the surface areas of a subtree's binary leaves
+  std::vector<std::uint8_t> small_and_sah_agrees_;  // inner node of at most kKnownMerge triangles, sah_agrees
+};
+
+// The binary nodes a wide node holds, one per lane (at most eight): a fixed array, so that the
+// collapse allocates nothing per node.
+class Slots {
+ public:
+  Slots() = default;
+  Slots(std::initializer_list<std::uint32_t> nodes) {
+    for (std::uint32_t n : nodes) push_back(n);
+  }
+  void push_back(std::uint32_t n) { node_.at(size_++) = n; }
+  // Puts n at position i, the slots from i on moving up by one.
+  void insert(std::size_t i, std::uint32_t n) {
+    node_.at(size_);  // room for one more (throws past eight)
+    for (std::size_t k = size_; k > i; --k) node_[k] = node_[k - 1];
+    node_[i] = n;
+    ++size_;
+  }
+  void clear() { size_ = 0; }
+  std::size_t size() const { return size_; }
+  std::uint32_t& operator[](std::size_t i) { return node_[i]; }
+  std::uint32_t operator[](std::size_t i) const { return node_[i]; }
+  const std::uint32_t* begin() const { return node_.data(); }
+  const std::uint32_t* end() const { return node_.data() + size_; }
+
+ private:
+  std::array<std::uint32_t, 8> node_{};
+  std::size_t size_ = 0;
 };
 
 // Appends the W-lane packets of binary leaf `leaf` (triangles [first, first + count) of bvh's leaf
@@ -130,7 +169,7 @@ Tree collapse(const Bvh& bvh, const Subtrees& sub, std::uint32_t stack_size, Lea
   // address space only.
   reserve_huge(out.nodes, bvh.nodes.size() + 1);
   reserve_huge(out.packets, bvh.triangles.size() / W + std::min<std::size_t>(bvh.leaf_count, bvh.nodes.size()) + 1);
-  auto make_node = [&](auto& self, const std::vector<std::uint32_t>& slots, std::uint32_t depth) -> std::uint32_t {
+  auto make_node = [&](auto& self, const Slots& slots, std::uint32_t depth) -> std::uint32_t {
     out.depth = std::max(out.depth, depth);
     const auto index = static_cast<std::uint32_t>(out.nodes.size());
     out.nodes.push_back(Node{});
@@ -144,7 +183,7 @@ Tree collapse(const Bvh& bvh, const Subtrees& sub, std::uint32_t stack_size, Lea
     out.nodes[index] = w;  // after the children: the vector may have grown meanwhile
     return index;
   };
-  make_node(make_node, bvh.is_leaf(0) ? std::vector<std::uint32_t>{0u} : slots_of(0), 1u);
+  make_node(make_node, bvh.is_leaf(0) ? Slots{0u} : slots_of(0), 1u);
   if ((W - 1) * out.depth > stack_size)
     throw Error(std::to_string(W) + "-wide BVH of depth " + std::to_string(out.depth) +
                 " could overflow the trace stack (" + std::to_string(stack_size) +
