@@ -3,14 +3,14 @@
 // How the threads share the build without changing the tree. A node's split depends only on the
 // set of triangles in its range, and a node's partition reorders only its own range; so subtrees
 // build independently of each other, in any order, on any thread. The builder therefore
-//  1. splits the top of the tree, node by node, on this thread: a node's bins computed by all
-//     threads over chunks of its range and merged in chunk order while no job runs yet (exact:
-//     min/max keep the first of equal values, +0 or -0, as one pass in range order does; counts
-//     are sums), then partitioned in std::partition's order, the one the serial build always used
-//     (partition_bounded, which bounds both sides on the way), so the triangle order is the same;
+//  1. splits the top of the tree, each node a task of one thread (the root's bins computed by all
+//     threads over chunks of its range and merged in chunk order: exact, min/max keep the first
+//     of equal values, +0 or -0, as one pass in range order does; counts are sums), partitioned
+//     in std::partition's order, the one the serial build always used (partition_bounded, which
+//     bounds both sides on the way), so the triangle order is the same;
 //  2. builds each subtree below the top (a node of at most `job_size` triangles) as a job of its
-//     own, numbered locally, started on the other threads as soon as a split makes its root
-//     (JobStream), and on this thread too once the top is split;
+//     own, numbered locally; tasks and jobs are taken by the threads as soon as a split makes
+//     them, largest first (JobStream);
 //  3. lays the tree out exactly as the serial depth-first build numbers it: children allocated in
 //     pairs when their parent is visited, the left subtree before the right. A subtree built with
 //     local numbering (root 0, the k-th inner node's children at 1 + 2k) lands unchanged but for
@@ -22,6 +22,8 @@
 #include <cmath>
 #include <cstddef>
 #include <deque>
+#include <functional>
+#include <mutex>
 #include <optional>
 
 #include "bvh/bvh.h"
@@ -277,10 +279,12 @@ NodeBounds bounds_of(const std::vector<PrimRef>& refs, std::uint32_t begin, std:
 }
 
 // A top node's split: its bins computed by `threads` threads over chunks and merged.
-void split_top_node(std::vector<PrimRef>& refs, std::vector<TopNode>& top, std::size_t i, unsigned threads,
-                    std::uint32_t nbins, const BvhBuildOptions& opts) {
-  const Range r = top[i].range;
-  const NodeBounds nb = top[i].bounds;
+// A top node's split: its bins computed by `threads` threads over chunks and merged. Returns its
+// children (range and bounds), none for a leaf.
+std::optional<std::pair<TopNode, TopNode>> split_top_node(std::vector<PrimRef>& refs, const TopNode& t, unsigned threads,
+                                                          std::uint32_t nbins, const BvhBuildOptions& opts) {
+  const Range r = t.range;
+  const NodeBounds nb = t.bounds;
   const PrimRef* base = refs.data() + r.begin;
   std::vector<SahBins> bins(threads, SahBins(nbins));
   auto chunk_of = [&](std::size_t b) { return static_cast<unsigned>(b / ((r.count() + threads - 1) / threads)); };
@@ -289,20 +293,19 @@ void split_top_node(std::vector<PrimRef>& refs, std::vector<TopNode>& top, std::
     const BinMap map(nb.centroids, nbins);
     for (SahBins& b : bins) b.clear();
     for_each_chunk_on(threads, r.count(), [&](std::size_t b, std::size_t e) { bins[chunk_of(b)].add(base + b, base + e, map); });
-    for (unsigned t = 1; t < threads; ++t) bins[0].merge(bins[t]);
+    for (unsigned k = 1; k < threads; ++k) bins[0].merge(bins[k]);
     split = bins[0].best(map);
   }
   SideBounds sides;
   const std::optional<std::uint32_t> mid = split_or_leaf(refs, r, nb, split, nbins, opts, sides);
-  if (!mid) return;  // a leaf: left and job stay -1
-  top[i].left = static_cast<std::int32_t>(top.size());
-  top.push_back({{r.begin, *mid, r.depth + 1}, sides.side[0], sides.known});
-  top.push_back({{*mid, r.end, r.depth + 1}, sides.side[1], sides.known});
+  if (!mid) return std::nullopt;
+  return std::pair<TopNode, TopNode>{TopNode{{r.begin, *mid, r.depth + 1}, sides.side[0], sides.known},
+                                     TopNode{{*mid, r.end, r.depth + 1}, sides.side[1], sides.known}};
 }
 
 struct Layout {
   std::vector<RsBvhNode>& nodes;
-  const std::vector<TopNode>& top;
+  const std::deque<TopNode>& top;
   std::vector<std::uint32_t>& job_offset;  // per job: where its nodes 1.. start (`next` at its root)
   std::vector<std::uint32_t>& job_slot;    // per job: where its root goes
   const std::deque<Subtree>& jobs;
@@ -388,29 +391,62 @@ void build_binary(Bvh& bvh, std::vector<PrimRef>& refs, unsigned threads, const 
   const std::uint32_t nbins = std::max<std::uint32_t>(2, opts.bins);
   const auto n = static_cast<std::uint32_t>(refs.size());
   const std::uint32_t job_size = threads > 1 ? std::max(kMinParallelPerThread * threads, n / (8 * threads)) : n;
-  std::vector<TopNode> top{{{0, n, 0}, {}, false}};
-  // A job starts as soon as a split makes its root, while this thread goes on splitting the top:
-  // the other threads build subtrees instead of waiting for the top's partitions (one thread
-  // each, std::partition's order). Until the first job exists, a top node is binned by all
-  // threads. (A deque: its elements stay where they are while jobs are added.)
+  // Every split is a task: a node above job_size is split by the thread that takes it, which then
+  // adds its children as tasks, and a node of at most job_size is a job (its whole subtree). So
+  // both threads split the top as soon as the root's children exist, and build subtrees as soon
+  // as the first ones exist (JobStream: the largest pending first). The root alone is binned by
+  // all threads. Partitions keep std::partition's order, one thread each; which thread split what
+  // never shows in the tree (the layout walks the top by its links, below). Deques: their elements
+  // stay where they are while others are added (under `mutex`).
+  std::deque<TopNode> top{{{0, n, 0}, {}, false}};
   std::deque<Subtree> jobs;
+  std::mutex mutex;
   {
     JobStream stream(threads);
-    for (std::size_t i = 0; i < top.size(); ++i) {
-      TopNode& t = top[i];
-      if (t.range.count() <= job_size) {
-        t.job = static_cast<std::int32_t>(jobs.size());
-        Subtree& out = jobs.emplace_back();
-        stream.add(t.range.count(), [&refs, &out, &opts, nbins, range = t.range, bounds = t.bounds, bounded = t.bounded] {
-          out = build_subtree(refs, range, bounded ? &bounds : nullptr, nbins, opts);
-        });
-        continue;
+    std::function<void(std::size_t)> add_task;
+    auto split_task = [&](std::size_t i) {
+      TopNode t;
+      {
+        std::lock_guard<std::mutex> lock(mutex);
+        t = top[i];
       }
-      const unsigned top_threads = jobs.empty() ? threads : 1;
-      if (!t.bounded) t.bounds = bounds_of(refs, t.range.begin, t.range.end, top_threads);
-      t.bounded = true;
-      split_top_node(refs, top, i, top_threads, nbins, opts);
-    }
+      const unsigned split_threads = i == 0 ? threads : 1;
+      if (!t.bounded) t.bounds = bounds_of(refs, t.range.begin, t.range.end, split_threads);
+      const auto children = split_top_node(refs, t, split_threads, nbins, opts);
+      std::size_t left = 0;
+      {
+        std::lock_guard<std::mutex> lock(mutex);
+        top[i].bounds = t.bounds;
+        top[i].bounded = true;
+        if (!children) return;  // a leaf: left and job stay -1
+        left = top.size();
+        top[i].left = static_cast<std::int32_t>(left);
+        top.push_back(children->first);
+        top.push_back(children->second);
+      }
+      add_task(left);
+      add_task(left + 1);
+    };
+    add_task = [&](std::size_t i) {
+      std::unique_lock<std::mutex> lock(mutex);
+      TopNode& t = top[i];
+      const std::uint32_t count = t.range.count();
+      if (count > job_size) {
+        lock.unlock();
+        stream.add(count, [&split_task, i] { split_task(i); });
+        return;
+      }
+      t.job = static_cast<std::int32_t>(jobs.size());
+      Subtree& out = jobs.emplace_back();
+      const Range range = t.range;
+      const NodeBounds bounds = t.bounds;
+      const bool bounded = t.bounded;
+      lock.unlock();
+      stream.add(count, [&refs, &out, &opts, nbins, range, bounds, bounded] {
+        out = build_subtree(refs, range, bounded ? &bounds : nullptr, nbins, opts);
+      });
+    };
+    add_task(0);
     stream.finish();
   }
   std::vector<std::uint32_t> offset(jobs.size()), slot(jobs.size());

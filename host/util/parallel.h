@@ -80,8 +80,8 @@ void for_each_job(unsigned threads, std::size_t n, Job&& job) {
 
 // Jobs run by `threads` - 1 workers as they are added, and by this thread too from finish() on:
 // each thread takes the largest pending job (the last to start is then small, so the threads
-// finish together). finish() returns when every job added has run, and rethrows the first
-// exception a job threw (no job starts after it). Destroying a stream without finish() (the
+// finish together). A job may add jobs. finish() returns when every job added has run, and
+// rethrows the first exception a job threw (no job starts after it). Destroying a stream without finish() (the
 // producer threw) drops the pending jobs and waits for the running ones.
 class JobStream {
  public:
@@ -130,13 +130,15 @@ class JobStream {
       std::function<void()> job;
       {
         std::unique_lock<std::mutex> lock(mutex_);
-        ready_.wait(lock, [this] { return !pending_.empty() || closed_; });
+        // Pending jobs, or closed with none running (a running job may still add some).
+        ready_.wait(lock, [this] { return !pending_.empty() || (closed_ && running_ == 0); });
         if (pending_.empty()) return;
         auto largest = std::min_element(pending_.begin(), pending_.end(), [](const Pending& a, const Pending& b) {
           return a.size != b.size ? a.size > b.size : a.order < b.order;
         });
         job = std::move(largest->job);
         pending_.erase(largest);
+        ++running_;
       }
       try {
         job();
@@ -145,6 +147,11 @@ class JobStream {
         if (!failure_) failure_ = std::current_exception();
         pending_.clear();
       }
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        --running_;
+      }
+      ready_.notify_all();
     }
   }
 
@@ -158,6 +165,7 @@ class JobStream {
   std::condition_variable ready_;
   std::vector<Pending> pending_;
   std::uint64_t added_ = 0;
+  std::size_t running_ = 0;
   bool closed_ = false;
   std::exception_ptr failure_;
   std::vector<std::thread> workers_;
