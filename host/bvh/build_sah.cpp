@@ -56,10 +56,10 @@ struct Range {
 };
 
 // The bounds of both sides of a split, found by the partition that made it (partition_bounded):
-// the children's NodeBounds without a pass of their own over their ranges.
+// the children's NodeBounds without a pass of their own over their ranges. Empty when the object
+// median split the node (its sides were not bounded).
 struct SideBounds {
-  NodeBounds side[2];
-  bool known = false;  // false: the object median split the node (its sides were not bounded)
+  std::optional<NodeBounds> side[2];
 };
 
 // Whether a box has a coordinate equal to zero. Of equal values a box keeps the first it meets
@@ -132,13 +132,13 @@ PrimRef* partition_bounded(PrimRef* first, PrimRef* last, Pred pred, SideBounds&
   }
   const PrimRef* range[2][2] = {{begin, mid}, {mid, end}};
   for (int k = 0; k < 2; ++k) {
-    sides.side[k] = NodeBounds{box[k].box(), cen[k].box()};
-    if (has_zero(sides.side[k].bounds) || has_zero(sides.side[k].centroids)) {
-      sides.side[k] = NodeBounds{};
-      sides.side[k].add(range[k][0], range[k][1]);
+    NodeBounds nb{box[k].box(), cen[k].box()};
+    if (has_zero(nb.bounds) || has_zero(nb.centroids)) {
+      nb = NodeBounds{};
+      nb.add(range[k][0], range[k][1]);
     }
+    sides.side[k] = nb;
   }
-  sides.known = true;
   return mid;
 }
 
@@ -150,7 +150,7 @@ PrimRef* partition_bounded(PrimRef* first, PrimRef* last, Pred pred, SideBounds&
 std::optional<std::uint32_t> split_or_leaf(std::vector<PrimRef>& refs, const Range& r, const NodeBounds& nb,
                                            const Split& split, std::uint32_t nbins, const BvhBuildOptions& opts,
                                            SideBounds& sides) {
-  sides.known = false;
+  sides = SideBounds{};
   const std::uint32_t count = r.count();
   if (count == 1) return std::nullopt;
   const float parent_area = nb.bounds.area();
@@ -169,7 +169,7 @@ std::optional<std::uint32_t> split_or_leaf(std::vector<PrimRef>& refs, const Ran
     return std::nullopt;
   }
   if (mid <= r.begin || mid >= r.end) {
-    sides.known = false;
+    sides = SideBounds{};
     // The object median along the widest centroid axis, ties broken by id so the result is deterministic.
     const Box& cb = nb.centroids;
     int axis = 0;
@@ -204,27 +204,26 @@ struct Subtree {
 struct Task {
   std::uint32_t node;
   Range range;
-  NodeBounds bounds;
-  bool bounded = false;
+  std::optional<NodeBounds> bounds;
 };
 
 // root_bounds: the root's bounds when known (else computed here).
-Subtree build_subtree(std::vector<PrimRef>& refs, const Range& root, const NodeBounds* root_bounds, std::uint32_t nbins,
-                      const BvhBuildOptions& opts) {
+Subtree build_subtree(std::vector<PrimRef>& refs, const Range& root, const std::optional<NodeBounds>& root_bounds,
+                      std::uint32_t nbins, const BvhBuildOptions& opts) {
   Subtree t;
   reserve_huge(t.nodes, 2 * root.count() / std::max<std::uint32_t>(1, opts.max_leaf_size / 2) + 1);
   t.nodes.push_back({});
   SahBins bins(nbins);
   SideBounds sides;
-  std::vector<Task> stack{{0, root, root_bounds ? *root_bounds : NodeBounds{}, root_bounds != nullptr}};
+  std::vector<Task> stack{{0, root, root_bounds}};
   while (!stack.empty()) {
     const Task task = stack.back();
     stack.pop_back();
     const Range& r = task.range;
     // In range order, as the serial build: of equal values (+0 and -0) a box keeps the first met.
     NodeBounds nb;
-    if (task.bounded)
-      nb = task.bounds;
+    if (task.bounds)
+      nb = *task.bounds;
     else
       nb.add(refs.data() + r.begin, refs.data() + r.end);
     set_box(t.nodes[task.node], nb.bounds);
@@ -249,8 +248,8 @@ Subtree build_subtree(std::vector<PrimRef>& refs, const Range& root, const NodeB
     t.nodes[task.node].first = left;
     t.nodes[task.node].count = 0;
     // Right first on the stack so the left subtree is laid out first (depth-first order).
-    stack.push_back({left + 1, {*mid, r.end, r.depth + 1}, sides.side[1], sides.known});
-    stack.push_back({left, {r.begin, *mid, r.depth + 1}, sides.side[0], sides.known});
+    stack.push_back({left + 1, {*mid, r.end, r.depth + 1}, sides.side[1]});
+    stack.push_back({left, {r.begin, *mid, r.depth + 1}, sides.side[0]});
   }
   return t;
 }
@@ -259,8 +258,7 @@ Subtree build_subtree(std::vector<PrimRef>& refs, const Range& root, const NodeB
 // the top nodes, a leaf, or the root of a job's subtree.
 struct TopNode {
   Range range;
-  NodeBounds bounds;        // when bounded: from the parent's partition, or computed for the node
-  bool bounded = false;
+  std::optional<NodeBounds> bounds;  // from the parent's partition, or computed when the node is split
   std::int32_t left = -1;  // inner: the left child's index among the top nodes, the right one next to it
   std::int32_t job = -1;   // the root of subtree `job`
 };
@@ -278,13 +276,12 @@ NodeBounds bounds_of(const std::vector<PrimRef>& refs, std::uint32_t begin, std:
   return nb;
 }
 
-// A top node's split: its bins computed by `threads` threads over chunks and merged.
 // A top node's split: its bins computed by `threads` threads over chunks and merged. Returns its
 // children (range and bounds), none for a leaf.
 std::optional<std::pair<TopNode, TopNode>> split_top_node(std::vector<PrimRef>& refs, const TopNode& t, unsigned threads,
                                                           std::uint32_t nbins, const BvhBuildOptions& opts) {
   const Range r = t.range;
-  const NodeBounds nb = t.bounds;
+  const NodeBounds nb = *t.bounds;
   const PrimRef* base = refs.data() + r.begin;
   std::vector<SahBins> bins(threads, SahBins(nbins));
   auto chunk_of = [&](std::size_t b) { return static_cast<unsigned>(b / ((r.count() + threads - 1) / threads)); };
@@ -299,8 +296,8 @@ std::optional<std::pair<TopNode, TopNode>> split_top_node(std::vector<PrimRef>& 
   SideBounds sides;
   const std::optional<std::uint32_t> mid = split_or_leaf(refs, r, nb, split, nbins, opts, sides);
   if (!mid) return std::nullopt;
-  return std::pair<TopNode, TopNode>{TopNode{{r.begin, *mid, r.depth + 1}, sides.side[0], sides.known},
-                                     TopNode{{*mid, r.end, r.depth + 1}, sides.side[1], sides.known}};
+  return std::pair<TopNode, TopNode>{TopNode{{r.begin, *mid, r.depth + 1}, sides.side[0]},
+                                     TopNode{{*mid, r.end, r.depth + 1}, sides.side[1]}};
 }
 
 struct Layout {
@@ -321,7 +318,7 @@ struct Layout {
       next += static_cast<std::uint32_t>(jobs[t.job].nodes.size()) - 1;
       return;
     }
-    set_box(nodes[slot], t.bounds.bounds);
+    set_box(nodes[slot], t.bounds->bounds);
     if (t.left < 0) {
       nodes[slot].first = t.range.begin;
       nodes[slot].count = t.range.count();
@@ -398,7 +395,7 @@ void build_binary(Bvh& bvh, std::vector<PrimRef>& refs, unsigned threads, const 
   // all threads. Partitions keep std::partition's order, one thread each; which thread split what
   // never shows in the tree (the layout walks the top by its links, below). Deques: their elements
   // stay where they are while others are added (under `mutex`).
-  std::deque<TopNode> top{{{0, n, 0}, {}, false}};
+  std::deque<TopNode> top{{{0, n, 0}, std::nullopt}};
   std::deque<Subtree> jobs;
   std::mutex mutex;
   {
@@ -411,13 +408,12 @@ void build_binary(Bvh& bvh, std::vector<PrimRef>& refs, unsigned threads, const 
         t = top[i];
       }
       const unsigned split_threads = i == 0 ? threads : 1;
-      if (!t.bounded) t.bounds = bounds_of(refs, t.range.begin, t.range.end, split_threads);
+      if (!t.bounds) t.bounds = bounds_of(refs, t.range.begin, t.range.end, split_threads);
       const auto children = split_top_node(refs, t, split_threads, nbins, opts);
       std::size_t left = 0;
       {
         std::lock_guard<std::mutex> lock(mutex);
         top[i].bounds = t.bounds;
-        top[i].bounded = true;
         if (!children) return;  // a leaf: left and job stay -1
         left = top.size();
         top[i].left = static_cast<std::int32_t>(left);
@@ -439,12 +435,9 @@ void build_binary(Bvh& bvh, std::vector<PrimRef>& refs, unsigned threads, const 
       t.job = static_cast<std::int32_t>(jobs.size());
       Subtree& out = jobs.emplace_back();
       const Range range = t.range;
-      const NodeBounds bounds = t.bounds;
-      const bool bounded = t.bounded;
+      const std::optional<NodeBounds> bounds = t.bounds;
       lock.unlock();
-      stream.add(count, [&refs, &out, &opts, nbins, range, bounds, bounded] {
-        out = build_subtree(refs, range, bounded ? &bounds : nullptr, nbins, opts);
-      });
+      stream.add(count, [&refs, &out, &opts, nbins, range, bounds] { out = build_subtree(refs, range, bounds, nbins, opts); });
     };
     add_task(0);
     stream.finish();

@@ -165,20 +165,10 @@ class SahBins {
     // Merging is exact for the split (see merge()).
     std::fill(box2_.begin(), box2_.end(), Box4{});
     std::fill(count2_.begin(), count2_.end(), 0u);
-    alignas(16) std::uint32_t b[4], c[4];
     const PrimRef* r = begin;
     for (; r + 1 < end; r += 2) {
-      __m128 lo, hi, lo2, hi2;
-      load(r[0], lo, hi);
-      load(r[1], lo2, hi2);
-      map.bins3(lo, hi, b);
-      map.bins3(lo2, hi2, c);
-      for (std::uint32_t a = 0; a < 3; ++a) {
-        box_[a * nbins_ + b[a]].grow(lo, hi);
-        ++count_[a * nbins_ + b[a]];
-        box2_[a * nbins_ + c[a]].grow(lo2, hi2);
-        ++count2_[a * nbins_ + c[a]];
-      }
+      add_one(r[0], map, box_.data(), count_.data());
+      add_one(r[1], map, box2_.data(), count2_.data());
     }
     add_to(r, end, map, box_.data(), count_.data());
     for (std::size_t i = 0; i < box_.size(); ++i) {
@@ -235,17 +225,19 @@ class SahBins {
 
  private:
   static constexpr std::ptrdiff_t kSplitAbove = 64;
-  void add_to(const PrimRef* begin, const PrimRef* end, const BinMap& map, Box4* box, std::uint32_t* count) const {
+  // One record into one set of bins (box, count: box_/count_ or the second set).
+  void add_one(const PrimRef& r, const BinMap& map, Box4* box, std::uint32_t* count) const {
     alignas(16) std::uint32_t b[4];
-    for (const PrimRef* r = begin; r != end; ++r) {
-      __m128 lo, hi;
-      load(*r, lo, hi);
-      map.bins3(lo, hi, b);
-      for (std::uint32_t a = 0; a < 3; ++a) {
-        box[a * nbins_ + b[a]].grow(lo, hi);
-        ++count[a * nbins_ + b[a]];
-      }
+    __m128 lo, hi;
+    load(r, lo, hi);
+    map.bins3(lo, hi, b);
+    for (std::uint32_t a = 0; a < 3; ++a) {
+      box[a * nbins_ + b[a]].grow(lo, hi);
+      ++count[a * nbins_ + b[a]];
     }
+  }
+  void add_to(const PrimRef* begin, const PrimRef* end, const BinMap& map, Box4* box, std::uint32_t* count) const {
+    for (const PrimRef* r = begin; r != end; ++r) add_one(*r, map, box, count);
   }
 
   std::uint32_t nbins_;

@@ -49,8 +49,7 @@ wide_tree::Slots slots_of(const Bvh& bvh, const wide_tree::Subtrees& sub, std::u
 WideBvh collapse_to_wide(const Bvh& bvh) {
   const wide_tree::Subtrees sub(bvh);
   return wide_tree::collapse<4, WideBvh>(
-      bvh, sub, RS_WIDE_STACK_SIZE, [&](std::uint32_t n) { return sub.leafish(n, kMergeTriangles); },
-      [&](std::uint32_t n) { return slots_of(bvh, sub, n); });
+      bvh, sub, RS_WIDE_STACK_SIZE, kMergeTriangles, [&](std::uint32_t n) { return slots_of(bvh, sub, n); });
 }
 
 const WideBvh& wide_of(const Bvh& bvh, WideBvh& scratch) {

@@ -59,8 +59,7 @@ wide_tree::Slots slots_of(const Bvh& bvh, const wide_tree::Subtrees& sub, std::u
 Wide8Bvh collapse_to_wide8(const Bvh& bvh) {
   const wide_tree::Subtrees sub(bvh);
   return wide_tree::collapse<8, Wide8Bvh>(
-      bvh, sub, RS_WIDE8_STACK_SIZE, [&](std::uint32_t n) { return sub.leafish(n, kMergeTriangles); },
-      [&](std::uint32_t n) { return slots_of(bvh, sub, n); });
+      bvh, sub, RS_WIDE8_STACK_SIZE, kMergeTriangles, [&](std::uint32_t n) { return slots_of(bvh, sub, n); });
 }
 
 std::string validate_wide8(const Wide8Bvh& wide, const Bvh& bvh) {

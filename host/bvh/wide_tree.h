@@ -148,14 +148,15 @@ void set_box(Node& w, int lane, const RsBvhNode& b) {
 // slots; a tree whose nodes, each pushing up to W - 1 children, could overflow the kernels' stack
 // of stack_size entries is refused. Wide nodes are numbered depth first (a node before its
 // children, its slots in order), and a leaf's packets are appended when the walk meets the leaf.
-// slots_of(n): the binary nodes a wide node over inner binary node n holds; leafish(n): whether
-// binary node n becomes one wide leaf (sub.as_leaf(n)). The collapses differ only in these two.
+// slots_of(n): the binary nodes a wide node over inner binary node n holds; a slot becomes one wide
+// leaf (sub.as_leaf) when sub.leafish(slot, merge_triangles). The collapses differ only in these two.
 //
 // (Tried: the subtrees below the top collapsed by all threads, each into a tree of its own, then
 // copied into place. On a 322 K-triangle scene the collapse went from 15-27 ms to 70-93 ms: a
 // subtree's own vectors fault their pages in again, 2 MiB pages or 4 KiB ones.)
-template <int W, class Tree, class LeafishFn, class SlotsOfFn>
-Tree collapse(const Bvh& bvh, const Subtrees& sub, std::uint32_t stack_size, LeafishFn leafish, SlotsOfFn slots_of) {
+template <int W, class Tree, class SlotsOfFn>
+Tree collapse(const Bvh& bvh, const Subtrees& sub, std::uint32_t stack_size, std::uint32_t merge_triangles,
+              SlotsOfFn slots_of) {
   using Node = std::decay_t<decltype(std::declval<Tree&>().nodes[0])>;
   Tree out;
   if (bvh.triangles.empty() || bvh.nodes.empty()) {
@@ -177,7 +178,7 @@ Tree collapse(const Bvh& bvh, const Subtrees& sub, std::uint32_t stack_size, Lea
     for (std::size_t i = 0; i < slots.size(); ++i) {
       set_box(w, static_cast<int>(i), bvh.nodes[slots[i]]);
       w.valid.s[i] = -1;
-      w.child[i] = leafish(slots[i]) ? append_leaf<W>(bvh, sub.as_leaf(slots[i]), out.packets)
+      w.child[i] = sub.leafish(slots[i], merge_triangles) ? append_leaf<W>(bvh, sub.as_leaf(slots[i]), out.packets)
                                      : self(self, slots_of(slots[i]), depth + 1);
     }
     out.nodes[index] = w;  // after the children: the vector may have grown meanwhile
