@@ -36,22 +36,26 @@ class ResultSet {
 
   bool has(const std::string& cell_id) const { return cells_.count(cell_id) > 0; }
   const CellRecord* find(const std::string& cell_id) const;
-  // Writes the cell's file atomically, then the regenerated views.
+  // Writes the cell's file atomically (the set's record of it); the views (write_views) are the
+  // caller's to regenerate: `run` does so once a batch, as its cells arrive together.
+  void write_cell(const CellRecord& cell);
+  // One cell: its file, then the views.
   void add(const CellRecord& cell);
-  // The same for many cells, with the views written once at the end (raysort merge).
+  // Many cells, with the views written once at the end (raysort merge).
   void add_all(const std::vector<CellRecord>& cells);
   // Sets one entry of meta.json and rewrites it (a shard's "absent_cells").
   void set_meta(const std::string& key, const nlohmann::json& value);
   std::vector<CellRecord> cells() const;  // sorted by id
   const nlohmann::json& meta() const { return meta_; }
   const std::string& dir() const { return dir_; }
+  // cells.json, cells.csv, tables.md and meta.json from every cell: all of them each time, so a
+  // writer calls it once per burst of cells, not per cell (at 960 cells, per cell made `make
+  // bench` write 3 GB).
   void write_views() const;
   // PNG plots (bench/plots.h); slower than the text views, so written at the end of a run.
   void write_plots() const;
 
  private:
-  void write_cell(const CellRecord& cell);  // its file, and cells_
-
   std::string dir_;
   nlohmann::json meta_;
   std::map<std::string, CellRecord> cells_;

@@ -445,8 +445,10 @@ RunSummary run_matrix(const MatrixSpec& requested, const RunOptions& opts) {
       spec.gpu_model.empty() ? std::nullopt : std::optional<GpuProfile>(load_gpu_profile(spec.gpu_model));
   std::vector<std::string> absent;  // planned cells whose batch turned out empty
 
+  // A cell's file is written as it is recorded; the views once per batch, whose cells arrive
+  // together (ResultSet::write_views), and again at the end (finish_run).
   auto record = [&](const CellRecord& c) {
-    results.add(c);
+    results.write_cell(c);
     ++summary.cells_run;
     summary.cells_failed += !c.ok();
     ++progress.done;
@@ -518,6 +520,7 @@ RunSummary run_matrix(const MatrixSpec& requested, const RunOptions& opts) {
       } catch (const Interrupted&) {
         break;  // the batch in flight is not recorded: a resume measures it
       }
+      results.write_views();
     }
   }
 
