@@ -1,13 +1,28 @@
-// The arithmetic in cl/shared.h and cl/sampling.h that host and kernels share: RNG, sin/cos, ray offsets.
+// The arithmetic in cl/shared.h and cl/sampling.h that host and kernels share: RNG, sin/cos, ray
+// offsets; and the packet traversal's per-lane ray set-up against the single-ray one (intersect.h).
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
+#include <limits>
+#include <random>
 #include <set>
+#include <vector>
 
+#include "intersect.h"
+#include "lanes.h"
 #include "sampling.h"
 #include "shared.h"
+#include "traverse_wide.h"
 
 namespace raysort {
+
+// traverse_packet.h at the widest packet, in a namespace of its own as in host/trace/packet_twin.cpp.
+namespace setup16 {
+#define RS_PACKET_W 16
+#include "traverse_packet.h"
+#undef RS_PACKET_W
+}  // namespace setup16
 
 TEST(SharedMath, SinCosWithinStatedError) {
   double worst = 0.0;
@@ -57,6 +72,74 @@ TEST(SharedMath, OffsetMovesAlongTheNormalAtAnyScale) {
     // The offset is tiny relative to the coordinates' magnitude.
     EXPECT_LT(std::sqrt(rs_dot(moved, moved)), 1e-3f * std::max(1.0f, scale)) << "scale " << scale;
   }
+}
+
+// The robust packet kernels set up all sixteen lanes at once (rs_packet_prepare_robust); each lane
+// must get exactly the bits rs_prepare_robust_ray gives its ray alone: 1/d and the parallel axes,
+// the ray-space axes kx, ky, kz (as selectors), the permuted origin, the shear, and whether the
+// direction is valid. Directions from components that make every branch matter: zeros of both
+// signs, components under the parallel threshold, denormals, huge and infinite ones, NaN, ties.
+TEST(SharedMath, PacketRaySetUpEqualsTheSingleRaySetUpInEveryLane) {
+  const float inf = std::numeric_limits<float>::infinity(), nan = std::numeric_limits<float>::quiet_NaN();
+  const std::vector<float> special{0.0f,  -0.0f, 1.0f,   -1.0f,  0.5f,    -0.5f, 1e-21f, -1e-21f, 1e-30f,
+                                   1e-40f, -1e-40f, 3e38f, -3e38f, 3.4028235e38f, inf, -inf,   nan,   2.0f};
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<std::size_t> pick(0, special.size() + 3);
+  std::uniform_real_distribution<float> any(-2.0f, 2.0f);
+  auto component = [&] {
+    const std::size_t k = pick(rng);
+    return k < special.size() ? special[k] : any(rng);  // a random value a quarter of the time
+  };
+  auto bits = [](float x) {
+    std::uint32_t b;
+    std::memcpy(&b, &x, 4);
+    return b;
+  };
+  int compared = 0;
+  for (int round = 0; round < 4000; ++round) {
+    std::vector<RsRay> rays(16);
+    std::vector<rs_u32> order(16);
+    for (rs_u32 i = 0; i < 16; ++i) {
+      rays[i] = RsRay{{any(rng), any(rng), any(rng)}, 0.0f, {component(), component(), component()}, 100.0f};
+      order[i] = 15 - i;  // through an order, as the kernels load
+    }
+    setup16::RsRayPacket p;
+    setup16::rs_pf tmax;
+    RsRay lane_rays[16];
+    const rs_u32 count = round % 5 == 0 ? 11u : 16u;  // some packets end early
+    const int active = setup16::rs_packet_load(rays.data(), order.data(), 0, count, 1, lane_rays, &p, &tmax);
+    int any_parallel = 0;
+    for (int i = 0; i < 16; ++i) {
+      const RsRay ray = i < static_cast<int>(count) ? rays[order[i]] : lane_rays[i];
+      const RsRobustRay r = rs_prepare_robust_ray(ray);
+      const bool in_range = i < static_cast<int>(count);
+      SCOPED_TRACE(::testing::Message() << "round " << round << " lane " << i << " d = (" << ray.d[0] << ", "
+                                        << ray.d[1] << ", " << ray.d[2] << ")");
+      ASSERT_EQ((active >> i) & 1, in_range && r.valid ? 1 : 0);
+      const float inv[3] = {p.ix.s[i], p.iy.s[i], p.iz.s[i]};
+      const int par[3] = {p.par_x.s[i], p.par_y.s[i], p.par_z.s[i]};
+      for (int a = 0; a < 3; ++a) {
+        ASSERT_EQ(bits(inv[a]), bits(r.inv_d[a])) << "axis " << a;
+        ASSERT_EQ(par[a] != 0, r.parallel[a] != 0) << "axis " << a;
+      }
+      ASSERT_EQ(p.kx1.s[i] != 0, r.kx == 1);
+      ASSERT_EQ(p.kx2.s[i] != 0, r.kx == 2);
+      ASSERT_EQ(p.ky1.s[i] != 0, r.ky == 1);
+      ASSERT_EQ(p.ky2.s[i] != 0, r.ky == 2);
+      ASSERT_EQ(p.kz1.s[i] != 0, r.kz == 1);
+      ASSERT_EQ(p.kz2.s[i] != 0, r.kz == 2);
+      ASSERT_EQ(bits(p.okx.s[i]), bits(r.okx));
+      ASSERT_EQ(bits(p.oky.s[i]), bits(r.oky));
+      ASSERT_EQ(bits(p.okz.s[i]), bits(r.okz));
+      ASSERT_EQ(bits(p.sx.s[i]), bits(r.sx));
+      ASSERT_EQ(bits(p.sy.s[i]), bits(r.sy));
+      ASSERT_EQ(bits(p.sz.s[i]), bits(r.sz));
+      if (in_range && r.valid && !r.oblique) any_parallel = 1;
+      ++compared;
+    }
+    ASSERT_EQ(p.any_parallel, any_parallel) << "round " << round;
+  }
+  EXPECT_EQ(compared, 4000 * 16);
 }
 
 }  // namespace raysort
