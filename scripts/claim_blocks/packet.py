@@ -1,21 +1,22 @@
 """results/README.md, "Tables 2 and 3 on a CPU that sees coherence": the packet class beside single rays
-on the paper's 40 cells of each table (paper-1spp-classes-da8579b), with scripts/paper_correlation.py."""
+on the paper's 40 cells of each table (paper-1spp-classes-da8579b), and the packet class again after its
+robust set-up was vectorised (paper-1spp-packet-06b6e7c), with scripts/paper_correlation.py."""
 import csv
 import os
 
 from paper_correlation import correlation_table
 
 from .sampling import column_label
-from .sets import CLASSES, PAPER_SPEEDUPS
+from .sets import CLASSES, PACKET_SETUP, PAPER_SPEEDUPS
 
 SCENES = ["sibenik", "breakfast_room", "grey_white_room", "multi-instance-real", "landscape"]
 ENCODERS = ["hcc", "mlhcc", "ppc", "twopoint", "grid", "aila", "reis", "origin"]
 BATCH = {"2": "bounce1", "3": "shadow0"}
 
 
-def _cells():
+def _cells(set_dir=CLASSES):
     """(layout, scene, batch, encoder) -> row, the ok 32-bit permute cells."""
-    with open(os.path.join(CLASSES, "cells.csv"), newline="") as f:
+    with open(os.path.join(set_dir, "cells.csv"), newline="") as f:
         return {(r["layout"], r["scene"], r["batch"], r["encoder"]): r for r in csv.DictReader(f)
                 if r["status"] == "ok" and r["access"] == "permute" and r["bits"] == "32"}
 
@@ -28,6 +29,10 @@ def _speedup(r):
 
 def correlation_block():
     return "\n".join(correlation_table([CLASSES]))
+
+
+def setup_correlation_block():
+    return "\n".join(correlation_table([PACKET_SETUP]))
 
 
 def _table(table):
@@ -58,6 +63,12 @@ def hcc_breakfast_phrase():
     c = _cells()
     return (f"{_with_interval(c[('packet16', 'breakfast_room', 'bounce1', 'hcc')])} in packets, "
             f"{_with_interval(c[('wide', 'breakfast_room', 'bounce1', 'hcc')])} in single rays")
+
+
+def setup_hcc_breakfast_phrase():
+    c = _cells(PACKET_SETUP)
+    return (f"{_with_interval(c[('packet16', 'breakfast_room', 'bounce1', 'hcc')])} "
+            f"(net {float(c[('packet16', 'breakfast_room', 'bounce1', 'hcc')]['net_speedup']):.3f})")
 
 
 def shadow_gap_phrase():

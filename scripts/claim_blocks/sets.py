@@ -9,6 +9,10 @@ XEON = os.path.join(ROOT, "results", "pocl-cpu-pthread-skylake-avx512-intel-xeon
 ONE_SPP = os.path.join(EPYC, "paper-1spp-9dab0ed")
 EIGHT_SPP = os.path.join(EPYC, "paper-8spp-9dab0ed", "merged")
 CLASSES = os.path.join(XEON, "paper-1spp-classes-da8579b")
+# The packet class's 80 cells of Tables 2 and 3 again after the robust packet kernels set up their
+# lanes' rays in vector form (issue 40): CLASSES' packet16 cells ran kernels that prepared each lane's
+# ray out of line, at 0.37-0.41 of the fast packets' speed on primary rays (docs/trace.md).
+PACKET_SETUP = os.path.join(XEON, "paper-1spp-packet-06b6e7c")
 VIEWPORT = os.path.join(EPYC, "paper-viewport-1spp-d8b4b22")
 HCC_DIR = os.path.join(EPYC, "paper-hcc-dir-1spp-d8b4b22")
 BOUNCES = os.path.join(EPYC, "paper-bounces-1spp-d8b4b22")
