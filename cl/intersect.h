@@ -185,7 +185,8 @@ RS_INLINE RsRobustRay rs_prepare_robust_ray(RsRay ray) {
  * the ray is parallel to contributes no distance, only the test bmin <= o <= bmax (inclusive, so
  * a ray grazing a box face or starting on a slab plane stays in). Returns the entry distance and
  * sets *hit when [entry, exit] overlaps [tmin, tmax]. */
-RS_INLINE float rs_intersect_box_robust(const RsRobustRay* r, RS_GLOBAL const RsBvhNode* n, float tmax, int* hit) {
+RS_FORCE_INLINE float rs_intersect_box_robust(const RsRobustRay* r, RS_GLOBAL const RsBvhNode* n, float tmax,
+                                              int* hit) {
   float tnear = r->tmin;
   float tfar = tmax;
   int inside = 1;

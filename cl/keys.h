@@ -42,14 +42,9 @@
 #define RS_LOCAL __local
 #define RS_U64(x) ((ulong)(x))
 #define RS_CONSTANT __constant
-/* Key code is inlined into the kernels, so PoCL sees one straight-line work-item body. The host
- * passes RS_NO_FORCED_INLINE for Oclgrind (host/runtime/runtime.cpp): LLVM's always-inliner emits
- * llvm.experimental.noalias.scope.decl even at -O0, which Oclgrind 21.10 cannot interpret. */
-#ifdef RS_NO_FORCED_INLINE
-#define RS_KEY_INLINE static inline
-#else
-#define RS_KEY_INLINE static inline __attribute__((always_inline))
-#endif
+/* Key code is inlined into the kernels, so PoCL sees one straight-line work-item body (except under
+ * Oclgrind: RS_FORCE_INLINE, shared.h). */
+#define RS_KEY_INLINE RS_FORCE_INLINE
 RS_KEY_INLINE rs_u32 rs_clz64(rs_u64 x) { return (rs_u32)clz(x); }
 /* Key stores of the encode kernels (encode.cl, encode_file.h). A 64-bit key goes out as two 32-bit
  * words on a little-endian device: PoCL's work-group vectoriser sizes its vectors by the widest type

@@ -23,6 +23,16 @@
 #define RS_INLINE static inline
 /* The small lane and vector helpers (lanes.h, packet_lanes.h): plain RS_INLINE on the device. */
 #define RS_LANE_INLINE RS_INLINE
+/* Forced inline, for code PoCL's inliner otherwise leaves as a function of its own in a hot loop
+ * (objdump of its kernel cache shows it): the key code (keys.h) and the robust slab test of the
+ * binary classes. The host passes RS_NO_FORCED_INLINE for Oclgrind (host/runtime/runtime.cpp):
+ * LLVM's always-inliner emits llvm.experimental.noalias.scope.decl even at -O0, which Oclgrind 21.10
+ * cannot interpret. */
+#ifdef RS_NO_FORCED_INLINE
+#define RS_FORCE_INLINE static inline
+#else
+#define RS_FORCE_INLINE static inline __attribute__((always_inline))
+#endif
 /* Fully unrolls the short fixed loop that follows (per-axis loops in the traversal). */
 #define RS_UNROLL _Pragma("unroll")
 typedef uchar rs_u8;
@@ -47,6 +57,7 @@ RS_INLINE float rs_int_as_float(rs_i32 i) { return as_float(i); }
  * recording traversal, 6.6 % of a quick preset's samples in calls (issue 42, item 5). Same
  * arithmetic, so the same bits. */
 #define RS_LANE_INLINE inline __attribute__((always_inline))
+#define RS_FORCE_INLINE inline
 #define RS_UNROLL _Pragma("GCC unroll 4")
 typedef std::uint8_t rs_u8;
 typedef std::uint32_t rs_u32;
