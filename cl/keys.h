@@ -38,13 +38,14 @@
 #include "intersect.h"
 #include "shared.h"
 
+/* Key code is inlined into the kernels, so PoCL sees one straight-line work-item body (except under
+ * Oclgrind; plain inline on the host: RS_FORCE_INLINE, shared.h). */
+#define RS_KEY_INLINE RS_FORCE_INLINE
+
 #ifdef __OPENCL_VERSION__
 #define RS_LOCAL __local
 #define RS_U64(x) ((ulong)(x))
 #define RS_CONSTANT __constant
-/* Key code is inlined into the kernels, so PoCL sees one straight-line work-item body (except under
- * Oclgrind: RS_FORCE_INLINE, shared.h). */
-#define RS_KEY_INLINE RS_FORCE_INLINE
 RS_KEY_INLINE rs_u32 rs_clz64(rs_u64 x) { return (rs_u32)clz(x); }
 /* Key stores of the encode kernels (encode.cl, encode_file.h). A 64-bit key goes out as two 32-bit
  * words on a little-endian device: PoCL's work-group vectoriser sizes its vectors by the widest type
@@ -64,7 +65,6 @@ RS_KEY_INLINE rs_u32 rs_clz64(rs_u64 x) { return (rs_u32)clz(x); }
 #define RS_LOCAL
 #define RS_CONSTANT
 #define RS_U64(x) ((rs_u64)(x))
-#define RS_KEY_INLINE inline
 RS_KEY_INLINE rs_u32 rs_clz64(rs_u64 x) { return (rs_u32)std::countl_zero(x); }
 #endif
 

@@ -66,9 +66,8 @@ def hcc_breakfast_phrase():
 
 
 def setup_hcc_breakfast_phrase():
-    c = _cells(PACKET_SETUP)
-    return (f"{_with_interval(c[('packet16', 'breakfast_room', 'bounce1', 'hcc')])} "
-            f"(net {float(c[('packet16', 'breakfast_room', 'bounce1', 'hcc')]['net_speedup']):.3f})")
+    hcc = _cells(PACKET_SETUP)[("packet16", "breakfast_room", "bounce1", "hcc")]
+    return f"{_with_interval(hcc)} (net {float(hcc['net_speedup']):.3f})"
 
 
 def shadow_gap_phrase():

@@ -14,9 +14,9 @@ from paper_correlation import correlation_table
 from spp_compare import gpu, load
 
 from . import appendix, audit, gpu_model_scoring, paper_tex, sampling
-from .sets import (AUDIT_ENCODEBENCH, PACKET_SETUP, AUDIT_ORDER, AUDIT_TWOPOINT_BITS, AUDIT_TWOPOINT_VARIANTS, BOUNCES, CLASSES,
+from .sets import (AUDIT_ENCODEBENCH, AUDIT_ORDER, AUDIT_TWOPOINT_BITS, AUDIT_TWOPOINT_VARIANTS, BOUNCES, CLASSES,
                    EIGHT_SPP, EIGHT_SPP_EARLIER, EIGHT_SPP_SHARDS, HCC_DIR, KERNEL_CLASSES_MODEL, OCLGRIND, ONE_SPP,
-                   PAPER_COLUMN, ROOT, SHARED_ROUNDS, SWEEPS, VIEWPORT)
+                   PACKET_SETUP, PAPER_COLUMN, ROOT, SHARED_ROUNDS, SWEEPS, VIEWPORT)
 
 
 # --- readers -------------------------------------------------------------------------------------------
