@@ -248,6 +248,68 @@ TEST(Wide8Bvh, OneLeafAndEmptyTrees) {
   for (int lane = 0; lane < 8; ++lane) EXPECT_EQ(empty.nodes[0].valid.s[lane], 0);
 }
 
+// "" when a W-wide tree is laid out depth first, else the first place it is not: node 0 the root,
+// each inner child's subtree right after the node's earlier children's, in lane order, and the leaf
+// packets in the order the same walk meets them. The layout the collapses promise on any number
+// of threads (wide_tree::collapse).
+template <int W, class Tree>
+std::string depth_first_layout(const Tree& t) {
+  std::uint64_t next_node = 0, next_packet = 0;
+  std::string err;
+  auto walk = [&](auto& self, std::uint32_t n) -> void {
+    if (n != next_node) {
+      err = "node " + std::to_string(n) + " where depth-first order puts node " + std::to_string(next_node);
+      return;
+    }
+    ++next_node;
+    for (int lane = 0; lane < W && err.empty(); ++lane) {
+      if (t.nodes[n].valid.s[lane] == 0) continue;
+      const std::uint32_t ref = t.nodes[n].child[lane];
+      if (!(ref & RS_WIDE_LEAF)) {
+        self(self, ref);
+        continue;
+      }
+      const std::uint32_t first = (ref & ~RS_WIDE_LEAF) >> 2;
+      if (first != next_packet)
+        err = "node " + std::to_string(n) + " lane " + std::to_string(lane) + ": packet " + std::to_string(first) +
+              " where depth-first order puts packet " + std::to_string(next_packet);
+      next_packet += (ref & 3u) + 1;
+    }
+  };
+  walk(walk, 0);
+  if (err.empty() && (next_node != t.nodes.size() || next_packet != t.packets.size()))
+    err = "nodes or packets the walk does not reach";
+  return err;
+}
+
+// The collapses split their work over threads (wide_tree::collapse): on 1, 2, 3 and 7 threads the
+// same bytes, laid out depth first, valid; the build's own 4-wide tree is the same too.
+TEST(WideBvh, SameCollapseOnEveryThreadCount) {
+  for (const char* name : {"multi-instance", "landscape", "detail-room"}) {
+    BvhBuildOptions opts;
+    opts.threads = 1;
+    const Bvh bvh = build_bvh(load_scene(name).flatten(), opts);
+    const WideBvh wide = collapse_to_wide(bvh, 1);
+    const Wide8Bvh wide8 = collapse_to_wide8(bvh, 1);
+    ASSERT_EQ(validate_wide(wide, bvh), "") << name;
+    ASSERT_EQ(validate_wide8(wide8, bvh), "") << name;
+    EXPECT_EQ(depth_first_layout<4>(wide), "") << name;
+    EXPECT_EQ(depth_first_layout<8>(wide8), "") << name;
+    auto same_bytes = [](const auto& x, const auto& y) {
+      return x.size() == y.size() && std::memcmp(x.data(), y.data(), x.size() * sizeof(x[0])) == 0;
+    };
+    EXPECT_TRUE(same_bytes(bvh.wide.nodes, wide.nodes) && same_bytes(bvh.wide.packets, wide.packets)) << name;
+    for (unsigned threads : {2u, 3u, 7u}) {
+      const WideBvh w = collapse_to_wide(bvh, threads);
+      EXPECT_TRUE(same_bytes(w.nodes, wide.nodes) && same_bytes(w.packets, wide.packets) && w.depth == wide.depth)
+          << name << ": 4-wide on " << threads << " threads differs from 1 thread's";
+      const Wide8Bvh w8 = collapse_to_wide8(bvh, threads);
+      EXPECT_TRUE(same_bytes(w8.nodes, wide8.nodes) && same_bytes(w8.packets, wide8.packets) && w8.depth == wide8.depth)
+          << name << ": 8-wide on " << threads << " threads differs from 1 thread's";
+    }
+  }
+}
+
 TEST(Wide8Bvh, ValidatorCatchesABrokenCollapse) {
   Scene::Flat tris = load_scene("detail-room").flatten();  // cornell's 8-wide tree is one node
   Bvh bvh = build_bvh(tris);

@@ -34,7 +34,7 @@ step_cycles = 10.0
 // 64 wide nodes, no packets: node k is line k.
 WideBvh nodes_only() {
   WideBvh w;
-  w.nodes.resize(64);
+  w.nodes.resize(64, RsWideNode{});
   return w;
 }
 
@@ -139,7 +139,7 @@ TEST(GpuModel, WarmL2ServesAnotherSmsMisses) {
 TEST(GpuModel, LeafStepsReadTheirPacketsAndRayLoadsCoalesce) {
   const GpuProfile p = tiny_gpu(1);
   WideBvh wide = nodes_only();  // nodes: 64 x 128 bytes = 8 KB, so packets start at 8192
-  wide.packets.resize(8);
+  wide.packets.resize(8, RsTriPacket{});
   const GpuAddressMap map(wide, 64);
   std::vector<std::uint64_t> lines;
   map.step_blocks(RS_WIDE_LEAF | (0u << 2) | 1u, 128, lines);  // packets 0-1: bytes 8192-8575
@@ -156,8 +156,8 @@ TEST(GpuModel, LeafStepsReadTheirPacketsAndRayLoadsCoalesce) {
 // 384-byte packets.
 TEST(GpuModel, Wide8StepsReadTheirNodesAndPackets) {
   Wide8Bvh wide8;
-  wide8.nodes.resize(32);  // 32 x 256 bytes = 8 KB, so packets start at 8192
-  wide8.packets.resize(4);
+  wide8.nodes.resize(32, RsWide8Node{});  // 32 x 256 bytes = 8 KB, so packets start at 8192
+  wide8.packets.resize(4, RsTriPacket8{});
   const GpuAddressMap map(wide8, 64);
   std::vector<std::uint64_t> lines;
   map.step_blocks(3, 128, lines);  // node 3: bytes 768-1023
@@ -190,7 +190,7 @@ TEST(GpuModel, CwbvhStepsReadTheirNodesAndTriangles) {
 // steps interleave differently wait for each other, where lockstep lets them advance together.
 TEST(GpuModel, WhileWhileStepsWaitForTheOtherKindOfStep) {
   WideBvh wide = nodes_only();
-  wide.packets.resize(8);
+  wide.packets.resize(8, RsTriPacket{});
   const GpuAddressMap map(wide, 64);
   const std::uint32_t L = RS_WIDE_LEAF;  // a leaf of one packet
   EXPECT_TRUE(map.is_leaf(L));
@@ -230,7 +230,7 @@ TEST(GpuModel, WhileWhileStepsWaitForTheOtherKindOfStep) {
 TEST(GpuModel, AnyHitLanesReadTheirLastLeafOnlyUpToTheHit) {
   const GpuProfile p = tiny_gpu(1);
   WideBvh wide = nodes_only();  // packets start at byte 8192 = line 64
-  wide.packets.resize(8);
+  wide.packets.resize(8, RsTriPacket{});
   const GpuAddressMap map(wide, 64);
   const std::uint32_t leaf = RS_WIDE_LEAF | (0u << 2) | 3u;  // packets 0-3: bytes 8192-8959, lines 64-69
   std::vector<std::uint64_t> lines;

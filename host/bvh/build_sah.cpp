@@ -477,7 +477,7 @@ Bvh build_bvh(const Scene::Flat& tris, const BvhBuildOptions& opts) {
   Bvh bvh;
   build_binary(bvh, refs, threads, opts);
   bvh.triangles = leaf_ordered(tris, refs, threads);
-  bvh.wide = collapse_to_wide(bvh);
+  bvh.wide = collapse_to_wide(bvh, threads);
   bvh.build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   bvh.sah_cost = sah_cost(bvh, opts);
   return bvh;

@@ -9,11 +9,12 @@
 
 #include "scene/scene.h"
 #include "bvh_layout.h"
+#include "util/uninit_vector.h"
 
 namespace raysort {
 
 struct BvhBuildOptions {
-  std::uint32_t bins = 16;           // SAH bins per axis
+  std::uint32_t bins = 16;           // SAH bins per axis (2 to 64)
   std::uint32_t max_leaf_size = 8;   // a leaf never holds more (forced split)
   float traversal_cost = 1.0f;       // SAH constants (relative to one triangle test)
   float intersection_cost = 1.0f;
@@ -25,8 +26,9 @@ struct BvhBuildOptions {
 // from the binary tree: a wide node holds its binary node's grandchildren, or a child itself when
 // that child is a leaf. Same boxes, same leaves; only the branching factor changes.
 struct WideBvh {
-  std::vector<RsWideNode> nodes;     // node 0 is the root (always an inner node)
-  std::vector<RsTriPacket> packets;  // leaf triangles, four to a packet
+  // Filled in place on all threads by the collapse: resize() leaves new elements unwritten.
+  UninitVector<RsWideNode> nodes;     // node 0 is the root (always an inner node)
+  UninitVector<RsTriPacket> packets;  // leaf triangles, four to a packet
   std::uint32_t depth = 0;           // inner wide nodes on the longest root-to-leaf path
   bool empty() const { return nodes.empty(); }
 };
@@ -36,8 +38,8 @@ struct WideBvh {
 // its parent, leaves of up to eight triangles in one packet. Built on demand (collapse_to_wide8),
 // not with the BVH: only the wide8 class walks it.
 struct Wide8Bvh {
-  std::vector<RsWide8Node> nodes;     // node 0 is the root (always an inner node)
-  std::vector<RsTriPacket8> packets;  // leaf triangles, eight to a packet
+  UninitVector<RsWide8Node> nodes;     // as WideBvh's: resize() leaves new elements unwritten
+  UninitVector<RsTriPacket8> packets;  // leaf triangles, eight to a packet
   std::uint32_t depth = 0;            // inner wide nodes on the longest root-to-leaf path
   bool empty() const { return nodes.empty(); }
 };
@@ -79,8 +81,9 @@ Bvh build_bvh(const Scene::Flat& tris, const BvhBuildOptions& opts = {});
 double sah_cost(const Bvh& bvh, const BvhBuildOptions& opts = {});
 
 // Collapses a binary BVH to the 4-wide layout. Throws an Error if a leaf needs more than four
-// packets (max_leaf_size > 16) or the stack bound RS_WIDE_STACK_SIZE could be exceeded.
-WideBvh collapse_to_wide(const Bvh& bvh);
+// packets (max_leaf_size > 16) or the stack bound RS_WIDE_STACK_SIZE could be exceeded. On `threads`
+// threads (0: host_threads()), the same tree for every count.
+WideBvh collapse_to_wide(const Bvh& bvh, unsigned threads = 0);
 
 // Checks the wide tree against its binary source: every triangle in exactly one valid packet lane
 // (with its vertices and id), each child box equal to a binary node's box, every reference in
@@ -90,7 +93,8 @@ std::string validate_wide(const WideBvh& wide, const Bvh& bvh);
 
 // Collapses a binary BVH to the 8-wide layout (host/bvh/wide8.cpp). Throws an Error if a leaf needs
 // more than four packets (max_leaf_size > 32) or the stack bound RS_WIDE8_STACK_SIZE could be exceeded.
-Wide8Bvh collapse_to_wide8(const Bvh& bvh);
+// On `threads` threads (0: host_threads()), the same tree for every count.
+Wide8Bvh collapse_to_wide8(const Bvh& bvh, unsigned threads = 0);
 
 // validate_wide's checks on the 8-wide tree, with its stack bound (7 * depth <= RS_WIDE8_STACK_SIZE).
 std::string validate_wide8(const Wide8Bvh& wide, const Bvh& bvh);

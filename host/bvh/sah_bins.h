@@ -9,9 +9,13 @@
 #include <emmintrin.h>
 
 #include <algorithm>
+#include <bit>
 #include <cstddef>
 #include <cstdint>
+#include <string>
 #include <vector>
+
+#include "util/error.h"
 
 namespace raysort::sah {
 
@@ -147,15 +151,31 @@ struct Split {
 class SahBins {
  public:
   explicit SahBins(std::uint32_t bins)
-      : nbins_(bins), box_(3 * nbins_), count_(3 * nbins_), box2_(3 * nbins_), count2_(3 * nbins_), right_area_(nbins_) {}
+      : nbins_(bins), box_(3 * nbins_), count_(3 * nbins_), box2_(3 * nbins_), count2_(3 * nbins_), right_area_(nbins_) {
+    if (bins > 64) throw Error("SAH bins: " + std::to_string(bins) + " per axis, at most 64 (BvhBuildOptions::bins)");
+  }
   SahBins(const SahBins&) = default;
   std::uint32_t bins() const { return nbins_; }
 
+  // Empty bins. After best() only the bins it found occupied are reset: a bin whose count is 0 still
+  // has the empty box (a record grows a box and counts it together; merging an empty bin changes
+  // nothing), and small nodes, most of the tree, occupy a few of the 3 x bins.
   void clear() {
-    std::fill(box_.begin(), box_.end(), Box4{});
-    std::fill(count_.begin(), count_.end(), 0u);
+    if (occupied_known_) {
+      for (std::uint32_t a = 0; a < 3; ++a)
+        for (std::uint64_t m = occupied_[a]; m != 0; m &= m - 1) {
+          const std::size_t i = a * nbins_ + static_cast<std::uint32_t>(std::countr_zero(m));
+          box_[i] = Box4{};
+          count_[i] = 0;
+        }
+    } else {
+      std::fill(box_.begin(), box_.end(), Box4{});
+      std::fill(count_.begin(), count_.end(), 0u);
+    }
+    occupied_known_ = false;
   }
   void add(const PrimRef* begin, const PrimRef* end, const BinMap& map) {
+    occupied_known_ = false;
     if (end - begin < kSplitAbove) {
       add_to(begin, end, map, box_.data(), count_.data());
       return;
@@ -180,6 +200,7 @@ class SahBins {
   // came first except for the sign of a zero, which no area, cost or comparison of best() sees
   // (a zero extent or product is a zero of either sign, and adding it changes no sum).
   void merge(const SahBins& o) {
+    occupied_known_ = false;
     for (std::size_t i = 0; i < box_.size(); ++i) {
       box_[i].grow(o.box_[i]);
       count_[i] += o.count_[i];
@@ -189,35 +210,44 @@ class SahBins {
   // The cheapest split over all axes (the first found among equal costs: axis x before y before
   // z, lower bins first), or none when every axis has no extent or leaves one side empty.
   Split best(const BinMap& map) {
+    for (std::uint32_t a = 0; a < 3; ++a) {
+      std::uint64_t m = 0;
+      for (std::uint32_t b = 0; b < nbins_; ++b) m |= std::uint64_t{count_[a * nbins_ + b] != 0} << b;
+      occupied_[a] = m;
+    }
+    occupied_known_ = true;
     Split best;
     for (int a = 0; a < 3; ++a) {
       if (map.scale[a] == 0.0f) continue;
       const Box4* box = &box_[a * nbins_];
       const std::uint32_t* count = &count_[a * nbins_];
-      // An empty bin changes neither box nor count: right_area_ repeats its neighbour's, and the
-      // plane after it costs what the plane before it cost (not less, so never a new best). Small
-      // nodes, most of the tree, leave most bins empty.
+      // Only occupied bins: an empty bin changes neither box nor count, so the plane after it costs
+      // what the plane before it cost (not less, so never a new best). right_area_[b] is the area of
+      // the occupied bins from b up, grown from the top down, for each occupied b > 0: the plane
+      // after occupied bin b reads it at the next occupied bin. (The same grows in the same order as
+      // a sweep over every bin, so the same costs bit for bit.)
+      const std::uint64_t occupied = occupied_[a];
       Box4 acc;
-      float acc_area = 0.0f;
-      for (std::uint32_t b = nbins_ - 1; b > 0; --b) {
-        if (count[b] != 0) {
-          acc.grow(box[b]);
-          acc_area = acc.area();
-        }
-        right_area_[b] = acc_area;
+      for (std::uint64_t m = occupied & ~std::uint64_t{1}; m != 0;) {
+        const int b = 63 - std::countl_zero(m);
+        acc.grow(box[b]);
+        right_area_[b] = acc.area();
+        m &= ~(std::uint64_t{1} << b);
       }
       std::uint32_t total = 0;
-      for (std::uint32_t b = 0; b < nbins_; ++b) total += count[b];
+      for (std::uint64_t m = occupied; m != 0; m &= m - 1) total += count[std::countr_zero(m)];
       Box4 left;
       std::uint32_t left_n = 0;
-      for (std::uint32_t b = 0; b + 1 < nbins_; ++b) {
-        if (count[b] == 0) continue;
+      for (std::uint64_t m = occupied; m != 0; m &= m - 1) {
+        const int b = std::countr_zero(m);
+        const std::uint64_t above = m & (m - 1);  // the occupied bins after b
+        if (above == 0) break;                    // nothing right of this plane
         left.grow(box[b]);
         left_n += count[b];
         const std::uint32_t right_n = total - left_n;
-        if (left_n == 0 || right_n == 0) continue;
-        const float cost = left.area() * static_cast<float>(left_n) + right_area_[b + 1] * static_cast<float>(right_n);
-        if (cost < best.cost) best = {a, b, cost};
+        const float cost =
+            left.area() * static_cast<float>(left_n) + right_area_[std::countr_zero(above)] * static_cast<float>(right_n);
+        if (cost < best.cost) best = {a, static_cast<std::uint32_t>(b), cost};
       }
     }
     return best;
@@ -246,6 +276,8 @@ class SahBins {
   std::vector<Box4> box2_;  // add()'s second set
   std::vector<std::uint32_t> count2_;
   std::vector<float> right_area_;
+  std::uint64_t occupied_[3] = {0, 0, 0};  // per axis, bit b: bin b holds a record (set by best())
+  bool occupied_known_ = false;            // occupied_ describes the bins (no add or merge since)
 };
 
 }  // namespace raysort::sah

@@ -46,10 +46,10 @@ wide_tree::Slots slots_of(const Bvh& bvh, const wide_tree::Subtrees& sub, std::u
 
 }  // namespace
 
-WideBvh collapse_to_wide(const Bvh& bvh) {
-  const wide_tree::Subtrees sub(bvh);
+WideBvh collapse_to_wide(const Bvh& bvh, unsigned threads) {
+  const wide_tree::Subtrees sub(bvh, threads);
   return wide_tree::collapse<4, WideBvh>(
-      bvh, sub, RS_WIDE_STACK_SIZE, kMergeTriangles, [&](std::uint32_t n) { return slots_of(bvh, sub, n); });
+      bvh, sub, RS_WIDE_STACK_SIZE, kMergeTriangles, [&](std::uint32_t n) { return slots_of(bvh, sub, n); }, threads);
 }
 
 const WideBvh& wide_of(const Bvh& bvh, WideBvh& scratch) {

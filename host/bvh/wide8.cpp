@@ -56,10 +56,10 @@ wide_tree::Slots slots_of(const Bvh& bvh, const wide_tree::Subtrees& sub, std::u
 
 }  // namespace
 
-Wide8Bvh collapse_to_wide8(const Bvh& bvh) {
-  const wide_tree::Subtrees sub(bvh);
+Wide8Bvh collapse_to_wide8(const Bvh& bvh, unsigned threads) {
+  const wide_tree::Subtrees sub(bvh, threads);
   return wide_tree::collapse<8, Wide8Bvh>(
-      bvh, sub, RS_WIDE8_STACK_SIZE, kMergeTriangles, [&](std::uint32_t n) { return slots_of(bvh, sub, n); });
+      bvh, sub, RS_WIDE8_STACK_SIZE, kMergeTriangles, [&](std::uint32_t n) { return slots_of(bvh, sub, n); }, threads);
 }
 
 std::string validate_wide8(const Wide8Bvh& wide, const Bvh& bvh) {

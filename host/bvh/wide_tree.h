@@ -17,6 +17,7 @@
 #include "bvh/had.h"
 #include "util/error.h"
 #include "util/huge_pages.h"
+#include "util/parallel.h"
 
 namespace raysort::wide_tree {
 
@@ -24,13 +25,29 @@ namespace raysort::wide_tree {
 // leaves, for the collapses' merge rule (a small subtree becomes one wide leaf when SAH agrees).
 class Subtrees {
  public:
-  explicit Subtrees(const Bvh& bvh) : bvh_(bvh) {
+  // On `threads` threads (0: host_threads()): the subtrees below the top binary levels in parallel,
+  // then the top on this thread.
+  explicit Subtrees(const Bvh& bvh, unsigned threads = 0) : bvh_(bvh) {
     // The builder keeps a subtree's triangles contiguous; a subtree where they are not is never merged.
     first_.assign(bvh.nodes.size(), 0);
     count_.assign(bvh.nodes.size(), 0);
     leaf_area_.assign(bvh.nodes.size(), 0.0);
     small_and_sah_agrees_.assign(bvh.nodes.size(), 0);
-    if (!bvh.triangles.empty() && !bvh.nodes.empty()) ranges(0);
+    if (bvh.triangles.empty() || bvh.nodes.empty()) return;
+    threads = threads > 0 ? threads : host_threads();
+    // The first binary level with enough nodes to keep every thread busy (or the leaves, below it).
+    std::uint32_t split_depth = 0;
+    for (std::vector<std::uint32_t> level{0u}, next; level.size() < 8 * threads; ++split_depth) {
+      next.clear();
+      for (std::uint32_t n : level)
+        if (!bvh.is_leaf(n)) next.push_back(bvh.nodes[n].first), next.push_back(bvh.nodes[n].first + 1);
+      if (next.empty()) break;
+      level.swap(next);
+    }
+    std::vector<std::uint32_t> below;  // the subtrees at split_depth
+    top_ranges(0, 0, split_depth, &below);
+    for_each_job(threads, below.size(), [&](std::size_t i) { ranges(below[i]); });
+    top_ranges(0, 0, split_depth, nullptr);
   }
   // A binary leaf, or a subtree of at most max_triangles whose box's surface area is at most the
   // sum of its binary leaves' (SAH: a random ray then tests no more packets than before).
@@ -39,6 +56,8 @@ class Subtrees {
     if (count_[n] > max_triangles) return false;
     return max_triangles <= kKnownMerge ? small_and_sah_agrees_[n] != 0 : sah_agrees(n);
   }
+  // The triangles of subtree n (for a leafish n: of its one wide leaf).
+  std::uint32_t count(std::uint32_t n) const { return count_[n]; }
   // Subtree n as one leaf: its box over all its triangles.
   RsBvhNode as_leaf(std::uint32_t n) const {
     RsBvhNode b = bvh_.nodes[n];
@@ -49,13 +68,28 @@ class Subtrees {
 
  private:
   void ranges(std::uint32_t n) {
+    if (!bvh_.is_leaf(n)) ranges(bvh_.nodes[n].first), ranges(bvh_.nodes[n].first + 1);
+    combine(n);
+  }
+  // The top binary levels above split_depth: first collecting the subtrees below them (`below`),
+  // then, once those are done, combining their own nodes.
+  void top_ranges(std::uint32_t n, std::uint32_t depth, std::uint32_t split_depth, std::vector<std::uint32_t>* below) {
+    if (depth == split_depth || bvh_.is_leaf(n)) {
+      if (below) below->push_back(n);
+      return;
+    }
+    top_ranges(bvh_.nodes[n].first, depth + 1, split_depth, below);
+    top_ranges(bvh_.nodes[n].first + 1, depth + 1, split_depth, below);
+    if (!below) combine(n);
+  }
+  // Node n's figures from its children's (a leaf's from itself).
+  void combine(std::uint32_t n) {
     const RsBvhNode& b = bvh_.nodes[n];
     if (b.count > 0) {
       first_[n] = b.first, count_[n] = b.count;
       leaf_area_[n] = node_surface_area(b);
       return;
     }
-    ranges(b.first), ranges(b.first + 1);
     const std::uint32_t l = b.first, r = b.first + 1;
     first_[n] = std::min(first_[l], first_[r]);
     count_[n] = count_[l] + count_[r];
@@ -103,17 +137,19 @@ class Slots {
   std::size_t size_ = 0;
 };
 
-// Appends the W-lane packets of binary leaf `leaf` (triangles [first, first + count) of bvh's leaf
-// order) and returns the leaf reference (RS_WIDE_LEAF | first packet << 2 | packets - 1, as in
-// cl/bvh_layout.h). Lanes past the last triangle stay invalid (valid = 0, id RS_NO_HIT).
+// The packets a wide leaf over `count` triangles takes: W triangles to a packet.
+template <int W>
+std::uint32_t leaf_packets(std::uint32_t count) {
+  return (count + W - 1) / W;
+}
+
+// Writes the W-lane packets of binary leaf `leaf` (triangles [first, first + count) of bvh's leaf
+// order) to packets[at], packets[at + 1], ... and returns the leaf reference (RS_WIDE_LEAF | at << 2 |
+// packets - 1, as in cl/bvh_layout.h). Lanes past the last triangle stay invalid (valid = 0, id
+// RS_NO_HIT). The collapse has checked that the leaf fits (at most four packets, at < 2^29).
 template <int W, class Packet>
-std::uint32_t append_leaf(const Bvh& bvh, const RsBvhNode& leaf, std::vector<Packet>& packets) {
-  const auto first = static_cast<std::uint32_t>(packets.size());
-  const std::uint32_t count = (leaf.count + W - 1) / W;
-  if (count > 4)
-    throw Error("BVH leaf of " + std::to_string(leaf.count) + " triangles does not fit the " + std::to_string(W) +
-                "-wide layout (at most " + std::to_string(4 * W) + " per leaf: lower max_leaf_size)");
-  if (first >= (1u << 29)) throw Error("scene too large for the wide BVH layout (2^29 leaf packets)");
+std::uint32_t write_leaf(const Bvh& bvh, const RsBvhNode& leaf, Packet* packets, std::uint64_t at) {
+  const std::uint32_t count = leaf_packets<W>(leaf.count);
   for (std::uint32_t p = 0; p < count; ++p) {
     Packet pk{};
     for (int lane = 0; lane < W; ++lane) {
@@ -130,9 +166,9 @@ std::uint32_t append_leaf(const Bvh& bvh, const RsBvhNode& leaf, std::vector<Pac
       pk.nondegenerate.s[lane] = exactly_degenerate(t) ? 0 : -1;
       pk.id[lane] = t.id;
     }
-    packets.push_back(pk);
+    packets[at + p] = pk;
   }
-  return RS_WIDE_LEAF | (first << 2) | (count - 1);
+  return RS_WIDE_LEAF | static_cast<std::uint32_t>(at << 2) | (count - 1);
 }
 
 // Writes binary node b's box into lane `lane` of wide node w.
@@ -147,48 +183,166 @@ void set_box(Node& w, int lane, const RsBvhNode& b) {
 // ray misses), a one-leaf tree still an inner root, any other the wide node over the binary root's
 // slots; a tree whose nodes, each pushing up to W - 1 children, could overflow the kernels' stack
 // of stack_size entries is refused. Wide nodes are numbered depth first (a node before its
-// children, its slots in order), and a leaf's packets are appended when the walk meets the leaf.
+// children, its slots in order), and a leaf's packets follow in the same depth-first order.
 // slots_of(n): the binary nodes a wide node over inner binary node n holds; a slot becomes one wide
 // leaf (sub.as_leaf) when sub.leafish(slot, merge_triangles). The collapses differ only in these two.
 //
-// (Tried: the subtrees below the top collapsed by all threads, each into a tree of its own, then
-// copied into place. On a 322 K-triangle scene the collapse went from 15-27 ms to 70-93 ms: a
-// subtree's own vectors fault their pages in again, 2 MiB pages or 4 KiB ones.)
+// On `threads` threads, the same tree for every count. Depth-first numbering puts each wide subtree
+// in one contiguous run of nodes and one of packets, so the subtrees below the top (the wide nodes
+// at task depth, a few dozen) are sized first (Extent, on all threads), the top then numbered on
+// this thread, which gives each subtree its first node and packet, and the subtrees written in
+// place on all threads. The arrays are sized once, so no page is touched twice.
+// (Tried before: each subtree into a tree of its own, then copied into place: on a 322 K-triangle
+// scene the collapse went from 15-27 ms to 70-93 ms, every subtree's own vectors faulting their
+// pages in again.)
 template <int W, class Tree, class SlotsOfFn>
 Tree collapse(const Bvh& bvh, const Subtrees& sub, std::uint32_t stack_size, std::uint32_t merge_triangles,
-              SlotsOfFn slots_of) {
+              SlotsOfFn slots_of, unsigned threads) {
   using Node = std::decay_t<decltype(std::declval<Tree&>().nodes[0])>;
+  using Packet = std::decay_t<decltype(std::declval<Tree&>().packets[0])>;
   Tree out;
   if (bvh.triangles.empty() || bvh.nodes.empty()) {
-    out.nodes.emplace_back();
+    out.nodes.push_back(Node{});
     out.depth = 1;
     return out;
   }
-  // Room for the largest possible tree up front (at most a wide node per binary node, a packet per
-  // W triangles plus one per leaf), so that growing never copies the packets nor faults their pages
-  // in twice; 2 MiB pages where the kernel lends them (util/huge_pages.h). Untouched room costs
-  // address space only.
-  reserve_huge(out.nodes, bvh.nodes.size() + 1);
-  reserve_huge(out.packets, bvh.triangles.size() / W + std::min<std::size_t>(bvh.leaf_count, bvh.nodes.size()) + 1);
-  auto make_node = [&](auto& self, const Slots& slots, std::uint32_t depth) -> std::uint32_t {
-    out.depth = std::max(out.depth, depth);
-    const auto index = static_cast<std::uint32_t>(out.nodes.size());
-    out.nodes.push_back(Node{});
+  // A wide subtree's size: its nodes and packets, its depth in wide levels, its largest leaf.
+  struct Extent {
+    std::uint64_t nodes = 0, packets = 0;
+    std::uint32_t depth = 0, largest_leaf = 0;
+    void add_leaf(std::uint32_t count) {
+      packets += leaf_packets<W>(count);
+      largest_leaf = std::max(largest_leaf, count);
+    }
+    void add_child(const Extent& c) {
+      nodes += c.nodes, packets += c.packets;
+      depth = std::max(depth, c.depth + 1);
+      largest_leaf = std::max(largest_leaf, c.largest_leaf);
+    }
+  };
+  struct Cursor {
+    std::uint64_t node = 0, packet = 0;
+  };
+  struct Task {
+    Slots slots;  // of its root, a wide node at task depth
+    Extent extent;
+    Cursor at;    // its root's index and its first packet
+  };
+  auto extent_of = [&](auto& self, const Slots& slots) -> Extent {
+    Extent e{1, 0, 1, 0};
+    for (std::uint32_t s : slots)
+      if (sub.leafish(s, merge_triangles)) e.add_leaf(sub.count(s));
+      else e.add_child(self(self, slots_of(s)));
+    return e;
+  };
+  Node* nodes = nullptr;
+  Packet* packets = nullptr;
+  // Writes the wide subtree over `slots` from `at` on (its root at at.node) and moves `at` past it.
+  auto fill = [&](auto& self, const Slots& slots, Cursor& at) -> std::uint32_t {
+    const auto index = static_cast<std::uint32_t>(at.node++);
     Node w{};  // lanes past slots.size(): valid = 0, empty boxes, child 0 (never read)
     for (std::size_t i = 0; i < slots.size(); ++i) {
       set_box(w, static_cast<int>(i), bvh.nodes[slots[i]]);
       w.valid.s[i] = -1;
-      w.child[i] = sub.leafish(slots[i], merge_triangles) ? append_leaf<W>(bvh, sub.as_leaf(slots[i]), out.packets)
-                                     : self(self, slots_of(slots[i]), depth + 1);
+      if (sub.leafish(slots[i], merge_triangles)) {
+        const RsBvhNode leaf = sub.as_leaf(slots[i]);
+        w.child[i] = write_leaf<W>(bvh, leaf, packets, at.packet);
+        at.packet += leaf_packets<W>(leaf.count);
+      } else {
+        w.child[i] = self(self, slots_of(slots[i]), at);
+      }
     }
-    out.nodes[index] = w;  // after the children: the vector may have grown meanwhile
+    nodes[index] = w;
     return index;
   };
-  make_node(make_node, bvh.is_leaf(0) ? Slots{0u} : slots_of(0), 1u);
-  if ((W - 1) * out.depth > stack_size)
-    throw Error(std::to_string(W) + "-wide BVH of depth " + std::to_string(out.depth) +
+
+  // The task depth: the first wide level with enough nodes to keep every thread busy.
+  const Slots root = bvh.is_leaf(0) ? Slots{0u} : slots_of(0);
+  threads = threads > 0 ? threads : host_threads();
+  std::uint32_t task_depth = 1;
+  for (std::vector<Slots> level{root}, next; !level.empty() && level.size() < 32 * threads; ++task_depth) {
+    next.clear();
+    for (const Slots& n : level)
+      for (std::uint32_t s : n)
+        if (!sub.leafish(s, merge_triangles)) next.push_back(slots_of(s));
+    level.swap(next);
+  }
+  // The top, walked twice on this thread: first to find the tasks and to size itself (no cursor),
+  // then, once the arrays are sized, to write itself and give each task its place.
+  std::vector<Task> tasks;
+  Extent top_extent;
+  std::size_t next_task = 0;
+  auto top = [&](auto& self, const Slots& slots, std::uint32_t depth, Cursor* at) -> std::uint32_t {
+    const auto index = static_cast<std::uint32_t>(at ? at->node++ : 0);
+    top_extent.depth = std::max(top_extent.depth, depth);
+    if (!at) ++top_extent.nodes;
+    Node w{};
+    for (std::size_t i = 0; i < slots.size(); ++i) {
+      const std::uint32_t s = slots[i];
+      set_box(w, static_cast<int>(i), bvh.nodes[s]);
+      w.valid.s[i] = -1;
+      if (sub.leafish(s, merge_triangles)) {
+        const RsBvhNode leaf = sub.as_leaf(s);
+        if (!at) {
+          top_extent.add_leaf(leaf.count);
+          continue;
+        }
+        w.child[i] = write_leaf<W>(bvh, leaf, packets, at->packet);
+        at->packet += leaf_packets<W>(leaf.count);
+      } else if (depth + 1 < task_depth) {
+        w.child[i] = self(self, slots_of(s), depth + 1, at);
+      } else if (!at) {
+        tasks.push_back({slots_of(s), {}, {}});
+      } else {
+        Task& t = tasks[next_task++];
+        t.at = *at;
+        w.child[i] = static_cast<std::uint32_t>(at->node);
+        at->node += t.extent.nodes, at->packet += t.extent.packets;
+      }
+    }
+    if (at) nodes[index] = w;
+    return index;
+  };
+  top(top, root, 1u, nullptr);
+  for_each_job(threads, tasks.size(), [&](std::size_t i) { tasks[i].extent = extent_of(extent_of, tasks[i].slots); });
+  Extent whole = top_extent;
+  for (const Task& t : tasks) {
+    whole.nodes += t.extent.nodes, whole.packets += t.extent.packets;
+    whole.depth = std::max(whole.depth, task_depth - 1 + t.extent.depth);
+    whole.largest_leaf = std::max(whole.largest_leaf, t.extent.largest_leaf);
+  }
+  if (leaf_packets<W>(whole.largest_leaf) > 4)
+    throw Error("BVH leaf of " + std::to_string(whole.largest_leaf) + " triangles does not fit the " +
+                std::to_string(W) + "-wide layout (at most " + std::to_string(4 * W) +
+                " per leaf: lower max_leaf_size)");
+  if (whole.packets > (1u << 29)) throw Error("scene too large for the wide BVH layout (2^29 leaf packets)");
+  if ((W - 1) * whole.depth > stack_size)
+    throw Error(std::to_string(W) + "-wide BVH of depth " + std::to_string(whole.depth) +
                 " could overflow the trace stack (" + std::to_string(stack_size) +
                 " entries); the binary BVH is deeper than its bound");
+  // 2 MiB pages where the kernel lends them (util/huge_pages.h): the arrays are tens of MB, filled
+  // fresh; resize() leaves them unwritten (UninitVector), so each thread first touches what it
+  // writes. Reserved for the largest possible tree (a wide node per binary node, a packet per W
+  // triangles plus one per leaf), not the exact size: untouched room costs address space only, and
+  // the exact sizes (8 and 24 MB on a 322 K-triangle scene) fall under glibc's mmap threshold once
+  // it has risen, so they came from the heap on 4 KiB pages: twice the page faults per build.
+  reserve_huge(out.nodes, bvh.nodes.size() + 1);
+  reserve_huge(out.packets, bvh.triangles.size() / W + std::min<std::size_t>(bvh.leaf_count, bvh.nodes.size()) + 1);
+  out.nodes.resize(whole.nodes);
+  out.packets.resize(whole.packets);
+  out.depth = whole.depth;
+  nodes = out.nodes.data(), packets = out.packets.data();
+  Cursor at;
+  top(top, root, 1u, &at);
+  std::vector<std::size_t> largest_first(tasks.size());
+  for (std::size_t i = 0; i < tasks.size(); ++i) largest_first[i] = i;
+  std::stable_sort(largest_first.begin(), largest_first.end(),
+                   [&](std::size_t a, std::size_t b) { return tasks[a].extent.nodes > tasks[b].extent.nodes; });
+  for_each_job(threads, tasks.size(), [&](std::size_t k) {
+    const std::size_t i = largest_first[k];
+    Cursor task_at = tasks[i].at;
+    fill(fill, tasks[i].slots, task_at);
+  });
   return out;
 }
 

@@ -144,8 +144,8 @@ class Runtime {
   // every later read, so there the zeros are written from the host.
   void zero(const std::string& name, const cl::Buffer& b, std::size_t bytes);
 
-  template <class T>
-  cl::Buffer upload(const std::string& name, const std::vector<T>& v, cl_mem_flags flags = CL_MEM_READ_ONLY) {
+  template <class T, class Alloc>
+  cl::Buffer upload(const std::string& name, const std::vector<T, Alloc>& v, cl_mem_flags flags = CL_MEM_READ_ONLY) {
     return buffer(name, std::max<std::size_t>(1, v.size()) * sizeof(T), flags | (v.empty() ? 0 : CL_MEM_COPY_HOST_PTR),
                   v.empty() ? nullptr : v.data());
   }

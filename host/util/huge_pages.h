@@ -16,8 +16,8 @@ namespace raysort {
 void advise_huge_pages(void* p, std::size_t bytes);
 
 // v.reserve(n), then the advice on the reserved storage, for an empty vector about to be filled.
-template <class T>
-void reserve_huge(std::vector<T>& v, std::size_t n) {
+template <class T, class Alloc>
+void reserve_huge(std::vector<T, Alloc>& v, std::size_t n) {
   v.reserve(n);
   advise_huge_pages(v.data(), v.capacity() * sizeof(T));
 }
