@@ -214,9 +214,9 @@ TEST(GpuModel, WhileWhileStepsWaitForTheOtherKindOfStep) {
   EXPECT_EQ(replay.counts().warp_steps, 3u + 6u);
   // On the binary layout a node is a leaf when it holds primitives.
   Bvh binary;
-  binary.nodes.resize(3);
+  binary.nodes.resize(3, RsBvhNode{});
   binary.nodes[1].count = 2;
-  binary.triangles.resize(2);
+  binary.triangles.resize(2, RsTriangle{});
   const GpuAddressMap bmap(binary, 64);
   EXPECT_FALSE(bmap.is_leaf(0));
   EXPECT_TRUE(bmap.is_leaf(1));

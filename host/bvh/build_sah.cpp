@@ -301,7 +301,7 @@ std::optional<std::pair<TopNode, TopNode>> split_top_node(std::vector<PrimRef>& 
 }
 
 struct Layout {
-  std::vector<RsBvhNode>& nodes;
+  UninitVector<RsBvhNode>& nodes;
   const std::deque<TopNode>& top;
   std::vector<std::uint32_t>& job_offset;  // per job: where its nodes 1.. start (`next` at its root)
   std::vector<std::uint32_t>& job_slot;    // per job: where its root goes
@@ -336,7 +336,7 @@ struct Layout {
 
 // Copies a job's subtree into the tree: root at its slot, nodes 1.. from its offset on, children
 // references moved by the same offset.
-void copy_job(std::vector<RsBvhNode>& nodes, const Subtree& s, std::uint32_t slot, std::uint32_t offset) {
+void copy_job(UninitVector<RsBvhNode>& nodes, const Subtree& s, std::uint32_t slot, std::uint32_t offset) {
   for (std::size_t k = 0; k < s.nodes.size(); ++k) {
     RsBvhNode n = s.nodes[k];
     if (n.count == 0) n.first = n.first - 1 + offset;
@@ -364,9 +364,10 @@ std::vector<PrimRef> primitives_of(const Scene::Flat& tris, unsigned threads) {
   return refs;
 }
 
-// The triangles in leaf order (what the nodes' first/count index), with their original ids.
-std::vector<RsTriangle> leaf_ordered(const Scene::Flat& tris, const std::vector<PrimRef>& refs, unsigned threads) {
-  std::vector<RsTriangle> out = huge_vector<RsTriangle>(refs.size());
+// The triangles in leaf order (what the nodes' first/count index), with their original ids; every
+// one written here, on all threads (UninitVector: not zeroed first on this one).
+UninitVector<RsTriangle> leaf_ordered(const Scene::Flat& tris, const std::vector<PrimRef>& refs, unsigned threads) {
+  UninitVector<RsTriangle> out = huge_vector<RsTriangle, DefaultInitAllocator<RsTriangle>>(refs.size());
   for_each_chunk_on(threads, refs.size(), [&](std::size_t b, std::size_t e) {
     for (std::size_t k = b; k < e; ++k) {
       const std::uint32_t t = refs[k].id;
@@ -445,7 +446,7 @@ void build_binary(Bvh& bvh, std::vector<PrimRef>& refs, unsigned threads, const 
   std::vector<std::uint32_t> offset(jobs.size()), slot(jobs.size());
   std::size_t total = 0;
   for (const TopNode& t : top) total += t.job >= 0 ? jobs[t.job].nodes.size() : 1;
-  bvh.nodes = huge_vector<RsBvhNode>(total);
+  bvh.nodes = huge_vector<RsBvhNode, DefaultInitAllocator<RsBvhNode>>(total);  // every node written below
   Layout layout{bvh.nodes, top, offset, slot, jobs};
   layout.place(0, 0);
   bvh.leaf_count = layout.leaves;

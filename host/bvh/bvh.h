@@ -56,8 +56,9 @@ struct CwBvh {
 };
 
 struct Bvh {
-  std::vector<RsBvhNode> nodes;       // node 0 is the root
-  std::vector<RsTriangle> triangles;  // leaf order; triangles[k].id = index in the scene's flat list
+  // Filled in place on all threads by the build: resize() leaves new elements unwritten.
+  UninitVector<RsBvhNode> nodes;       // node 0 is the root
+  UninitVector<RsTriangle> triangles;  // leaf order; triangles[k].id = index in the scene's flat list
   std::uint32_t depth = 0;            // longest root-to-leaf path, in edges
   std::uint32_t leaf_count = 0;
   WideBvh wide;                       // the same tree, 4-wide (what the trace kernels read)

@@ -47,12 +47,12 @@ class DeviceUploads {
  public:
   DeviceUploads(Runtime& rt, std::string prefix, std::map<std::string, cl::Buffer>& per_scene)
       : rt_(rt), prefix_(std::move(prefix)), per_scene_(per_scene) {}
-  template <class T>
-  cl::Buffer buffer(const std::string& what, const std::vector<T>& data) {
+  template <class T, class Alloc>
+  cl::Buffer buffer(const std::string& what, const std::vector<T, Alloc>& data) {
     return rt_.upload(prefix_ + what, data);
   }
-  template <class T>
-  cl::Buffer scene_buffer(const std::string& what, const std::vector<T>& data) {
+  template <class T, class Alloc>
+  cl::Buffer scene_buffer(const std::string& what, const std::vector<T, Alloc>& data) {
     auto it = per_scene_.find(what);
     if (it == per_scene_.end()) it = per_scene_.emplace(what, rt_.upload(what, data)).first;
     return it->second;

@@ -7,6 +7,7 @@
 // for huge pages for its own build memory too. Elsewhere (another OS, THP "never") the advice is
 // a no-op.
 #include <cstddef>
+#include <memory>
 #include <vector>
 
 namespace raysort {
@@ -22,10 +23,11 @@ void reserve_huge(std::vector<T, Alloc>& v, std::size_t n) {
   advise_huge_pages(v.data(), v.capacity() * sizeof(T));
 }
 
-// A vector of n value-initialised elements whose storage was advised before it was written.
-template <class T>
-std::vector<T> huge_vector(std::size_t n) {
-  std::vector<T> v;
+// A vector of n elements whose storage was advised before it was written: value-initialised for
+// std::vector, unwritten for an UninitVector (util/uninit_vector.h) that threads then fill.
+template <class T, class Alloc = std::allocator<T>>
+std::vector<T, Alloc> huge_vector(std::size_t n) {
+  std::vector<T, Alloc> v;
   reserve_huge(v, n);
   v.resize(n);
   return v;
