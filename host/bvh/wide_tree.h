@@ -188,10 +188,11 @@ void set_box(Node& w, int lane, const RsBvhNode& b) {
 // leaf (sub.as_leaf) when sub.leafish(slot, merge_triangles). The collapses differ only in these two.
 //
 // On `threads` threads, the same tree for every count. Depth-first numbering puts each wide subtree
-// in one contiguous run of nodes and one of packets, so the subtrees below the top (the wide nodes
-// at task depth, a few dozen) are sized first (Extent, on all threads), the top then numbered on
-// this thread, which gives each subtree its first node and packet, and the subtrees written in
-// place on all threads. The arrays are sized once, so no page is touched twice.
+// in one contiguous run of nodes and one of packets, so the subtrees below the top (rooted at the
+// task depth, the first wide level with 32 nodes per thread) are sized first (Extent, on all
+// threads), the top then numbered on this thread, which gives each subtree its first node and
+// packet, and the subtrees written in place on all threads, largest first. The arrays are sized
+// once, so no page is touched twice.
 // (Tried before: each subtree into a tree of its own, then copied into place: on a 322 K-triangle
 // scene the collapse went from 15-27 ms to 70-93 ms, every subtree's own vectors faulting their
 // pages in again.)
@@ -237,24 +238,6 @@ Tree collapse(const Bvh& bvh, const Subtrees& sub, std::uint32_t stack_size, std
   };
   Node* nodes = nullptr;
   Packet* packets = nullptr;
-  // Writes the wide subtree over `slots` from `at` on (its root at at.node) and moves `at` past it.
-  auto fill = [&](auto& self, const Slots& slots, Cursor& at) -> std::uint32_t {
-    const auto index = static_cast<std::uint32_t>(at.node++);
-    Node w{};  // lanes past slots.size(): valid = 0, empty boxes, child 0 (never read)
-    for (std::size_t i = 0; i < slots.size(); ++i) {
-      set_box(w, static_cast<int>(i), bvh.nodes[slots[i]]);
-      w.valid.s[i] = -1;
-      if (sub.leafish(slots[i], merge_triangles)) {
-        const RsBvhNode leaf = sub.as_leaf(slots[i]);
-        w.child[i] = write_leaf<W>(bvh, leaf, packets, at.packet);
-        at.packet += leaf_packets<W>(leaf.count);
-      } else {
-        w.child[i] = self(self, slots_of(slots[i]), at);
-      }
-    }
-    nodes[index] = w;
-    return index;
-  };
 
   // The task depth: the first wide level with enough nodes to keep every thread busy.
   const Slots root = bvh.is_leaf(0) ? Slots{0u} : slots_of(0);
@@ -267,16 +250,21 @@ Tree collapse(const Bvh& bvh, const Subtrees& sub, std::uint32_t stack_size, std
         if (!sub.leafish(s, merge_triangles)) next.push_back(slots_of(s));
     level.swap(next);
   }
-  // The top, walked twice on this thread: first to find the tasks and to size itself (no cursor),
-  // then, once the arrays are sized, to write itself and give each task its place.
+  // The wide subtree over `slots`, a node at `depth`. Without a cursor (the top, walked first, on
+  // this thread): counts the top's own nodes and packets into top_extent and collects the subtrees
+  // at task depth as tasks. With one: writes the subtree from `at` on (its root at at.node), a
+  // task's place where the top meets it (the tasks' extents known by then), and moves `at` past it.
+  // The top is walked once each way on this thread; each task with a cursor on some thread.
   std::vector<Task> tasks;
   Extent top_extent;
   std::size_t next_task = 0;
-  auto top = [&](auto& self, const Slots& slots, std::uint32_t depth, Cursor* at) -> std::uint32_t {
+  auto walk = [&](auto& self, const Slots& slots, std::uint32_t depth, Cursor* at) -> std::uint32_t {
+    if (!at) {
+      ++top_extent.nodes;
+      top_extent.depth = std::max(top_extent.depth, depth);
+    }
     const auto index = static_cast<std::uint32_t>(at ? at->node++ : 0);
-    top_extent.depth = std::max(top_extent.depth, depth);
-    if (!at) ++top_extent.nodes;
-    Node w{};
+    Node w{};  // lanes past slots.size(): valid = 0, empty boxes, child 0 (never read)
     for (std::size_t i = 0; i < slots.size(); ++i) {
       const std::uint32_t s = slots[i];
       set_box(w, static_cast<int>(i), bvh.nodes[s]);
@@ -289,7 +277,7 @@ Tree collapse(const Bvh& bvh, const Subtrees& sub, std::uint32_t stack_size, std
         }
         w.child[i] = write_leaf<W>(bvh, leaf, packets, at->packet);
         at->packet += leaf_packets<W>(leaf.count);
-      } else if (depth + 1 < task_depth) {
+      } else if (depth + 1 != task_depth) {
         w.child[i] = self(self, slots_of(s), depth + 1, at);
       } else if (!at) {
         tasks.push_back({slots_of(s), {}, {}});
@@ -303,7 +291,7 @@ Tree collapse(const Bvh& bvh, const Subtrees& sub, std::uint32_t stack_size, std
     if (at) nodes[index] = w;
     return index;
   };
-  top(top, root, 1u, nullptr);
+  walk(walk, root, 1u, nullptr);
   for_each_job(threads, tasks.size(), [&](std::size_t i) { tasks[i].extent = extent_of(extent_of, tasks[i].slots); });
   Extent whole = top_extent;
   for (const Task& t : tasks) {
@@ -333,7 +321,7 @@ Tree collapse(const Bvh& bvh, const Subtrees& sub, std::uint32_t stack_size, std
   out.depth = whole.depth;
   nodes = out.nodes.data(), packets = out.packets.data();
   Cursor at;
-  top(top, root, 1u, &at);
+  walk(walk, root, 1u, &at);
   std::vector<std::size_t> largest_first(tasks.size());
   for (std::size_t i = 0; i < tasks.size(); ++i) largest_first[i] = i;
   std::stable_sort(largest_first.begin(), largest_first.end(),
@@ -341,7 +329,7 @@ Tree collapse(const Bvh& bvh, const Subtrees& sub, std::uint32_t stack_size, std
   for_each_job(threads, tasks.size(), [&](std::size_t k) {
     const std::size_t i = largest_first[k];
     Cursor task_at = tasks[i].at;
-    fill(fill, tasks[i].slots, task_at);
+    walk(walk, tasks[i].slots, task_depth, &task_at);
   });
   return out;
 }
