@@ -2,8 +2,9 @@
 // A std::vector whose resize(n) leaves new elements of trivial types unwritten (default-initialised)
 // instead of zeroing them: for large arrays that several threads then fill in place, so that each
 // page is first touched, faulted in and zeroed by the kernel, on the thread that writes it, not in
-// one serial pass of resize(). resize(n, value), push_back and assign write as usual. The BVH
-// collapse's wide trees (host/bvh/wide_tree.h) are such arrays.
+// one serial pass of resize(). resize(n, value), push_back and assign write as usual. The BVH's
+// arrays are such (bvh/bvh.h: the binary nodes, the leaf-ordered triangles, the 4- and 8-wide
+// nodes and packets), filled by the build and the collapses on every thread.
 #include <memory>
 #include <new>
 #include <type_traits>
