@@ -157,25 +157,17 @@ class SahBins {
   SahBins(const SahBins&) = default;
   std::uint32_t bins() const { return nbins_; }
 
-  // Empty bins. After best() only the bins it found occupied are reset: a bin whose count is 0 still
-  // has the empty box (a record grows a box and counts it together; merging an empty bin changes
-  // nothing), and small nodes, most of the tree, occupy a few of the 3 x bins.
+  // Empty bins: only the occupied ones are reset. A bin whose count is 0 still has the empty box (a
+  // record grows a box and counts it together; merging an empty bin changes nothing), and small
+  // nodes, most of the tree, occupy a few of the 3 x bins.
   void clear() {
-    if (occupied_known_) {
-      for (std::uint32_t a = 0; a < 3; ++a)
-        for (std::uint64_t m = occupied_[a]; m != 0; m &= m - 1) {
-          const std::size_t i = a * nbins_ + static_cast<std::uint32_t>(std::countr_zero(m));
-          box_[i] = Box4{};
-          count_[i] = 0;
-        }
-    } else {
-      std::fill(box_.begin(), box_.end(), Box4{});
-      std::fill(count_.begin(), count_.end(), 0u);
-    }
-    occupied_known_ = false;
+    for (std::size_t i = 0; i < count_.size(); ++i)
+      if (count_[i] != 0) {
+        box_[i] = Box4{};
+        count_[i] = 0;
+      }
   }
   void add(const PrimRef* begin, const PrimRef* end, const BinMap& map) {
-    occupied_known_ = false;
     if (end - begin < kSplitAbove) {
       add_to(begin, end, map, box_.data(), count_.data());
       return;
@@ -200,7 +192,6 @@ class SahBins {
   // came first except for the sign of a zero, which no area, cost or comparison of best() sees
   // (a zero extent or product is a zero of either sign, and adding it changes no sum).
   void merge(const SahBins& o) {
-    occupied_known_ = false;
     for (std::size_t i = 0; i < box_.size(); ++i) {
       box_[i].grow(o.box_[i]);
       count_[i] += o.count_[i];
@@ -210,12 +201,6 @@ class SahBins {
   // The cheapest split over all axes (the first found among equal costs: axis x before y before
   // z, lower bins first), or none when every axis has no extent or leaves one side empty.
   Split best(const BinMap& map) {
-    for (std::uint32_t a = 0; a < 3; ++a) {
-      std::uint64_t m = 0;
-      for (std::uint32_t b = 0; b < nbins_; ++b) m |= std::uint64_t{count_[a * nbins_ + b] != 0} << b;
-      occupied_[a] = m;
-    }
-    occupied_known_ = true;
     Split best;
     for (int a = 0; a < 3; ++a) {
       if (map.scale[a] == 0.0f) continue;
@@ -226,7 +211,8 @@ class SahBins {
       // the occupied bins from b up, grown from the top down, for each occupied b > 0: the plane
       // after occupied bin b reads it at the next occupied bin. (The same grows in the same order as
       // a sweep over every bin, so the same costs bit for bit.)
-      const std::uint64_t occupied = occupied_[a];
+      std::uint64_t occupied = 0;  // bit b: bin b holds a record
+      for (std::uint32_t b = 0; b < nbins_; ++b) occupied |= std::uint64_t{count[b] != 0} << b;
       Box4 acc;
       for (std::uint64_t m = occupied & ~std::uint64_t{1}; m != 0;) {
         const int b = 63 - std::countl_zero(m);
@@ -276,8 +262,6 @@ class SahBins {
   std::vector<Box4> box2_;  // add()'s second set
   std::vector<std::uint32_t> count2_;
   std::vector<float> right_area_;
-  std::uint64_t occupied_[3] = {0, 0, 0};  // per axis, bit b: bin b holds a record (set by best())
-  bool occupied_known_ = false;            // occupied_ describes the bins (no add or merge since)
 };
 
 }  // namespace raysort::sah
