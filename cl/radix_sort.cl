@@ -172,6 +172,91 @@ __kernel void rs_scan(__global uint* restrict counts, uint m) {
   }
 }
 
+#if RS_WG > 1
+/* The local-memory tile of the GPU shape (RS_WG > 1), shared by rs_scatter and rs_onesweep. */
+typedef struct {
+  uint tile_n;                  /* keys in the tile */
+  uint mine;                    /* this work-item's first key in the tile */
+  rs_key keys[RS_MAX_ITEMS];    /* its `items` consecutive keys and values, in registers */
+  uint values[RS_MAX_ITEMS];
+} RsTileItems;
+
+/* Steps 1-3 of a pass over the tile that starts at key tile_begin: staged (coalesced), counted per
+ * work-item into rank[digit][work-item], and ranked stably by one exclusive scan of that table in
+ * digit-major order. Afterwards rank[d * RS_WG] is the tile position of digit d's first key. */
+static inline void rs_rank_tile(__global const rs_key* restrict keys_in, __global const uint* restrict values_in,
+                                uint n, uint items, uint tile_begin, uint shift, uint mask,
+                                __local rs_key* tile_keys, __local uint* tile_values, __local uint* rank,
+                                __local uint* partial, RsTileItems* it) {
+  const uint lid = get_local_id(0);
+  it->tile_n = min(n - min(n, tile_begin), items * RS_WG);
+  const uint tile_n = it->tile_n;
+
+  /* 1. Stage the tile (coalesced) and clear this work-item's column. */
+  for (uint i = lid; i < tile_n; i += RS_WG) {
+    tile_keys[i] = keys_in[tile_begin + i];
+    tile_values[i] = values_in[tile_begin + i];
+  }
+  for (uint d = 0; d < RS_RADIX; ++d) rank[d * RS_WG + lid] = 0;
+  barrier(CLK_LOCAL_MEM_FENCE);
+
+  /* 2. Each work-item counts its own `items` consecutive keys; keep them in registers. */
+  it->mine = lid * items;
+  for (uint j = 0; j < RS_MAX_ITEMS; ++j) {
+    if (j < items && it->mine + j < tile_n) {
+      it->keys[j] = tile_keys[it->mine + j];
+      it->values[j] = tile_values[it->mine + j];
+      rank[rs_digit(it->keys[j], shift, mask) * RS_WG + lid] += 1u;
+    }
+  }
+  barrier(CLK_LOCAL_MEM_FENCE);
+
+  /* 3. Exclusive scan of rank[] in digit-major order: work-item w owns entries
+   *    [w * RS_RADIX, (w + 1) * RS_RADIX), a Hillis-Steele scan joins the segments. */
+  uint sum = 0;
+  for (uint e = 0; e < RS_RADIX; ++e) sum += rank[lid * RS_RADIX + e];
+  partial[lid] = sum;
+  barrier(CLK_LOCAL_MEM_FENCE);
+  for (uint step = 1; step < RS_WG; step <<= 1) {
+    uint add = lid >= step ? partial[lid - step] : 0u;
+    barrier(CLK_LOCAL_MEM_FENCE);
+    partial[lid] += add;
+    barrier(CLK_LOCAL_MEM_FENCE);
+  }
+  uint running = partial[lid] - sum;
+  for (uint e = 0; e < RS_RADIX; ++e) {
+    uint c = rank[lid * RS_RADIX + e];
+    rank[lid * RS_RADIX + e] = running;
+    running += c;
+  }
+  barrier(CLK_LOCAL_MEM_FENCE);
+}
+
+/* Steps 4-5, once run_delta[d] (global position - tile position of digit d's run) is set and a
+ * barrier has passed: the tile reordered by digit in local memory (stable: work-items in order,
+ * keys in order), then written out so that consecutive work-items write consecutive positions
+ * inside each digit's run. */
+static inline void rs_write_tile(__global rs_key* restrict keys_out, __global uint* restrict values_out, uint items,
+                                 uint shift, uint mask, __local rs_key* tile_keys, __local uint* tile_values,
+                                 __local uint* rank, __local const uint* run_delta, const RsTileItems* it) {
+  const uint lid = get_local_id(0);
+  for (uint j = 0; j < RS_MAX_ITEMS; ++j) {
+    if (j < items && it->mine + j < it->tile_n) {
+      uint to = rank[rs_digit(it->keys[j], shift, mask) * RS_WG + lid]++;
+      tile_keys[to] = it->keys[j];
+      tile_values[to] = it->values[j];
+    }
+  }
+  barrier(CLK_LOCAL_MEM_FENCE);
+  for (uint i = lid; i < it->tile_n; i += RS_WG) {
+    rs_key key = tile_keys[i];
+    uint to = run_delta[rs_digit(key, shift, mask)] + i;
+    keys_out[to] = key;
+    values_out[to] = tile_values[i];
+  }
+}
+#endif
+
 /* One counting-sort pass: tile `tile` writes its keys, stably, from offsets[digit * tiles + tile]. */
 __kernel void rs_scatter(__global const rs_key* restrict keys_in, __global const uint* restrict values_in,
                          __global rs_key* restrict keys_out, __global uint* restrict values_out, uint n, uint items,
@@ -198,71 +283,131 @@ __kernel void rs_scatter(__global const rs_key* restrict keys_in, __global const
   __local uint partial[RS_WG];
   __local uint run_delta[RS_RADIX]; /* global position - tile position of each digit's run */
   const uint lid = get_local_id(0);
-  const uint tile_begin = tile * items * RS_WG;
-  const uint tile_n = min(n - min(n, tile_begin), items * RS_WG);
-
-  /* 1. Stage the tile (coalesced) and clear this work-item's column. */
-  for (uint i = lid; i < tile_n; i += RS_WG) {
-    tile_keys[i] = keys_in[tile_begin + i];
-    tile_values[i] = values_in[tile_begin + i];
-  }
-  for (uint d = 0; d < RS_RADIX; ++d) rank[d * RS_WG + lid] = 0;
-  barrier(CLK_LOCAL_MEM_FENCE);
-
-  /* 2. Each work-item counts its own `items` consecutive keys; keep them in registers. */
-  const uint mine = lid * items;
-  rs_key my_keys[RS_MAX_ITEMS];
-  uint my_values[RS_MAX_ITEMS];
-  for (uint j = 0; j < RS_MAX_ITEMS; ++j) {
-    if (j < items && mine + j < tile_n) {
-      my_keys[j] = tile_keys[mine + j];
-      my_values[j] = tile_values[mine + j];
-      rank[rs_digit(my_keys[j], shift, mask) * RS_WG + lid] += 1u;
-    }
-  }
-  barrier(CLK_LOCAL_MEM_FENCE);
-
-  /* 3. Exclusive scan of rank[] in digit-major order: work-item w owns entries
-   *    [w * RS_RADIX, (w + 1) * RS_RADIX), a Hillis-Steele scan joins the segments. */
-  uint sum = 0;
-  for (uint e = 0; e < RS_RADIX; ++e) sum += rank[lid * RS_RADIX + e];
-  partial[lid] = sum;
-  barrier(CLK_LOCAL_MEM_FENCE);
-  for (uint step = 1; step < RS_WG; step <<= 1) {
-    uint add = lid >= step ? partial[lid - step] : 0u;
-    barrier(CLK_LOCAL_MEM_FENCE);
-    partial[lid] += add;
-    barrier(CLK_LOCAL_MEM_FENCE);
-  }
-  uint running = partial[lid] - sum;
-  for (uint e = 0; e < RS_RADIX; ++e) {
-    uint c = rank[lid * RS_RADIX + e];
-    rank[lid * RS_RADIX + e] = running;
-    running += c;
-  }
-  barrier(CLK_LOCAL_MEM_FENCE);
+  RsTileItems it;
+  rs_rank_tile(keys_in, values_in, n, items, tile * items * RS_WG, shift, mask, tile_keys, tile_values, rank, partial,
+               &it);
   for (uint d = lid; d < RS_RADIX; d += RS_WG) run_delta[d] = offsets[d * tiles + tile] - rank[d * RS_WG];
   barrier(CLK_LOCAL_MEM_FENCE); /* column 0 of rank[] is read above and advanced below */
+  rs_write_tile(keys_out, values_out, items, shift, mask, tile_keys, tile_values, rank, run_delta, &it);
+#endif
+}
 
-  /* 4. Reorder the tile by digit in local memory (stable: work-items in order, keys in order). */
-  for (uint j = 0; j < RS_MAX_ITEMS; ++j) {
-    if (j < items && mine + j < tile_n) {
-      uint to = rank[rs_digit(my_keys[j], shift, mask) * RS_WG + lid]++;
-      tile_keys[to] = my_keys[j];
-      tile_values[to] = my_values[j];
+/* Passes of a key width: ceil(RS_KEY_BITS / RS_RADIX_BITS). */
+#define RS_MAX_PASSES ((RS_KEY_BITS + RS_RADIX_BITS - 1) / RS_RADIX_BITS)
+
+#if RS_WG > 1
+/* ---------------------------------------------------------------------------------------------
+ * Onesweep (Adinets & Merrill 2022, "Onesweep: A Faster Least Significant Digit Radix Sort for
+ * GPUs"): one read of the keys takes the histograms of every pass (rs_hist_all, rs_hist_scan),
+ * then each pass is ONE kernel (rs_onesweep) instead of count + scan + scatter: a tile ranks its
+ * keys as rs_scatter does, and learns how many keys of each digit the tiles before it hold by a
+ * decoupled look-back over their published counts. A tile takes its index from an atomic counter
+ * in the order tiles start, so it only ever waits for tiles that have started; it still needs the
+ * device to let a started work-group finish while another spins (forward progress between
+ * work-groups), which OpenCL 1.2 does not promise: the host selects it by device (NVIDIA), and
+ * the tests run it on PoCL and Oclgrind, whose work-groups run to completion.
+ *
+ * The sweep buffer (uint, zeroed before a sort): [RS_MAX_PASSES][RS_RADIX] the global digit
+ * counts, scanned in place into each digit's first output position; then one tile counter per
+ * pass that runs; then per pass that runs a [tile][RS_RADIX] status table. A status word is
+ * a flag in its two top bits (0: nothing yet, AGGREGATE: the tile's own count of that digit,
+ * INCLUSIVE: the count of that digit over this tile and every tile before it) and a 30-bit
+ * count, written and read as one word with atomics, so no fence orders a count and its flag
+ * (the host uses Onesweep below 2^30 pairs only).
+ * ------------------------------------------------------------------------------------------- */
+#define RS_SWEEP_AGGREGATE 0x40000000u
+#define RS_SWEEP_INCLUSIVE 0x80000000u
+#define RS_SWEEP_COUNT 0x3fffffffu
+
+/* Zeroes sweep[0 .. words) before a sort (a kernel, not clEnqueueFillBuffer: Oclgrind 21.10's
+ * uninitialised-value check does not see what a fill writes). */
+__kernel void rs_sweep_clear(__global uint* restrict sweep, uint words) {
+  for (uint i = get_global_id(0); i < words; i += get_global_size(0)) sweep[i] = 0;
+}
+
+/* Digit counts of every pass in pass_mask (bit p: digit bits [lo + p * RS_RADIX_BITS, ...)) over
+ * one tile, added into sweep[p * RS_RADIX + digit]. */
+__kernel void rs_hist_all(__global const rs_key* restrict keys, uint n, uint items, uint lo, uint hi_bit,
+                          uint pass_mask, __global uint* restrict sweep) {
+  __local uint hist[RS_MAX_PASSES * RS_RADIX];
+  const uint lid = get_local_id(0);
+  for (uint i = lid; i < RS_MAX_PASSES * RS_RADIX; i += RS_WG) hist[i] = 0;
+  barrier(CLK_LOCAL_MEM_FENCE);
+  const uint begin = get_group_id(0) * items * RS_WG;
+  const uint end = min(n, begin + items * RS_WG);
+  for (uint i = begin + lid; i < end; i += RS_WG) {
+    const rs_key key = keys[i];
+    for (uint p = 0; p < RS_MAX_PASSES; ++p) {
+      if (!((pass_mask >> p) & 1u)) continue;
+      const uint shift = lo + p * RS_RADIX_BITS;
+      atomic_inc(&hist[p * RS_RADIX + rs_digit(key, shift, rs_mask(shift, hi_bit))]);
     }
   }
   barrier(CLK_LOCAL_MEM_FENCE);
-
-  /* 5. Write out: consecutive work-items write consecutive positions inside each digit's run. */
-  for (uint i = lid; i < tile_n; i += RS_WG) {
-    rs_key key = tile_keys[i];
-    uint to = run_delta[rs_digit(key, shift, mask)] + i;
-    keys_out[to] = key;
-    values_out[to] = tile_values[i];
-  }
-#endif
+  for (uint i = lid; i < RS_MAX_PASSES * RS_RADIX; i += RS_WG)
+    if (hist[i]) atomic_add(&sweep[i], hist[i]);
 }
+
+/* Each pass's digit counts, scanned in place (exclusive): digit d's first output position. */
+__kernel void rs_hist_scan(__global uint* restrict sweep) {
+  for (uint p = get_local_id(0); p < RS_MAX_PASSES; p += RS_SCAN_WG) {
+    uint running = 0;
+    for (uint d = 0; d < RS_RADIX; ++d) {
+      const uint c = sweep[p * RS_RADIX + d];
+      sweep[p * RS_RADIX + d] = running;
+      running += c;
+    }
+  }
+}
+
+/* One pass, whole: sweep[digits + d] is digit d's first output position, sweep[counter] the tile
+ * counter and sweep[status ...] the status table of this pass (all zero but the positions). */
+__kernel void rs_onesweep(__global const rs_key* restrict keys_in, __global const uint* restrict values_in,
+                          __global rs_key* restrict keys_out, __global uint* restrict values_out, uint n, uint items,
+                          uint shift, uint hi_bit, __global volatile uint* sweep, uint digits, uint counter,
+                          uint status) {
+  __local rs_key tile_keys[RS_WG * RS_MAX_ITEMS];
+  __local uint tile_values[RS_WG * RS_MAX_ITEMS];
+  __local uint rank[RS_RADIX * RS_WG];
+  __local uint partial[RS_WG];
+  __local uint run_delta[RS_RADIX];
+  __local uint count[RS_RADIX];
+  __local uint tile_index;
+  const uint lid = get_local_id(0);
+  const uint mask = rs_mask(shift, hi_bit);
+  /* The tile in the order work-groups start, not get_group_id: a tile waits only for started ones. */
+  if (lid == 0) tile_index = atomic_inc(&sweep[counter]);
+  barrier(CLK_LOCAL_MEM_FENCE);
+  const uint tile = tile_index;
+  RsTileItems it;
+  rs_rank_tile(keys_in, values_in, n, items, tile * items * RS_WG, shift, mask, tile_keys, tile_values, rank, partial,
+               &it);
+  __global volatile uint* own = sweep + status + tile * RS_RADIX;
+  /* Publish this tile's count of every digit first (the first tile's is already inclusive) ... */
+  for (uint d = lid; d < RS_RADIX; d += RS_WG) {
+    const uint end = d + 1 < RS_RADIX ? rank[(d + 1) * RS_WG] : it.tile_n;
+    count[d] = end - rank[d * RS_WG];
+    atomic_xchg(&own[d], (tile == 0 ? RS_SWEEP_INCLUSIVE : RS_SWEEP_AGGREGATE) | count[d]);
+  }
+  /* ... then look back, digit by digit, over the tiles before it until one is inclusive. */
+  for (uint d = lid; d < RS_RADIX; d += RS_WG) {
+    uint before = 0;
+    for (uint t = tile; t > 0;) {
+      --t;
+      uint word;
+      do {
+        word = atomic_or(&sweep[status + t * RS_RADIX + d], 0u);
+      } while (!(word & (RS_SWEEP_AGGREGATE | RS_SWEEP_INCLUSIVE)));
+      before += word & RS_SWEEP_COUNT;
+      if (word & RS_SWEEP_INCLUSIVE) break;
+    }
+    if (tile > 0) atomic_xchg(&own[d], RS_SWEEP_INCLUSIVE | (before + count[d]));
+    run_delta[d] = sweep[digits + d] + before - rank[d * RS_WG];
+  }
+  barrier(CLK_LOCAL_MEM_FENCE); /* column 0 of rank[] is read above and advanced below */
+  rs_write_tile(keys_out, values_out, items, shift, mask, tile_keys, tile_values, rank, run_delta, &it);
+}
+#endif
 
 #if RS_WG == 1
 /* MSD-first hybrid, CPU shape only (the host uses it for large N, see radix_sort.cpp). After one
@@ -275,7 +420,6 @@ __kernel void rs_scatter(__global const rs_key* restrict keys_in, __global const
  * is [offsets[d * tiles], offsets[(d + 1) * tiles]) of the scanned digit-major counts, the last
  * one ends at n. pass_mask: bit p set for each lower pass p (digit bits [lo + p * RS_RADIX_BITS,
  * ...)) that runs. With an odd number of passes the result is in keys_b/values_b, else in a. */
-#define RS_MAX_PASSES ((RS_KEY_BITS + RS_RADIX_BITS - 1) / RS_RADIX_BITS)
 /* One stable pass of a bucket, src -> dst, from the positions in `position`. */
 static inline void rs_bucket_pass(__global const rs_key* restrict src_k, __global const uint* restrict src_v,
                            __global rs_key* restrict dst_k, __global uint* restrict dst_v, uint begin, uint end,

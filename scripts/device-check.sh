@@ -2,7 +2,7 @@
 # What a lent GPU machine runs (docs/gpu-runs.md), in one command, from the repository root, with
 # the bundle of scripts/device-bundle.sh carried in .device/:
 #   1. finds NVIDIA's OpenCL library and an ICD file naming it (writes one if the machine has none);
-#   2. lists the OpenCL devices;
+#   2. lists the OpenCL devices, and checks the sort in the device's own shape (sortcheck);
 #   3. the golden check (scripts/golden.sh) on the GPU: keys, orders, ANC, SIMT and GPU-model
 #      figures of the quick preset must equal the committed PoCL ones, bit for bit;
 #   4. every trace class (`--layout all`: the CPU classes too, for the record), both variants, on the
@@ -74,6 +74,9 @@ fi
 
 step "2. OpenCL devices"
 "$bin" devices || { echo "raysort cannot list OpenCL devices"; exit 3; }
+# The sort in the device's own shape against its host twin (on NVIDIA: the Onesweep passes, whose
+# look-back needs the forward progress OpenCL does not promise), before anything sorts with it.
+limited 120 "$bin" sortcheck --sizes 1,255,257,4097,1000003 --bits 32,64 || fail "raysort sortcheck"
 
 # The real scenes of steps 4 and 5, unpacked from the bundle.
 if [ -z "${DEVICE_CHECK_QUICK:-}" ] && [ -f "$bundle/scenes.tar.gz" ]; then

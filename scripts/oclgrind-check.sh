@@ -11,7 +11,8 @@
 #                an encoder from a file (the example, inside cl/encode_file.h's encode_file_* kernels)
 #   render       generate, shade, the (fast, wide) counted closest hit, accumulate, compaction
 #   sortcheck    the radix sort in the shape Oclgrind gets (the GPU shape: local-memory tiles),
-#                a small GPU shape whose tiles are 256 keys, and the CPU shape, at
+#                a small GPU shape whose tiles are 256 keys, with and without the Onesweep
+#                passes, and the CPU shape, at
 #                N = 1, 255, 256, 257, 4097 and 32/64-bit keys, against the host twin
 # Every run must exit 0 (its results equal the host twins) and Oclgrind must report nothing.
 #
@@ -64,9 +65,12 @@ cases=(
   "render|render ${DEV[*]} --scene cornell --resolution 16x9 --spp 1 --out $work/render"
 )
 # Sort shapes: Oclgrind's own (its device type includes GPU: local-memory tiles of 128 x 8 keys),
-# a small GPU shape (32 x 8 = 256-key tiles: 255, 256, 257 sit on a tile boundary) and the CPU
-# shape (one work-item per tile, 8-bit digits, 4096-key tiles: 4097 is two tiles).
-shapes=("gpu|" "gpu-wg32|--work-group 32 --scan-work-group 32" "cpu|--work-group 1 --scan-work-group 1 --radix-bits 8")
+# a small GPU shape (32 x 8 = 256-key tiles: 255, 256, 257 sit on a tile boundary), the same with
+# the Onesweep passes (4097 keys: 17 tiles looking back) and the CPU shape (one work-item per
+# tile, 8-bit digits, 4096-key tiles: 4097 is two tiles).
+shapes=("gpu|" "gpu-wg32|--work-group 32 --scan-work-group 32"
+  "gpu-wg32-onesweep|--work-group 32 --scan-work-group 32 --onesweep"
+  "cpu|--work-group 1 --scan-work-group 1 --radix-bits 8")
 for s in "${shapes[@]}"; do
   IFS='|' read -r shape opts <<<"$s"
   for bits in 32 64; do

@@ -78,6 +78,8 @@ struct Device {
   std::unique_ptr<RadixSort> gpu_shape;  // the work-group ranking path, forced onto this device
   std::unique_ptr<RadixSort> hybrid;     // the CPU shape with the MSD-first hybrid at every size
   std::unique_ptr<RadixSort> hybrid_any_skew;  // ... that never falls back to the LSD passes
+  std::unique_ptr<RadixSort> onesweep;         // the GPU shape with the Onesweep passes, forced
+  std::unique_ptr<RadixSort> onesweep_small;   // ... with 32-key tiles and 4-bit digits: many tiles
 };
 
 Device& device() {
@@ -94,6 +96,14 @@ Device& device() {
     EXPECT_GT(tuning.work_group, 1u);
     EXPECT_LE(tuning.local_bytes(8), gpu.local_mem_bytes);
     d.gpu_shape = std::make_unique<RadixSort>(*d.rt, tuning);
+    EXPECT_FALSE(tuning.onesweep) << "Onesweep chosen for a device that is not NVIDIA's";
+    tuning.onesweep = true;
+    d.onesweep = std::make_unique<RadixSort>(*d.rt, tuning);
+    tuning.work_group = 32;
+    tuning.items = 1;
+    tuning.radix_bits = 4;
+    tuning.scan_work_group = 32;
+    d.onesweep_small = std::make_unique<RadixSort>(*d.rt, tuning);
     RadixSortTuning hybrid = RadixSortTuning::for_device(d.rt->info());
     if (hybrid.work_group == 1) {
       hybrid.hybrid_min = 2;
@@ -159,6 +169,57 @@ TEST(Sort, GpuShapeMatchesStableSort) {
       }
   auto keys = make_keys(Shape::Uniform, (1u << 20) + 3, 64, 99);
   check(sorter, keys, {64, 0}, "gpu shape: 1M+3 uniform 64-bit keys");
+}
+
+TEST(Sort, OnesweepMatchesStableSort) {
+  // The Onesweep passes (one histogram read, then per pass one kernel with a decoupled look-back)
+  // forced onto this device, whose work-groups run on several threads at once: tiles of 2048 keys
+  // (0, 1, 2048, 2049 sit on tile boundaries) and of 32 keys (65537 keys: 2049 tiles looking back).
+  for (RadixSort* sorter : {device().onesweep.get(), device().onesweep_small.get()}) {
+    const std::string shape = sorter == device().onesweep.get() ? "onesweep" : "onesweep, 32-key tiles";
+    for (unsigned bits : kKeyBits)
+      for (Shape s : kShapes)
+        for (std::size_t n : {std::size_t(0), std::size_t(1), std::size_t(2), std::size_t(2048), std::size_t(2049),
+                              std::size_t(65537)}) {
+          auto keys = make_keys(s, n, bits, 9000 * bits + n + static_cast<int>(s));
+          check(*sorter, keys, {bits, 0}, fmt::format("{}: {} keys of {} bits, n = {}", shape, name(s), bits, n));
+          check(*sorter, keys, {bits, bits / 2}, fmt::format("{}: {} keys of {} bits, top {}, n = {}", shape, name(s),
+                                                             bits, bits / 2, n));
+        }
+  }
+  auto keys = make_keys(Shape::Uniform, (1u << 20) + 3, 64, 98);
+  const SortStats st = check(*device().onesweep, keys, {64, 0}, "onesweep: 1M+3 uniform 64-bit keys");
+  // One kernel per pass: no count, scan or scatter launches.
+  for (const SortCommandTime& c : st.commands) {
+    EXPECT_TRUE(c.name != "rs_count" && c.name != "rs_scan" && c.name != "rs_scatter") << c.name;
+    if (c.name == "rs_onesweep") {
+      EXPECT_EQ(c.launches, st.passes_run);
+    }
+    if (c.name == "rs_hist_all") {
+      EXPECT_EQ(c.launches, 1u);
+    }
+  }
+}
+
+TEST(Sort, OnesweepIsChosenForNvidiaAndNeedsTheGpuShape) {
+  DeviceInfo gpu = device().rt->info();
+  gpu.type = "GPU";
+  gpu.local_mem_bytes = 48 * 1024;
+  gpu.max_work_group_size = 1024;
+  gpu.platform_name = "NVIDIA CUDA";
+  EXPECT_TRUE(RadixSortTuning::for_device(gpu).onesweep);
+  gpu.platform_name = "Oclgrind";
+  EXPECT_FALSE(RadixSortTuning::for_device(gpu).onesweep);
+  RadixSortTuning cpu = RadixSortTuning::for_device(device().rt->info());
+  EXPECT_FALSE(cpu.onesweep);
+  cpu.work_group = 1;
+  cpu.onesweep = true;
+  try {
+    RadixSort refused(*device().rt, cpu);
+    ADD_FAILURE() << "Onesweep with one work-item per tile was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("GPU shape"), std::string::npos) << e.what();
+  }
 }
 
 TEST(Sort, ShrinksALaunchToWhatItsKernelTakes) {

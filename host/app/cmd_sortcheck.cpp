@@ -29,6 +29,7 @@ struct SortCheckOptions {
   std::vector<unsigned> bits = {32, 64};
   // 0: keep the value RadixSortTuning::for_device gives (the device's own shape).
   unsigned work_group = 0, items = 0, radix_bits = 0, scan_work_group = 0;
+  bool onesweep = false;  // force the Onesweep passes (GPU shape)
 };
 
 // One size and key width: random keys (fixed seed), sorted on the device and by the host twin.
@@ -57,14 +58,16 @@ void run_sortcheck(const SortCheckOptions& opt) {
   if (opt.items) t.items = opt.items;
   if (opt.radix_bits) t.radix_bits = opt.radix_bits;
   if (opt.scan_work_group) t.scan_work_group = opt.scan_work_group;
+  if (opt.onesweep) t.onesweep = true;
   // The pairs, their host twin's copies and the device's buffers, before any is allocated.
   for (unsigned bits : opt.bits)
     for (std::size_t n : opt.sizes)
       check_sort_memory(n, bits > 32 ? 8 : 4, &rt.info(),
                         fmt::format("sortcheck of {} pairs with {}-bit keys", n, bits > 32 ? 64 : 32), "lower --sizes");
   RadixSort sorter(rt, t);
-  fmt::print("device: {} ({})\nradix sort: {}-bit digits, work-group {}, {} keys per work-item, scan work-group {}\n",
-             rt.info().name, rt.info().platform_name, t.radix_bits, t.work_group, t.items, t.scan_work_group);
+  fmt::print("device: {} ({})\nradix sort: {}-bit digits, work-group {}, {} keys per work-item, scan work-group {}, {}\n",
+             rt.info().name, rt.info().platform_name, t.radix_bits, t.work_group, t.items, t.scan_work_group,
+             t.work_group == 1 ? "CPU shape" : t.onesweep ? "Onesweep passes" : "reduce-then-scan passes");
   bool all_ok = true;
   for (unsigned bits : opt.bits)
     for (std::size_t n : opt.sizes)
@@ -96,6 +99,8 @@ void register_sortcheck_command(CLI::App& app) {
   whole_number(cmd->add_option("--radix-bits", opt.radix_bits, "force the digit width (1 to 12)"), 0, 12);
   whole_number(cmd->add_option("--scan-work-group", opt.scan_work_group, "force the scan's work-items (a power of two)"), 0,
                65536);
+  cmd->add_flag("--onesweep", opt.onesweep,
+                "force the Onesweep passes (decoupled look-back; the GPU shape, a work-group of 2 or more)");
   cmd->callback([] { run_sortcheck(opt); });
 }
 

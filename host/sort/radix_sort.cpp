@@ -34,9 +34,12 @@ std::size_t RadixSortTuning::local_bytes(std::size_t key_bytes) const {
     const std::size_t max_passes = (key_bytes * 8 + radix_bits - 1) / radix_bits;
     return std::max(count, max_passes * radix * 4);  // rs_bucket_sort's histograms
   }
-  const std::size_t scatter =
+  std::size_t scatter =
       std::size_t(work_group) * items * (key_bytes + 4) + radix * work_group * 4 + work_group * 4 + radix * 4;
-  return std::max(count, scatter);
+  if (!onesweep) return std::max(count, scatter);
+  scatter += radix * 4 + 4;  // rs_onesweep: the tile's digit counts and its index
+  const std::size_t max_passes = (key_bytes * 8 + radix_bits - 1) / radix_bits;
+  return std::max({count, scatter, max_passes * radix * 4});  // rs_hist_all: every pass's histogram
 }
 
 RadixSortTuning RadixSortTuning::for_device(const DeviceInfo& device) {
@@ -75,6 +78,10 @@ RadixSortTuning RadixSortTuning::for_device(const DeviceInfo& device) {
   }
   t.scan_work_group = std::min<unsigned>(1024, floor_pow2(max_wg));
   t.reduce_work_group = std::min<unsigned>(64, floor_pow2(max_wg));
+  // Onesweep's look-back spins on other work-groups' progress: on NVIDIA's GPUs a started
+  // work-group keeps running; elsewhere nothing here has shown it does (issue 42, item 1).
+  t.onesweep = device.platform_name.find("NVIDIA") != std::string::npos;
+  if (t.onesweep && t.local_bytes(8) > device.local_mem_bytes) t.onesweep = false;
   return t;
 }
 
@@ -87,6 +94,9 @@ RadixSort::RadixSort(Runtime& rt, const RadixSortTuning& tuning, RadixSortFit fi
       !pow2(tuning_.scan_work_group) || tuning_.reduce_work_group < 1 || tuning_.hybrid_skew < 1)
     throw Error(fmt::format("radix sort: invalid tuning (radix_bits {}, work_group {}, items {}, scan_work_group {})",
                             tuning_.radix_bits, tuning_.work_group, tuning_.items, tuning_.scan_work_group));
+  if (tuning_.onesweep && tuning_.work_group == 1)
+    throw Error("radix sort: Onesweep needs the GPU shape (a work-group of more than one work-item per tile); "
+                "force a work-group of 2 or more, or leave Onesweep off");
   if (tuning_.local_bytes(8) > rt.info().local_mem_bytes)
     throw Error(fmt::format("radix sort: the tuning needs {} of local memory, device '{}' has {}",
                             human_bytes(tuning_.local_bytes(8)), rt.info().name,
@@ -119,6 +129,12 @@ std::optional<RadixSort::KernelOverflow> RadixSort::build_kernels(Runtime& rt) {
       k.scatter = cl::Kernel(program, "rs_scatter");
       if (tuning_.hybrid()) k.bucket_sort = cl::Kernel(program, "rs_bucket_sort");
       if (warp_sort_shape()) k.warp_sort = cl::Kernel(program, "rs_warp_sort");
+      if (tuning_.onesweep) {
+        k.sweep_clear = cl::Kernel(program, "rs_sweep_clear");
+        k.hist_all = cl::Kernel(program, "rs_hist_all");
+        k.hist_scan = cl::Kernel(program, "rs_hist_scan");
+        k.onesweep = cl::Kernel(program, "rs_onesweep");
+      }
     });
     // Every launch's work-group must fit what the kernel takes on this device: a launch over it
     // fails with CL_INVALID_WORK_GROUP_SIZE in the middle of a sort, and PoCL then aborted the
@@ -129,11 +145,16 @@ std::optional<RadixSort::KernelOverflow> RadixSort::build_kernels(Runtime& rt) {
       unsigned local;
       bool scan_shape;
     };
-    const Launch launches[] = {{&k.count_bounds, "rs_count_bounds", tuning_.work_group, false},
-                               {&k.count, "rs_count", tuning_.work_group, false},
-                               {&k.scatter, "rs_scatter", tuning_.work_group, false},
-                               {&k.scan, "rs_scan", tuning_.scan_work_group, true},
-                               {&k.reduce_bounds, "rs_reduce_bounds", tuning_.scan_work_group, true}};
+    std::vector<Launch> launches = {{&k.count_bounds, "rs_count_bounds", tuning_.work_group, false},
+                                    {&k.count, "rs_count", tuning_.work_group, false},
+                                    {&k.scatter, "rs_scatter", tuning_.work_group, false},
+                                    {&k.scan, "rs_scan", tuning_.scan_work_group, true},
+                                    {&k.reduce_bounds, "rs_reduce_bounds", tuning_.scan_work_group, true}};
+    if (tuning_.onesweep)
+      launches.insert(launches.end(), {{&k.sweep_clear, "rs_sweep_clear", tuning_.work_group, false},
+                                       {&k.hist_all, "rs_hist_all", tuning_.work_group, false},
+                                       {&k.onesweep, "rs_onesweep", tuning_.work_group, false},
+                                       {&k.hist_scan, "rs_hist_scan", tuning_.scan_work_group, true}});
     for (const Launch& l : launches) {
       const std::size_t most = cl_call("querying a radix sort kernel's work-group size", [&] {
         return l.kernel->getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(rt.info().device);
@@ -295,6 +316,32 @@ void RadixSort::warp_passes(Passes& ps, const std::vector<unsigned>& run, int co
   ps.warp_sort(lo, top, pass_mask, group, std::size_t(1) << tuning_.radix_bits);
 }
 
+// Onesweep (tuning.onesweep; cl/radix_sort.cl says how): the sweep buffer zeroed, one read for the
+// digit counts of every pass that runs, their scan, then one kernel per pass.
+void RadixSort::onesweep_passes(Passes& ps, const std::vector<unsigned>& run, cl_uint lo, unsigned key_width) {
+  const std::size_t radix = std::size_t(1) << tuning_.radix_bits;
+  const std::size_t max_passes = (key_width + tuning_.radix_bits - 1) / tuning_.radix_bits;
+  const std::size_t counters = max_passes * radix, status = counters + run.size();
+  const std::size_t words = status + run.size() * ps.tiles * radix;
+  ensure(rt_, sweep_, sweep_bytes_, words * 4, "radix sort onesweep status");
+  set_args(ps.k.sweep_clear, sweep_, static_cast<cl_uint>(words));
+  enqueue(ps.k.sweep_clear, "rs_sweep_clear", std::min(words, ps.tiles * ps.wg), ps.wg);
+  cl_uint pass_mask = 0;
+  for (unsigned p : run) pass_mask |= cl_uint(1) << p;
+  set_args(ps.k.hist_all, *ps.src_keys, ps.n, ps.n_items, lo, ps.hi, pass_mask, sweep_);
+  enqueue(ps.k.hist_all, "rs_hist_all", ps.tiles * ps.wg, ps.wg);
+  set_args(ps.k.hist_scan, sweep_);
+  enqueue(ps.k.hist_scan, "rs_hist_scan", tuning_.scan_work_group, tuning_.scan_work_group);
+  for (std::size_t i = 0; i < run.size(); ++i) {
+    const cl_uint shift = lo + run[i] * tuning_.radix_bits;
+    set_args(ps.k.onesweep, *ps.src_keys, *ps.src_values, *ps.dst_keys, *ps.dst_values, ps.n, ps.n_items, shift, ps.hi,
+             sweep_, static_cast<cl_uint>(run[i] * radix), static_cast<cl_uint>(counters + i),
+             static_cast<cl_uint>(status + i * ps.tiles * radix));
+    enqueue(ps.k.onesweep, "rs_onesweep", ps.tiles * ps.wg, ps.wg);
+    ps.flip();
+  }
+}
+
 SortStats RadixSort::sort(cl::Buffer& keys, cl::Buffer& values, std::size_t count, const RadixSortConfig& cfg) {
   if (cfg.key_bits < 1 || cfg.key_bits > 64 || cfg.top_bits > cfg.key_bits)
     throw Error(fmt::format("radix sort: key_bits must be 1..64 and top_bits 0..key_bits (got key_bits {}, top_bits {})",
@@ -361,7 +408,11 @@ SortStats RadixSort::sort(cl::Buffer& keys, cl::Buffer& values, std::size_t coun
   Passes ps{*this, k, n, n_items, hi, wg, tiles, bins, stats, &keys, &values, &keys_tmp_, &values_tmp_};
   cl_call("running the radix sort passes", [&] {
     bool done = false;
-    if (warp) {
+    // Onesweep's status words hold 30-bit counts.
+    if (t.onesweep && !warp && !run.empty() && count < (std::size_t(1) << 30)) {
+      onesweep_passes(ps, run, lo, cfg.wide_keys() ? 64 : 32);
+      done = true;
+    } else if (warp) {
       warp_passes(ps, run, counted, lo, cfg.warp_group);
       done = true;
     } else if (hybrid && run.size() >= 2) {

@@ -70,6 +70,12 @@ struct RadixSortTuning {
   // back to the global LSD passes when one bucket holds more than 1 / hybrid_skew of the pairs.
   std::size_t hybrid_min = std::size_t(1) << 20;
   unsigned hybrid_skew = 4;
+  // work_group > 1: every pass as one Onesweep kernel (cl/radix_sort.cl: one read for the
+  // histograms of all passes, then per pass a decoupled look-back instead of count + scan +
+  // scatter). It assumes forward progress between work-groups, which OpenCL does not promise:
+  // for_device turns it on for NVIDIA's GPUs only; tests force it on PoCL and Oclgrind, whose
+  // work-groups run to completion. Sorts of 2^30 pairs or more take the reduce-then-scan passes.
+  bool onesweep = false;
 
   bool hybrid() const { return work_group == 1 && radix_bits <= 8 && hybrid_min > 0; }
 
@@ -115,6 +121,7 @@ class RadixSort {
     cl::Kernel count_bounds, reduce_bounds, count, scan, scatter;
     cl::Kernel bucket_sort;  // the hybrid's per-bucket LSD passes (work_group == 1 only)
     cl::Kernel warp_sort;    // the warp-granular sort's per-bucket walk (warp_sort_shape() only)
+    cl::Kernel sweep_clear, hist_all, hist_scan, onesweep;  // the Onesweep passes (tuning.onesweep only)
   };
   Kernels& kernels_for(const RadixSortConfig& cfg) { return cfg.wide_keys() ? wide_ : narrow_; }
   // The first launch whose work-group is more than its kernel takes on the device.
@@ -134,6 +141,7 @@ class RadixSort {
                            std::size_t tiles, std::size_t key_bytes);
   bool hybrid_passes(Passes& ps, const std::vector<unsigned>& run, int counted, cl_uint lo, std::size_t count);
   void warp_passes(Passes& ps, const std::vector<unsigned>& run, int counted, cl_uint lo, unsigned group);
+  void onesweep_passes(Passes& ps, const std::vector<unsigned>& run, cl_uint lo, unsigned key_width);
   static void ensure(Runtime& rt, cl::Buffer& b, std::size_t& have, std::size_t need, const char* name);
   template <class Key>
   SortStats sort_host(std::vector<Key>& keys, std::vector<std::uint32_t>& values, const RadixSortConfig& cfg);
@@ -142,9 +150,10 @@ class RadixSort {
   RadixSortTuning tuning_;
   Kernels narrow_, wide_;
   // Scratch, grown on demand: ping-pong keys/values, per-tile digit counts, per-tile key OR/AND
-  // and their reduction.
-  cl::Buffer keys_tmp_, values_tmp_, counts_, tile_bounds_, bounds_;
-  std::size_t keys_tmp_bytes_ = 0, values_tmp_bytes_ = 0, counts_bytes_ = 0, tile_bounds_bytes_ = 0, bounds_bytes_ = 0;
+  // and their reduction, Onesweep's digit positions, tile counters and look-back status.
+  cl::Buffer keys_tmp_, values_tmp_, counts_, tile_bounds_, bounds_, sweep_;
+  std::size_t keys_tmp_bytes_ = 0, values_tmp_bytes_ = 0, counts_bytes_ = 0, tile_bounds_bytes_ = 0, bounds_bytes_ = 0,
+              sweep_bytes_ = 0;
   // Device copies for the host-vector overloads.
   cl::Buffer keys_io_, values_io_;
   std::size_t keys_io_bytes_ = 0, values_io_bytes_ = 0;
