@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <cstdlib>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -466,6 +467,31 @@ TEST(CliReport, BadlyTypedMatrixEntriesNameTheFileAndKey) {
     expect_exit({"report", dir.string()}, 1, {"meta.json", "matrix." + key});
     fs::remove_all(dir);
   }
+}
+
+// sortbench's GPU shape on this CPU: the reduce-then-scan passes and, beside them on the same keys,
+// the Onesweep passes (issue 42, item 1), both checked against std::stable_sort.
+TEST(Sortbench, GpuShapeTimesOnesweepBesideReduceThenScan) {
+  const CliResult r = run_cli({"sortbench", "--gpu-shape", "--no-large", "--bits", "32", "--reps", "1", "--ref-reps", "1"});
+  ASSERT_EQ(r.code, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find("passes: ours reduce-then-scan; other passes: Onesweep"), std::string::npos) << r.out;
+  std::size_t rows = 0;
+  std::istringstream lines(r.out);
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind("| 2073600 | 32 |", 0) != 0) continue;
+    ++rows;
+    std::vector<std::string> cells;
+    std::istringstream row(line);
+    for (std::string cell; std::getline(row, cell, '|');) cells.push_back(cell);
+    ASSERT_GE(cells.size(), 21u) << line;
+    // other passes Mkeys/s and ours/other time: measured, finite, positive
+    for (int c : {18, 19}) {
+      const double v = std::strtod(cells[c].c_str(), nullptr);
+      EXPECT_TRUE(std::isfinite(v) && v > 0.0) << "column " << c << " is not a measured figure: " << line;
+    }
+    EXPECT_EQ(cells[20], " yes ") << line;  // ok
+  }
+  EXPECT_EQ(rows, 2u) << r.out;  // random and few-distinct keys
 }
 
 // Found by fuzz/cli_fuzzer.cpp: CLI11 converts a flag's value with std::stoll and its out_of_range

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cstdint>
 #include <fstream>
+#include <memory>
 #include <numeric>
 #include <random>
 #include <string>
@@ -41,6 +42,7 @@ struct Options {
   int ref_reps = 3;
   bool large = true;
   std::vector<unsigned> bits = {32, 64};
+  bool gpu_shape = false;  // the GPU shape on any device (local-memory tiles; both kinds of passes)
 };
 
 double median(std::vector<double> v) {
@@ -88,6 +90,11 @@ struct Row {
   bool ok = false;           // ours equals std::stable_sort
   bool lsd_ok = false;       // the host LSD anchor equals std::stable_sort
   bool warp_ok = true;       // the warp-granular sort equals its host twin
+  // The GPU shape's other kind of passes (Onesweep when ours runs reduce-then-scan, and the other
+  // way round), sorted back to back with ours: Mkeys/s (-1: not run) and the median of ours ms /
+  // its ms over the reps.
+  double other = -1, other_saving = 0;
+  bool other_ok = true;
   std::vector<SortStats> full_reps;  // the full sort's stats of every timed rep (where the time goes)
 };
 
@@ -159,31 +166,35 @@ struct DeviceInput {
   }
 };
 
-// Ours, the full sort and (on the CPU shape) the warp-granular one, back to back in every rep, in
-// an order that flips every rep; rep -1 is the untimed warm-up whose results are checked.
+// Ours, the full sort, with (on the CPU shape) the warp-granular one and (on the GPU shape, when
+// given) the other kind of passes, back to back in every rep, in an order that rotates every rep;
+// rep -1 is the untimed warm-up whose results are checked.
 template <class Key>
-void time_ours(RadixSort& sorter, DeviceInput<Key>& in, const std::vector<Pair<Key>>& expected,
+void time_ours(RadixSort& sorter, RadixSort* other, DeviceInput<Key>& in, const std::vector<Pair<Key>>& expected,
                const std::vector<Key>& keys, const std::vector<std::uint32_t>& values, const Options& opt, Row& row) {
   RadixSortConfig full{row.bits, 0}, warp{row.bits, 0};
   warp.warp_group = 32;
-  const bool with_warp = sorter.warp_sort_shape();
-  std::vector<double> full_ms, warp_ms, saving;
+  enum Arm { Full, Warp, Other };
+  std::vector<Arm> arms = {Full};
+  if (sorter.warp_sort_shape()) arms.push_back(Warp);
+  if (other) arms.push_back(Other);
+  std::vector<double> full_ms, warp_ms, warp_saving, other_ms, other_saving;
+  std::vector<Key> want_keys(expected.size());
+  std::vector<std::uint32_t> want_values(expected.size());
+  for (std::size_t j = 0; j < expected.size(); ++j) want_keys[j] = expected[j].key, want_values[j] = expected[j].value;
   for (int r = -1; r < opt.reps; ++r) {
-    double f = 0, w = 0;
-    for (int i = 0; i < 2; ++i) {
-      const bool warp_now = (i == 1) == (r % 2 == 0);
-      if (warp_now && !with_warp) continue;
+    double ms[3] = {0, 0, 0};
+    for (std::size_t i = 0; i < arms.size(); ++i) {
+      const Arm arm = arms[(i + static_cast<std::size_t>(r + 1)) % arms.size()];
       in.restore();
-      const SortStats s = sorter.sort(in.work_keys, in.work_values, in.n, warp_now ? warp : full);
-      (warp_now ? w : f) = s.ms;
-      if (!warp_now) row.stats = s;
-      if (r == -1 && !warp_now) {
-        std::vector<Key> k(expected.size());
-        std::vector<std::uint32_t> v(expected.size());
-        for (std::size_t j = 0; j < expected.size(); ++j) k[j] = expected[j].key, v[j] = expected[j].value;
-        row.ok = in.holds(k, v);
-      }
-      if (r == -1 && warp_now) {
+      const SortStats s = (arm == Other ? *other : sorter).sort(in.work_keys, in.work_values, in.n,
+                                                                arm == Warp ? warp : full);
+      ms[arm] = s.ms;
+      if (arm == Full) row.stats = s;
+      if (r != -1) continue;
+      if (arm == Full) row.ok = in.holds(want_keys, want_values);
+      if (arm == Other) row.other_ok = in.holds(want_keys, want_values);
+      if (arm == Warp) {
         std::vector<Key> k = keys;
         std::vector<std::uint32_t> v = values;
         reference_warp_sort(k, v, warp);
@@ -192,13 +203,15 @@ void time_ours(RadixSort& sorter, DeviceInput<Key>& in, const std::vector<Pair<K
     }
     if (r < 0) continue;
     row.full_reps.push_back(row.stats);
-    full_ms.push_back(f);
-    if (with_warp) warp_ms.push_back(w), saving.push_back(f / w);
+    full_ms.push_back(ms[Full]);
+    if (sorter.warp_sort_shape()) warp_ms.push_back(ms[Warp]), warp_saving.push_back(ms[Full] / ms[Warp]);
+    if (other) other_ms.push_back(ms[Other]), other_saving.push_back(ms[Full] / ms[Other]);
   }
   const double nk = static_cast<double>(in.n) * 1e-3;
   row.ours_ms = median(full_ms);
   row.ours = nk / row.ours_ms;
-  if (with_warp) row.warp = nk / median(warp_ms), row.warp_saving = median(saving);
+  if (!warp_ms.empty()) row.warp = nk / median(warp_ms), row.warp_saving = median(warp_saving);
+  if (!other_ms.empty()) row.other = nk / median(other_ms), row.other_saving = median(other_saving);
 }
 
 // Where the time of a case's full sort goes: per command (kernel, read-back, copy) its launches
@@ -248,8 +261,8 @@ void time_boost_compute([[maybe_unused]] Runtime& rt, [[maybe_unused]] DeviceInp
 }
 
 template <class Key>
-Row bench_case(Runtime& rt, RadixSort& sorter, double bandwidth, std::size_t n, unsigned bits, bool few,
-               const Options& opt) {
+Row bench_case(Runtime& rt, RadixSort& sorter, RadixSort* other, double bandwidth, std::size_t n, unsigned bits,
+               bool few, const Options& opt) {
   Row row;
   row.n = n;
   row.bits = bits;
@@ -259,7 +272,7 @@ Row bench_case(Runtime& rt, RadixSort& sorter, double bandwidth, std::size_t n, 
   std::iota(values.begin(), values.end(), 0u);
   const std::vector<Pair<Key>> expected = host_sorts(keys, values, opt, row);
   DeviceInput<Key> in(rt, keys, values);
-  time_ours(sorter, in, expected, keys, values, opt, row);
+  time_ours(sorter, other, in, expected, keys, values, opt, row);
   // The copy-bandwidth bound: every pass that runs reads and writes all keys and values once,
   // and the upfront histogram reads the keys once.
   const double bytes = static_cast<double>(n) * (row.stats.passes_run * 2.0 * (sizeof(Key) + 4) + sizeof(Key));
@@ -276,7 +289,12 @@ void run_sortbench(const Options& opt) {
     load >> one >> five;
     fmt::print("host load average (1, 5 min): {} {}\n", one, five);
   }
-  RadixSort sorter(rt);
+  // --gpu-shape on a CPU: the shape for_device gives a GPU with this device's work-group limit and
+  // at most 48 KiB of local memory (NVIDIA's OpenCL limit), fitted to what the kernels take here.
+  DeviceInfo shape_of = rt.info();
+  if (opt.gpu_shape && shape_of.type != "GPU")
+    shape_of.type = "GPU", shape_of.local_mem_bytes = std::min<std::uint64_t>(shape_of.local_mem_bytes, 48 * 1024);
+  RadixSort sorter(rt, RadixSortTuning::for_device(shape_of), RadixSortFit::ShrinkToKernels);
   const auto& t = sorter.tuning();
   fmt::print("radix sort: {}-bit digits, work-group {}, {}; programs built in {:.0f} ms\n", t.radix_bits,
              t.work_group,
@@ -286,6 +304,25 @@ void run_sortbench(const Options& opt) {
                                : fmt::format("{} keys per work-item", t.items),
              rt.build_ms());
   fmt::print("first launches (warm-up, both key widths): {:.0f} ms\n", sorter.warm_up());
+  // The GPU shape's passes: reduce-then-scan (count, scan, scatter) or Onesweep (one kernel per
+  // pass, decoupled look-back; for_device picks it on NVIDIA). The other kind runs beside ours.
+  std::unique_ptr<RadixSort> other;
+  if (t.work_group > 1) {
+    RadixSortTuning ot = t;
+    ot.onesweep = !t.onesweep;
+    try {
+      other = std::make_unique<RadixSort>(rt, ot, RadixSortFit::ShrinkToKernels);
+      other->warm_up();
+    } catch (const Error& e) {
+      fmt::print("{} passes: not run beside ours ({})\n", ot.onesweep ? "Onesweep" : "reduce-then-scan", e.what());
+    }
+  }
+  const char* ours_passes = t.work_group == 1 ? "CPU shape" : t.onesweep ? "Onesweep" : "reduce-then-scan";
+  const char* other_passes = t.onesweep ? "reduce-then-scan" : "Onesweep";
+  fmt::print("passes: ours {}{}\n", ours_passes,
+             other ? fmt::format("; other passes: {}, sorted back to back with ours in every rep, ours/other time the "
+                                 "median of the reps' ratios", other_passes)
+                   : std::string());
   const double bandwidth = copy_bandwidth(rt);
   fmt::print("copy bandwidth (clEnqueueCopyBuffer, read + write): {:.1f} GB/s\n", bandwidth * 1e-9);
   fmt::print("ours: median of {} reps, profiling events; host sorts and Boost.Compute: median of {} reps, wall clock\n",
@@ -298,8 +335,8 @@ void run_sortbench(const Options& opt) {
 #endif
   fmt::print("\n| pairs | key bits | keys | passes run/skipped | ours Mkeys/s | ours ms | copy bound Mkeys/s | "
              "% of bound | std::stable_sort | std::sort | host LSD | Boost.Compute | x stable_sort | x host LSD | x Boost | "
-             "warp 32 Mkeys/s | full/warp time | ok |\n");
-  fmt::print("|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n");
+             "warp 32 Mkeys/s | full/warp time | other passes Mkeys/s | ours/other time | ok |\n");
+  fmt::print("|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n");
   std::vector<std::size_t> sizes = {2073600};
   if (opt.large) sizes.push_back(16u << 20);
   std::vector<Row> rows;
@@ -307,18 +344,23 @@ void run_sortbench(const Options& opt) {
   for (std::size_t n : sizes)
     for (unsigned bits : opt.bits)
       for (bool few : {false, true}) {
-        Row r = bits == 64 ? bench_case<std::uint64_t>(rt, sorter, bandwidth, n, bits, few, opt)
-                           : bench_case<std::uint32_t>(rt, sorter, bandwidth, n, bits, few, opt);
-        all_ok = all_ok && r.ok && r.lsd_ok && r.warp_ok;
+        Row r = bits == 64 ? bench_case<std::uint64_t>(rt, sorter, other.get(), bandwidth, n, bits, few, opt)
+                           : bench_case<std::uint32_t>(rt, sorter, other.get(), bandwidth, n, bits, few, opt);
+        all_ok = all_ok && r.ok && r.lsd_ok && r.warp_ok && r.other_ok;
         auto boost = [&](double v) { return r.boost < 0 ? std::string("-") : fmt::format("{:.1f}", v); };
         fmt::print(
             "| {} | {} | {} | {}/{} | {:.1f} | {:.2f} | {:.1f} | {:.0f}% | {:.1f} | {:.1f} | {:.1f} | {} | {:.1f} | {:.2f} | {} "
-            "| {} | {} | {} |\n",
+            "| {} | {} | {} | {} | {} |\n",
             r.n, r.bits, r.keys, r.stats.passes_run, r.stats.passes_skipped, r.ours, r.ours_ms, r.bound,
             100.0 * r.ours / r.bound, r.stable, r.unstable, r.host_lsd, boost(r.boost), r.ours / r.stable,
             r.ours / r.host_lsd, boost(r.ours / r.boost), r.warp < 0 ? "-" : fmt::format("{:.1f}", r.warp),
             r.warp < 0 ? "-" : fmt::format("{:.2f}", r.warp_saving),
-            !r.ok ? "NO" : !r.lsd_ok ? "NO (host LSD)" : r.warp_ok ? "yes" : "NO (warp sort)");
+            r.other < 0 ? "-" : fmt::format("{:.1f}", r.other), r.other < 0 ? "-" : fmt::format("{:.2f}", r.other_saving),
+            !r.ok         ? "NO"
+            : !r.lsd_ok   ? "NO (host LSD)"
+            : !r.warp_ok  ? "NO (warp sort)"
+            : !r.other_ok ? "NO (other passes)"
+                          : "yes");
         std::fflush(stdout);
         rows.push_back(r);
       }
@@ -330,7 +372,8 @@ void run_sortbench(const Options& opt) {
   fmt::print("\n");
 #endif
   if (!all_ok) {
-    fmt::print("FAILED: a sorted result (ours, the host LSD anchor, or the warp sort against its twin) differs\n");
+    fmt::print("FAILED: a sorted result (ours, the host LSD anchor, the warp sort against its twin, or the other "
+               "passes) differs\n");
     set_command_exit_code(1);
   }
 }
@@ -348,6 +391,8 @@ void register_sortbench_command(CLI::App& app) {
   cmd->add_option("--bits", opt.bits, "key widths to run, comma-separated: 32, 64 or both (default both)")
       ->delimiter(',')
       ->check(CLI::IsMember({32u, 64u}));
+  cmd->add_flag("--gpu-shape", opt.gpu_shape,
+                "sort in the GPU shape (local-memory tiles, reduce-then-scan beside Onesweep) on any device");
   cmd->callback([] { run_sortbench(opt); });
 }
 
