@@ -389,6 +389,9 @@ __kernel void rs_onesweep(__global const rs_key* restrict keys_in, __global cons
     count[d] = end - rank[d * RS_WG];
     atomic_xchg(&own[d], (tile == 0 ? RS_SWEEP_INCLUSIVE : RS_SWEEP_AGGREGATE) | count[d]);
   }
+  /* (every digit's, before any work-item waits: PoCL runs a work-group's work-items one after the
+   * other between barriers, and a later tile may be waiting on any of these digits) */
+  barrier(CLK_LOCAL_MEM_FENCE);
   /* ... then look back, digit by digit, over the tiles before it until one is inclusive. */
   for (uint d = lid; d < RS_RADIX; d += RS_WG) {
     uint before = 0;
