@@ -307,9 +307,9 @@ __kernel void rs_scatter(__global const rs_key* restrict keys_in, __global const
  * work-groups), which OpenCL 1.2 does not promise: the host selects it by device (NVIDIA), and
  * the tests run it on PoCL and Oclgrind, whose work-groups run to completion.
  *
- * The sweep buffer (uint, zeroed before a sort): [RS_MAX_PASSES][RS_RADIX] the global digit
- * counts, scanned in place into each digit's first output position; then one tile counter per
- * pass that runs; then per pass that runs a [tile][RS_RADIX] status table. A status word is
+ * The sweep buffer (uint): [RS_MAX_PASSES][RS_RADIX] the global digit counts (zeroed before a
+ * sort), scanned in place into each digit's first output position; then the tile counter and the
+ * [tile][RS_RADIX] status table of the pass, zeroed before each pass. A status word is
  * a flag in its two top bits (0: nothing yet, AGGREGATE: the tile's own count of that digit,
  * INCLUSIVE: the count of that digit over this tile and every tile before it) and a 30-bit
  * count, written and read as one word with atomics, so no fence orders a count and its flag
@@ -319,10 +319,10 @@ __kernel void rs_scatter(__global const rs_key* restrict keys_in, __global const
 #define RS_SWEEP_INCLUSIVE 0x80000000u
 #define RS_SWEEP_COUNT 0x3fffffffu
 
-/* Zeroes sweep[0 .. words) before a sort (a kernel, not clEnqueueFillBuffer: Oclgrind 21.10's
+/* Zeroes sweep[first .. end) (a kernel, not clEnqueueFillBuffer: Oclgrind 21.10's
  * uninitialised-value check does not see what a fill writes). */
-__kernel void rs_sweep_clear(__global uint* restrict sweep, uint words) {
-  for (uint i = get_global_id(0); i < words; i += get_global_size(0)) sweep[i] = 0;
+__kernel void rs_sweep_clear(__global uint* restrict sweep, uint first, uint end) {
+  for (uint i = first + get_global_id(0); i < end; i += get_global_size(0)) sweep[i] = 0;
 }
 
 /* Digit counts of every pass in pass_mask (bit p: digit bits [lo + p * RS_RADIX_BITS, ...)) over

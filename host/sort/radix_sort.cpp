@@ -316,16 +316,20 @@ void RadixSort::warp_passes(Passes& ps, const std::vector<unsigned>& run, int co
   ps.warp_sort(lo, top, pass_mask, group, std::size_t(1) << tuning_.radix_bits);
 }
 
-// Onesweep (tuning.onesweep; cl/radix_sort.cl says how): the sweep buffer zeroed, one read for the
-// digit counts of every pass that runs, their scan, then one kernel per pass.
+// Onesweep (tuning.onesweep; cl/radix_sort.cl says how): one read for the digit counts of every
+// pass that runs, their scan, then per pass its tile counter and status table zeroed and one
+// kernel. The status table is as large as the reduce-then-scan passes' tile counts (counts_).
 void RadixSort::onesweep_passes(Passes& ps, const std::vector<unsigned>& run, cl_uint lo, unsigned key_width) {
   const std::size_t radix = std::size_t(1) << tuning_.radix_bits;
   const std::size_t max_passes = (key_width + tuning_.radix_bits - 1) / tuning_.radix_bits;
-  const std::size_t counters = max_passes * radix, status = counters + run.size();
-  const std::size_t words = status + run.size() * ps.tiles * radix;
-  ensure(rt_, sweep_, sweep_bytes_, words * 4, "radix sort onesweep status");
-  set_args(ps.k.sweep_clear, sweep_, static_cast<cl_uint>(words));
-  enqueue(ps.k.sweep_clear, "rs_sweep_clear", std::min(words, ps.tiles * ps.wg), ps.wg);
+  const cl_uint counter = static_cast<cl_uint>(max_passes * radix), status = counter + 1;
+  const cl_uint words = status + static_cast<cl_uint>(ps.bins);
+  ensure(rt_, sweep_, sweep_bytes_, std::size_t(words) * 4, "radix sort onesweep status");
+  auto clear = [&](cl_uint first) {
+    set_args(ps.k.sweep_clear, sweep_, first, words);
+    enqueue(ps.k.sweep_clear, "rs_sweep_clear", std::min<std::size_t>(words - first, ps.tiles * ps.wg), ps.wg);
+  };
+  clear(0);
   cl_uint pass_mask = 0;
   for (unsigned p : run) pass_mask |= cl_uint(1) << p;
   set_args(ps.k.hist_all, *ps.src_keys, ps.n, ps.n_items, lo, ps.hi, pass_mask, sweep_);
@@ -333,10 +337,10 @@ void RadixSort::onesweep_passes(Passes& ps, const std::vector<unsigned>& run, cl
   set_args(ps.k.hist_scan, sweep_);
   enqueue(ps.k.hist_scan, "rs_hist_scan", tuning_.scan_work_group, tuning_.scan_work_group);
   for (std::size_t i = 0; i < run.size(); ++i) {
+    if (i > 0) clear(counter);
     const cl_uint shift = lo + run[i] * tuning_.radix_bits;
     set_args(ps.k.onesweep, *ps.src_keys, *ps.src_values, *ps.dst_keys, *ps.dst_values, ps.n, ps.n_items, shift, ps.hi,
-             sweep_, static_cast<cl_uint>(run[i] * radix), static_cast<cl_uint>(counters + i),
-             static_cast<cl_uint>(status + i * ps.tiles * radix));
+             sweep_, static_cast<cl_uint>(run[i] * radix), counter, status);
     enqueue(ps.k.onesweep, "rs_onesweep", ps.tiles * ps.wg, ps.wg);
     ps.flip();
   }
