@@ -885,6 +885,11 @@ TEST(Matrix, LayoutIsRecordedAndModelled) {
     EXPECT_EQ(meta["bvh"]["layout"], trace_layout_name(layout));
     EXPECT_EQ(meta["bvh"]["width"], layout == TraceLayout::Wide ? 4 : 2);
     EXPECT_EQ(meta["bvh"]["max_leaf_size"], BvhBuildOptions{}.max_leaf_size);
+    // The sort's shape on this device (a CPU: one work-item per tile, 8-bit digits, the hybrid).
+    EXPECT_EQ(meta["sort"]["shape"], "cpu") << meta["sort"].dump();
+    EXPECT_EQ(meta["sort"]["digit_bits"], 8) << meta["sort"].dump();
+    EXPECT_NE(meta["sort"]["passes"].get<std::string>().find("MSD-first hybrid"), std::string::npos)
+        << meta["sort"].dump();
     sets.emplace(trace_layout_name(layout), ResultSet::load(opts.out));
     for (const auto& c : sets.at(trace_layout_name(layout)).cells()) {
       EXPECT_EQ(c.layout, trace_layout_name(layout)) << c.id();

@@ -93,6 +93,26 @@ nlohmann::json bvh_meta(const std::vector<TraceLayout>& layouts) {
           {"simt_model", "walks the same tree as the trace kernel, one ray per lane of a 32-wide warp (bench/metrics.h)"}};
 }
 
+// The sort the cells' orders came from (sort/radix_sort.h, docs/sort.md): its shape on this device
+// and which kind of passes it runs (on NVIDIA the Onesweep passes, elsewhere reduce-then-scan or
+// the CPU shape's), as it stands after fitting its launches to the device's kernels.
+nlohmann::json sort_meta(const RadixSortTuning& t) {
+  const bool cpu = t.work_group == 1;
+  nlohmann::json m = {{"doc", "docs/sort.md"},
+                      {"shape", cpu ? "cpu" : "gpu"},
+                      {"digit_bits", t.radix_bits},
+                      {"work_group", t.work_group},
+                      {"passes", cpu ? (t.hybrid() ? fmt::format("MSD-first hybrid from {} pairs, else LSD", t.hybrid_min)
+                                                   : std::string("LSD"))
+                                     : t.onesweep ? "onesweep (below 2^30 pairs)"
+                                                  : "reduce-then-scan"}};
+  if (cpu)
+    m["tile"] = fmt::format(">= {} keys, {} tiles per compute unit", t.min_tile, t.tiles_per_unit);
+  else
+    m["tile"] = fmt::format("{} x {} keys", t.work_group, t.items);
+  return m;
+}
+
 // What the kernels were built from (runtime/runtime.h): a resume and compare check it.
 nlohmann::json kernels_meta() {
   const KernelProvenance k = kernel_provenance();
@@ -170,7 +190,8 @@ nlohmann::json embree_meta(const std::vector<std::string>& keys) {
 #endif
 }
 
-nlohmann::json run_meta(const MatrixSpec& spec, const RunOptions& opts, const DeviceInfo& dev) {
+nlohmann::json run_meta(const MatrixSpec& spec, const RunOptions& opts, const DeviceInfo& dev,
+                        const RadixSortTuning& sort) {
   nlohmann::json meta = {
       {"format_version", kResultFormatVersion},
       {"raysort_version", RAYSORT_VERSION},
@@ -204,6 +225,7 @@ nlohmann::json run_meta(const MatrixSpec& spec, const RunOptions& opts, const De
       {"date", utc_now()},
       {"seeds", {{"rays", spec.seed}}},
       {"bvh", bvh_meta(spec.layouts)},
+      {"sort", sort_meta(sort)},
       {"baseline",
        {{"orders", spec.to_json().at("baseline")},
         {"pixel", "generation order: pixel-major, terminated paths compacted out in order"},
@@ -380,9 +402,10 @@ std::vector<TraceLayout> resolved_layouts(const std::vector<TraceLayout>& layout
 
 // The result set of this run (a resume's, or a new one) with its meta.json, checked to hold only
 // cells the matrix plans; says on stderr what runs where.
-ResultSet open_results(const MatrixSpec& spec, const RunOptions& opts, const DeviceInfo& device, std::size_t planned,
-                       const std::vector<PlannedCell>& full_plan, const std::string& out_dir) {
-  nlohmann::json meta = run_meta(spec, opts, device);
+ResultSet open_results(const MatrixSpec& spec, const RunOptions& opts, const DeviceInfo& device,
+                       const RadixSortTuning& sort, std::size_t planned, const std::vector<PlannedCell>& full_plan,
+                       const std::string& out_dir) {
+  nlohmann::json meta = run_meta(spec, opts, device, sort);
   if (opts.shard.active()) meta["shard"] = shard_meta(spec, opts.shard, full_plan);
   // What files the scenes were made from (scene/provenance.h): compare says when two sets differ.
   meta["scene_files"] = scene_file_checksums(spec.scenes, resolve_scene_root(SceneOptions{opts.scene_root, {}}));
@@ -428,14 +451,14 @@ RunSummary run_matrix(const MatrixSpec& requested, const RunOptions& opts) {
   check_matrix_memory(spec, facts, rt.info());  // before the result set is written
   RunSummary summary;
   summary.out_dir = opts.out.empty() ? default_result_dir(spec, rt.info().slug(), opts.shard) : opts.out;
-  ResultSet results = open_results(spec, opts, rt.info(), plan.size(), full_plan, summary.out_dir);
+  RadixSort sorter(rt);  // before the result set: its meta.json records the sort's shape
+  ResultSet results = open_results(spec, opts, rt.info(), sorter.tuning(), plan.size(), full_plan, summary.out_dir);
 
   InterruptGuard interrupt_guard;
   const char* kill_env = std::getenv("RAYSORT_TEST_KILL_AFTER_CELLS");
   const std::size_t kill_after = kill_env ? std::strtoul(kill_env, nullptr, 10) : 0;
   Progress progress;
   progress.total = plan.size();
-  RadixSort sorter(rt);
   sorter.warm_up();
   RayPermuter permuter(rt);
   permuter.warm_up();
