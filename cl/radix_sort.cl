@@ -24,6 +24,9 @@
  *     that table ranks every key stably inside the tile; keys are reordered by digit in local
  *     memory and written out in digit runs, so consecutive work-items write consecutive words.
  *
+ * On NVIDIA the GPU shape's passes are Onesweep's instead (rs_hist_all, rs_hist_scan, rs_onesweep,
+ * below): the same tiles, one kernel per pass, each tile's offsets found by a decoupled look-back.
+ *
  * The host (host/sort/radix_sort.cpp) picks RS_RADIX_BITS, RS_WG and the tile size from the
  * device's type, local memory and maximum work-group size. OpenCL C 1.2, no sub-groups, every
  * barrier in uniform control flow, global sizes padded to a multiple of the local size
