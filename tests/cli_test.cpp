@@ -494,6 +494,20 @@ TEST(Sortbench, GpuShapeTimesOnesweepBesideReduceThenScan) {
   EXPECT_EQ(rows, 2u) << r.out;  // random and few-distinct keys
 }
 
+// run --sort-passes onesweep on a device whose sort has the CPU shape: one message that names the
+// option and the fix, and no result folder; an unknown value lists the valid ones.
+TEST(SortCli, OnesweepOnTheCpuShapeIsRefusedBeforeAnythingIsWritten) {
+  const std::vector<std::string> run = {"run", "--preset", "quick", "--scenes", "cornell", "--batches", "primary",
+                                        "--encoders", "hcc", "--reps", "1", "--warmup", "0", "--max-time", "0"};
+  auto with = [&](const std::string& passes) {
+    std::vector<std::string> args = run;
+    args.insert(args.end(), {"--sort-passes", passes});
+    return args;
+  };
+  expect_refused(with("onesweep"), {"--sort-passes onesweep", "CPU shape", "use auto or reduce-then-scan"});
+  expect_refused(with("fastest"), {"--sort-passes", "auto,reduce-then-scan,onesweep"});
+}
+
 // Found by fuzz/cli_fuzzer.cpp: CLI11 converts a flag's value with std::stoll and its out_of_range
 // escaped as "internal error: stoll" (exit 3). It is bad input.
 TEST(CliExitCodes, AFlagValueOutOfRangeIsBadInput) {

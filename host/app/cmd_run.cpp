@@ -147,6 +147,12 @@ void register_run_command(CLI::App& app) {
   cmd->add_flag("--warp-sort", a->warp_sort,
                 "sort only down to groups of 32 rays (a warp), leaving each group in generation order: the paper's "
                 "'terminate bucket sorting early' (docs/sort.md; CPU devices; off by default)");
+  cmd->add_option("--sort-passes", a->opts.sort_passes,
+                  "the GPU-shape sort's passes: auto (the device's: Onesweep on NVIDIA, else reduce-then-scan), "
+                  "reduce-then-scan, or onesweep (GPU shape only); the orders are the same, meta.json says which ran "
+                  "(docs/sort.md)")
+      ->check(CLI::IsMember({"auto", "reduce-then-scan", "onesweep"}))
+      ->capture_default_str();
   add_common_options(*cmd, a->common);
   add_protocol_number_options(
       *cmd, a->reps, a->warmup, a->max_noise_pct, a->max_time_s,

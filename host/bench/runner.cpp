@@ -451,7 +451,15 @@ RunSummary run_matrix(const MatrixSpec& requested, const RunOptions& opts) {
   check_matrix_memory(spec, facts, rt.info());  // before the result set is written
   RunSummary summary;
   summary.out_dir = opts.out.empty() ? default_result_dir(spec, rt.info().slug(), opts.shard) : opts.out;
-  RadixSort sorter(rt);  // before the result set: its meta.json records the sort's shape
+  // The sort, before the result set: its meta.json records the sort's shape, and a shape refused
+  // here leaves no folder behind.
+  RadixSortTuning sort_tuning = RadixSortTuning::for_device(rt.info());
+  if (opts.sort_passes == "onesweep" && sort_tuning.work_group == 1)
+    throw Error(fmt::format("--sort-passes onesweep: the sort on device '{}' has the CPU shape (one work-item per "
+                            "tile); Onesweep runs in the GPU shape only; use auto or reduce-then-scan (docs/sort.md)",
+                            rt.info().name));
+  if (opts.sort_passes != "auto") sort_tuning.onesweep = opts.sort_passes == "onesweep";
+  RadixSort sorter(rt, sort_tuning, RadixSortFit::ShrinkToKernels);
   ResultSet results = open_results(spec, opts, rt.info(), sorter.tuning(), plan.size(), full_plan, summary.out_dir);
 
   InterruptGuard interrupt_guard;

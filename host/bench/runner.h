@@ -25,6 +25,10 @@ struct RunOptions {
   ShardSpec shard;         // --shard i/N: run only this shard's cells (bench/shard.h)
   // Resuming: cells already recorded as failed or timeout are measured again unless no_retry.
   bool no_retry = false;
+  // run --sort-passes: the GPU shape's passes, "auto" (the device's: Onesweep on NVIDIA, else
+  // reduce-then-scan), "reduce-then-scan" or "onesweep" (refused on the CPU shape). The orders are
+  // the same either way; only the sort's time differs, and meta.json's "sort" says which ran.
+  std::string sort_passes = "auto";
 };
 
 struct RunSummary {
