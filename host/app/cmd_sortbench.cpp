@@ -314,14 +314,12 @@ void run_sortbench(const Options& opt) {
       other = std::make_unique<RadixSort>(rt, ot, RadixSortFit::ShrinkToKernels);
       other->warm_up();
     } catch (const Error& e) {
-      fmt::print("{} passes: not run beside ours ({})\n", ot.onesweep ? "Onesweep" : "reduce-then-scan", e.what());
+      fmt::print("{} passes: not run beside ours ({})\n", ot.gpu_passes(), e.what());
     }
   }
-  const char* ours_passes = t.work_group == 1 ? "CPU shape" : t.onesweep ? "Onesweep" : "reduce-then-scan";
-  const char* other_passes = t.onesweep ? "reduce-then-scan" : "Onesweep";
-  fmt::print("passes: ours {}{}\n", ours_passes,
+  fmt::print("passes: ours {}{}\n", t.work_group == 1 ? "CPU shape" : t.gpu_passes(),
              other ? fmt::format("; other passes: {}, sorted back to back with ours in every rep, ours/other time the "
-                                 "median of the reps' ratios", other_passes)
+                                 "median of the reps' ratios", other->tuning().gpu_passes())
                    : std::string());
   const double bandwidth = copy_bandwidth(rt);
   fmt::print("copy bandwidth (clEnqueueCopyBuffer, read + write): {:.1f} GB/s\n", bandwidth * 1e-9);

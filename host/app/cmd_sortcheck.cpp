@@ -67,7 +67,7 @@ void run_sortcheck(const SortCheckOptions& opt) {
   RadixSort sorter(rt, t);
   fmt::print("device: {} ({})\nradix sort: {}-bit digits, work-group {}, {} keys per work-item, scan work-group {}, {}\n",
              rt.info().name, rt.info().platform_name, t.radix_bits, t.work_group, t.items, t.scan_work_group,
-             t.work_group == 1 ? "CPU shape" : t.onesweep ? "Onesweep passes" : "reduce-then-scan passes");
+             t.work_group == 1 ? std::string("CPU shape") : fmt::format("{} passes", t.gpu_passes()));
   bool all_ok = true;
   for (unsigned bits : opt.bits)
     for (std::size_t n : opt.sizes)

@@ -31,15 +31,13 @@ std::size_t RadixSortTuning::local_bytes(std::size_t key_bytes) const {
   const std::size_t count = radix * 4 + 2 * std::size_t(work_group) * key_bytes;
   if (work_group == 1) {
     if (!hybrid()) return count;
-    const std::size_t max_passes = (key_bytes * 8 + radix_bits - 1) / radix_bits;
-    return std::max(count, max_passes * radix * 4);  // rs_bucket_sort's histograms
+    return std::max<std::size_t>(count, max_passes(key_bytes * 8) * radix * 4);  // rs_bucket_sort's histograms
   }
   std::size_t scatter =
       std::size_t(work_group) * items * (key_bytes + 4) + radix * work_group * 4 + work_group * 4 + radix * 4;
   if (!onesweep) return std::max(count, scatter);
   scatter += radix * 4 + 4;  // rs_onesweep: the tile's digit counts and its index
-  const std::size_t max_passes = (key_bytes * 8 + radix_bits - 1) / radix_bits;
-  return std::max({count, scatter, max_passes * radix * 4});  // rs_hist_all: every pass's histogram
+  return std::max({count, scatter, max_passes(key_bytes * 8) * radix * 4});  // rs_hist_all: every pass's histogram
 }
 
 RadixSortTuning RadixSortTuning::for_device(const DeviceInfo& device) {
@@ -166,7 +164,7 @@ std::optional<RadixSort::KernelOverflow> RadixSort::build_kernels(Runtime& rt) {
 }
 
 unsigned RadixSort::passes(const RadixSortConfig& cfg) const {
-  return (cfg.sorted_bits() + tuning_.radix_bits - 1) / tuning_.radix_bits;
+  return tuning_.max_passes(cfg.sorted_bits());
 }
 
 void RadixSort::ensure(Runtime& rt, cl::Buffer& b, std::size_t& have, std::size_t need, const char* name) {
@@ -321,8 +319,7 @@ void RadixSort::warp_passes(Passes& ps, const std::vector<unsigned>& run, int co
 // kernel. The status table is as large as the reduce-then-scan passes' tile counts (counts_).
 void RadixSort::onesweep_passes(Passes& ps, const std::vector<unsigned>& run, cl_uint lo, unsigned key_width) {
   const std::size_t radix = std::size_t(1) << tuning_.radix_bits;
-  const std::size_t max_passes = (key_width + tuning_.radix_bits - 1) / tuning_.radix_bits;
-  const cl_uint counter = static_cast<cl_uint>(max_passes * radix), status = counter + 1;
+  const cl_uint counter = static_cast<cl_uint>(tuning_.max_passes(key_width) * radix), status = counter + 1;
   const cl_uint words = status + static_cast<cl_uint>(ps.bins);
   ensure(rt_, sweep_, sweep_bytes_, std::size_t(words) * 4, "radix sort onesweep status");
   auto clear = [&](cl_uint first) {

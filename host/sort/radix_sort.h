@@ -78,6 +78,10 @@ struct RadixSortTuning {
   bool onesweep = false;
 
   bool hybrid() const { return work_group == 1 && radix_bits <= 8 && hybrid_min > 0; }
+  // Passes a key of key_bits bits can take: ceil(key_bits / radix_bits) (cl/radix_sort.cl's RS_MAX_PASSES).
+  unsigned max_passes(unsigned key_bits) const { return (key_bits + radix_bits - 1) / radix_bits; }
+  // The GPU shape's kind of passes, as sortbench, sortcheck and the docs name it.
+  const char* gpu_passes() const { return onesweep ? "Onesweep" : "reduce-then-scan"; }
 
   static RadixSortTuning for_device(const DeviceInfo& device);
   // Local memory one tile of the scatter kernel needs (the largest of the kernels).
