@@ -16,8 +16,6 @@ namespace raysort {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
 // A figure without an interval (compare falls back to the point rule).
 Estimate point(double v) { return {v, kNaN, kNaN, 0}; }
 

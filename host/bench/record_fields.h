@@ -11,6 +11,7 @@
 // A change of a field's meaning (its unit, what it counts, how it is estimated) bumps
 // kResultFormatVersion (bench/record.h); a new field gets required_from = the version after the
 // current one, so records of the current version, which lack it, still read.
+#include <limits>
 #include <vector>
 
 #include "bench/record.h"
@@ -27,5 +28,7 @@ inline constexpr const char* kGpuModelKey = "gpu_model";
 inline constexpr const char* kEmbreeKey = "embree";
 inline constexpr const char* kEmbreePathKey = "path";  // names an Embree element; in its columns' names
 inline constexpr int kGroupsRequiredFrom = 4;
+// A figure that is not there (null in the cell file, an empty column in cells.csv).
+inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 }  // namespace raysort

@@ -17,7 +17,6 @@ namespace raysort {
 namespace {
 
 using nlohmann::json;
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // Errors are plain runtime errors: the reader of the file (result_set.cpp) names the file and the fix.
 [[noreturn]] void refuse(const std::string& what) { throw std::runtime_error(what); }

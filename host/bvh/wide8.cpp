@@ -21,15 +21,15 @@ namespace {
 // A subtree of at most eight triangles becomes one leaf (one full packet) when SAH agrees: the
 // 4-wide collapse's rule (wide.cpp) at the 8-wide packet's size. The SAH builder's leaves hold
 // about two triangles; merged, a leaf test fills more of the eight lanes.
-constexpr std::uint32_t kMergeTriangles = 8;
+constexpr std::uint32_t kWide8MergeTriangles = 8;
 
 // The binary nodes an 8-wide node over inner binary node n holds (see the top of the file).
-wide_tree::Slots slots_of(const Bvh& bvh, const wide_tree::Subtrees& sub, std::uint32_t n) {
+wide_tree::Slots wide8_slots(const Bvh& bvh, const wide_tree::Subtrees& sub, std::uint32_t n) {
   wide_tree::Slots slots{bvh.nodes[n].first, bvh.nodes[n].first + 1}, deeper;
   for (int level = 2; level <= 3; ++level) {  // every inner slot down to three levels below n
     deeper.clear();
     for (std::uint32_t s : slots) {
-      if (sub.leafish(s, kMergeTriangles)) {
+      if (sub.leafish(s, kWide8MergeTriangles)) {
         deeper.push_back(s);
       } else {
         deeper.push_back(bvh.nodes[s].first);
@@ -42,7 +42,7 @@ wide_tree::Slots slots_of(const Bvh& bvh, const wide_tree::Subtrees& sub, std::u
     std::size_t best = slots.size();
     double best_area = -1.0;
     for (std::size_t i = 0; i < slots.size(); ++i) {
-      if (sub.leafish(slots[i], kMergeTriangles)) continue;
+      if (sub.leafish(slots[i], kWide8MergeTriangles)) continue;
       const double a = node_surface_area(bvh.nodes[slots[i]]);
       if (a > best_area) best = i, best_area = a;
     }
@@ -59,7 +59,7 @@ wide_tree::Slots slots_of(const Bvh& bvh, const wide_tree::Subtrees& sub, std::u
 Wide8Bvh collapse_to_wide8(const Bvh& bvh, unsigned threads) {
   const wide_tree::Subtrees sub(bvh, threads);
   return wide_tree::collapse<8, Wide8Bvh>(
-      bvh, sub, RS_WIDE8_STACK_SIZE, kMergeTriangles, [&](std::uint32_t n) { return slots_of(bvh, sub, n); }, threads);
+      bvh, sub, RS_WIDE8_STACK_SIZE, kWide8MergeTriangles, [&](std::uint32_t n) { return wide8_slots(bvh, sub, n); }, threads);
 }
 
 std::string validate_wide8(const Wide8Bvh& wide, const Bvh& bvh) {

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <filesystem>
 #include <map>
+#include <numbers>
 #include <optional>
 
 #include "scene/mesh_formats.h"
@@ -25,7 +26,6 @@ namespace {
 
 using Matrix = std::array<double, 16>;  // row-major 4×4
 constexpr Matrix kIdentity{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
-constexpr double kPi = 3.14159265358979323846;
 constexpr int kMaxIncludeDepth = 32;  // an Include cycle is refused, not followed until the stack ends
 
 Matrix multiply(const Matrix& a, const Matrix& b) {
@@ -72,7 +72,7 @@ std::array<double, 3> apply(const Matrix& m, double x, double y, double z, doubl
 Matrix rotation(double deg, double x, double y, double z) {
   const double len = std::sqrt(x * x + y * y + z * z);
   x /= len, y /= len, z /= len;
-  const double s = std::sin(deg * kPi / 180), c = std::cos(deg * kPi / 180);
+  const double s = std::sin(deg * std::numbers::pi / 180), c = std::cos(deg * std::numbers::pi / 180);
   return {x * x + (1 - x * x) * c, x * y * (1 - c) - z * s, x * z * (1 - c) + y * s, 0,
           x * y * (1 - c) + z * s, y * y + (1 - y * y) * c, y * z * (1 - c) - x * s, 0,
           x * z * (1 - c) - y * s, y * z * (1 - c) + x * s, z * z + (1 - z * z) * c, 0,
@@ -502,8 +502,8 @@ void PbrtLoader::camera() {
   c.up = {float(up[0]), float(up[1]), float(up[2])};
   c.width = width_;
   c.height = height_;
-  const double half = std::tan(std::clamp(fov_, 1e-3, 179.0) * kPi / 360);
-  c.fov_y_deg = float(width_ >= height_ ? fov_ : 2 * std::atan(half * height_ / width_) * 180 / kPi);
+  const double half = std::tan(std::clamp(fov_, 1e-3, 179.0) * std::numbers::pi / 360);
+  c.fov_y_deg = float(width_ >= height_ ? fov_ : 2 * std::atan(half * height_ / width_) * 180 / std::numbers::pi);
   for (const Vec3& v : {c.position, c.look_at, c.up})
     for (float k : v)
       if (!std::isfinite(k))

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <unordered_map>
 
 #include "scene/noise.h"
@@ -15,8 +16,6 @@
 namespace raysort {
 
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // Reads and range-checks one generator's parameters, naming the generator and key on failure.
 class Params {
@@ -139,9 +138,9 @@ Mesh make_displaced_sphere(const Params& p, std::uint64_t seed) {
   b.mesh.triangles.reserve(std::size_t(rings - 1) * segs * 2);
   std::uint32_t top = displaced(0, 1, 0);
   for (std::uint32_t r = 1; r < rings; ++r) {
-    double theta = kPi * r / rings, st = std::sin(theta), ct = std::cos(theta);
+    double theta = std::numbers::pi * r / rings, st = std::sin(theta), ct = std::cos(theta);
     for (std::uint32_t s = 0; s < segs; ++s) {
-      double phi = 2.0 * kPi * s / segs;
+      double phi = 2.0 * std::numbers::pi * s / segs;
       displaced(st * std::cos(phi), ct, st * std::sin(phi));
     }
   }
@@ -206,14 +205,14 @@ Mesh make_torus_knot(const Params& p, std::uint64_t) {
   Builder b;
   b.mesh.positions.reserve(std::size_t(segments) * sides);
   for (std::uint32_t i = 0; i < segments; ++i) {
-    double u = double(i) / segments * kp * 2.0 * kPi;
+    double u = double(i) / segments * kp * 2.0 * std::numbers::pi;
     auto p1 = curve(u), p2 = curve(u + 0.01);
     std::array<double, 3> t{p2[0] - p1[0], p2[1] - p1[1], p2[2] - p1[2]};
     std::array<double, 3> n{p2[0] + p1[0], p2[1] + p1[1], p2[2] + p1[2]};
     auto bn = normalize(cross(t, n));
     n = normalize(cross(bn, t));
     for (std::uint32_t j = 0; j < sides; ++j) {
-      double v = double(j) / sides * 2.0 * kPi;
+      double v = double(j) / sides * 2.0 * std::numbers::pi;
       double cx = -tube * std::cos(v), cy = tube * std::sin(v);
       b.vertex(p1[0] + cx * n[0] + cy * bn[0], p1[1] + cx * n[1] + cy * bn[1], p1[2] + cx * n[2] + cy * bn[2]);
     }
@@ -235,11 +234,11 @@ Mesh make_gem(const Params& p, std::uint64_t seed) {
   std::uint32_t center = b.vertex(0, crown, 0), apex = b.vertex(0, -pavilion, 0);
   std::uint32_t tab = center + 2, gir = tab + n;
   for (std::uint32_t i = 0; i < n; ++i) {
-    double a = 2.0 * kPi * i / n;
+    double a = 2.0 * std::numbers::pi * i / n;
     b.vertex(table * std::cos(a), crown, table * std::sin(a));
   }
   for (std::uint32_t i = 0; i < n; ++i) {
-    double a = 2.0 * kPi * (i + 0.5) / n;
+    double a = 2.0 * std::numbers::pi * (i + 0.5) / n;
     b.vertex(r * std::cos(a), 0.0, r * std::sin(a));
   }
   for (std::uint32_t i = 0; i < n; ++i) {
@@ -322,7 +321,7 @@ Mesh make_tree(const Params& p, std::uint64_t seed) {
   std::uint32_t first = static_cast<std::uint32_t>(b.mesh.positions.size());
   for (int ring = 0; ring < 2; ++ring)
     for (std::uint32_t s = 0; s < sides; ++s) {
-      double a = 2.0 * kPi * s / sides;
+      double a = 2.0 * std::numbers::pi * s / sides;
       b.vertex(trunk * std::cos(a), ring ? trunk_top : 0.0, trunk * std::sin(a));
     }
   b.ring_strip(first, 2, sides, false);
@@ -330,12 +329,12 @@ Mesh make_tree(const Params& p, std::uint64_t seed) {
   for (std::uint32_t l = 0; l < layers; ++l) {
     double base = trunk_top * 0.6 + l * layer_h * 0.8;
     double rad = crown * (1.0 - 0.25 * l) * rng.uniform(0.85, 1.15);
-    double twist = rng.uniform(0.0, 2.0 * kPi);
+    double twist = rng.uniform(0.0, 2.0 * std::numbers::pi);
     std::uint32_t apex = b.vertex(0.0, std::min(height, base + layer_h * 1.4), 0.0);
     std::uint32_t centre = b.vertex(0.0, base, 0.0);
     std::uint32_t ring = static_cast<std::uint32_t>(b.mesh.positions.size());
     for (std::uint32_t s = 0; s < sides; ++s) {
-      double a = twist + 2.0 * kPi * s / sides;
+      double a = twist + 2.0 * std::numbers::pi * s / sides;
       b.vertex(rad * std::cos(a), base, rad * std::sin(a));
     }
     for (std::uint32_t s = 0; s < sides; ++s) {
