@@ -151,7 +151,7 @@ void register_run_command(CLI::App& app) {
                   "the GPU-shape sort's passes: auto (the device's: Onesweep on NVIDIA, else reduce-then-scan), "
                   "reduce-then-scan, or onesweep (GPU shape only); the orders are the same, meta.json says which ran "
                   "(docs/sort.md)")
-      ->check(CLI::IsMember({"auto", "reduce-then-scan", "onesweep"}))
+      ->check(CLI::IsMember(kSortPassesValues))
       ->capture_default_str();
   add_common_options(*cmd, a->common);
   add_protocol_number_options(

@@ -31,6 +31,9 @@ struct RunOptions {
   std::string sort_passes = "auto";
 };
 
+// run --sort-passes's values, the default first (RunOptions::sort_passes).
+inline const std::vector<std::string> kSortPassesValues = {"auto", "reduce-then-scan", "onesweep"};
+
 struct RunSummary {
   std::string out_dir;
   std::size_t cells_run = 0;      // measured by this run (retries included)
