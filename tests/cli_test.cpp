@@ -203,6 +203,25 @@ TEST(Cli, AllocationOverTheDeviceLimitFailsOnlyItsCell) {
   fs::remove_all(out);
 }
 
+// `run` measures with no warm-up round unless asked (MatrixSpec::warmup: a batch's setup runs each
+// kernel once, the sort and the permute included), and its permute cells, whose buffer that setup
+// touches first, are measured and checked as before.
+TEST(Cli, RunHasNoWarmupRoundByDefault) {
+  std::string out = temp_dir("nowarmup");
+  CliResult r = run_cli({"run", "--scenes", "cornell", "--batches", "primary,bounce1", "--encoders", "origin,hcc",
+                         "--bits", "32", "--access", "all", "--resolution", "16x16", "--reps", "2", "--max-time", "0",
+                         "--out", out});
+  ASSERT_EQ(r.code, 0) << r.err;
+  ResultSet rs = ResultSet::load(out);
+  EXPECT_EQ(rs.meta()["matrix"]["warmup"], 0) << rs.meta()["matrix"].dump();
+  ASSERT_EQ(rs.cells().size(), 10u) << r.err;  // per batch: NoSort + 2 encoders x 2 access modes
+  for (const auto& c : rs.cells()) {
+    EXPECT_EQ(c.status, "ok") << c.id() << ": " << c.error;
+    EXPECT_TRUE(c.hits_match_nosort) << c.id();
+  }
+  fs::remove_all(out);
+}
+
 // A cell over --timeout is recorded as "timeout" and the run goes on to the next cell.
 TEST(Cli, CellOverTimeoutRecordedAsTimeout) {
   std::string out = temp_dir("timeout");

@@ -161,6 +161,9 @@ void register_run_command(CLI::App& app) {
       "stop sampling a cell once its speedup's 95 % interval is within +-this many percent (default 2)",
       "stop sampling a cell after this many seconds of rounds (past --reps) even if --max-noise is not "
       "reached; the cell records that it stopped on time (default 5; quick preset 0.3)");
+  cmd->get_option("--warmup")
+      ->description("untimed rounds of every arm before timing (default 0: each batch's setup runs every kernel "
+                    "once, untimed; docs/measurement.md)");
   cmd->add_option("--access", a->access,
                   "ray access modes, comma-separated: gather (trace through the sorted order), permute (move the "
                   "rays into sorted order first, timed as a stage), or all");

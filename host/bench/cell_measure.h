@@ -126,6 +126,9 @@ class BatchBench {
   // Readies a group before the rounds (prepare, keys in generation order, the repeat check for an
   // encoder without a host twin); a failure is kept in g.error.
   void ready_group(SortedGroup& g, const PrepareEncoder& prepare);
+  // One untimed run of g's prologue (encode + sort) and, if g permutes, of the permute: the batch's
+  // kernels and their buffers warmed before the rounds (the order of g's first sort is kept).
+  void warm_sort_and_permute(SortedGroup& g);
   // A group's prologue (encode + sort into its order) and arms (one trace per access mode, Embree's).
   MeasurementGroup sorted_group(SortedGroup& g);
   // The measurement of the NoSort group (if any) and `sorted` sharing their rounds.
