@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <regex>
 #include <cstdlib>
 #include <sstream>
 #include <string>
@@ -219,6 +220,25 @@ TEST(Cli, RunHasNoWarmupRoundByDefault) {
     EXPECT_EQ(c.status, "ok") << c.id() << ": " << c.error;
     EXPECT_TRUE(c.hits_match_nosort) << c.id();
   }
+  fs::remove_all(out);
+}
+
+// A batch's cells are recorded together when its shared rounds end; the ETA of their lines counts
+// them all from the first line on. It once divided the elapsed time by the one cell printed so far:
+// "[1/158] ... (elapsed 405s, ETA 1059m00s)" for a run that ended 4 minutes later. Two batches of
+// equal size, each sampled for a second: the first cell's ETA is about the time spent so far.
+TEST(Cli, RunEtaCountsABatchsCellsFromItsFirstLine) {
+  std::string out = temp_dir("eta");
+  CliResult r = run_cli({"run", "--scenes", "cornell", "--batches", "primary,shadow0", "--encoders", "origin,hcc",
+                         "--bits", "32", "--resolution", "128x128", "--reps", "7", "--max-noise", "0.001", "--max-time",
+                         "1", "--out", out});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::regex first(R"(\n\[1/6\] [^\n]*\(elapsed (\d+)s, ETA (\d+)s\)\n)");
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(r.err, m, first)) << r.err;
+  const int elapsed = std::stoi(m[1]), eta = std::stoi(m[2]);
+  EXPECT_GE(elapsed, 1) << r.err;  // a second of rounds at least: the check below can tell
+  EXPECT_LE(eta, 2 * elapsed + 1) << r.err;
   fs::remove_all(out);
 }
 

@@ -240,12 +240,17 @@ nlohmann::json run_meta(const MatrixSpec& spec, const RunOptions& opts, const De
 
 struct Progress {
   std::size_t total = 0, done = 0;
+  // The ETA's rate is that of the cells measured by this run: not those a resume skipped (`skipped`,
+  // in `done`), and a batch's cells count from its first line on (`arriving`: recorded together
+  // when its shared rounds end, they were one estimate of 1000 minutes, then 999, ...).
+  std::size_t skipped = 0, arriving = 0;
   std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
   void line(const std::string& what) {
     double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::string eta = "?";
-    if (done > 0) {
-      double left = elapsed / static_cast<double>(done) * static_cast<double>(total - done);
+    const std::size_t finished = done + arriving;
+    if (finished > skipped) {
+      double left = elapsed / static_cast<double>(finished - skipped) * static_cast<double>(total - finished);
       eta = left >= 60 ? fmt::format("{:.0f}m{:02.0f}s", std::floor(left / 60), std::fmod(left, 60.0))
                        : fmt::format("{:.0f}s", left);
     }
@@ -483,6 +488,7 @@ RunSummary run_matrix(const MatrixSpec& requested, const RunOptions& opts) {
     ++summary.cells_run;
     summary.cells_failed += !c.ok();
     ++progress.done;
+    if (progress.arriving > 0) --progress.arriving;
     // Test hook (tests/bench_test.cpp): die by SIGKILL right after the N-th new cell, a
     // deterministic kill point for the resume test.
     if (kill_after > 0 && summary.cells_run >= kill_after) std::raise(SIGKILL);
@@ -501,7 +507,7 @@ RunSummary run_matrix(const MatrixSpec& requested, const RunOptions& opts) {
       });
       if (whole) complete.insert(round_group(batch_cells.front()));
       for (const auto& c : batch_cells) {
-        summary.cells_skipped += whole, progress.done += whole;
+        summary.cells_skipped += whole, progress.done += whole, progress.skipped += whole;
         const CellRecord* had = whole ? nullptr : results.find(c.id);
         summary.cells_retried += had && !had->ok();
         summary.cells_remeasured += had && had->ok();
@@ -543,7 +549,9 @@ RunSummary run_matrix(const MatrixSpec& requested, const RunOptions& opts) {
       // of that input plus the cut's build and upload (outside the timed rounds).
       auto prepare = [&](Encoder e, unsigned bits) { return scene.prepare_encoder(e, bits, first.batch); };
       try {
-        for (CellRecord& c : bench.measure_batch(groups, settings, prepare)) {
+        std::vector<CellRecord> measured = bench.measure_batch(groups, settings, prepare);
+        progress.arriving = measured.size();
+        for (CellRecord& c : measured) {
           if (c.encoder == kBaselineEncoder)
             c.leaks_per_million = scene.leaks_per_million(*rb, first.variant, first.layout, both_variants);
           record(c);
