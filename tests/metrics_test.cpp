@@ -1,5 +1,6 @@
 // ANC on known key sequences and the SIMT model on hand-built traversal trails.
 #include <gtest/gtest.h>
+#include <fmt/format.h>
 
 #include <algorithm>
 #include <numeric>
@@ -210,6 +211,47 @@ TEST(SimtModel, TracedDistinctNodesEqualTheSortedUnion) {
       EXPECT_EQ(got.warps, want.warps);
       EXPECT_EQ(got.lane_efficiency, want.lane_efficiency);
       EXPECT_EQ(got.distinct_nodes_per_visit, want.distinct_nodes_per_visit);
+    }
+}
+
+// The trails recorded once in ray order (bench/metrics.h, RayTrails) give every other order the
+// model, GPU counts included, that walking the rays again gives; over its budget nothing is kept
+// and the model is the same. Any hit too (its last leaf reads are kept with the trails).
+TEST(SimtModel, TrailsRecordedOnceGiveEveryOrderTheSameModel) {
+  std::mt19937 rng(11);
+  const Bvh bvh = build_bvh(scattered_triangles(400, rng));
+  const std::vector<RsRay> rays = scattered_rays(3000, rng);
+  std::vector<std::uint32_t> shuffled(rays.size());
+  std::iota(shuffled.begin(), shuffled.end(), 0u);
+  std::shuffle(shuffled.begin(), shuffled.end(), rng);
+  const GpuProfile gpu = load_gpu_profile("rtx3060");
+  for (TraceLayout layout : {TraceLayout::Wide, TraceLayout::Wide8, TraceLayout::Binary, TraceLayout::Cwbvh})
+    for (bool any_hit : {false, true}) {
+      SCOPED_TRACE(fmt::format("{} any_hit {}", trace_layout_name(layout), any_hit));
+      RayTrails trails;
+      trails.budget_bytes = std::uint64_t{1} << 30;
+      GpuCounts walked_counts, read_counts;
+      const SimtModel nosort = simt_model(bvh, rays, nullptr, any_hit, TraceVariant::Robust, layout, &gpu, nullptr, &trails);
+      ASSERT_TRUE(trails.filled());
+      EXPECT_EQ(trails.begin.size(), rays.size() + 1);
+      EXPECT_EQ(trails.steps.size(), nosort.total_steps);
+      const SimtModel walked = simt_model(bvh, rays, shuffled.data(), any_hit, TraceVariant::Robust, layout, &gpu, &walked_counts);
+      const SimtModel read =
+          simt_model(bvh, rays, shuffled.data(), any_hit, TraceVariant::Robust, layout, &gpu, &read_counts, &trails);
+      EXPECT_EQ(read.total_steps, walked.total_steps);
+      EXPECT_EQ(read.lane_efficiency, walked.lane_efficiency);
+      EXPECT_EQ(read.distinct_nodes_per_visit, walked.distinct_nodes_per_visit);
+      EXPECT_EQ(read_counts.warp_steps, walked_counts.warp_steps);
+      EXPECT_EQ(read_counts.dram_bytes, walked_counts.dram_bytes);
+      EXPECT_EQ(read_counts.l1_hits, walked_counts.l1_hits);
+      RayTrails small;
+      small.budget_bytes = 1000;
+      (void)simt_model(bvh, rays, nullptr, any_hit, TraceVariant::Robust, layout, nullptr, nullptr, &small);
+      EXPECT_FALSE(small.filled());
+      EXPECT_TRUE(small.over_budget);
+      EXPECT_EQ(simt_model(bvh, rays, shuffled.data(), any_hit, TraceVariant::Robust, layout, nullptr, nullptr, &small)
+                    .lane_efficiency,
+                walked.lane_efficiency);
     }
 }
 

@@ -13,6 +13,7 @@
 #include "render/frame_memory.h"
 #include "trace/exact_oracle.h"
 #include "trace/order_agreement.h"
+#include "util/host_memory.h"
 
 namespace raysort {
 
@@ -65,8 +66,11 @@ BatchBench::BatchBench(const Stages& stages, const Bvh& bvh, const RayBatch& bat
   } catch (const Error& err) {
     setup_error_ = err.what();
   }
+  // The NoSort model records every ray's trail for the sorted orders' models (bench/metrics.h),
+  // within an eighth of the host's free memory (sibenik's 2 M bounce rays: about 0.3 GB).
+  trails_.budget_bytes = available_host_memory() / 8;
   nosort_simt_ = simt_model(bvh_, batch_.rays, nullptr, batch_.any_hit(), s_.tracer.variant(), s_.tracer.layout(),
-                            s_.gpu, &nosort_gpu_);
+                            s_.gpu, &nosort_gpu_, &trails_);
 }
 
 cl::Event BatchBench::trace(const cl::Buffer& rays, const cl::Buffer& order, const cl::Buffer& hits) {
@@ -351,7 +355,7 @@ std::string BatchBench::check_order(const SortedGroup& g, SortedOrder& so) {
     return "the sorted order does not sort the keys";
   so.anc = average_number_of_codes(sorted_keys);
   so.simt = simt_model(bvh_, batch_.rays, so.order.data(), batch_.any_hit(), s_.tracer.variant(), s_.tracer.layout(),
-                       s_.gpu, &so.gpu);
+                       s_.gpu, &so.gpu, &trails_);
   return "";
 }
 

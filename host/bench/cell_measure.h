@@ -186,6 +186,7 @@ class BatchBench {
   bool embree_ready_ = false;
   SimtModel nosort_simt_;
   GpuCounts nosort_gpu_;
+  RayTrails trails_;  // every ray's trail, recorded by the NoSort model for the sorted orders' models
 };
 
 }  // namespace raysort

@@ -127,6 +127,7 @@ struct TrailRecorder {
   int robust, any;
   bool wide_layout, wide8_layout, cw_layout;
   rs_u32 cap;
+  const RayTrails* cached;  // filled: each lane's trail is read, not walked
 
   // An any-hit traversal stops in the leaf it hits, right after the packet (wide) or triangle
   // (binary) holding the hit triangle: how many of the leaf's it read (the GPU model's reads of
@@ -167,6 +168,13 @@ struct TrailRecorder {
         for (std::size_t l = 0; l < w.lanes.size(); ++l) {
           const std::size_t i = first_ray + l;
           const std::uint32_t ray_index = order ? order[i] : static_cast<std::uint32_t>(i);
+          w.rays.push_back(ray_index);
+          if (cached) {
+            w.lanes[l].assign(cached->steps.begin() + static_cast<std::ptrdiff_t>(cached->begin[ray_index]),
+                              cached->steps.begin() + static_cast<std::ptrdiff_t>(cached->begin[ray_index + 1]));
+            w.last_reads.push_back(cached->last_reads[ray_index]);
+            continue;
+          }
           rs_u32 len = 0;
           const RsHit hit =
               wide_layout    ? rs_traverse_wide_recorded(wide.nodes.data(), wide.packets.data(), rays[ray_index],
@@ -178,7 +186,6 @@ struct TrailRecorder {
                              : rs_traverse_variant_recorded(bvh.nodes.data(), bvh.triangles.data(), rays[ray_index],
                                                             robust, any, nullptr, buffer.data(), cap, &len);
           w.lanes[l].assign(buffer.begin(), buffer.begin() + std::min(len, cap));
-          w.rays.push_back(ray_index);
           w.last_reads.push_back(any && hit.tri != RS_NO_HIT && len > 0 && len <= cap
                                      ? leaf_reads_until(hit.tri, buffer[len - 1])
                                      : 0);
@@ -197,7 +204,8 @@ struct TrailRecorder {
 }  // namespace
 
 SimtModel simt_model(const Bvh& bvh, const std::vector<RsRay>& rays, const std::uint32_t* order, bool any_hit,
-                     TraceVariant variant, TraceLayout layout, const GpuProfile* gpu, GpuCounts* gpu_counts) {
+                     TraceVariant variant, TraceLayout layout, const GpuProfile* gpu, GpuCounts* gpu_counts,
+                     RayTrails* trails) {
   WideBvh scratch;
   // Each class's model walks the tree its kernels walk, one ray per lane: the binary tree (binary,
   // binary-ww), the 8-wide one (wide8, stream), the compressed one (cwbvh), else the 4-wide one (the
@@ -219,8 +227,15 @@ SimtModel simt_model(const Bvh& bvh, const std::vector<RsRay>& rays, const std::
                                  : cw_layout    ? cw.nodes.size() + cw.triangles.size()
                                                 : bvh.nodes.size();
   const rs_u32 cap = static_cast<rs_u32>(std::min<std::size_t>(most_steps, 1u << 16));
-  const TrailRecorder recorder{bvh,   wide, wide8, cw, rays, order, variant == TraceVariant::Robust ? 1 : 0, any_hit ? 1 : 0,
-                               wide_layout, wide8_layout, cw_layout, cap};
+  const bool read_trails = trails && trails->filled() && trails->begin.size() == rays.size() + 1;
+  // Filled in ray order, wave after wave, while it fits its budget (paper-1spp: 94 orders of 2 M rays
+  // each walked the whole batch again on the host, about 40 s of a 9-minute run).
+  RayTrails* fill = trails && !trails->filled() && !trails->over_budget && !order ? trails : nullptr;
+  if (fill) fill->begin.assign(1, 0);
+  const TrailRecorder recorder{bvh,        wide,         wide8,     cw,
+                               rays,       order,        variant == TraceVariant::Robust ? 1 : 0,
+                               any_hit ? 1 : 0,          wide_layout, wide8_layout,
+                               cw_layout,  cap,          read_trails ? trails : nullptr};
   std::optional<GpuAddressMap> map;
   std::optional<GpuReplay> replay;
   if (gpu) {
@@ -238,6 +253,18 @@ SimtModel simt_model(const Bvh& bvh, const std::vector<RsRay>& rays, const std::
   for (std::size_t w0 = 0; w0 < warps; w0 += wave) {
     std::span<WarpTrails> now(slots.data(), std::min(wave, warps - w0));
     recorder.record(w0, now, partial);
+    if (fill) {
+      for (const WarpTrails& w : now)
+        for (std::size_t l = 0; l < w.lanes.size(); ++l) {
+          fill->steps.insert(fill->steps.end(), w.lanes[l].begin(), w.lanes[l].end());
+          fill->begin.push_back(fill->steps.size());
+          fill->last_reads.push_back(w.last_reads[l]);
+        }
+      if (fill->bytes() > fill->budget_bytes) {
+        *fill = RayTrails{fill->budget_bytes, {}, {}, {}, true};
+        fill = nullptr;
+      }
+    }
     if (!replay) continue;
     if (replay->dynamic_fetch())
       replay->replay_stream(now, w0 + now.size() == warps);

@@ -40,8 +40,24 @@ SimtModel simt_model_from_trails(const std::vector<std::vector<std::uint32_t>>& 
 // or a leaf. order null = identity.
 // With a GPU profile, the same trails are also replayed through its caches (bench/gpu_model.h)
 // and *gpu_counts receives the counts; the SIMT figures do not depend on it.
+//
+// `trails`, when given, holds every ray's trail for the models of other orders of the same rays,
+// tree and variant: a ray's walk is its own wherever an order puts it (one ray per lane), only the
+// warps change. A call in ray order (order null) fills it while it fits in its budget; a call given
+// it filled reads the trails instead of walking the rays again. The figures are the same either way.
+struct RayTrails {
+  std::uint64_t budget_bytes = 0;
+  std::vector<std::uint64_t> begin;  // ray i's steps: [begin[i], begin[i + 1]); rays + 1 entries once filled
+  std::vector<std::uint32_t> steps;
+  std::vector<std::uint32_t> last_reads;
+  bool over_budget = false;
+  bool filled() const { return !begin.empty(); }
+  std::uint64_t bytes() const {
+    return begin.size() * sizeof(std::uint64_t) + (steps.size() + last_reads.size()) * sizeof(std::uint32_t);
+  }
+};
 SimtModel simt_model(const Bvh& bvh, const std::vector<RsRay>& rays, const std::uint32_t* order, bool any_hit,
                      TraceVariant variant = TraceVariant::Fast, TraceLayout layout = TraceLayout::Wide,
-                     const GpuProfile* gpu = nullptr, GpuCounts* gpu_counts = nullptr);
+                     const GpuProfile* gpu = nullptr, GpuCounts* gpu_counts = nullptr, RayTrails* trails = nullptr);
 
 }  // namespace raysort
