@@ -1,7 +1,8 @@
 """The generators of scripts/claims.py: block name -> function returning the block's text, computed
 from committed result sets only (claim_blocks/sets.py names them). One list, here."""
 from . import (appendix, audit, beyond, gpu_model, gpu_model_appendix, gpu_model_holds, gpu_model_rest,
-               gpu_model_scoring, kernels, nvidia, packet, paper_tex, prose_early, reference_sets, sampling)
+               gpu_model_scoring, kernels, nvidia, packet, paper_tex, prose_early, protocol_time, reference_sets,
+               sampling)
 
 GENERATORS = {
     "table1-lights": prose_early.table1_block,
@@ -161,6 +162,8 @@ GENERATORS = {
     "model-classes-pocl-speed": prose_early.model_classes_pocl_speed_phrase,
     "shared-share": prose_early.shared_share_phrase,
     "shared-rounds": prose_early.shared_rounds_phrase,
+    "protocol-time": protocol_time.protocol_time_block,
+    "protocol-time-same": protocol_time.protocol_time_same_phrase,
     "oclgrind-cells": prose_early.oclgrind_cells_phrase,
     "oclgrind-failed": prose_early.oclgrind_failed_phrase,
     "oclgrind-time": prose_early.oclgrind_time_phrase,

@@ -1,0 +1,83 @@
+"""results/README.md, "The paper preset against the issue's commit": issue 42's wall-clock bar, measured
+side by side on one day (results/pocl-cpu-pthread-skylake-avx512-amd-epyc/protocol-time-ca43944). Each arm
+is a result set with its run's log (run.log, whose last line is `/usr/bin/time`'s "WALL <arm> <s> s")."""
+import csv
+import json
+import os
+import re
+import statistics
+
+from .sets import PROTOCOL_TIME
+
+# (folder, what runs, the folder of the issue's commit's run it is compared with), in the order of the table.
+ARMS = [
+    ("b17c516", "the issue's commit: each cell group in rounds of its own, one warm-up round", "b17c516"),
+    ("ca43944", "shared rounds (up to 8 groups), no warm-up round: the default", "b17c516"),
+    ("ca43944-warmup-1", "the same with `--warmup 1`", "b17c516"),
+    ("ca43944-max-time-3", "the same with `--max-time 3`", "b17c516"),
+    ("b17c516-run2", "the issue's commit again", "b17c516-run2"),
+    ("fa4b665", "the default again (fa4b665: ca43944 and the ETA fix)", "b17c516-run2"),
+    ("0606a6b", "and with each ray's SIMT trail recorded once per batch (0606a6b)", "b17c516-run3"),
+    ("b17c516-run3", "the issue's commit, a third time", "b17c516-run3"),
+]
+
+
+def _wall_s(arm):
+    with open(os.path.join(PROTOCOL_TIME, arm, "run.log")) as f:
+        return float(re.search(r"^WALL \S+ ([\d.]+) s$", f.read(), re.M).group(1))
+
+
+def _noise(arm):
+    with open(os.path.join(PROTOCOL_TIME, arm, "meta.json")) as f:
+        return json.load(f)["noise"]
+
+
+def _sorted_rows(arm, batch):
+    with open(os.path.join(PROTOCOL_TIME, arm, "cells.csv"), newline="") as f:
+        return [r for r in csv.DictReader(f) if r["batch"] == batch and r["encoder"] != "nosort"]
+
+
+def _half_width(r):
+    return (float(r["speedup_hi"]) - float(r["speedup_lo"])) / (2 * float(r["speedup"]))
+
+
+def _nosort_ms(arm, batch):
+    """The median NoSort trace of the batch: how fast the machine traced during that run."""
+    with open(os.path.join(PROTOCOL_TIME, arm, "cells.csv"), newline="") as f:
+        return next(float(r["nosort_trace_ms"]) for r in csv.DictReader(f) if r["batch"] == batch and r["encoder"] == "nosort")
+
+
+def protocol_time_block():
+    """Per arm: wall clock and its share of the issue's commit's in the same pair, A/A, half-widths, rounds."""
+    lines = ["| set | what runs | wall clock | of the issue's commit's | NoSort bounce1 trace | A/A calibration "
+             "| speedup half-width, median / 90th pct. | bounce1: rounds, half-width | shadow0: rounds, half-width |",
+             "|---|---|---:|---:|---:|---:|---:|---:|---:|"]
+    for arm, what, base in ARMS:
+        n = _noise(arm)
+        per_batch = []
+        for batch in ("bounce1", "shadow0"):
+            rows = _sorted_rows(arm, batch)
+            per_batch.append(f"{statistics.median(int(r['rounds']) for r in rows):.0f}, "
+                             f"{100 * statistics.median(_half_width(r) for r in rows):.1f} %")
+        lines.append(f"| `{arm}/` | {what} | {_wall_s(arm):.1f} s | {_wall_s(arm) / _wall_s(base):.3f} | "
+                     f"{_nosort_ms(arm, 'bounce1'):.1f} ms | "
+                     f"{n['aa_containing_one']} of {n['aa_intervals']} ({100 * n['aa_coverage']:.1f} %) | "
+                     f"{100 * n['speedup_half_width']['median']:.2f} % / {100 * n['speedup_half_width']['p90']:.1f} % | "
+                     f"{per_batch[0]} | {per_batch[1]} |")
+    return "\n".join(lines)
+
+
+def protocol_time_same_phrase():
+    """The deterministic figures agree across the arms; the speedups of the default against the issue's."""
+    cells = {}
+    for arm, _, _ in ARMS:
+        with open(os.path.join(PROTOCOL_TIME, arm, "cells.csv"), newline="") as f:
+            cells[arm] = {r["id"]: r for r in csv.DictReader(f)}
+    base = cells[ARMS[0][0]]
+    same = sum(all(cells[a][i]["order_hash"] == base[i]["order_hash"] and cells[a][i]["anc"] == base[i]["anc"]
+                   for a, _, _ in ARMS[1:]) for i in base)
+    new = cells[ARMS[1][0]]
+    ratios = [float(new[i]["speedup"]) / float(base[i]["speedup"]) for i in base if base[i]["encoder"] != "nosort"]
+    return (f"the same {same} of {len(base)} order hashes and ANCs in all {len(ARMS)} sets; speedups of `{ARMS[1][0]}/` "
+            f"over `{ARMS[0][0]}/`'s, per cell: median {statistics.median(ratios):.3f} ({min(ratios):.3f} to "
+            f"{max(ratios):.3f})")
