@@ -228,14 +228,13 @@ SimtModel simt_model(const Bvh& bvh, const std::vector<RsRay>& rays, const std::
                                                 : bvh.nodes.size();
   const rs_u32 cap = static_cast<rs_u32>(std::min<std::size_t>(most_steps, 1u << 16));
   const bool read_trails = trails && trails->filled() && trails->begin.size() == rays.size() + 1;
-  // Filled in ray order, wave after wave, while it fits its budget (paper-1spp: 94 orders of 2 M rays
-  // each walked the whole batch again on the host, about 40 s of a 9-minute run).
+  // Filled in ray order, wave after wave, while it fits its budget (paper-1spp on sibenik: 94 orders of
+  // 2 M rays, each of which walked the whole batch again on the host).
   RayTrails* fill = trails && !trails->filled() && !trails->over_budget && !order ? trails : nullptr;
   if (fill) fill->begin.assign(1, 0);
-  const TrailRecorder recorder{bvh,        wide,         wide8,     cw,
-                               rays,       order,        variant == TraceVariant::Robust ? 1 : 0,
-                               any_hit ? 1 : 0,          wide_layout, wide8_layout,
-                               cw_layout,  cap,          read_trails ? trails : nullptr};
+  const TrailRecorder recorder{bvh, wide, wide8, cw, rays, order, variant == TraceVariant::Robust ? 1 : 0,
+                               any_hit ? 1 : 0, wide_layout, wide8_layout, cw_layout, cap,
+                               read_trails ? trails : nullptr};
   std::optional<GpuAddressMap> map;
   std::optional<GpuReplay> replay;
   if (gpu) {
