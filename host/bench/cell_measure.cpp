@@ -189,12 +189,9 @@ void BatchBench::ready_group(SortedGroup& g, const PrepareEncoder& prepare) {
 
 void BatchBench::warm_sort_and_permute(SortedGroup& g) {
   (void)sorted_group(g).prologue.run();
-  for (const CellRecord& c : g.cells)
-    if (c.access == "permute") {
-      cl::Event p = s_.permuter.enqueue(rays_, g.order, n_, permuted_rays());
-      cl_call("waiting for the permute kernel", [&] { p.wait(); });
-      break;
-    }
+  if (std::none_of(g.cells.begin(), g.cells.end(), [](const CellRecord& c) { return c.access == "permute"; })) return;
+  cl::Event p = s_.permuter.enqueue(rays_, g.order, n_, permuted_rays());
+  cl_call("waiting for the permute kernel", [&] { p.wait(); });
 }
 
 MeasurementGroup BatchBench::sorted_group(SortedGroup& g) {
