@@ -19,7 +19,7 @@ std::vector<std::uint64_t> encode_on_host(Encoder e, unsigned bits, const Encode
   auto work = [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) keys[i] = key(rays[i]);
   };
-  for_each_chunk(rays.size(), rays.size() < 8192, work);
+  for_each_block(rays.size(), rays.size() < 8192, work);
   return keys;
 }
 

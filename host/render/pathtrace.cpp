@@ -7,6 +7,7 @@
 
 #include "render/batches.h"
 #include "util/error.h"
+#include "util/parallel.h"
 
 namespace raysort {
 
@@ -172,10 +173,14 @@ Frame trace_frame_host(const ShadeInputs& in, const Bvh& bvh, const FrameOptions
     // 3. shade
     shadow_rays.resize(n * per), shadow_states.resize(n * per), shadow_valid.resize(n * per), shadow_dest.resize(n * per);
     bounce_rays.resize(n), bounce_states.resize(n), bounce_valid.resize(n), bounce_dest.resize(n);
-    for (std::size_t i = 0; i < n; ++i)
-      rs_shade(in.triangles.data(), in.materials.data(), in.lights.data(), p, bounce, static_cast<rs_u32>(i), rays[i],
-               states[i], hits[i], f.radiance.data(), shadow_rays.data(), shadow_states.data(), shadow_valid.data(),
-               bounce_rays.data(), bounce_states.data(), bounce_valid.data());
+    // One ray per item, as one per work-item in the shade kernel: a ray writes only its own slots
+    // and its own path's radiance, so the blocks may run on any thread.
+    for_each_block(n, n < 4096, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t i = begin; i < end; ++i)
+        rs_shade(in.triangles.data(), in.materials.data(), in.lights.data(), p, bounce, static_cast<rs_u32>(i), rays[i],
+                 states[i], hits[i], f.radiance.data(), shadow_rays.data(), shadow_states.data(), shadow_valid.data(),
+                 bounce_rays.data(), bounce_states.data(), bounce_valid.data());
+    });
     // 4.-5. compact the shadow rays, trace them (any hit), add what reached a light
     if (per > 0) {
       auto srays = compact_host(shadow_valid, shadow_dest, shadow_rays);

@@ -44,7 +44,7 @@ void trace_packets_on_host(int width, int single_at, const WideBvh& wide, const 
       trace(wide.nodes.data(), wide.packets.data(), rays.data(), order, static_cast<rs_u32>(p * width), n, robust,
             any_hit, single_at, hits.data(), visits);
   };
-  for_each_chunk(packets, n < 4096, work);
+  for_each_block(packets, n < 4096, work, 64);
 }
 
 }  // namespace raysort

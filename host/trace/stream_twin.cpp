@@ -16,7 +16,7 @@ void trace_streams_on_host(const Wide8Bvh& wide8, const std::vector<RsRay>& rays
       rs_traverse_stream(wide8.nodes.data(), wide8.packets.data(), rays.data(), order,
                          static_cast<rs_u32>(s * RS_STREAM_RAYS), n, robust, any_hit, hits.data(), visits);
   };
-  for_each_chunk(streams, n < 4096, work);
+  for_each_block(streams, n < 4096, work, 64);
 }
 
 }  // namespace raysort

@@ -174,7 +174,7 @@ std::vector<RsHit> trace_reference(const Bvh& bvh, const std::vector<RsRay>& ray
       if (node_visits) (*node_visits)[i] = visits;
     }
   };
-  for_each_chunk(n, n < 4096, work);
+  for_each_block(n, n < 4096, work);
   return hits;
 }
 
@@ -199,17 +199,7 @@ std::vector<std::uint64_t> node_traffic(const Bvh& bvh, const std::vector<RsRay>
       for (rs_u32 k = 0; k < len; ++k) ++c[trail[k]];
     }
   };
-  if (used == 1) {
-    work(0, 0, n);
-  } else {
-    std::vector<std::thread> pool;
-    const std::size_t chunk = (n + used - 1) / used;
-    for (unsigned t = 0; t < used; ++t) {
-      const std::size_t b = t * chunk, e = std::min(n, b + chunk);
-      if (b < e) pool.emplace_back(work, t, b, e);
-    }
-    for (auto& th : pool) th.join();
-  }
+  for_each_block_on(used, n, 1024, work);
   for (unsigned t = 1; t < used; ++t)
     for (std::size_t k = 0; k < counts[0].size(); ++k) counts[0][k] += counts[t][k];
   return counts.empty() ? std::vector<std::uint64_t>{} : std::move(counts[0]);

@@ -1,11 +1,12 @@
 #pragma once
-// Host work spread over threads. for_each_chunk: one contiguous chunk per thread (the host twins
-// and the host encoders run the same per-item code on every core, and the items are independent,
-// so any split gives the same results). for_each_job: jobs of uneven size (the BVH builder's
-// subtrees), each thread taking the next job when its last is done; every job writes only its
-// own outputs, so which thread ran which job never shows in the result. JobStream: the same for
-// jobs that appear while the threads already run the first ones (the BVH builder's subtrees, made
-// by the splits of the top of the tree).
+// Host work spread over threads. for_each_chunk: one contiguous chunk per thread (the BVH
+// builder's binning, whose per-chunk partial results follow the split). for_each_block: blocks
+// taken by whichever thread is free (the host twins and the host encoders run the same per-item
+// code on every core, and the items are independent, so any split gives the same results).
+// for_each_job: jobs of uneven size (the BVH builder's subtrees), each thread taking the next job
+// when its last is done; every job writes only its own outputs, so which thread ran which job never
+// shows in the result. JobStream: the same for jobs that appear while the threads already run the
+// first ones (the BVH builder's subtrees, made by the splits of the top of the tree).
 #include <algorithm>
 #include <atomic>
 #include <condition_variable>
@@ -45,6 +46,34 @@ void for_each_chunk_on(unsigned threads, std::size_t n, Work&& work) {
 template <class Work>
 void for_each_chunk(std::size_t n, bool serial, Work&& work) {
   for_each_chunk_on(serial ? 1u : host_threads(), n, std::forward<Work>(work));
+}
+
+// Runs work(worker, begin, end) over [0, n) in blocks of `block` items on `threads` threads (this
+// one, worker 0, among them), each thread taking the next block when its last is done. For items of
+// uneven cost (a frame's rays: the sky's take no step, a wall's take dozens), where one contiguous
+// chunk per thread leaves a core idle once its half is done. `worker` < threads names the thread, for
+// per-thread partial results that are summed afterwards (any split gives the same sums).
+template <class Work>
+void for_each_block_on(unsigned threads, std::size_t n, std::size_t block, Work&& work) {
+  block = std::max<std::size_t>(1, block);
+  const std::size_t blocks = (n + block - 1) / block;
+  threads = static_cast<unsigned>(std::min<std::size_t>(std::max(1u, threads), std::max<std::size_t>(1, blocks)));
+  std::atomic<std::size_t> next{0};
+  auto worker = [&](unsigned w) {
+    for (std::size_t b; (b = next.fetch_add(1)) < blocks;) work(w, b * block, std::min(n, (b + 1) * block));
+  };
+  std::vector<std::thread> pool;
+  for (unsigned t = 1; t < threads; ++t) pool.emplace_back(worker, t);
+  worker(0);
+  for (auto& th : pool) th.join();
+}
+
+// Runs work(begin, end) over [0, n) in blocks of `block` items, balanced over the host's threads
+// (for_each_block_on); in this thread alone when `serial`.
+template <class Work>
+void for_each_block(std::size_t n, bool serial, Work&& work, std::size_t block = 1024) {
+  for_each_block_on(serial ? 1u : host_threads(), n, block,
+                    [&work](unsigned, std::size_t b, std::size_t e) { work(b, e); });
 }
 
 // Runs job(i) for every i in [0, n) on `threads` threads (this one among them), each taking the
