@@ -164,6 +164,7 @@ GENERATORS = {
     "shared-rounds": prose_early.shared_rounds_phrase,
     "protocol-time": protocol_time.protocol_time_block,
     "protocol-time-same": protocol_time.protocol_time_same_phrase,
+    "protocol-time-final": protocol_time.protocol_time_final_phrase,
     "oclgrind-cells": prose_early.oclgrind_cells_phrase,
     "oclgrind-failed": prose_early.oclgrind_failed_phrase,
     "oclgrind-time": prose_early.oclgrind_time_phrase,

@@ -19,6 +19,11 @@ ARMS = [
     ("fa4b665", "the default again (fa4b665: ca43944 and the ETA fix)", "b17c516-run2"),
     ("0606a6b", "and with each ray's SIMT trail recorded once per batch (0606a6b)", "b17c516-run3"),
     ("b17c516-run3", "the issue's commit, a third time", "b17c516-run3"),
+    # Stop 59, the same day, in the order A B B A: pair 4, then pair 5.
+    ("1d00992", "the default at 1d00992 (0606a6b, and the host twins' rays in blocks)", "b17c516-run4"),
+    ("b17c516-run4", "the issue's commit, a fourth time", "b17c516-run4"),
+    ("b17c516-run5", "the issue's commit, a fifth time", "b17c516-run5"),
+    ("1d00992-run2", "the default at 1d00992 again", "b17c516-run5"),
 ]
 
 
@@ -81,3 +86,26 @@ def protocol_time_same_phrase():
     return (f"the same {same} of {len(base)} order hashes and ANCs in all {len(ARMS)} sets; speedups of `{ARMS[1][0]}/` "
             f"over `{ARMS[0][0]}/`'s, per cell: median {statistics.median(ratios):.3f} ({min(ratios):.3f} to "
             f"{max(ratios):.3f})")
+
+
+# The arms that ran the code as it stands after 0606a6b (1d00992 changes only the host twins' thread split),
+# and every arm of the default protocol (shared rounds, no warm-up round, the 5 s budget: ca43944 on).
+FINAL = ["0606a6b", "1d00992", "1d00992-run2"]
+DEFAULT_PROTOCOL = ["ca43944", "fa4b665"] + FINAL
+
+
+def protocol_time_final_phrase():
+    """The bar over every pair that ran the final code: each pair's ratio, their median, the half-widths, and
+    the A/A calibration pooled over every run of the default protocol (a run's 23-26 intervals are too few)."""
+    base = {arm: b for arm, _, b in ARMS}
+    ratios = [_wall_s(arm) / _wall_s(base[arm]) for arm in FINAL]
+    under = sum(r <= 7 / 12.92 for r in ratios)
+    contain = sum(_noise(a)["aa_containing_one"] for a in DEFAULT_PROTOCOL)
+    total = sum(_noise(a)["aa_intervals"] for a in DEFAULT_PROTOCOL)
+    widths = [(100 * _noise(a)["speedup_half_width"]["median"], 100 * _noise(base[a])["speedup_half_width"]["median"])
+              for a in FINAL]
+    return (f"{', '.join(f'{r:.3f}' for r in ratios)} of the issue's commit's time in the {len(FINAL)} pairs that ran "
+            f"the final code (median {statistics.median(ratios):.3f}; {under} of {len(FINAL)} at or under the bar's "
+            f"0.542), at a median half-width of {', '.join(f'{w:.2f}' for w, _ in widths)} % against the issue's "
+            f"commit's {', '.join(f'{b:.2f}' for _, b in widths)} % in the same pairs; A/A calibration over the "
+            f"{len(DEFAULT_PROTOCOL)} runs of the default protocol: {contain} of {total} ({100 * contain / total:.1f} %)")
