@@ -155,6 +155,7 @@ GENERATORS = {
     "packet-gap": prose_early.packet_gap_phrase,
     "packet-simt": prose_early.packet_simt_phrase,
     "packet-bar": prose_early.packet_bar_phrase,
+    "packet-h200": prose_early.packet_h200_phrase,
     "packet-setup-cost": prose_early.packet_setup_cost_phrase,
     "packet-setup-aa": prose_early.packet_setup_aa_phrase,
     "model-classes-stopped": prose_early.model_classes_stopped_phrase,

@@ -15,8 +15,8 @@ from spp_compare import gpu, load
 
 from . import appendix, audit, gpu_model_scoring, paper_tex, sampling
 from .sets import (AUDIT_ENCODEBENCH, AUDIT_ORDER, AUDIT_TWOPOINT_BITS, AUDIT_TWOPOINT_VARIANTS, BOUNCES, CLASSES,
-                   EIGHT_SPP, EIGHT_SPP_EARLIER, EIGHT_SPP_SHARDS, HCC_DIR, KERNEL_CLASSES_MODEL, OCLGRIND, ONE_SPP,
-                   PACKET_SETUP, PAPER_COLUMN, ROOT, SHARED_ROUNDS, SWEEPS, VIEWPORT)
+                   EIGHT_SPP, EIGHT_SPP_EARLIER, EIGHT_SPP_SHARDS, H200_VALIDATION, HCC_DIR, KERNEL_CLASSES_MODEL,
+                   OCLGRIND, ONE_SPP, PACKET_SETUP, PAPER_COLUMN, ROOT, SHARED_ROUNDS, SWEEPS, VIEWPORT)
 
 
 # --- readers -------------------------------------------------------------------------------------------
@@ -125,6 +125,25 @@ def packet_bar_phrase():
     for t in short:
         text += f", not on Table {t} ({c[(t, 'packet16')][0]:.2f}, its interval reaching {c[(t, 'packet16')][1]:.2f})"
     return f"Issue 40's bar is {BAR} on both: {text}"
+
+
+def _pearson_text(set_dir, table, layout):
+    """'0.69 [0.49, 0.83]': a class's Pearson with the paper and its interval, as paper_correlation.py prints it."""
+    for line in correlation_table([set_dir])[2:]:
+        cols = [c.strip() for c in line.strip("|").split("|")]
+        if cols[0][0] == table and cols[1] == layout:
+            return cols[4]
+    raise KeyError((set_dir, table, layout))
+
+
+def packet_h200_phrase():
+    """For scale: the real GPU (the H200's validation matrix, the 4-wide kernel, gather) against the paper,
+    on the same 40 cells of each table, beside the packet class."""
+    return (f"an NVIDIA H200 running the 4-wide single-ray kernel on the same 40 cells of each table (gather, "
+            f"`gpu-validation-12e32f2`) follows the paper's RTX 3060 at Pearson {_pearson_text(H200_VALIDATION, '2', 'wide')} "
+            f"on Table 2 and {_pearson_text(H200_VALIDATION, '3', 'wide')} on Table 3, where the packet class on "
+            f"PoCL follows it at {_pearson_text(PACKET_SETUP, '2', 'packet16')} and "
+            f"{_pearson_text(PACKET_SETUP, '3', 'packet16')}")
 
 
 # --- What ordering buys as the kernel gets faster --------------------------------------------------------
