@@ -5,6 +5,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstddef>
+#include <stdexcept>
 #include <thread>
 #include <vector>
 
@@ -53,6 +54,21 @@ TEST(Parallel, ForEachBlockSharesUnevenWorkBetweenThreads) {
     }
   });
   EXPECT_TRUE(shared) << "no other thread ran an item of the first half while item 0 was busy";
+}
+
+TEST(Parallel, ForEachBlockRethrowsABlocksException) {
+  // A block that throws on a worker thread must fail the call, not terminate the process.
+  for (unsigned threads : {1u, 2u, 4u}) {
+    std::atomic<std::size_t> ran{0};
+    EXPECT_THROW(for_each_block_on(threads, 1000, 10,
+                                   [&](unsigned, std::size_t begin, std::size_t) {
+                                     ++ran;
+                                     if (begin == 500) throw std::runtime_error("block 50");
+                                   }),
+                 std::runtime_error)
+        << threads << " threads";
+    EXPECT_LE(ran.load(), std::size_t{100});
+  }
 }
 
 }  // namespace raysort

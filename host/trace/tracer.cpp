@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cstring>
 #include <numeric>
-#include <thread>
 
 #include "trace/packet_twin.h"
 #include "trace/stream_twin.h"

@@ -52,20 +52,32 @@ void for_each_chunk(std::size_t n, bool serial, Work&& work) {
 // one, worker 0, among them), each thread taking the next block when its last is done. For items of
 // uneven cost (a frame's rays: the sky's take no step, a wall's take dozens), where one contiguous
 // chunk per thread leaves a core idle once its half is done. `worker` < threads names the thread, for
-// per-thread partial results that are summed afterwards (any split gives the same sums).
+// per-thread partial results that are summed afterwards (any split gives the same sums). The first
+// exception a block throws is rethrown here once all threads have stopped (as for_each_job).
 template <class Work>
 void for_each_block_on(unsigned threads, std::size_t n, std::size_t block, Work&& work) {
   block = std::max<std::size_t>(1, block);
   const std::size_t blocks = (n + block - 1) / block;
   threads = static_cast<unsigned>(std::min<std::size_t>(std::max(1u, threads), std::max<std::size_t>(1, blocks)));
   std::atomic<std::size_t> next{0};
+  std::exception_ptr failure;
+  std::mutex failure_mutex;
   auto worker = [&](unsigned w) {
-    for (std::size_t b; (b = next.fetch_add(1)) < blocks;) work(w, b * block, std::min(n, (b + 1) * block));
+    for (std::size_t b; (b = next.fetch_add(1)) < blocks;) {
+      try {
+        work(w, b * block, std::min(n, (b + 1) * block));
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(failure_mutex);
+        if (!failure) failure = std::current_exception();
+        next.store(blocks);
+      }
+    }
   };
   std::vector<std::thread> pool;
   for (unsigned t = 1; t < threads; ++t) pool.emplace_back(worker, t);
   worker(0);
   for (auto& th : pool) th.join();
+  if (failure) std::rethrow_exception(failure);
 }
 
 // Runs work(begin, end) over [0, n) in blocks of `block` items, balanced over the host's threads
