@@ -89,34 +89,11 @@ void for_each_block(std::size_t n, bool serial, Work&& work, std::size_t block =
 }
 
 // Runs job(i) for every i in [0, n) on `threads` threads (this one among them), each taking the
-// lowest job not yet taken. The first exception a job throws is rethrown here once all threads
-// have stopped (the others take no new jobs after it).
+// lowest job not yet taken: blocks of one job (for_each_block_on). The first exception a job throws
+// is rethrown here once all threads have stopped (the others take no new jobs after it).
 template <class Job>
 void for_each_job(unsigned threads, std::size_t n, Job&& job) {
-  threads = static_cast<unsigned>(std::min<std::size_t>(std::max(1u, threads), n));
-  if (threads <= 1) {
-    for (std::size_t i = 0; i < n; ++i) job(i);
-    return;
-  }
-  std::atomic<std::size_t> next{0};
-  std::exception_ptr failure;
-  std::mutex failure_mutex;
-  auto worker = [&] {
-    for (std::size_t i; (i = next.fetch_add(1)) < n;) {
-      try {
-        job(i);
-      } catch (...) {
-        std::lock_guard<std::mutex> lock(failure_mutex);
-        if (!failure) failure = std::current_exception();
-        next.store(n);
-      }
-    }
-  };
-  std::vector<std::thread> pool;
-  for (unsigned t = 1; t < threads; ++t) pool.emplace_back(worker);
-  worker();
-  for (auto& th : pool) th.join();
-  if (failure) std::rethrow_exception(failure);
+  for_each_block_on(threads, n, 1, [&job](unsigned, std::size_t i, std::size_t) { job(i); });
 }
 
 // Jobs run by `threads` - 1 workers as they are added, and by this thread too from finish() on:

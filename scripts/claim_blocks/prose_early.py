@@ -93,13 +93,13 @@ def packet_setup_aa_phrase():
 
 @functools.lru_cache(maxsize=None)
 def _correlation(set_dir=CLASSES):
-    """(table, class) -> (Pearson, its 95 % interval's upper end, the SIMT ratio's Pearson), read from the
-    table scripts/paper_correlation.py prints (permute)."""
+    """(table, class) -> (Pearson, its 95 % interval's upper end, the SIMT ratio's Pearson, the Pearson with its
+    interval as text), read from the table scripts/paper_correlation.py prints (one access mode per class)."""
     out = {}
     for line in correlation_table([set_dir])[2:]:
         cols = [c.strip() for c in line.strip("|").split("|")]
         m = re.match(r"([-\d.]+) \[([-\d.]+), ([-\d.]+)\]", cols[4])
-        out[(cols[0][0], cols[1])] = (float(m.group(1)), float(m.group(3)), float(cols[6]))
+        out[(cols[0][0], cols[1])] = (float(m.group(1)), float(m.group(3)), float(cols[6]), cols[4])
     return out
 
 
@@ -127,23 +127,14 @@ def packet_bar_phrase():
     return f"Issue 40's bar is {BAR} on both: {text}"
 
 
-def _pearson_text(set_dir, table, layout):
-    """'0.69 [0.49, 0.83]': a class's Pearson with the paper and its interval, as paper_correlation.py prints it."""
-    for line in correlation_table([set_dir])[2:]:
-        cols = [c.strip() for c in line.strip("|").split("|")]
-        if cols[0][0] == table and cols[1] == layout:
-            return cols[4]
-    raise KeyError((set_dir, table, layout))
-
-
 def packet_h200_phrase():
     """For scale: the real GPU (the H200's validation matrix, the 4-wide kernel, gather) against the paper,
     on the same 40 cells of each table, beside the packet class."""
+    gpu, ours = _correlation(H200_VALIDATION), _correlation(PACKET_SETUP)
     return (f"an NVIDIA H200 running the 4-wide single-ray kernel on the same 40 cells of each table (gather, "
-            f"`gpu-validation-12e32f2`) follows the paper's RTX 3060 at Pearson {_pearson_text(H200_VALIDATION, '2', 'wide')} "
-            f"on Table 2 and {_pearson_text(H200_VALIDATION, '3', 'wide')} on Table 3, where the packet class on "
-            f"PoCL follows it at {_pearson_text(PACKET_SETUP, '2', 'packet16')} and "
-            f"{_pearson_text(PACKET_SETUP, '3', 'packet16')}")
+            f"`gpu-validation-12e32f2`) follows the paper's RTX 3060 at Pearson {gpu[('2', 'wide')][3]} on Table 2 and "
+            f"{gpu[('3', 'wide')][3]} on Table 3, where the packet class on PoCL follows it at "
+            f"{ours[('2', 'packet16')][3]} and {ours[('3', 'packet16')][3]}")
 
 
 # --- What ordering buys as the kernel gets faster --------------------------------------------------------
