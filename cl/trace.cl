@@ -12,6 +12,14 @@
  * traverse_packet.h and traverse_binary.h, shared with the host reference.
  * The global size is padded to a multiple of the local size (PoCL 3.1 has no non-uniform
  * work-groups), so every kernel guards on count.
+ *
+ * Gather on a CPU: a CPU runs a work-group's work-items one after another on one core, and a
+ * sorted order sends each work-item's ray load to a random place in a batch of tens of MB: a cache
+ * and TLB miss that nothing else hides, since the traversal before it is one long dependent chain
+ * (on sibenik's bounce1 batch, 13 % of the kernel's samples sat on that one load). A GPU hides it
+ * behind other warps. So on a CPU device the host defines RS_PREFETCH_AHEAD (runtime.cpp) and
+ * each work-item prefetches the ray of the work-item that many places ahead, which runs a few
+ * microseconds later (docs/trace.md, "Gather on a CPU"). A prefetch changes no result.
  */
 #include "traverse_binary.h"
 #include "traverse_wide.h"
@@ -38,6 +46,21 @@
 #endif
 #endif
 
+/* Prefetches the rays at order positions [from, from + n) that exist (see the top: CPU devices).
+ * Oclgrind gets RS_PREFETCH_AHEAD too, without the x86 or Arm builtin: its unoptimised build still
+ * reads order[pf], so its bounds check covers the loop's guard. */
+#ifdef RS_PREFETCH_AHEAD
+#if defined(__x86_64__) || defined(__aarch64__)
+#define RS_PREFETCH(p) __builtin_prefetch(p)
+#else
+#define RS_PREFETCH(p) ((void)(p))
+#endif
+#define RS_PREFETCH_RAYS(rays, order, from, n, count) \
+  for (uint pf = (from); pf < (from) + (n) && pf < (count); ++pf) RS_PREFETCH(&(rays)[(order)[pf]])
+#else
+#define RS_PREFETCH_RAYS(rays, order, from, n, count)
+#endif
+
 /* Each variant gets the same three kernels: closest hit, any hit (shadow rays), and an
  * instrumented closest hit that also writes the number of BVH nodes each ray fetched.
  * ROBUST is 0 (fast) or 1 (watertight): a constant, so each kernel compiles one variant. */
@@ -47,6 +70,7 @@
                                       __global RsHit* hits) {                                                 \
     uint i = get_global_id(0);                                                                                \
     if (i >= count) return;                                                                                   \
+    RS_PREFETCH_RAYS(rays, order, i + RS_PREFETCH_AHEAD, 1, count);                                           \
     hits[i] = TRAVERSE(nodes, tris, rays[order[i]], 0, 0);                                                    \
   }                                                                                                           \
   __kernel void trace_any##SUFFIX(__global const NODE* nodes, __global const LEAF* tris,                        \
@@ -54,6 +78,7 @@
                                   __global RsHit* hits) {                                                     \
     uint i = get_global_id(0);                                                                                \
     if (i >= count) return;                                                                                   \
+    RS_PREFETCH_RAYS(rays, order, i + RS_PREFETCH_AHEAD, 1, count);                                           \
     hits[i] = TRAVERSE(nodes, tris, rays[order[i]], 1, 0);                                                    \
   }                                                                                                           \
   __kernel void trace_closest_counted##SUFFIX(__global const NODE* nodes, __global const LEAF* tris,            \
@@ -62,6 +87,7 @@
     uint i = get_global_id(0);                                                                                \
     if (i >= count) return;                                                                                   \
     uint v = 0;                                                                                               \
+    RS_PREFETCH_RAYS(rays, order, i + RS_PREFETCH_AHEAD, 1, count);                                           \
     hits[i] = TRAVERSE(nodes, tris, rays[order[i]], 0, &v);                                                   \
     visits[i] = v;                                                                                            \
   }
@@ -75,6 +101,7 @@
                                     __global RsHit* hits) {                                                    \
     const uint first = get_global_id(0) * RAYS;                                                               \
     if (first >= count) return;                                                                                \
+    RS_PREFETCH_RAYS(rays, order, first + RAYS, RAYS, count);                                                \
     TRAVERSE(nodes, tris, rays, order, first, count, ROBUST, 0, hits, 0);                                      \
   }                                                                                                            \
   __kernel void trace_any##NAME(__global const NODE_T* nodes, __global const LEAF_T* tris,                     \
@@ -82,6 +109,7 @@
                                 __global RsHit* hits) {                                                        \
     const uint first = get_global_id(0) * RAYS;                                                               \
     if (first >= count) return;                                                                                \
+    RS_PREFETCH_RAYS(rays, order, first + RAYS, RAYS, count);                                                \
     TRAVERSE(nodes, tris, rays, order, first, count, ROBUST, 1, hits, 0);                                      \
   }                                                                                                            \
   __kernel void trace_closest_counted##NAME(__global const NODE_T* nodes, __global const LEAF_T* tris,         \
@@ -89,6 +117,7 @@
                                             __global RsHit* hits, __global uint* visits) {                     \
     const uint first = get_global_id(0) * RAYS;                                                               \
     if (first >= count) return;                                                                                \
+    RS_PREFETCH_RAYS(rays, order, first + RAYS, RAYS, count);                                                \
     TRAVERSE(nodes, tris, rays, order, first, count, ROBUST, 0, hits, visits);                                 \
   }
 

@@ -150,6 +150,19 @@ TEST(ClRuntime, ClOptionsFromTheEnvironmentReachTheBuild) {
   ::unsetenv("RAYSORT_CL_OPTIONS");
 }
 
+// On a CPU device the trace kernels prefetch the rays they gather (cl/trace.cl, "Gather on a CPU"):
+// the build defines how far ahead, and the kernels compile with it. A GPU build never gets it.
+TEST(ClRuntime, CpuBuildsPrefetchTheGatheredRays) {
+  Runtime& rt = testing::runtime();
+  const bool cpu = rt.info().type == "CPU" || rt.info().is_simulator();
+  EXPECT_EQ(rt.build_options("").find("-DRS_PREFETCH_AHEAD=") != std::string::npos, cpu) << rt.info().type;
+  if (!cpu) GTEST_SKIP() << "a " << rt.info().type << " device: no prefetch";
+  const std::string src =
+      "#if !defined(RS_PREFETCH_AHEAD) || RS_PREFETCH_AHEAD < 1\n#error no prefetch distance\n#endif\n"
+      "__kernel void ahead(__global int* p) { p[0] = RS_PREFETCH_AHEAD; }\n";
+  EXPECT_NO_THROW(rt.build_source(src, "ahead.cl"));
+}
+
 TEST(ClRuntime, EmbeddedKernelsResolveIncludes) {
   std::string src = kernel_source("cl/trace.cl");
   EXPECT_NE(src.find("RAYSORT_SHARED_H"), std::string::npos);
