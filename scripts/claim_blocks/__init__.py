@@ -166,6 +166,8 @@ GENERATORS = {
     "protocol-time": protocol_time.protocol_time_block,
     "protocol-time-same": protocol_time.protocol_time_same_phrase,
     "protocol-time-final": protocol_time.protocol_time_final_phrase,
+    "protocol-time-prefetch": protocol_time.protocol_time_prefetch_block,
+    "protocol-time-prefetch-bar": protocol_time.protocol_time_prefetch_phrase,
     "oclgrind-cells": prose_early.oclgrind_cells_phrase,
     "oclgrind-failed": prose_early.oclgrind_failed_phrase,
     "oclgrind-time": prose_early.oclgrind_time_phrase,

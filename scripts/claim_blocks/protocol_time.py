@@ -1,6 +1,7 @@
 """results/README.md, "The paper preset against the issue's commit": issue 42's wall-clock bar, measured
-side by side on one day (results/pocl-cpu-pthread-skylake-avx512-amd-epyc/protocol-time-ca43944). Each arm
-is a result set with its run's log (run.log, whose last line is `/usr/bin/time`'s "WALL <arm> <s> s")."""
+side by side on one day per result set (results/pocl-cpu-pthread-skylake-avx512-amd-epyc/protocol-time-ca43944,
+2026-11-29, and protocol-time-00cb31e, 2026-12-01, after the gathered rays' prefetch). Each arm is a result
+set with its run's log (run.log, whose last line is `/usr/bin/time`'s "WALL <arm> <s> s")."""
 import csv
 import functools
 import json
@@ -8,7 +9,7 @@ import os
 import re
 import statistics
 
-from .sets import PROTOCOL_TIME
+from .sets import PROTOCOL_TIME, PROTOCOL_TIME_PREFETCH
 
 BAR = 7 / 12.92  # issue 42: 7 minutes where the issue's commit took 12 min 55 s, as a share of its time
 
@@ -29,21 +30,32 @@ ARMS = [
     ("1d00992-run2", "the default at 1d00992 again", "b17c516-run5"),
 ]
 
+# protocol-time-00cb31e: the code with the trace kernels' prefetch of the gathered ray (00cb31e), in pairs
+# with the issue's commit, in the order A B B A B A.
+PREFETCH_ARMS = [
+    ("00cb31e", "the default at 00cb31e (1d00992, and the gathered rays prefetched on a CPU)", "b17c516"),
+    ("b17c516", "the issue's commit", "b17c516"),
+    ("b17c516-run2", "the issue's commit again", "b17c516-run2"),
+    ("00cb31e-run2", "the default at 00cb31e again", "b17c516-run2"),
+    ("b17c516-run3", "the issue's commit, a third time", "b17c516-run3"),
+    ("00cb31e-run3", "the default at 00cb31e, a third time", "b17c516-run3"),
+]
+
 
 @functools.lru_cache(maxsize=None)
-def _wall_s(arm):
-    with open(os.path.join(PROTOCOL_TIME, arm, "run.log")) as f:
+def _wall_s(arm, root=PROTOCOL_TIME):
+    with open(os.path.join(root, arm, "run.log")) as f:
         return float(re.search(r"^WALL \S+ ([\d.]+) s$", f.read(), re.M).group(1))
 
 
 @functools.lru_cache(maxsize=None)
-def _noise(arm):
-    with open(os.path.join(PROTOCOL_TIME, arm, "meta.json")) as f:
+def _noise(arm, root=PROTOCOL_TIME):
+    with open(os.path.join(root, arm, "meta.json")) as f:
         return json.load(f)["noise"]
 
 
-def _sorted_rows(arm, batch):
-    with open(os.path.join(PROTOCOL_TIME, arm, "cells.csv"), newline="") as f:
+def _sorted_rows(arm, batch, root=PROTOCOL_TIME):
+    with open(os.path.join(root, arm, "cells.csv"), newline="") as f:
         return [r for r in csv.DictReader(f) if r["batch"] == batch and r["encoder"] != "nosort"]
 
 
@@ -51,30 +63,38 @@ def _half_width(r):
     return (float(r["speedup_hi"]) - float(r["speedup_lo"])) / (2 * float(r["speedup"]))
 
 
-def _nosort_ms(arm, batch):
+def _nosort_ms(arm, batch, root=PROTOCOL_TIME):
     """The median NoSort trace of the batch: how fast the machine traced during that run."""
-    with open(os.path.join(PROTOCOL_TIME, arm, "cells.csv"), newline="") as f:
+    with open(os.path.join(root, arm, "cells.csv"), newline="") as f:
         return next(float(r["nosort_trace_ms"]) for r in csv.DictReader(f) if r["batch"] == batch and r["encoder"] == "nosort")
 
 
-def protocol_time_block():
+def _table(arms, root):
     """Per arm: wall clock and its share of the issue's commit's in the same pair, A/A, half-widths, rounds."""
     lines = ["| set | what runs | wall clock | of the issue's commit's | NoSort bounce1 trace | A/A calibration "
              "| speedup half-width, median / 90th pct. | bounce1: rounds, half-width | shadow0: rounds, half-width |",
              "|---|---|---:|---:|---:|---:|---:|---:|---:|"]
-    for arm, what, base in ARMS:
-        n = _noise(arm)
+    for arm, what, base in arms:
+        n = _noise(arm, root)
         per_batch = []
         for batch in ("bounce1", "shadow0"):
-            rows = _sorted_rows(arm, batch)
+            rows = _sorted_rows(arm, batch, root)
             per_batch.append(f"{statistics.median(int(r['rounds']) for r in rows):.0f}, "
                              f"{100 * statistics.median(_half_width(r) for r in rows):.1f} %")
-        lines.append(f"| `{arm}/` | {what} | {_wall_s(arm):.1f} s | {_wall_s(arm) / _wall_s(base):.3f} | "
-                     f"{_nosort_ms(arm, 'bounce1'):.1f} ms | "
+        lines.append(f"| `{arm}/` | {what} | {_wall_s(arm, root):.1f} s | {_wall_s(arm, root) / _wall_s(base, root):.3f} | "
+                     f"{_nosort_ms(arm, 'bounce1', root):.1f} ms | "
                      f"{n['aa_containing_one']} of {n['aa_intervals']} ({100 * n['aa_coverage']:.1f} %) | "
                      f"{100 * n['speedup_half_width']['median']:.2f} % / {100 * n['speedup_half_width']['p90']:.1f} % | "
                      f"{per_batch[0]} | {per_batch[1]} |")
     return "\n".join(lines)
+
+
+def protocol_time_block():
+    return _table(ARMS, PROTOCOL_TIME)
+
+
+def protocol_time_prefetch_block():
+    return _table(PREFETCH_ARMS, PROTOCOL_TIME_PREFETCH)
 
 
 def protocol_time_same_phrase():
@@ -93,14 +113,15 @@ def protocol_time_same_phrase():
             f"{max(ratios):.3f})")
 
 
-# The arms that ran the code as it stands after 0606a6b (1d00992 changes only the host twins' thread split),
-# and every arm of the default protocol (shared rounds, no warm-up round, the 5 s budget: ca43944 on).
+# The arms that ran the code of 0606a6b to 1d00992 (1d00992 changes only the host twins' thread split), the
+# last before the prefetch, and every arm of the default protocol (shared rounds, no warm-up round, the 5 s
+# budget: ca43944 on) in that set.
 FINAL = ["0606a6b", "1d00992", "1d00992-run2"]
 DEFAULT_PROTOCOL = ["ca43944", "fa4b665"] + FINAL
 
 
 def protocol_time_final_phrase():
-    """The bar over every pair that ran the final code: each pair's ratio, their median, the half-widths, and
+    """The bar over every pair that ran 0606a6b's code: each pair's ratio, their median, the half-widths, and
     the A/A calibration pooled over every run of the default protocol (a run's 23-26 intervals are too few)."""
     base = {arm: b for arm, _, b in ARMS}
     ratios = [_wall_s(arm) / _wall_s(base[arm]) for arm in FINAL]
@@ -110,7 +131,37 @@ def protocol_time_final_phrase():
     widths = [(100 * _noise(a)["speedup_half_width"]["median"], 100 * _noise(base[a])["speedup_half_width"]["median"])
               for a in FINAL]
     return (f"{', '.join(f'{r:.3f}' for r in ratios)} of the issue's commit's time in the {len(FINAL)} pairs that ran "
-            f"the final code (median {statistics.median(ratios):.3f}; {under} of {len(FINAL)} at or under the bar's "
+            f"0606a6b's code (median {statistics.median(ratios):.3f}; {under} of {len(FINAL)} at or under the bar's "
             f"{BAR:.3f}), at a median half-width of {', '.join(f'{w:.2f}' for w, _ in widths)} % against the issue's "
             f"commit's {', '.join(f'{b:.2f}' for _, b in widths)} % in the same pairs; A/A calibration over the "
             f"{len(DEFAULT_PROTOCOL)} runs of the default protocol: {contain} of {total} ({100 * contain / total:.1f} %)")
+
+
+def protocol_time_prefetch_phrase():
+    """The bar over the pairs of protocol-time-00cb31e: each pair's ratio, their median, the half-widths, the A/A
+    calibration pooled over the code's runs, and the order hashes and ANCs against the issue's commit."""
+    mine = [(arm, base) for arm, _, base in PREFETCH_ARMS if arm != base]
+    ratios = [_wall_s(a, PROTOCOL_TIME_PREFETCH) / _wall_s(b, PROTOCOL_TIME_PREFETCH) for a, b in mine]
+    under = sum(r <= BAR for r in ratios)
+    noise = {a: _noise(a, PROTOCOL_TIME_PREFETCH) for a, _, _ in PREFETCH_ARMS}
+    contain = sum(noise[a]["aa_containing_one"] for a, _ in mine)
+    total = sum(noise[a]["aa_intervals"] for a, _ in mine)
+    widths = [(100 * noise[a]["speedup_half_width"]["median"], 100 * noise[b]["speedup_half_width"]["median"])
+              for a, b in mine]
+    old_contain = sum(_noise(a)["aa_containing_one"] for a in DEFAULT_PROTOCOL)
+    old_total = sum(_noise(a)["aa_intervals"] for a in DEFAULT_PROTOCOL)
+    cells = {}
+    for arm, _, _ in PREFETCH_ARMS:
+        with open(os.path.join(PROTOCOL_TIME_PREFETCH, arm, "cells.csv"), newline="") as f:
+            cells[arm] = {r["id"]: r for r in csv.DictReader(f)}
+    first = cells[PREFETCH_ARMS[0][0]]
+    same = sum(all(cells[a][i]["order_hash"] == first[i]["order_hash"] and cells[a][i]["anc"] == first[i]["anc"]
+                   for a, _, _ in PREFETCH_ARMS) for i in first)
+    return (f"{', '.join(f'{r:.3f}' for r in ratios)} of the issue's commit's time in the {len(mine)} pairs (median "
+            f"{statistics.median(ratios):.3f}; {under} of {len(mine)} at or under the bar's {BAR:.3f}), at a median "
+            f"half-width of {', '.join(f'{w:.2f}' for w, _ in widths)} % against the issue's commit's "
+            f"{', '.join(f'{b:.2f}' for _, b in widths)} % in the same pairs; A/A calibration over the {len(mine)} runs: "
+            f"{contain} of {total} ({100 * contain / total:.1f} %), and over every run of the default protocol in "
+            f"both sets ({len(DEFAULT_PROTOCOL) + len(mine)}): {contain + old_contain} of {total + old_total} "
+            f"({100 * (contain + old_contain) / (total + old_total):.1f} %); the same {same} of {len(first)} order "
+            f"hashes and ANCs in all {len(PREFETCH_ARMS)} sets")

@@ -75,6 +75,7 @@ GPU_SCHEDULE_DYNAMIC = os.path.join(GPU_MODEL_SETS, "schedules", "dynamic-fetch-
 SHARED_ROUNDS = os.path.join(XEON, "shared-rounds-ab")
 # Issue 42's wall-clock bar side by side with the issue's commit (claim_blocks/protocol_time.py).
 PROTOCOL_TIME = os.path.join(EPYC, "protocol-time-ca43944")
+PROTOCOL_TIME_PREFETCH = os.path.join(EPYC, "protocol-time-00cb31e")
 OCLGRIND = os.path.join(ROOT, "results", "gpu-oclgrind-simulator", "quick-tiny-binary-5230438")
 EIGHT_SPP_SHARDS = os.path.join(EPYC, "paper-8spp-9dab0ed", "shards")
 # The earlier 8-spp sets (sibenik and breakfast_room; grey_white_room), kept for their history.
