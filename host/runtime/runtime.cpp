@@ -343,7 +343,7 @@ std::string Runtime::build_options(const std::string& extra) const {
   if (info_.is_simulator()) opts += " -cl-opt-disable -DRS_NO_FORCED_INLINE";
   // A CPU runs a work-group's work-items one after another, so the trace kernels prefetch the ray
   // of the work-item this many places ahead (cl/trace.cl says why; a GPU hides the load behind
-  // other warps). 4: a work-item takes about 0.2-1 µs on a CPU core, a miss to DRAM 0.1. Oclgrind
+  // other warps). 4: a work-item takes about 0.1-1 µs on a CPU core, a miss to DRAM about 0.1. Oclgrind
   // gets it too, to check the prefetch's index (it compiles no prefetch instruction).
   if (info_.type == "CPU" || info_.is_simulator()) opts += " -DRS_PREFETCH_AHEAD=4";
   if (!extra.empty()) opts += " " + extra;
