@@ -80,6 +80,10 @@ RS_INLINE float rs_int_as_float(rs_i32 i) { return std::bit_cast<float>(i); }
  * which -cl-fast-relaxed-math (finite-math-only) leaves undefined (docs/design.md, "Device facts"). */
 #define RS_T_FAR 3.0e38f
 #define RS_NO_HIT 0xFFFFFFFFu
+/* How many rays ahead a CPU trace fetches the ray it will read through a sorted order: the host's
+ * -DRS_PREFETCH_AHEAD for the kernels on a CPU device (cl/trace.cl, "Gather on a CPU") and Embree's
+ * arms on a sorted order. A work-item takes about 0.1-1 µs on a CPU core, a miss to DRAM about 0.1. */
+#define RS_RAY_PREFETCH_DISTANCE 4
 /* ---------------------------------------------------------------------------------------------
  * Ray and hit records. All fields are 4 bytes; no float3 (whose size differs between host and CL).
  * ------------------------------------------------------------------------------------------- */

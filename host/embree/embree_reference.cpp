@@ -91,8 +91,6 @@ struct RayAt {
     if (order && i < end) __builtin_prefetch(&rays[order[i]]);
   }
 };
-// How many rays ahead the single-ray loop fetches (as RS_PREFETCH_AHEAD in the kernels).
-constexpr std::size_t kPrefetchAhead = 4;
 
 RTCIntersectContext context_with(bool coherent) {
   RTCIntersectContext ctx;
@@ -132,7 +130,7 @@ void trace_single(RTCScene scene, const RayAt& at, std::size_t n, bool any_hit, 
   parallel_chunks<NoScratch>(n, threads, [&](std::size_t begin, std::size_t end, NoScratch&) {
     RTCIntersectContext ctx = context_with(coherent);
     for (std::size_t i = begin; i < end; ++i) {
-      at.prefetch(i + kPrefetchAhead, end);
+      at.prefetch(i + RS_RAY_PREFETCH_DISTANCE, end);
       const RsRay& r = at(i);
       if (any_hit) {
         alignas(16) RTCRay ray;

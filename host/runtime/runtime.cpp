@@ -12,6 +12,7 @@
 #include <set>
 #include <sstream>
 
+#include "shared.h"
 #include "util/embedded.h"
 #include "util/fnv.h"
 #include "util/input_file.h"
@@ -342,10 +343,11 @@ std::string Runtime::build_options(const std::string& extra) const {
   // same (FP_CONTRACT OFF either way), so are the bits.
   if (info_.is_simulator()) opts += " -cl-opt-disable -DRS_NO_FORCED_INLINE";
   // A CPU runs a work-group's work-items one after another, so the trace kernels prefetch the ray
-  // of the work-item this many places ahead (cl/trace.cl says why; a GPU hides the load behind
-  // other warps). 4: a work-item takes about 0.1-1 µs on a CPU core, a miss to DRAM about 0.1. Oclgrind
-  // gets it too, to check the prefetch's index (it compiles no prefetch instruction).
-  if (info_.type == "CPU" || info_.is_simulator()) opts += " -DRS_PREFETCH_AHEAD=4";
+  // of the work-item RS_RAY_PREFETCH_DISTANCE places ahead (cl/trace.cl says why; a GPU hides the
+  // load behind other warps). Oclgrind gets it too, to check the prefetch's index (it compiles no
+  // prefetch instruction).
+  if (info_.type == "CPU" || info_.is_simulator())
+    opts += fmt::format(" -DRS_PREFETCH_AHEAD={}", RS_RAY_PREFETCH_DISTANCE);
   if (!extra.empty()) opts += " " + extra;
   // Options for every kernel build, e.g. -DRS_PORTABLE_MASK_BITS on an x86 OpenCL compiler that
   // lacks the target builtins cl/lanes.h uses there (docs/trace.md).

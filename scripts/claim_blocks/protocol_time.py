@@ -54,9 +54,15 @@ def _noise(arm, root=PROTOCOL_TIME):
         return json.load(f)["noise"]
 
 
-def _sorted_rows(arm, batch, root=PROTOCOL_TIME):
+@functools.lru_cache(maxsize=None)
+def _cells(arm, root=PROTOCOL_TIME):
+    """A run's cells.csv rows by cell id (read once)."""
     with open(os.path.join(root, arm, "cells.csv"), newline="") as f:
-        return [r for r in csv.DictReader(f) if r["batch"] == batch and r["encoder"] != "nosort"]
+        return {r["id"]: r for r in csv.DictReader(f)}
+
+
+def _sorted_rows(arm, batch, root=PROTOCOL_TIME):
+    return [r for r in _cells(arm, root).values() if r["batch"] == batch and r["encoder"] != "nosort"]
 
 
 def _half_width(r):
@@ -65,8 +71,8 @@ def _half_width(r):
 
 def _nosort_ms(arm, batch, root=PROTOCOL_TIME):
     """The median NoSort trace of the batch: how fast the machine traced during that run."""
-    with open(os.path.join(root, arm, "cells.csv"), newline="") as f:
-        return next(float(r["nosort_trace_ms"]) for r in csv.DictReader(f) if r["batch"] == batch and r["encoder"] == "nosort")
+    return next(float(r["nosort_trace_ms"]) for r in _cells(arm, root).values()
+                if r["batch"] == batch and r["encoder"] == "nosort")
 
 
 def _table(arms, root):
@@ -97,18 +103,35 @@ def protocol_time_prefetch_block():
     return _table(PREFETCH_ARMS, PROTOCOL_TIME_PREFETCH)
 
 
+def _same_orders(arms, root):
+    """How many of the first arm's cells have the same order hash and ANC in every arm, and of how many."""
+    first = _cells(arms[0][0], root)
+    same = sum(all((_cells(a, root)[i]["order_hash"], _cells(a, root)[i]["anc"]) == (first[i]["order_hash"], first[i]["anc"])
+                   for a, _, _ in arms[1:]) for i in first)
+    return same, len(first)
+
+
+def _pairs(arms, mine, root):
+    """Per arm of `mine`: its wall clock over its pair's issue's-commit run, and the two median half-widths (%)."""
+    base = {arm: b for arm, _, b in arms}
+    ratios = [_wall_s(a, root) / _wall_s(base[a], root) for a in mine]
+    widths = [(100 * _noise(a, root)["speedup_half_width"]["median"],
+               100 * _noise(base[a], root)["speedup_half_width"]["median"]) for a in mine]
+    return ratios, widths
+
+
+def _aa(runs, root):
+    """A/A intervals containing 1, and all of them, pooled over the runs."""
+    return (sum(_noise(a, root)["aa_containing_one"] for a in runs), sum(_noise(a, root)["aa_intervals"] for a in runs))
+
+
 def protocol_time_same_phrase():
     """The deterministic figures agree across the arms; the speedups of the default against the issue's."""
-    cells = {}
-    for arm, _, _ in ARMS:
-        with open(os.path.join(PROTOCOL_TIME, arm, "cells.csv"), newline="") as f:
-            cells[arm] = {r["id"]: r for r in csv.DictReader(f)}
-    base = cells[ARMS[0][0]]
-    same = sum(all(cells[a][i]["order_hash"] == base[i]["order_hash"] and cells[a][i]["anc"] == base[i]["anc"]
-                   for a, _, _ in ARMS[1:]) for i in base)
-    new = cells[ARMS[1][0]]
+    same, count = _same_orders(ARMS, PROTOCOL_TIME)
+    base = _cells(ARMS[0][0])
+    new = _cells(ARMS[1][0])
     ratios = [float(new[i]["speedup"]) / float(base[i]["speedup"]) for i in base if base[i]["encoder"] != "nosort"]
-    return (f"the same {same} of {len(base)} order hashes and ANCs in all {len(ARMS)} sets; speedups of `{ARMS[1][0]}/` "
+    return (f"the same {same} of {count} order hashes and ANCs in all {len(ARMS)} sets; speedups of `{ARMS[1][0]}/` "
             f"over `{ARMS[0][0]}/`'s, per cell: median {statistics.median(ratios):.3f} ({min(ratios):.3f} to "
             f"{max(ratios):.3f})")
 
@@ -123,13 +146,9 @@ DEFAULT_PROTOCOL = ["ca43944", "fa4b665"] + FINAL
 def protocol_time_final_phrase():
     """The bar over every pair that ran 0606a6b's code: each pair's ratio, their median, the half-widths, and
     the A/A calibration pooled over every run of the default protocol (a run's 23-26 intervals are too few)."""
-    base = {arm: b for arm, _, b in ARMS}
-    ratios = [_wall_s(arm) / _wall_s(base[arm]) for arm in FINAL]
+    ratios, widths = _pairs(ARMS, FINAL, PROTOCOL_TIME)
     under = sum(r <= BAR for r in ratios)
-    contain = sum(_noise(a)["aa_containing_one"] for a in DEFAULT_PROTOCOL)
-    total = sum(_noise(a)["aa_intervals"] for a in DEFAULT_PROTOCOL)
-    widths = [(100 * _noise(a)["speedup_half_width"]["median"], 100 * _noise(base[a])["speedup_half_width"]["median"])
-              for a in FINAL]
+    contain, total = _aa(DEFAULT_PROTOCOL, PROTOCOL_TIME)
     return (f"{', '.join(f'{r:.3f}' for r in ratios)} of the issue's commit's time in the {len(FINAL)} pairs that ran "
             f"0606a6b's code (median {statistics.median(ratios):.3f}; {under} of {len(FINAL)} at or under the bar's "
             f"{BAR:.3f}), at a median half-width of {', '.join(f'{w:.2f}' for w, _ in widths)} % against the issue's "
@@ -140,28 +159,17 @@ def protocol_time_final_phrase():
 def protocol_time_prefetch_phrase():
     """The bar over the pairs of protocol-time-00cb31e: each pair's ratio, their median, the half-widths, the A/A
     calibration pooled over the code's runs, and the order hashes and ANCs against the issue's commit."""
-    mine = [(arm, base) for arm, _, base in PREFETCH_ARMS if arm != base]
-    ratios = [_wall_s(a, PROTOCOL_TIME_PREFETCH) / _wall_s(b, PROTOCOL_TIME_PREFETCH) for a, b in mine]
+    mine = [arm for arm, _, base in PREFETCH_ARMS if arm != base]
+    ratios, widths = _pairs(PREFETCH_ARMS, mine, PROTOCOL_TIME_PREFETCH)
     under = sum(r <= BAR for r in ratios)
-    noise = {a: _noise(a, PROTOCOL_TIME_PREFETCH) for a, _, _ in PREFETCH_ARMS}
-    contain = sum(noise[a]["aa_containing_one"] for a, _ in mine)
-    total = sum(noise[a]["aa_intervals"] for a, _ in mine)
-    widths = [(100 * noise[a]["speedup_half_width"]["median"], 100 * noise[b]["speedup_half_width"]["median"])
-              for a, b in mine]
-    old_contain = sum(_noise(a)["aa_containing_one"] for a in DEFAULT_PROTOCOL)
-    old_total = sum(_noise(a)["aa_intervals"] for a in DEFAULT_PROTOCOL)
-    cells = {}
-    for arm, _, _ in PREFETCH_ARMS:
-        with open(os.path.join(PROTOCOL_TIME_PREFETCH, arm, "cells.csv"), newline="") as f:
-            cells[arm] = {r["id"]: r for r in csv.DictReader(f)}
-    first = cells[PREFETCH_ARMS[0][0]]
-    same = sum(all(cells[a][i]["order_hash"] == first[i]["order_hash"] and cells[a][i]["anc"] == first[i]["anc"]
-                   for a, _, _ in PREFETCH_ARMS) for i in first)
+    contain, total = _aa(mine, PROTOCOL_TIME_PREFETCH)
+    old_contain, old_total = _aa(DEFAULT_PROTOCOL, PROTOCOL_TIME)
+    same, count = _same_orders(PREFETCH_ARMS, PROTOCOL_TIME_PREFETCH)
     return (f"{', '.join(f'{r:.3f}' for r in ratios)} of the issue's commit's time in the {len(mine)} pairs (median "
             f"{statistics.median(ratios):.3f}; {under} of {len(mine)} at or under the bar's {BAR:.3f}), at a median "
             f"half-width of {', '.join(f'{w:.2f}' for w, _ in widths)} % against the issue's commit's "
             f"{', '.join(f'{b:.2f}' for _, b in widths)} % in the same pairs; A/A calibration over the {len(mine)} runs: "
             f"{contain} of {total} ({100 * contain / total:.1f} %), and over every run of the default protocol in "
             f"both sets ({len(DEFAULT_PROTOCOL) + len(mine)}): {contain + old_contain} of {total + old_total} "
-            f"({100 * (contain + old_contain) / (total + old_total):.1f} %); the same {same} of {len(first)} order "
+            f"({100 * (contain + old_contain) / (total + old_total):.1f} %); the same {same} of {count} order "
             f"hashes and ANCs in all {len(PREFETCH_ARMS)} sets")
