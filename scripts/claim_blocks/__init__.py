@@ -1,8 +1,8 @@
 """The generators of scripts/claims.py: block name -> function returning the block's text, computed
 from committed result sets only (claim_blocks/sets.py names them). One list, here."""
 from . import (appendix, audit, beyond, gpu_model, gpu_model_appendix, gpu_model_holds, gpu_model_rest,
-               gpu_model_scoring, kernels, nvidia, packet, paper_tex, prose_early, protocol_time, reference_sets,
-               sampling)
+               gpu_model_scoring, kernels, nvidia, packet, packet_epyc, paper_tex, prose_early, protocol_time,
+               reference_sets, sampling)
 
 GENERATORS = {
     "table1-lights": prose_early.table1_block,
@@ -27,6 +27,14 @@ GENERATORS = {
     "packet-shadow-gap": packet.shadow_gap_phrase,
     "packet-setup-correlation": packet.setup_correlation_block,
     "packet-setup-hcc-breakfast": packet.setup_hcc_breakfast_phrase,
+    "packet-epyc-runs": packet_epyc.runs_phrase,
+    "packet-epyc-correlation": packet_epyc.correlation_block,
+    "packet-epyc-by-scene": packet_epyc.by_scene_block,
+    "packet-epyc-width": packet_epyc.width_block,
+    "packet-epyc-width-verdict": packet_epyc.width_verdict_phrase,
+    "packet-epyc-fast-robust": packet_epyc.fast_robust_phrase,
+    "packet-epyc-access": packet_epyc.access_phrase,
+    "packet-epyc-wide-gather": packet_epyc.wide_gather_phrase,
     "overhead-table5": sampling.overhead_table5_block,
     "spp-batches": sampling.batches_block,
     "spp-table7-anc": sampling.anc_table7_block,

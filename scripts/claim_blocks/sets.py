@@ -13,6 +13,11 @@ CLASSES = os.path.join(XEON, "paper-1spp-classes-da8579b")
 # lanes' rays in vector form (issue 40): CLASSES' packet16 cells ran kernels that prepared each lane's
 # ray out of line, at 0.37-0.41 of the fast packets' speed on primary rays (docs/trace.md).
 PACKET_SETUP = os.path.join(XEON, "paper-1spp-packet-06b6e7c")
+# The same 80 cells on the EPYC with the kernels of 139c5a4 (the gathered ray prefetched): packet16, the
+# packet widths 8 and 4, the landscape stand-in at the paper's size, and shadow0 per width on landscape and
+# sibenik (PACKET_EPYC); both access modes of packet16 and single rays (PACKET_EPYC_ACCESS).
+PACKET_EPYC = os.path.join(EPYC, "paper-1spp-packet-139c5a4")
+PACKET_EPYC_ACCESS = os.path.join(EPYC, "paper-1spp-access-139c5a4")
 VIEWPORT = os.path.join(EPYC, "paper-viewport-1spp-d8b4b22")
 HCC_DIR = os.path.join(EPYC, "paper-hcc-dir-1spp-d8b4b22")
 BOUNCES = os.path.join(EPYC, "paper-bounces-1spp-d8b4b22")
