@@ -8,7 +8,7 @@ import os
 
 from paper_correlation import correlations, scene_correlations
 
-from .prose_early import _elapsed_s, _noise, _rows, duration
+from .prose_early import BAR, _elapsed_s, _noise, _rows, duration
 from .sampling import column_label
 from .sets import PACKET_EPYC, PACKET_EPYC_ACCESS, PAPER_SPEEDUPS
 
@@ -19,7 +19,6 @@ WIDTH_SHADOW0 = os.path.join(PACKET_EPYC, "width-shadow0")
 WIDTHS_AGAIN = os.path.join(PACKET_EPYC, "widths-8-16")
 FAST_ROBUST = os.path.join(PACKET_EPYC, "landscape-fast-robust")
 AS_PAPER_SIZE = {"scenes/paper-size/landscape-21m.toml": "landscape"}
-BAR = 0.8  # issue 40's bar on the packet class's Pearson correlation with the paper, both tables
 
 # (label, set folders, scene mapping, the classes and access modes to show), in the block's order
 ROWS = [

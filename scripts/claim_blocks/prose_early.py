@@ -10,7 +10,7 @@ import re
 import statistics
 
 import gpu_model_validate as validate
-from paper_correlation import correlation_table
+from paper_correlation import correlations
 from spp_compare import gpu, load
 
 from . import appendix, audit, gpu_model_scoring, paper_tex, sampling
@@ -98,13 +98,9 @@ def packet_setup_aa_phrase():
 @functools.lru_cache(maxsize=None)
 def _correlation(set_dir=CLASSES):
     """(table, class) -> (Pearson, its 95 % interval's upper end, the SIMT ratio's Pearson, the Pearson with its
-    interval as text), read from the table scripts/paper_correlation.py prints (one access mode per class)."""
-    out = {}
-    for line in correlation_table([set_dir])[2:]:
-        cols = [c.strip() for c in line.strip("|").split("|")]
-        m = re.match(r"([-\d.]+) \[([-\d.]+), ([-\d.]+)\]", cols[4])
-        out[(cols[0][0], cols[1])] = (float(m.group(1)), float(m.group(3)), float(cols[6]), cols[4])
-    return out
+    interval as text), from scripts/paper_correlation.py (one access mode per class in these sets)."""
+    return {(table, layout): (c["pearson"], c["hi"], c["simt_pearson"], f"{c['pearson']:.2f} [{c['lo']:.2f}, {c['hi']:.2f}]")
+            for (table, layout, _access), c in correlations([set_dir]).items()}
 
 
 BAR = 0.8  # issue 40's bar on the packet class's Pearson correlation with the paper, both tables
