@@ -362,6 +362,10 @@ RS_INLINE void rs_traverse_packet(RS_GLOBAL const RsWideNode* nodes, RS_GLOBAL c
   while (lanes) {
     const int alone = single_at > 0 && rs_popcount(lanes) <= single_at;
     if (visits && !alone) steps = steps - rsp_mask(lanes);
+#ifdef RS_PACKET_STEP_HOOK
+    /* A host-only study's count of the packet's own steps (tools/packet_study.cpp); never in a kernel. */
+    if (!alone) RS_PACKET_STEP_HOOK(lanes, ref);
+#endif
     if (alone) {
       /* Too few lanes share this subtree for vector steps to pay: each walks it alone. */
       finished |= rs_packet_lanes_alone(nodes, packets, lane_rays, lanes, ref, robust, any_hit, visits != 0, &hit_t,

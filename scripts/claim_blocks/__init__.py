@@ -32,6 +32,7 @@ GENERATORS = {
     "packet-epyc-by-scene": packet_epyc.by_scene_block,
     "packet-epyc-width": packet_epyc.width_block,
     "packet-epyc-width-verdict": packet_epyc.width_verdict_phrase,
+    "packet-epyc-steps": packet_epyc.steps_block,
     "packet-epyc-fast-robust": packet_epyc.fast_robust_phrase,
     "packet-epyc-access": packet_epyc.access_phrase,
     "packet-epyc-wide-gather": packet_epyc.wide_gather_phrase,

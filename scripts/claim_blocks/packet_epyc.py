@@ -5,6 +5,7 @@ packet's width does to the gains on landscape's shadow rays (paper-1spp-packet-1
 paper-1spp-access-139c5a4), with scripts/paper_correlation.py."""
 import csv
 import os
+import re
 
 from paper_correlation import correlations, scene_correlations
 
@@ -18,6 +19,7 @@ LANDSCAPE_21M = os.path.join(PACKET_EPYC, "landscape-21m")
 WIDTH_SHADOW0 = os.path.join(PACKET_EPYC, "width-shadow0")
 WIDTHS_AGAIN = os.path.join(PACKET_EPYC, "widths-8-16")
 FAST_ROBUST = os.path.join(PACKET_EPYC, "landscape-fast-robust")
+PACKET_STEPS = os.path.join(PACKET_EPYC, "packet-steps")  # build/packet_study SCENE 1920x1080 shadow0
 AS_PAPER_SIZE = {"scenes/paper-size/landscape-21m.toml": "landscape"}
 
 # (label, set folders, scene mapping, the classes and access modes to show), in the block's order
@@ -140,3 +142,30 @@ def width_verdict_phrase():
                     (c[("2", layout, access)]["pearson"], c[("3", layout, access)]["pearson"]))
     return "; ".join(f"{layout} " + ", ".join(f"{a:.2f}" for a, _ in r) + " and " + ", ".join(f"{b:.2f}" for _, b in r)
                      for layout, r in sorted(runs.items(), key=lambda kv: -int(kv[0][6:])))
+
+
+def _packet_steps(scene):
+    """packet_study's output for the scene's shadow0: (order, width) -> (steps per packet, lanes per step)."""
+    with open(os.path.join(PACKET_STEPS, f"{scene}-shadow0.txt")) as f:
+        return {(m.group(1), int(m.group(2))): (float(m.group(3)), float(m.group(4)))
+                for m in re.finditer(r"^  (\S+)\s+packet(\d+)\s+steps\s+([\d.]+)\s+leaf steps\s+[\d.]+\s+lanes per step"
+                                     r"\s+([\d.]+)", f.read(), re.M)}
+
+
+def steps_block():
+    """What an order saves a packet in steps (NoSort's steps per packet over the order's, packet_study's host
+    count) beside what it buys in time (width-shadow0's measured speedup), packets of 16 and 8, shadow0."""
+    c = _cells(WIDTH_SHADOW0)
+    out = ["| scene | encoder | packet16: fewer steps | packet16: faster | packet16: lanes per step | "
+           "packet8: fewer steps | packet8: faster |", "|---|---|---:|---:|---|---:|---:|"]
+    for scene in ["landscape", "sibenik"]:
+        steps = _packet_steps(scene)
+        for e in ["hcc", "origin", "reis", "ppc", "aila"]:
+            cols = []
+            for w in (16, 8):
+                cols.append(f"{steps[('nosort', w)][0] / steps[(e, w)][0]:.2f}")
+                cols.append(f"{float(c[(scene, e, f'packet{w}')]['speedup']):.2f}")
+                if w == 16:
+                    cols.append(f"{steps[('nosort', 16)][1]:.2f} → {steps[(e, 16)][1]:.2f}")
+            out.append(f"| {scene} | {e} | " + " | ".join(cols) + " |")
+    return "\n".join(out)
