@@ -46,21 +46,7 @@ PacketSteps g_counted;
   (++g_counted.steps, g_counted.leaf_steps += ((ref) & RS_WIDE_LEAF) != 0u, \
    g_counted.lane_steps += static_cast<std::uint64_t>(rs_popcount(lanes)))
 
-namespace packet4 {
-#define RS_PACKET_W 4
-#include "traverse_packet.h"
-#undef RS_PACKET_W
-}  // namespace packet4
-namespace packet8 {
-#define RS_PACKET_W 8
-#include "traverse_packet.h"
-#undef RS_PACKET_W
-}  // namespace packet8
-namespace packet16 {
-#define RS_PACKET_W 16
-#include "traverse_packet.h"
-#undef RS_PACKET_W
-}  // namespace packet16
+#include "trace/packet_widths.inc"
 
 using namespace raysort;
 

@@ -10,21 +10,7 @@
 
 namespace raysort {
 
-namespace packet4 {
-#define RS_PACKET_W 4
-#include "traverse_packet.h"
-#undef RS_PACKET_W
-}  // namespace packet4
-namespace packet8 {
-#define RS_PACKET_W 8
-#include "traverse_packet.h"
-#undef RS_PACKET_W
-}  // namespace packet8
-namespace packet16 {
-#define RS_PACKET_W 16
-#include "traverse_packet.h"
-#undef RS_PACKET_W
-}  // namespace packet16
+#include "trace/packet_widths.inc"
 
 void trace_packets_on_host(int width, int single_at, const WideBvh& wide, const std::vector<RsRay>& rays,
                            const std::uint32_t* order, int robust, int any_hit, std::vector<RsHit>& hits,
