@@ -40,16 +40,18 @@ def fisher_interval(r, n):
     return math.tanh(z - 1.96 * se), math.tanh(z + 1.96 * se)
 
 
+def paper_speedups(bits="32"):
+    """(table, stand-in scene, encoder) -> the paper's RTX 3060 speedup, Tables 2 and 3 at that key length."""
+    with open(PAPER, newline="") as f:
+        return {(r["table"], r["scene"], r["encoder"]): float(r["paper_speedup"]) for r in csv.DictReader(f)
+                if r["table"] in TABLES and r["bits"] == bits}
+
+
 def paired_cells(set_dirs, bits="32", scene_as=None):
     """(table, layout, access) -> [(paper, measured, simt ratio, scene, encoder)], every ok cell of the
     sets that pairs with a paper cell; scene_as maps a set's scene name to the stand-in it is scored as,
     and the cells of the stand-in it replaces are left out."""
-    paper = {}
-    with open(PAPER, newline="") as f:
-        for r in csv.DictReader(f):
-            if r["table"] in TABLES and r["bits"] == bits:
-                paper[(r["table"], r["scene"], r["encoder"])] = float(r["paper_speedup"])
-
+    paper = paper_speedups(bits)
     scene_as = scene_as or {}
     replaced = set(scene_as.values()) - set(scene_as)
     cells = {}

@@ -52,9 +52,6 @@ using namespace raysort;
 
 namespace {
 
-using Traverse = void (*)(const RsWideNode*, const RsTriPacket*, const RsRay*, const rs_u32*, rs_u32, rs_u32, int, int,
-                          int, RsHit*, rs_u32*);
-
 int run_study(int argc, char** argv) {
   const study::Args args = study::parse_args("packet_study", argc, argv, "960x540");
   const PreparedScene p = prepare_scene(args.scene, args.options);
@@ -81,8 +78,8 @@ int run_study(int argc, char** argv) {
   std::vector<RsHit> hits(n);
   std::vector<rs_u32> visits(n);
   for (const auto& [name, order] : orders) {
-    for (const auto& [width, traverse] : {std::pair<int, Traverse>{16, &packet16::rs_traverse_packet},
-                                          {8, &packet8::rs_traverse_packet}, {4, &packet4::rs_traverse_packet}}) {
+    for (int width : {16, 8, 4}) {
+      const PacketTraversal traverse = packet_traversal(width);
       g_counted = {};
       for (rs_u32 first = 0; first < n; first += static_cast<rs_u32>(width))
         traverse(wide.nodes.data(), wide.packets.data(), rays.data(), order.data(), first, n, 1, any_hit, 0,

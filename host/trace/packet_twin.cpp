@@ -15,12 +15,7 @@ namespace raysort {
 void trace_packets_on_host(int width, int single_at, const WideBvh& wide, const std::vector<RsRay>& rays,
                            const std::uint32_t* order, int robust, int any_hit, std::vector<RsHit>& hits,
                            std::uint32_t* visits) {
-  using Trace = void (*)(const RsWideNode*, const RsTriPacket*, const RsRay*, const rs_u32*, rs_u32, rs_u32, int, int,
-                         int, RsHit*, rs_u32*);
-  Trace trace = width == 4    ? &packet4::rs_traverse_packet
-                : width == 8  ? &packet8::rs_traverse_packet
-                : width == 16 ? &packet16::rs_traverse_packet
-                              : nullptr;
+  const PacketTraversal trace = packet_traversal(width);
   if (!trace) throw Error("internal: no packet traversal of width " + std::to_string(width) + " (4, 8 or 16)");
   const auto n = static_cast<rs_u32>(rays.size());
   hits.resize(n);

@@ -4,14 +4,15 @@ Tables 2 and 3 at each packet width and access mode, which stand-in holds Table 
 packet's width does to the gains on landscape's shadow rays (paper-1spp-packet-139c5a4,
 paper-1spp-access-139c5a4), with scripts/paper_correlation.py."""
 import csv
+import functools
 import os
 import re
 
-from paper_correlation import correlations, scene_correlations
+from paper_correlation import correlations, paper_speedups, scene_correlations
 
 from .prose_early import BAR, _elapsed_s, _noise, _rows, duration
 from .sampling import column_label
-from .sets import PACKET_EPYC, PACKET_EPYC_ACCESS, PAPER_SPEEDUPS
+from .sets import PACKET_EPYC, PACKET_EPYC_ACCESS
 
 FIVE = os.path.join(PACKET_EPYC, "five-scenes")
 WIDTHS = os.path.join(PACKET_EPYC, "widths-8-4")
@@ -34,6 +35,12 @@ ROWS = [
 ]
 
 
+@functools.lru_cache(maxsize=None)
+def _correlations(sets, scene_as=None):
+    """paper_correlation.correlations of a tuple of set folders (and a scene mapping's items), computed once."""
+    return correlations(list(sets), scene_as=dict(scene_as) if scene_as else None)
+
+
 def _pearson(c):
     text = f"{c['pearson']:.2f} [{c['lo']:.2f}, {c['hi']:.2f}]"
     return f"**{text}**" if c["pearson"] >= BAR else text
@@ -43,7 +50,7 @@ def correlation_block():
     out = ["| set | class | access | Table 2 (bounce1): Pearson [95 %] | Table 3 (shadow0): Pearson [95 %] |",
            "|---|---|---|---|---|"]
     for label, sets, scene_as, arms in ROWS:
-        c = correlations(sets, scene_as=scene_as)
+        c = _correlations(tuple(sets), tuple(scene_as.items()) if scene_as else None)
         for layout, access in arms:
             out.append(f"| {label} | {layout} | {access} | {_pearson(c[('2', layout, access)])} | "
                        f"{_pearson(c[('3', layout, access)])} |")
@@ -66,6 +73,7 @@ def by_scene_block():
     return "\n".join(out)
 
 
+@functools.lru_cache(maxsize=None)
 def _cells(set_dir):
     with open(os.path.join(set_dir, "cells.csv"), newline="") as f:
         return {(r["scene"], r["encoder"], r["layout"]): r for r in csv.DictReader(f) if r["status"] == "ok"}
@@ -74,10 +82,7 @@ def _cells(set_dir):
 def width_block():
     """shadow0 on landscape and sibenik: each width's speedup over its own NoSort (all in the same rounds),
     the SIMT model's two ratios (32-wide warps over the 4-wide tree), and the paper's speedup."""
-    c = _cells(WIDTH_SHADOW0)
-    with open(PAPER_SPEEDUPS, newline="") as f:
-        paper = {(r["scene"], r["encoder"]): r["paper_speedup"] for r in csv.DictReader(f)
-                 if r["table"] == "3" and r["bits"] == "32"}
+    c, paper = _cells(WIDTH_SHADOW0), paper_speedups()
     layouts = ["packet16", "packet8", "packet4", "wide"]
     out = ["| scene | encoder | paper | " + " | ".join(layouts) + " | SIMT lane efficiency ratio | SIMT distinct "
            "nodes per visit ratio |", "|---|---|---:|" + "---|" * len(layouts) + "---:|---:|"]
@@ -91,13 +96,13 @@ def width_block():
                 row.append(f"{float(r['speedup']):.2f} [{float(r['speedup_lo']):.2f}, {float(r['speedup_hi']):.2f}]")
             r = c[(scene, e, "packet16")]
             simt = f"{float(r['simt_lane_efficiency_ratio']):.2f} | {float(r['simt_distinct_per_visit_ratio']):.2f}"
-            out.append(f"| {scene} | {e} | {paper[(scene, e)]} | " + " | ".join(row) + f" | {simt} |")
+            out.append(f"| {scene} | {e} | {paper[('3', scene, e)]:.2f} | " + " | ".join(row) + f" | {simt} |")
     return "\n".join(out)
 
 
 def access_phrase():
     """The access set: what the prefetch did to the gather column's correlation (wide, then packet16)."""
-    c = correlations([PACKET_EPYC_ACCESS])
+    c = _correlations((PACKET_EPYC_ACCESS,))
     f = lambda t, l, a: f"{c[(t, l, a)]['pearson']:.2f}"  # noqa: E731
     return (f"single rays (`wide`) gathered {f('2', 'wide', 'gather')} and {f('3', 'wide', 'gather')}, permuted "
             f"{f('2', 'wide', 'permute')} and {f('3', 'wide', 'permute')}; packets gathered "
@@ -125,7 +130,7 @@ def fast_robust_phrase():
 
 def wide_gather_phrase():
     """The access set's single rays gathered: Pearson with Table 2, then Table 3 (paper-cfebb2c's section)."""
-    c = correlations([PACKET_EPYC_ACCESS])
+    c = _correlations((PACKET_EPYC_ACCESS,))
     return f"{c[('2', 'wide', 'gather')]['pearson']:.2f} and {c[('3', 'wide', 'gather')]['pearson']:.2f}"
 
 
@@ -135,7 +140,7 @@ def width_verdict_phrase():
     for label, sets, scene_as, arms in ROWS:
         if scene_as:
             continue
-        c = correlations(sets)
+        c = _correlations(tuple(sets))
         for layout, access in arms:
             if layout.startswith("packet") and access == "permute":
                 runs.setdefault(layout, []).append(

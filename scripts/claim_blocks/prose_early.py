@@ -33,7 +33,7 @@ def _noise(set_dir):
 
 def _elapsed_s(log):
     """Wall-clock seconds of a run-time log: `/usr/bin/time -v`'s Elapsed line, bash's `real XmY.Zs`, or the
-    `WALL <s> s` line of `/usr/bin/time -f "WALL %e s"` at the end of a run.log."""
+    `WALL [<arm>] <s> s` line of `/usr/bin/time -f "WALL ... %e s"` at the end of a run.log."""
     with open(log) as f:
         text = f.read()
     m = re.search(r"Elapsed \(wall clock\) time \(h:mm:ss or m:ss\): (?:(\d+):)?(\d+):([\d.]+)", text)
@@ -42,7 +42,7 @@ def _elapsed_s(log):
     m = re.search(r"real\s+(\d+)m([\d.]+)s", text)
     if m:
         return int(m.group(1)) * 60 + float(m.group(2))
-    m = re.search(r"^WALL ([\d.]+) s", text, re.M)
+    m = re.search(r"^WALL (?:\S+ )?([\d.]+) s\b", text, re.M)
     if m:
         return float(m.group(1))
     raise SystemExit(f"claims: {os.path.relpath(log, ROOT)} holds no wall clock (`/usr/bin/time -v` or `time`)")

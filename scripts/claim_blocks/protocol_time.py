@@ -6,9 +6,9 @@ import csv
 import functools
 import json
 import os
-import re
 import statistics
 
+from .prose_early import _elapsed_s
 from .sets import PROTOCOL_TIME, PROTOCOL_TIME_PREFETCH
 
 BAR = 7 / 12.92  # issue 42: 7 minutes where the issue's commit took 12 min 55 s, as a share of its time
@@ -44,8 +44,7 @@ PREFETCH_ARMS = [
 
 @functools.lru_cache(maxsize=None)
 def _wall_s(arm, root=PROTOCOL_TIME):
-    with open(os.path.join(root, arm, "run.log")) as f:
-        return float(re.search(r"^WALL \S+ ([\d.]+) s$", f.read(), re.M).group(1))
+    return _elapsed_s(os.path.join(root, arm, "run.log"))
 
 
 @functools.lru_cache(maxsize=None)
