@@ -199,6 +199,8 @@ RS_LANE_INLINE int rs8_bits(rs_i8 m) { return (int)rs8_mask_bits(m); }
 #endif
 RS_LANE_INLINE void rs8_store(rs_f8 a, float* p) { vstore8(a, 0, p); }
 RS_LANE_INLINE rs_f8 rs8_load(const float* p) { return vload8(0, p); }
+RS_LANE_INLINE rs_i8 rs8_splati(int x) { return (int8)(x); }
+RS_LANE_INLINE void rs8_storei(rs_i8 a, int* p) { vstore8(a, 0, p); }
 #else
 /* 16-byte aligned, not 32 as float8: a 32-byte-aligned struct passed by value has another x86-64
  * calling convention with and without AVX (GCC's -Wpsabi note on every operator). The layouts
@@ -249,6 +251,10 @@ RS_LANE_INLINE rs_f8 rs8_load(const float* p) {
   rs_f8 r;
   for (int i = 0; i < 8; ++i) r.s[i] = p[i];
   return r;
+}
+RS_LANE_INLINE rs_i8 rs8_splati(int x) { return rs_i8{{x, x, x, x, x, x, x, x}}; }
+RS_LANE_INLINE void rs8_storei(rs_i8 a, int* p) {
+  for (int i = 0; i < 8; ++i) p[i] = a.s[i];
 }
 #undef RS_LANES_BINARY
 #undef RS_LANES_COMPARE
