@@ -14,8 +14,9 @@
  * - Children nearest first by the smallest entry distance among their rays (ties by slot); any hit
  *   keeps slot order. The others are pushed with their ray masks.
  * - Leaves: each ray of the mask tests the leaf's triangle packets as the wide8 class does
- *   (rs_wide8_leaf: Möller–Trumbore or the watertight test on eight triangles at once); any hit: a
- *   ray that finds one leaves the stream, which ends when no ray is left.
+ *   (rs_wide8_leaf: Möller–Trumbore or the watertight test on eight triangles at once; a packet's
+ *   edges computed once for the mask); any hit: a ray that finds one leaves the stream, which ends
+ *   when no ray is left.
  * Per ray the arithmetic is that of the wide8 class, so a triangle is hit or missed as there; only
  * the order in which a ray meets the nodes of its path differs (its stream's companions decide
  * it), so which of two equally near triangles it keeps may differ. Steps per ray: the nodes and
@@ -179,9 +180,25 @@ RS_INLINE void rs_traverse_stream(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBAL 
         continue;
       }
     } else {
-      for (rs_u32 rest = m; rest; rest &= rest - 1) {
-        const int i = rs_lowest_bit_u(rest);
-        if (rs_wide8_leaf(packets, ref, tr[i], &rr[i], ray[i].d, robust, any_hit, &hit[i])) live &= ~(1u << i);
+      /* rs_wide8_leaf for each ray of the mask, packets outer and rays inner, so a packet's edges
+       * are computed once for all of them (fast variant): per ray the packets in the same order,
+       * the same tests and the same choice of the nearest lane; an any-hit ray leaves at its first
+       * hit. */
+      const rs_u32 first_packet = (ref & ~RS_WIDE_LEAF) >> 2, end_packet = first_packet + (ref & 3u) + 1u;
+      rs_u32 looking = m;
+      for (rs_u32 pi = first_packet; pi < end_packet && looking; ++pi) {
+        RS_GLOBAL const RsTriPacket8* p = &packets[pi];
+        const RsTriEdges8 e = rs_tri_edges8(p);
+        for (rs_u32 rest = looking; rest; rest &= rest - 1) {
+          const int i = rs_lowest_bit_u(rest);
+          rs_f8 tw, uw, vw;
+          const int bits = robust ? rs_packet8_intersect_robust(&rr[i], ray[i].d, p, hit[i].t, &tw, &uw, &vw)
+                                  : rs_packet8_intersect_edges(tr[i], &e, hit[i].t, &tw, &uw, &vw);
+          if (bits && rs_wide8_keep_nearest(bits, tw, uw, vw, p, &hit[i]) && any_hit) {
+            looking &= ~(1u << i);
+            live &= ~(1u << i);
+          }
+        }
       }
     }
     /* Next: the nearest pending subtree with a ray still looking. */

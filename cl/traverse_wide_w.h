@@ -29,6 +29,10 @@
 #define rsw_boxes rs_wide_boxes
 #define rsw_boxes_robust rs_wide_boxes_robust
 #define rsw_intersect rs_packet_intersect
+#define RsWEdges RsTriEdges
+#define rsw_edges rs_tri_edges
+#define rsw_intersect_edges rs_packet_intersect_edges
+#define rsw_keep_nearest rs_wide_keep_nearest
 #define rsw_intersect_robust rs_packet_intersect_robust
 #define rsw_traverse_subtree rs_traverse_wide_subtree
 #define rsw_traverse_recorded rs_traverse_wide_recorded
@@ -52,6 +56,10 @@
 #define rsw_boxes rs_wide8_boxes
 #define rsw_boxes_robust rs_wide8_boxes_robust
 #define rsw_intersect rs_packet8_intersect
+#define RsWEdges RsTriEdges8
+#define rsw_edges rs_tri_edges8
+#define rsw_intersect_edges rs_packet8_intersect_edges
+#define rsw_keep_nearest rs_wide8_keep_nearest
 #define rsw_intersect_robust rs_packet8_intersect_robust
 #define rsw_traverse_subtree rs_traverse_wide8_subtree
 #define rsw_traverse_recorded rs_traverse_wide8_recorded
@@ -102,16 +110,33 @@ RS_INLINE rsw_i rsw_boxes_robust(const RsRobustRay* r, RS_GLOBAL const RsWNode* 
   return inside & (tnear <= tfar);
 }
 
+/* A packet's first vertices and two edges (Möller–Trumbore's e1 = v1 - v0, e2 = v2 - v0) and its
+ * valid lanes: what the test reads of the packet, so a caller testing many rays against one packet
+ * (the stream class, traverse_stream.h) computes it once. */
+typedef struct {
+  rsw_f v0x, v0y, v0z, e1x, e1y, e1z, e2x, e2y, e2z;
+  rsw_i valid;
+} RsWEdges;
+
+RS_INLINE RsWEdges rsw_edges(RS_GLOBAL const RsWPacket* p) {
+  RsWEdges e;
+  e.v0x = p->v0x, e.v0y = p->v0y, e.v0z = p->v0z;
+  e.e1x = p->v1x - e.v0x, e.e1y = p->v1y - e.v0y, e.e1z = p->v1z - e.v0z;
+  e.e2x = p->v2x - e.v0x, e.e2y = p->v2y - e.v0y, e.e2z = p->v2z - e.v0z;
+  e.valid = p->valid;
+  return e;
+}
+
 /* Möller–Trumbore on a packet of RS_WIDE_W triangles: per lane the operations of
  * rs_intersect_triangle in the same order. Returns the bits of the lanes hit within (tmin, tmax), with t, u, v per lane. */
-RS_INLINE int rsw_intersect(RsTraversalRay r, RS_GLOBAL const RsWPacket* p, float tmax, rsw_f* t_out, rsw_f* u_out,
-                            rsw_f* v_out) {
-  const rsw_f v0x = p->v0x, v0y = p->v0y, v0z = p->v0z;
-  const rsw_f e1x = p->v1x - v0x, e1y = p->v1y - v0y, e1z = p->v1z - v0z;
-  const rsw_f e2x = p->v2x - v0x, e2y = p->v2y - v0y, e2z = p->v2z - v0z;
+RS_INLINE int rsw_intersect_edges(RsTraversalRay r, const RsWEdges* e, float tmax, rsw_f* t_out, rsw_f* u_out,
+                                  rsw_f* v_out) {
+  const rsw_f v0x = e->v0x, v0y = e->v0y, v0z = e->v0z;
+  const rsw_f e1x = e->e1x, e1y = e->e1y, e1z = e->e1z;
+  const rsw_f e2x = e->e2x, e2y = e->e2y, e2z = e->e2z;
   const rsw_f px = r.d.y * e2z - r.d.z * e2y, py = r.d.z * e2x - r.d.x * e2z, pz = r.d.x * e2y - r.d.y * e2x;
   const rsw_f det = e1x * px + e1y * py + e1z * pz;
-  int bits = rsw_bits(p->valid & (det != 0.0f));
+  int bits = rsw_bits(e->valid & (det != 0.0f));
   if (!bits) return 0;
   /* Lanes with det == 0 divide by 1 instead (and stay rejected): no inf in any lane. */
   const rsw_f inv_det = rsw_splat(1.0f) / rsw_select(det, rsw_splat(1.0f), det == 0.0f);
@@ -129,6 +154,12 @@ RS_INLINE int rsw_intersect(RsTraversalRay r, RS_GLOBAL const RsWPacket* p, floa
   *u_out = u;
   *v_out = v;
   return bits;
+}
+
+RS_INLINE int rsw_intersect(RsTraversalRay r, RS_GLOBAL const RsWPacket* p, float tmax, rsw_f* t_out, rsw_f* u_out,
+                            rsw_f* v_out) {
+  const RsWEdges e = rsw_edges(p);
+  return rsw_intersect_edges(r, &e, tmax, t_out, u_out, v_out);
 }
 
 /* The watertight test (Woop et al. 2013, as rs_intersect_triangle_robust) on a packet of RS_WIDE_W
@@ -219,6 +250,29 @@ RS_INLINE int rsw_intersect_robust(const RsRobustRay* r, const float* d, RS_GLOB
   return bits;
 }
 
+/* Of a packet's hit lanes (bits, with their t, u, v), the nearest one below the ray's closest hit so
+ * far (the lowest lane among equal t) becomes its hit. Returns whether one did: every hit lane may
+ * have rounded onto the closest t so far, and then nothing is nearer. */
+RS_INLINE int rsw_keep_nearest(int bits, rsw_f tw, rsw_f uw, rsw_f vw, RS_GLOBAL const RsWPacket* p, RsHit* hit) {
+  float ts[RS_WIDE_W], us[RS_WIDE_W], vs[RS_WIDE_W];
+  rsw_store(tw, ts);
+  rsw_store(uw, us);
+  rsw_store(vw, vs);
+  int best = -1;
+  float best_t = hit->t;
+  for (int i = 0; i < RS_WIDE_W; ++i)
+    if (((bits >> i) & 1) && ts[i] < best_t) {
+      best_t = ts[i];
+      best = i;
+    }
+  if (best < 0) return 0;
+  hit->t = best_t;
+  hit->tri = p->id[best];
+  hit->u = us[best];
+  hit->v = vs[best];
+  return 1;
+}
+
 /* The triangle packets of the leaf `ref` against one ray: hit becomes the closest hit so far (the
  * lane of smallest t below hit->t, ties by lane). Any hit (any_hit = 1) stops at the first packet
  * with a hit and returns 1; otherwise returns 0. */
@@ -229,24 +283,7 @@ RS_INLINE int rsw_leaf(RS_GLOBAL const RsWPacket* packets, rs_u32 ref, RsTravers
     rsw_f tw, uw, vw;
     const int bits = robust ? rsw_intersect_robust(rr, d, &packets[pi], hit->t, &tw, &uw, &vw)
                             : rsw_intersect(r, &packets[pi], hit->t, &tw, &uw, &vw);
-    if (!bits) continue;
-    float ts[RS_WIDE_W], us[RS_WIDE_W], vs[RS_WIDE_W];
-    rsw_store(tw, ts);
-    rsw_store(uw, us);
-    rsw_store(vw, vs);
-    int best = -1;
-    float best_t = hit->t;
-    for (int i = 0; i < RS_WIDE_W; ++i)
-      if (((bits >> i) & 1) && ts[i] < best_t) {
-        best_t = ts[i];
-        best = i;
-      }
-    if (best < 0) continue; /* every hit lane rounded onto the closest t so far: nothing nearer */
-    hit->t = best_t;
-    hit->tri = packets[pi].id[best];
-    hit->u = us[best];
-    hit->v = vs[best];
-    if (any_hit) return 1;
+    if (bits && rsw_keep_nearest(bits, tw, uw, vw, &packets[pi], hit) && any_hit) return 1;
   }
   return 0;
 }
@@ -382,6 +419,10 @@ RS_INLINE RsHit rsw_traverse(RS_GLOBAL const RsWNode* nodes, RS_GLOBAL const RsW
 #undef rsw_boxes
 #undef rsw_boxes_robust
 #undef rsw_intersect
+#undef RsWEdges
+#undef rsw_edges
+#undef rsw_intersect_edges
+#undef rsw_keep_nearest
 #undef rsw_intersect_robust
 #undef rsw_traverse_subtree
 #undef rsw_traverse_recorded
