@@ -7,8 +7,10 @@
  * No include guard: traverse_wide.h includes it with RS_WIDE_W 4, traverse_wide8.h with 8. The
  * names below are aliases for the width's types, lane helpers (lanes.h) and layout (bvh_layout.h);
  * the functions it defines get the width's names:
- *   W = 4: rs_wide_boxes[_robust], rs_packet_intersect[_robust], rs_traverse_wide[_recorded|_subtree]
- *   W = 8: rs_wide8_boxes[_robust], rs_packet8_intersect[_robust], rs_traverse_wide8[_recorded|_subtree]
+ *   W = 4: rs_wide_boxes[_robust], rs_packet_intersect[_robust|_edges], rs_tri_edges (RsTriEdges),
+ *          rs_wide_keep_nearest, rs_wide_leaf, rs_traverse_wide[_recorded|_subtree]
+ *   W = 8: rs_wide8_boxes[_robust], rs_packet8_intersect[_robust|_edges], rs_tri_edges8 (RsTriEdges8),
+ *          rs_wide8_keep_nearest, rs_wide8_leaf, rs_traverse_wide8[_recorded|_subtree]
  * All aliases are undefined again at the end.
  */
 #if RS_WIDE_W == 4
