@@ -47,6 +47,12 @@ RS_INLINE float rs_safe_rcp(float d) {
   return 1.0f / sd;
 }
 
+/* The octant of a ray's 1/d (bit a set: 1/d < 0 on axis a, so a box's upper bound on that axis is
+ * its near plane): what the W-wide box tests choose a node's planes by (traverse_wide_w.h). */
+RS_INLINE int rs_octant(float ix, float iy, float iz) {
+  return (ix < 0.0f) | ((iy < 0.0f) << 1) | ((iz < 0.0f) << 2);
+}
+
 RS_INLINE RsTraversalRay rs_prepare_ray(RsRay r) {
   RsTraversalRay t;
   t.o = rs_vec3(r.o[0], r.o[1], r.o[2]);

@@ -32,56 +32,6 @@
 /* Rays per stream: one bit each in a 32-bit mask. */
 #define RS_STREAM_RAYS 32
 
-/* A node's eight child boxes as the near and far planes of one ray octant (bit a set: 1/d < 0 on
- * axis a, so the upper bound is the near plane), read once for every ray of the stream that reaches
- * the node, as Embree's stream kernels hold a node in registers while its rays pass (Fuetterling et
- * al. 2015, section 4). */
-typedef struct {
-  rs_f8 near_x, far_x, near_y, far_y, near_z, far_z;
-  rs_i8 valid;
-} RsStreamPlanes;
-
-RS_INLINE RsStreamPlanes rs_stream_planes(RS_GLOBAL const RsWide8Node* n, int octant) {
-  RsStreamPlanes b;
-  b.near_x = (octant & 1) ? n->hi_x : n->lo_x, b.far_x = (octant & 1) ? n->lo_x : n->hi_x;
-  b.near_y = (octant & 2) ? n->hi_y : n->lo_y, b.far_y = (octant & 2) ? n->lo_y : n->hi_y;
-  b.near_z = (octant & 4) ? n->hi_z : n->lo_z, b.far_z = (octant & 4) ? n->lo_z : n->hi_z;
-  b.valid = n->valid;
-  return b;
-}
-
-/* The octant of a ray's 1/d (the bits rs_wide8_boxes and rs_wide8_boxes_robust choose planes by). */
-RS_INLINE int rs_stream_octant(float ix, float iy, float iz) {
-  return (ix < 0.0f) | ((iy < 0.0f) << 1) | ((iz < 0.0f) << 2);
-}
-
-/* rs_wide8_boxes (fast) or rs_wide8_boxes_robust (robust, a ray with no parallel axis) with the
- * planes of the ray's octant already chosen: per lane the same operations in the same order, so the
- * same bits. A robust ray with a parallel axis takes rs_wide8_boxes_robust itself (the caller). */
-RS_INLINE rs_i8 rs_stream_boxes(const RsStreamPlanes* b, const RsTraversalRay* tr, const RsRobustRay* rr, int robust,
-                                float tmax, rs_f8* tnear_out) {
-  const float ox = robust ? rr->o[0] : tr->o.x, oy = robust ? rr->o[1] : tr->o.y, oz = robust ? rr->o[2] : tr->o.z;
-  const float ix = robust ? rr->inv_d[0] : tr->inv_d.x, iy = robust ? rr->inv_d[1] : tr->inv_d.y,
-              iz = robust ? rr->inv_d[2] : tr->inv_d.z;
-  const float tmin = robust ? rr->tmin : tr->tmin;
-  const rs_f8 tnx = (b->near_x - ox) * ix, tfx = (b->far_x - ox) * ix;
-  const rs_f8 tny = (b->near_y - oy) * iy, tfy = (b->far_y - oy) * iy;
-  const rs_f8 tnz = (b->near_z - oz) * iz, tfz = (b->far_z - oz) * iz;
-  rs_f8 tnear, tfar;
-  if (robust) {
-    /* rsw_boxes_robust's axis loop, unrolled: near planes into tmin, scaled far planes into tmax. */
-    tnear = rs8_max(rs8_max(rs8_max(rs8_splat(tmin), tnx), tny), tnz);
-    tfar = rs8_min(rs8_min(rs8_min(rs8_splat(tmax), tfx * RS_SLAB_FAR_SCALE), tfy * RS_SLAB_FAR_SCALE),
-                   tfz * RS_SLAB_FAR_SCALE);
-    *tnear_out = tnear;
-    return b->valid & (tnear <= tfar);
-  }
-  tnear = rs8_max(rs8_max(tnx, tny), rs8_max(tnz, rs8_splat(tmin)));
-  tfar = rs8_min(rs8_min(tfx, tfy), rs8_min(tfz, rs8_splat(tmax)));
-  *tnear_out = tnear;
-  return (tnear <= tfar) & b->valid;
-}
-
 /* Traces rays[order[first + i]], i < RS_STREAM_RAYS (and first + i < count), as one stream into
  * hits[first + i]: closest hit (any_hit = 0) or any hit, fast (robust = 0) or robust. visits, when
  * not null, receives per ray its steps. */
@@ -109,8 +59,8 @@ RS_INLINE void rs_traverse_stream(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBAL 
       tr[i] = rs_prepare_ray(ray[i]);
     }
     live |= 1u << i;
-    octant_of[i] = robust ? rs_stream_octant(rr[i].inv_d[0], rr[i].inv_d[1], rr[i].inv_d[2])
-                          : rs_stream_octant(tr[i].inv_d.x, tr[i].inv_d.y, tr[i].inv_d.z);
+    octant_of[i] = robust ? rs_octant(rr[i].inv_d[0], rr[i].inv_d[1], rr[i].inv_d[2])
+                          : rs_octant(tr[i].inv_d.x, tr[i].inv_d.y, tr[i].inv_d.z);
     in_octant[octant_of[i]] |= 1u << i;
   }
   rs_u32 stack[RS_WIDE8_STACK_SIZE];
@@ -123,10 +73,12 @@ RS_INLINE void rs_traverse_stream(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBAL 
       for (rs_u32 rest = m; rest; rest &= rest - 1) ++steps[rs_lowest_bit_u(rest)];
     if (!(ref & RS_WIDE_LEAF)) {
       RS_GLOBAL const RsWide8Node* n = &nodes[ref];
-      /* The planes of the first ray's octant; a ray of another octant (rare in a coherent stream:
-       * none when the mask lies in one octant) chooses its own. */
+      /* The node's planes for the first ray's octant (rs_wide8_planes, what rs_wide8_boxes reads), read
+       * once for the mask; a ray of another octant (rare in a coherent stream: none when the mask lies
+       * in one octant) chooses its own. Each ray then runs rs_wide8_boxes's slab arithmetic
+       * (rs_wide8_slabs / rs_wide8_slabs_robust), so the same bits. */
       const int octant = octant_of[rs_lowest_bit_u(m)];
-      const RsStreamPlanes planes = rs_stream_planes(n, octant);
+      const RsWide8Planes planes = rs_wide8_planes(n, octant);
       const rs_u32 others = m & ~in_octant[octant];
       /* Each ray of the mask against the eight boxes; per child, its rays (a bit per ray, gathered
        * lane-wise, so no loop over a ray's hit children) and their nearest entry. */
@@ -138,11 +90,9 @@ RS_INLINE void rs_traverse_stream(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBAL 
         rs_i8 h;
         if (robust && !rr[i].oblique) {
           h = rs_wide8_boxes_robust(&rr[i], n, hit[i].t, &tnear);
-        } else if (others & (1u << i)) {
-          const RsStreamPlanes own = rs_stream_planes(n, octant_of[i]);
-          h = rs_stream_boxes(&own, &tr[i], &rr[i], robust, hit[i].t, &tnear);
         } else {
-          h = rs_stream_boxes(&planes, &tr[i], &rr[i], robust, hit[i].t, &tnear);
+          const RsWide8Planes own = others & (1u << i) ? rs_wide8_planes(n, octant_of[i]) : planes;
+          h = robust ? rs_wide8_slabs_robust(&own, &rr[i], hit[i].t, &tnear) : rs_wide8_slabs(&own, &tr[i], hit[i].t, &tnear);
         }
         rays_in = rays_in | (h & rs8_splati((int)(1u << i)));
         any_in = any_in | h;

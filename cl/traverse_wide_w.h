@@ -7,9 +7,11 @@
  * No include guard: traverse_wide.h includes it with RS_WIDE_W 4, traverse_wide8.h with 8. The
  * names below are aliases for the width's types, lane helpers (lanes.h) and layout (bvh_layout.h);
  * the functions it defines get the width's names:
- *   W = 4: rs_wide_boxes[_robust], rs_packet_intersect[_robust|_edges], rs_tri_edges (RsTriEdges),
+ *   W = 4: rs_wide_planes (RsWidePlanes), rs_wide_slabs[_robust], rs_wide_boxes[_robust],
+ *          rs_packet_intersect[_robust|_edges], rs_tri_edges (RsTriEdges),
  *          rs_wide_keep_nearest, rs_wide_leaf, rs_traverse_wide[_recorded|_subtree]
- *   W = 8: rs_wide8_boxes[_robust], rs_packet8_intersect[_robust|_edges], rs_tri_edges8 (RsTriEdges8),
+ *   W = 8: rs_wide8_planes (RsWide8Planes), rs_wide8_slabs[_robust], rs_wide8_boxes[_robust],
+ *          rs_packet8_intersect[_robust|_edges], rs_tri_edges8 (RsTriEdges8),
  *          rs_wide8_keep_nearest, rs_wide8_leaf, rs_traverse_wide8[_recorded|_subtree]
  * All aliases are undefined again at the end.
  */
@@ -28,6 +30,10 @@
 #define RsWNode RsWideNode
 #define RsWPacket RsTriPacket
 #define RS_WSTACK RS_WIDE_STACK_SIZE
+#define RsWPlanes RsWidePlanes
+#define rsw_planes rs_wide_planes
+#define rsw_slabs rs_wide_slabs
+#define rsw_slabs_robust rs_wide_slabs_robust
 #define rsw_boxes rs_wide_boxes
 #define rsw_boxes_robust rs_wide_boxes_robust
 #define rsw_intersect rs_packet_intersect
@@ -55,6 +61,10 @@
 #define RsWNode RsWide8Node
 #define RsWPacket RsTriPacket8
 #define RS_WSTACK RS_WIDE8_STACK_SIZE
+#define RsWPlanes RsWide8Planes
+#define rsw_planes rs_wide8_planes
+#define rsw_slabs rs_wide8_slabs
+#define rsw_slabs_robust rs_wide8_slabs_robust
 #define rsw_boxes rs_wide8_boxes
 #define rsw_boxes_robust rs_wide8_boxes_robust
 #define rsw_intersect rs_packet8_intersect
@@ -71,34 +81,74 @@
 #error "RS_WIDE_W must be 4 or 8 (traverse_wide.h, traverse_wide8.h)"
 #endif
 
-/* Slab test of a node's RS_WIDE_W child boxes (fast variant). The near plane of each axis is
- * chosen by the sign of 1/d once, instead of min/max per box (lo <= hi, so the result is the same).
- * Returns the hit lanes (with the node's valid lanes) and each box's entry distance. */
-RS_INLINE rsw_i rsw_boxes(RsTraversalRay r, RS_GLOBAL const RsWNode* n, float tmax, rsw_f* tnear_out) {
+/* A node's RS_WIDE_W child boxes as the near and far planes of one 1/d octant (rs_octant), and its
+ * valid lanes: choosing the near plane of each axis by the sign of 1/d once, instead of a min and a
+ * max per box (lo <= hi, so the result is the same). The box tests below read a node through it; the
+ * stream class (traverse_stream.h) reads it once for all the rays of one octant that reach a node. */
+typedef struct {
+  rsw_f near_x, far_x, near_y, far_y, near_z, far_z;
+  rsw_i valid;
+} RsWPlanes;
+
+RS_INLINE RsWPlanes rsw_planes(RS_GLOBAL const RsWNode* n, int octant) {
   RS_GLOBAL const rsw_f* b = &n->lo_x; /* lo_x hi_x lo_y hi_y lo_z hi_z */
-  const int nx = r.inv_d.x < 0.0f, ny = r.inv_d.y < 0.0f, nz = r.inv_d.z < 0.0f;
-  rsw_f tnx = (b[nx] - r.o.x) * r.inv_d.x, tfx = (b[1 - nx] - r.o.x) * r.inv_d.x;
-  rsw_f tny = (b[2 + ny] - r.o.y) * r.inv_d.y, tfy = (b[3 - ny] - r.o.y) * r.inv_d.y;
-  rsw_f tnz = (b[4 + nz] - r.o.z) * r.inv_d.z, tfz = (b[5 - nz] - r.o.z) * r.inv_d.z;
-  rsw_f tnear = rsw_max(rsw_max(tnx, tny), rsw_max(tnz, rsw_splat(r.tmin)));
-  rsw_f tfar = rsw_min(rsw_min(tfx, tfy), rsw_min(tfz, rsw_splat(tmax)));
-  *tnear_out = tnear;
-  return (tnear <= tfar) & n->valid;
+  const int nx = octant & 1, ny = (octant >> 1) & 1, nz = (octant >> 2) & 1;
+  RsWPlanes p;
+  p.near_x = b[nx], p.far_x = b[1 - nx];
+  p.near_y = b[2 + ny], p.far_y = b[3 - ny];
+  p.near_z = b[4 + nz], p.far_z = b[5 - nz];
+  p.valid = n->valid;
+  return p;
 }
 
-/* The conservative slab test (Ize 2013, as rs_intersect_box_robust) on RS_WIDE_W boxes. Most rays
- * have no parallel axis (r->oblique) and skip the per-axis branch; the axis loop is unrolled, so a
- * ray's per-axis values stay in registers across the traversal instead of being re-read and
- * re-broadcast from the ray struct on every visit (docs/trace.md: 0.79–0.91x the time). */
+/* Slab test of the boxes (fast variant) for a ray of the planes' octant. Returns the hit lanes (with
+ * the node's valid lanes) and each box's entry distance. */
+RS_INLINE rsw_i rsw_slabs(const RsWPlanes* b, const RsTraversalRay* r, float tmax, rsw_f* tnear_out) {
+  rsw_f tnx = (b->near_x - r->o.x) * r->inv_d.x, tfx = (b->far_x - r->o.x) * r->inv_d.x;
+  rsw_f tny = (b->near_y - r->o.y) * r->inv_d.y, tfy = (b->far_y - r->o.y) * r->inv_d.y;
+  rsw_f tnz = (b->near_z - r->o.z) * r->inv_d.z, tfz = (b->far_z - r->o.z) * r->inv_d.z;
+  rsw_f tnear = rsw_max(rsw_max(tnx, tny), rsw_max(tnz, rsw_splat(r->tmin)));
+  rsw_f tfar = rsw_min(rsw_min(tfx, tfy), rsw_min(tfz, rsw_splat(tmax)));
+  *tnear_out = tnear;
+  return (tnear <= tfar) & b->valid;
+}
+
+RS_INLINE rsw_i rsw_boxes(RsTraversalRay r, RS_GLOBAL const RsWNode* n, float tmax, rsw_f* tnear_out) {
+  const RsWPlanes b = rsw_planes(n, rs_octant(r.inv_d.x, r.inv_d.y, r.inv_d.z));
+  return rsw_slabs(&b, &r, tmax, tnear_out);
+}
+
+/* The conservative slab test (Ize 2013, as rs_intersect_box_robust) for an oblique ray (no axis
+ * parallel: r->oblique) of the planes' octant: x, then y, then z into (tmin, tmax), far planes
+ * scaled. */
+RS_INLINE rsw_i rsw_slabs_robust(const RsWPlanes* b, const RsRobustRay* r, float tmax, rsw_f* tnear_out) {
+  const rsw_f t0x = (b->near_x - r->o[0]) * r->inv_d[0], t1x = (b->far_x - r->o[0]) * r->inv_d[0];
+  const rsw_f t0y = (b->near_y - r->o[1]) * r->inv_d[1], t1y = (b->far_y - r->o[1]) * r->inv_d[1];
+  const rsw_f t0z = (b->near_z - r->o[2]) * r->inv_d[2], t1z = (b->far_z - r->o[2]) * r->inv_d[2];
+  const rsw_f tnear = rsw_max(rsw_max(rsw_max(rsw_splat(r->tmin), t0x), t0y), t0z);
+  const rsw_f tfar = rsw_min(rsw_min(rsw_min(rsw_splat(tmax), t1x * RS_SLAB_FAR_SCALE), t1y * RS_SLAB_FAR_SCALE),
+                             t1z * RS_SLAB_FAR_SCALE);
+  *tnear_out = tnear;
+  return b->valid & (tnear <= tfar);
+}
+
+/* The conservative slab test on RS_WIDE_W boxes for any ray. Most rays have no parallel axis
+ * (r->oblique) and take rsw_slabs_robust, straight-line code whose per-axis values stay in registers
+ * across the traversal (docs/trace.md: 0.79–0.91x the time of the rolled loop); a ray with a parallel
+ * axis takes the axis loop, where such an axis contributes only bmin <= o <= bmax. */
 RS_INLINE rsw_i rsw_boxes_robust(const RsRobustRay* r, RS_GLOBAL const RsWNode* n, float tmax,
                                  rsw_f* tnear_out) {
+  if (r->oblique) {
+    const RsWPlanes planes = rsw_planes(n, rs_octant(r->inv_d[0], r->inv_d[1], r->inv_d[2]));
+    return rsw_slabs_robust(&planes, r, tmax, tnear_out);
+  }
   RS_GLOBAL const rsw_f* b = &n->lo_x;
   rsw_f tnear = rsw_splat(r->tmin);
   rsw_f tfar = rsw_splat(tmax);
   rsw_i inside = n->valid;
   RS_UNROLL
   for (int a = 0; a < 3; ++a) {
-    if (!r->oblique && r->parallel[a]) {
+    if (r->parallel[a]) {
       inside = inside & (b[2 * a] <= r->o[a]) & (b[2 * a + 1] >= r->o[a]);
       continue;
     }
@@ -418,6 +468,10 @@ RS_INLINE RsHit rsw_traverse(RS_GLOBAL const RsWNode* nodes, RS_GLOBAL const RsW
 #undef RsWNode
 #undef RsWPacket
 #undef RS_WSTACK
+#undef RsWPlanes
+#undef rsw_planes
+#undef rsw_slabs
+#undef rsw_slabs_robust
 #undef rsw_boxes
 #undef rsw_boxes_robust
 #undef rsw_intersect
