@@ -173,11 +173,11 @@ RS_TRACE_KERNELS(_binary_ww_robust, RS_WW_ROBUST)
 #undef LEAF
 
 #elif defined(RS_TRACE_STREAM)
-/* Ray streams over the 8-wide BVH (traverse_stream.h): work-item s traces rays
- * [s * RS_STREAM_RAYS, (s + 1) * RS_STREAM_RAYS) of the order node by node, each ray alone against a
- * node's eight boxes (the stream class). */
-RS_GROUP_KERNELS(_stream, RsWide8Node, RsTriPacket8, RS_STREAM_RAYS, rs_traverse_stream, 0)
-RS_GROUP_KERNELS(_stream_robust, RsWide8Node, RsTriPacket8, RS_STREAM_RAYS, rs_traverse_stream, 1)
+/* Ray streams over the 8-wide BVH (traverse_stream.h): work-item s deals rays
+ * [s * RS_STREAM_CHUNK, (s + 1) * RS_STREAM_CHUNK) of the order into streams of one direction octant,
+ * each traced node by node, each ray alone against a node's eight boxes (the stream class). */
+RS_GROUP_KERNELS(_stream, RsWide8Node, RsTriPacket8, RS_STREAM_CHUNK, rs_traverse_stream, 0)
+RS_GROUP_KERNELS(_stream_robust, RsWide8Node, RsTriPacket8, RS_STREAM_CHUNK, rs_traverse_stream, 1)
 
 #elif defined(RS_TRACE_PACKET)
 /* Ray packets over the 4-wide BVH (traverse_packet.h): work-item p traces rays

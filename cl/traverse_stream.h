@@ -1,12 +1,15 @@
-/* raysort — ray-stream traversal of the 8-wide BVH: RS_STREAM_RAYS (32) consecutive rays of the
- * batch's order walk the tree together, node by node, each ray tested alone against a node's eight
- * child boxes (docs/trace.md, "Trace classes"). The scheme is the ray-stream traversal of
+/* raysort — ray-stream traversal of the 8-wide BVH: a work-item deals RS_STREAM_CHUNK consecutive rays
+ * of the batch's order, in that order, into streams of up to RS_STREAM_RAYS (32) rays of one direction
+ * octant, and each stream walks the tree together, node by node, each ray tested alone against a
+ * node's eight child boxes (docs/trace.md, "Trace classes"). The scheme is the ray-stream traversal of
  * Fuetterling, Lojewski, Pfreundt and Ebert (HPG 2015, "Efficient Ray Tracing Kernels for Modern
  * CPU Architectures"), what Embree's incoherent streams (rtcIntersect1M / rtcOccluded1M) run: the
  * SIMD lanes hold a node's children, as in the single-ray wide8 class, and the stream's rays share
  * the node's fetch. So a node costs one memory access for every ray of the stream that reaches it,
  * and the order of the rays decides how many of them reach the same nodes: on a CPU this is the
- * memory side of a warp's coherence, as the packet classes are its SIMD side.
+ * memory side of a warp's coherence, as the packet classes are its SIMD side. Dealing by octant (as
+ * Embree 3's rtcOccluded1M deals its rays before it traces them) lets a stream's rays share a node's
+ * near and far planes: in pixel order, 32 consecutive rays after a bounce lie in 5 octants.
  *
  * - A node is visited with the mask of the stream's rays that entered it (a bit per ray). Each of
  *   those rays runs the wide8 class's slab test (rs_wide8_boxes / rs_wide8_boxes_robust) with its
@@ -29,16 +32,12 @@
 
 #include "traverse_wide8.h"
 
-/* Rays per stream: one bit each in a 32-bit mask. */
-#define RS_STREAM_RAYS 32
-
-/* Traces rays[order[first + i]], i < RS_STREAM_RAYS (and first + i < count), as one stream into
- * hits[first + i]: closest hit (any_hit = 0) or any hit, fast (robust = 0) or robust. visits, when
- * not null, receives per ray its steps. */
-RS_INLINE void rs_traverse_stream(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBAL const RsTriPacket8* packets,
-                                  RS_GLOBAL const RsRay* rays, RS_GLOBAL const rs_u32* order, rs_u32 first,
-                                  rs_u32 count, int robust, int any_hit, RS_GLOBAL RsHit* hits,
-                                  RS_GLOBAL rs_u32* visits) {
+/* Traces the rays at positions pos[0..n) of the order (n <= RS_STREAM_RAYS) as one stream into their
+ * hits: closest hit (any_hit = 0) or any hit, fast (robust = 0) or robust. visits, when not null,
+ * receives per ray its steps. */
+RS_INLINE void rs_trace_stream(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBAL const RsTriPacket8* packets,
+                               RS_GLOBAL const RsRay* rays, RS_GLOBAL const rs_u32* order, const rs_u32* pos, int n,
+                               int robust, int any_hit, RS_GLOBAL RsHit* hits, RS_GLOBAL rs_u32* visits) {
   RsRay ray[RS_STREAM_RAYS];
   RsTraversalRay tr[RS_STREAM_RAYS];
   RsRobustRay rr[RS_STREAM_RAYS];
@@ -49,8 +48,8 @@ RS_INLINE void rs_traverse_stream(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBAL 
   int octant_of[RS_STREAM_RAYS];
   for (int i = 0; i < RS_STREAM_RAYS; ++i) {
     steps[i] = 0;
-    if (first + (rs_u32)i >= count) continue;
-    ray[i] = rays[order[first + (rs_u32)i]];
+    if (i >= n) continue;
+    ray[i] = rays[order[pos[i]]];
     hit[i] = rs_miss(ray[i].tmax);
     if (robust) {
       rr[i] = rs_prepare_robust_ray(ray[i]);
@@ -74,8 +73,9 @@ RS_INLINE void rs_traverse_stream(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBAL 
     if (!(ref & RS_WIDE_LEAF)) {
       RS_GLOBAL const RsWide8Node* n = &nodes[ref];
       /* The node's planes for the first ray's octant (rs_wide8_planes, what rs_wide8_boxes reads), read
-       * once for the mask; a ray of another octant (rare in a coherent stream: none when the mask lies
-       * in one octant) chooses its own. Each ray then runs rs_wide8_boxes's slab arithmetic
+       * once for the mask; a ray of another octant (rare: the rays are dealt by the signs of d,
+       * those of 1/d but for d = -inf and a robust ray's near-parallel axis, whose 1/d is 0) chooses its
+       * own. Each ray then runs rs_wide8_boxes's slab arithmetic
        * (rs_wide8_slabs / rs_wide8_slabs_robust), so the same bits. */
       const int octant = octant_of[rs_lowest_bit_u(m)];
       const RsWide8Planes planes = rs_wide8_planes(n, octant);
@@ -162,10 +162,43 @@ RS_INLINE void rs_traverse_stream(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBAL 
       }
     }
   }
-  for (int i = 0; i < RS_STREAM_RAYS; ++i) {
-    if (first + (rs_u32)i >= count) break;
-    hits[first + (rs_u32)i] = hit[i];
-    if (visits) visits[first + (rs_u32)i] = steps[i];
+  for (int i = 0; i < n; ++i) {
+    hits[pos[i]] = hit[i];
+    if (visits) visits[pos[i]] = steps[i];
+  }
+}
+
+/* Traces the rays at positions [first, first + RS_STREAM_CHUNK) of the order (those below count): dealt
+ * in order into one stream per octant of d's signs, a stream traced when it holds RS_STREAM_RAYS rays,
+ * the rest at the end, octant by octant (as Embree's rtcOccluded1M deals its rays). d's sign bits are
+ * those of the 1/d the stream's node test reads (rs_safe_rcp keeps the sign), so a stream's rays share
+ * their planes; a ray whose 1/d still lands in another octant (d = -inf; a robust ray's near-parallel
+ * axis, whose 1/d is 0) chooses its own, as in a mixed stream. One call site of rs_trace_stream, so
+ * the kernel holds one copy of it. */
+RS_INLINE void rs_traverse_stream(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBAL const RsTriPacket8* packets,
+                                  RS_GLOBAL const RsRay* rays, RS_GLOBAL const rs_u32* order, rs_u32 first,
+                                  rs_u32 count, int robust, int any_hit, RS_GLOBAL RsHit* hits,
+                                  RS_GLOBAL rs_u32* visits) {
+  rs_u32 dealt[8][RS_STREAM_RAYS];
+  int held[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+  const rs_u32 end = count - first < RS_STREAM_CHUNK ? count : first + RS_STREAM_CHUNK;
+  rs_u32 next = first;
+  int rest = 0; /* after the last ray: the octant whose partial stream goes next */
+  for (;;) {
+    int full = -1;
+    while (next < end && full < 0) {
+      RS_GLOBAL const float* d = rays[order[next]].d;
+      const int o = (rs_float_as_int(d[0]) < 0) | ((rs_float_as_int(d[1]) < 0) << 1) | ((rs_float_as_int(d[2]) < 0) << 2);
+      dealt[o][held[o]++] = next++;
+      if (held[o] == RS_STREAM_RAYS) full = o;
+    }
+    if (full < 0) {
+      while (rest < 8 && held[rest] == 0) ++rest;
+      if (rest == 8) break;
+      full = rest;
+    }
+    rs_trace_stream(nodes, packets, rays, order, dealt[full], held[full], robust, any_hit, hits, visits);
+    held[full] = 0;
   }
 }
 

@@ -386,7 +386,7 @@ TEST(Trace, TraceClassNames) {
   EXPECT_EQ(tree_kind(TraceLayout::Cwbvh), TreeKind::Compressed8);
   EXPECT_EQ(tree_width(TraceLayout::Cwbvh), 8);
   EXPECT_FALSE(walks_wide_tree(TraceLayout::Cwbvh));
-  EXPECT_EQ(packet_width(TraceLayout::Stream), 32);
+  EXPECT_EQ(packet_width(TraceLayout::Stream), RS_STREAM_CHUNK);
   EXPECT_EQ(tree_width(TraceLayout::Stream), 8);
   EXPECT_TRUE(is_stream(TraceLayout::Stream));
   EXPECT_FALSE(is_stream(TraceLayout::Packet16));

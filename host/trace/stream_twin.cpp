@@ -10,13 +10,13 @@ void trace_streams_on_host(const Wide8Bvh& wide8, const std::vector<RsRay>& rays
                            int robust, int any_hit, std::vector<RsHit>& hits, std::uint32_t* visits) {
   const auto n = static_cast<rs_u32>(rays.size());
   hits.resize(n);
-  const std::size_t streams = (static_cast<std::size_t>(n) + RS_STREAM_RAYS - 1) / RS_STREAM_RAYS;
+  const std::size_t chunks = (static_cast<std::size_t>(n) + RS_STREAM_CHUNK - 1) / RS_STREAM_CHUNK;
   auto work = [&](std::size_t begin, std::size_t end) {
-    for (std::size_t s = begin; s < end; ++s)
+    for (std::size_t c = begin; c < end; ++c)
       rs_traverse_stream(wide8.nodes.data(), wide8.packets.data(), rays.data(), order,
-                         static_cast<rs_u32>(s * RS_STREAM_RAYS), n, robust, any_hit, hits.data(), visits);
+                         static_cast<rs_u32>(c * RS_STREAM_CHUNK), n, robust, any_hit, hits.data(), visits);
   };
-  for_each_block(streams, n < 4096, work, 64);
+  for_each_block(chunks, n < 4096, work, 8);
 }
 
 }  // namespace raysort

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "shared.h"
 #include "util/error.h"
 #include "util/text.h"
 
@@ -46,8 +47,8 @@ constexpr TraceClass kTraceClasses[] = {
      "packets of 16, single rays from 4 lanes"},
     {TraceLayout::Hybrid, "hybrid", 0, 0, false, TreeKind::Wide4, "", "", false,
      "hybrids of the device's preferred width"},
-    {TraceLayout::Stream, "stream", 32, 0, true, TreeKind::Wide8, "-DRS_TRACE_STREAM", "_stream", false,
-     "streams of 32 rays over the 8-wide BVH, node by node"},
+    {TraceLayout::Stream, "stream", RS_STREAM_CHUNK, 0, true, TreeKind::Wide8, "-DRS_TRACE_STREAM", "_stream", false,
+     "streams of 32 rays of one direction octant (dealt from 1024 consecutive rays) over the 8-wide BVH, node by node"},
     {TraceLayout::Cwbvh, "cwbvh", 1, 0, false, TreeKind::Compressed8, "-DRS_TRACE_CWBVH", "_cwbvh", false,
      "one ray over the compressed 8-wide BVH of Ylitie et al. 2017, a GPU kernel"},
     {TraceLayout::BinaryWw, "binary-ww", 1, 0, false, TreeKind::Binary, "-DRS_TRACE_BINARY_WW", "_binary_ww", true,

@@ -14,9 +14,10 @@ namespace raysort {
 // layout gains). PacketN: N consecutive rays of the order per work-item over the 4-wide tree, one
 // ray per vector lane (cl/traverse_packet.h). HybridN: the same packets, but a subtree that at most
 // N/4 lanes reach is walked by each of them alone (single rays). Packet, Hybrid: the width the device
-// prefers, resolved by resolve_trace_layout before anything runs. Stream: 32 consecutive rays of the
-// order per work-item over the 8-wide collapse, node by node, each ray tested alone against a
-// node's eight boxes (cl/traverse_stream.h): the rays share each node's fetch.
+// prefers, resolved by resolve_trace_layout before anything runs. Stream: RS_STREAM_CHUNK (1024)
+// consecutive rays of the order per work-item, dealt into streams of 32 rays of one direction octant,
+// each walking the 8-wide collapse node by node, each ray tested alone against a node's eight boxes
+// (cl/traverse_stream.h): a stream's rays share each node's fetch.
 // Cwbvh: one ray per work-item over the compressed 8-wide BVH (host/bvh/cwbvh.cpp,
 // cl/traverse_cwbvh.h; Ylitie et al. 2017), the GPU-class kernel. BinaryWw: the binary BVH in the
 // while-while loop form of Aila and Laine 2009 (cl/traverse_binary_ww.h; Binary is their if-if form).
@@ -46,7 +47,7 @@ std::string trace_layouts_help();
 // A command line's class list: "wide,packet" (in that order, repeats dropped), or "all" for every
 // class but the unresolved packet. Throws Error naming an unknown class.
 std::vector<TraceLayout> parse_trace_layouts(const std::string& list);
-// Rays per work-item: 1 for the single-ray classes, N for PacketN and HybridN, 32 for Stream (0 for
+// Rays per work-item: 1 for the single-ray classes, N for PacketN and HybridN, RS_STREAM_CHUNK for Stream (0 for
 // the unresolved Packet and Hybrid).
 int packet_width(TraceLayout l);
 // The hybrid's switch: a subtree reached by at most this many lanes is walked by each alone (0: never).
