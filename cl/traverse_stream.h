@@ -9,7 +9,8 @@
  * and the order of the rays decides how many of them reach the same nodes: on a CPU this is the
  * memory side of a warp's coherence, as the packet classes are its SIMD side. Dealing by octant (as
  * Embree 3's rtcOccluded1M deals its rays before it traces them) lets a stream's rays share a node's
- * near and far planes: in pixel order, 32 consecutive rays after a bounce lie in 5 octants.
+ * near and far planes: in pixel order, 32 consecutive rays after a bounce lie in 4.4-6.8 octants
+ * (sibenik and breakfast_room at 1080p).
  *
  * - A node is visited with the mask of the stream's rays that entered it (a bit per ray). Each of
  *   those rays runs the wide8 class's slab test (rs_wide8_boxes / rs_wide8_boxes_robust) with its
