@@ -6,6 +6,10 @@
 #include "util/error.h"
 #include "util/text.h"
 
+// The stream's sizes spelt in its --help line from the constants themselves.
+#define RS_STREAM_TEXT_(x) #x
+#define RS_STREAM_TEXT(x) RS_STREAM_TEXT_(x)
+
 namespace raysort {
 
 namespace {
@@ -48,7 +52,8 @@ constexpr TraceClass kTraceClasses[] = {
     {TraceLayout::Hybrid, "hybrid", 0, 0, false, TreeKind::Wide4, "", "", false,
      "hybrids of the device's preferred width"},
     {TraceLayout::Stream, "stream", RS_STREAM_CHUNK, 0, true, TreeKind::Wide8, "-DRS_TRACE_STREAM", "_stream", false,
-     "streams of 32 rays of one direction octant (dealt from 1024 consecutive rays) over the 8-wide BVH, node by node"},
+     "streams of " RS_STREAM_TEXT(RS_STREAM_RAYS) " rays of one direction octant (dealt from " RS_STREAM_TEXT(RS_STREAM_CHUNK)
+     " consecutive rays) over the 8-wide BVH, node by node"},
     {TraceLayout::Cwbvh, "cwbvh", 1, 0, false, TreeKind::Compressed8, "-DRS_TRACE_CWBVH", "_cwbvh", false,
      "one ray over the compressed 8-wide BVH of Ylitie et al. 2017, a GPU kernel"},
     {TraceLayout::BinaryWw, "binary-ww", 1, 0, false, TreeKind::Binary, "-DRS_TRACE_BINARY_WW", "_binary_ww", true,
