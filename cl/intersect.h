@@ -49,9 +49,8 @@ RS_INLINE float rs_safe_rcp(float d) {
 
 /* The octant of a ray's 1/d (bit a set: 1/d < 0 on axis a, so a box's upper bound on that axis is
  * its near plane): what the W-wide box tests choose a node's planes by (traverse_wide_w.h). */
-RS_INLINE int rs_octant(float ix, float iy, float iz) {
-  return (ix < 0.0f) | ((iy < 0.0f) << 1) | ((iz < 0.0f) << 2);
-}
+RS_INLINE int rs_octant_of_signs(int nx, int ny, int nz) { return nx | (ny << 1) | (nz << 2); }
+RS_INLINE int rs_octant(float ix, float iy, float iz) { return rs_octant_of_signs(ix < 0.0f, iy < 0.0f, iz < 0.0f); }
 
 RS_INLINE RsTraversalRay rs_prepare_ray(RsRay r) {
   RsTraversalRay t;

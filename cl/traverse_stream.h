@@ -189,7 +189,7 @@ RS_INLINE void rs_traverse_stream(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBAL 
     int full = -1;
     while (next < end && full < 0) {
       RS_GLOBAL const float* d = rays[order[next]].d;
-      const int o = (rs_float_as_int(d[0]) < 0) | ((rs_float_as_int(d[1]) < 0) << 1) | ((rs_float_as_int(d[2]) < 0) << 2);
+      const int o = rs_octant_of_signs(rs_float_as_int(d[0]) < 0, rs_float_as_int(d[1]) < 0, rs_float_as_int(d[2]) < 0);
       dealt[o][held[o]++] = next++;
       if (held[o] == RS_STREAM_RAYS) full = o;
     }
