@@ -84,9 +84,10 @@ RS_INLINE float rs_int_as_float(rs_i32 i) { return std::bit_cast<float>(i); }
  * -DRS_PREFETCH_AHEAD for the kernels on a CPU device (cl/trace.cl, "Gather on a CPU") and Embree's
  * arms on a sorted order. A work-item takes about 0.1-1 µs on a CPU core, a miss to DRAM about 0.1. */
 #define RS_RAY_PREFETCH_DISTANCE 4
-/* The stream class (cl/traverse_stream.h): rays per stream (one bit each in a 32-bit mask) and rays per
- * work-item, which deals them into streams of one direction octant each. */
-#define RS_STREAM_RAYS 32
+/* The stream class (cl/traverse_stream.h): rays per stream (one bit each in a 64-bit mask, as Embree's
+ * AVX-512 streams hold) and rays per work-item, which deals them into streams of one direction octant
+ * each. */
+#define RS_STREAM_RAYS 64
 #ifndef RS_STREAM_CHUNK
 #define RS_STREAM_CHUNK 1024
 #endif

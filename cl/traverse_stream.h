@@ -1,5 +1,5 @@
 /* raysort — ray-stream traversal of the 8-wide BVH: a work-item deals RS_STREAM_CHUNK consecutive rays
- * of the batch's order, in that order, into streams of up to RS_STREAM_RAYS (32) rays of one direction
+ * of the batch's order, in that order, into streams of up to RS_STREAM_RAYS (64) rays of one direction
  * octant, and each stream walks the tree together, node by node, each ray tested alone against a
  * node's eight child boxes (docs/trace.md, "Trace classes"). The scheme is the ray-stream traversal of
  * Fuetterling, Lojewski, Pfreundt and Ebert (HPG 2015, "Efficient Ray Tracing Kernels for Modern
@@ -44,8 +44,8 @@ RS_INLINE void rs_trace_stream(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBAL con
   RsRobustRay rr[RS_STREAM_RAYS];
   RsHit hit[RS_STREAM_RAYS];
   rs_u32 steps[RS_STREAM_RAYS];
-  rs_u32 live = 0; /* rays still looking (any hit: those without one yet) */
-  rs_u32 in_octant[8] = {0, 0, 0, 0, 0, 0, 0, 0}; /* the rays of each 1/d octant */
+  rs_u64 live = 0; /* rays still looking (any hit: those without one yet) */
+  rs_u64 in_octant[8] = {0, 0, 0, 0, 0, 0, 0, 0}; /* the rays of each 1/d octant */
   int octant_of[RS_STREAM_RAYS];
   for (int i = 0; i < RS_STREAM_RAYS; ++i) {
     steps[i] = 0;
@@ -58,19 +58,19 @@ RS_INLINE void rs_trace_stream(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBAL con
     } else {
       tr[i] = rs_prepare_ray(ray[i]);
     }
-    live |= 1u << i;
+    live |= (rs_u64)1 << i;
     octant_of[i] = robust ? rs_octant(rr[i].inv_d[0], rr[i].inv_d[1], rr[i].inv_d[2])
                           : rs_octant(tr[i].inv_d.x, tr[i].inv_d.y, tr[i].inv_d.z);
-    in_octant[octant_of[i]] |= 1u << i;
+    in_octant[octant_of[i]] |= (rs_u64)1 << i;
   }
   rs_u32 stack[RS_WIDE8_STACK_SIZE];
-  rs_u32 stack_rays[RS_WIDE8_STACK_SIZE];
+  rs_u64 stack_rays[RS_WIDE8_STACK_SIZE];
   int sp = 0;
   rs_u32 ref = 0; /* the root is always an inner node */
-  rs_u32 m = live;
+  rs_u64 m = live;
   while (m) {
     if (visits)
-      for (rs_u32 rest = m; rest; rest &= rest - 1) ++steps[rs_lowest_bit_u(rest)];
+      for (rs_u64 rest = m; rest; rest &= rest - 1) ++steps[rs_lowest_bit_ul(rest)];
     if (!(ref & RS_WIDE_LEAF)) {
       RS_GLOBAL const RsWide8Node* n = &nodes[ref];
       /* The node's planes for the first ray's octant (rs_wide8_planes, what rs_wide8_boxes reads), read
@@ -78,34 +78,40 @@ RS_INLINE void rs_trace_stream(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBAL con
        * those of 1/d but for d = -inf and a robust ray's near-parallel axis, whose 1/d is 0) chooses its
        * own. Each ray then runs rs_wide8_boxes's slab arithmetic
        * (rs_wide8_slabs / rs_wide8_slabs_robust), so the same bits. */
-      const int octant = octant_of[rs_lowest_bit_u(m)];
+      const int octant = octant_of[rs_lowest_bit_ul(m)];
       const RsWide8Planes planes = rs_wide8_planes(n, octant);
-      const rs_u32 others = m & ~in_octant[octant];
+      const rs_u64 others = m & ~in_octant[octant];
       /* Each ray of the mask against the eight boxes; per child, its rays (a bit per ray, gathered
-       * lane-wise, so no loop over a ray's hit children) and their nearest entry. */
-      rs_i8 rays_in = rs8_splati(0), any_in = rays_in;
+       * lane-wise, so no loop over a ray's hit children: rays 0-31 in rays_lo, 32-63 in rays_hi) and
+       * their nearest entry. */
+      rs_i8 rays_lo = rs8_splati(0), rays_hi = rays_lo, any_in = rays_lo;
       rs_f8 nearest = rs8_splat(3.4028235e38f);
-      for (rs_u32 rest = m; rest; rest &= rest - 1) {
-        const int i = rs_lowest_bit_u(rest);
+      for (rs_u64 rest = m; rest; rest &= rest - 1) {
+        const int i = rs_lowest_bit_ul(rest);
         rs_f8 tnear;
         rs_i8 h;
         if (robust && !rr[i].oblique) {
           h = rs_wide8_boxes_robust(&rr[i], n, hit[i].t, &tnear);
         } else {
-          const RsWide8Planes own = others & (1u << i) ? rs_wide8_planes(n, octant_of[i]) : planes;
+          const RsWide8Planes own = others & ((rs_u64)1 << i) ? rs_wide8_planes(n, octant_of[i]) : planes;
           h = robust ? rs_wide8_slabs_robust(&own, &rr[i], hit[i].t, &tnear) : rs_wide8_slabs(&own, &tr[i], hit[i].t, &tnear);
         }
-        rays_in = rays_in | (h & rs8_splati((int)(1u << i)));
+        if (i < 32)
+          rays_lo = rays_lo | (h & rs8_splati((int)(1u << i)));
+        else
+          rays_hi = rays_hi | (h & rs8_splati((int)(1u << (i - 32))));
         any_in = any_in | h;
         nearest = rs8_min(nearest, rs8_select(rs8_splat(3.4028235e38f), tnear, h));
       }
       const int entered = rs8_bits(any_in);
       if (entered) {
-        int child_rays[8];
-        rs8_storei(rays_in, child_rays);
+        int child_lo[8], child_hi[8];
+        rs8_storei(rays_lo, child_lo);
+        rs8_storei(rays_hi, child_hi);
         float dist[8];
         rs8_store(nearest, dist);
-        rs_u32 refs[8], masks[8];
+        rs_u32 refs[8];
+        rs_u64 masks[8];
         float keys[8];
         int k = 0;
         for (int b = entered; b; b &= b - 1) {
@@ -119,7 +125,7 @@ RS_INLINE void rs_trace_stream(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBAL con
           }
           keys[j] = key;
           refs[j] = n->child[c];
-          masks[j] = (rs_u32)child_rays[c];
+          masks[j] = (rs_u64)(rs_u32)child_lo[c] | (rs_u64)(rs_u32)child_hi[c] << 32;
         }
         for (int j = k - 1; j > 0; --j) {
           stack[sp] = refs[j];
@@ -136,18 +142,18 @@ RS_INLINE void rs_trace_stream(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBAL con
        * the same tests and the same choice of the nearest lane; an any-hit ray leaves at its first
        * hit. */
       const rs_u32 first_packet = (ref & ~RS_WIDE_LEAF) >> 2, end_packet = first_packet + (ref & 3u) + 1u;
-      rs_u32 looking = m;
+      rs_u64 looking = m;
       for (rs_u32 pi = first_packet; pi < end_packet && looking; ++pi) {
         RS_GLOBAL const RsTriPacket8* p = &packets[pi];
         const RsTriEdges8 e = rs_tri_edges8(p);
-        for (rs_u32 rest = looking; rest; rest &= rest - 1) {
-          const int i = rs_lowest_bit_u(rest);
+        for (rs_u64 rest = looking; rest; rest &= rest - 1) {
+          const int i = rs_lowest_bit_ul(rest);
           rs_f8 tw, uw, vw;
           const int bits = robust ? rs_packet8_intersect_robust(&rr[i], ray[i].d, p, hit[i].t, &tw, &uw, &vw)
                                   : rs_packet8_intersect_edges(tr[i], &e, hit[i].t, &tw, &uw, &vw);
           if (bits && rs_wide8_keep_nearest(bits, tw, uw, vw, p, &hit[i]) && any_hit) {
-            looking &= ~(1u << i);
-            live &= ~(1u << i);
+            looking &= ~((rs_u64)1 << i);
+            live &= ~((rs_u64)1 << i);
           }
         }
       }
