@@ -14,7 +14,7 @@ namespace raysort {
 // layout gains). PacketN: N consecutive rays of the order per work-item over the 4-wide tree, one
 // ray per vector lane (cl/traverse_packet.h). HybridN: the same packets, but a subtree that at most
 // N/4 lanes reach is walked by each of them alone (single rays). Packet, Hybrid: the width the device
-// prefers, resolved by resolve_trace_layout before anything runs. Stream: RS_STREAM_CHUNK (1024)
+// prefers, resolved by resolve_trace_layout before anything runs. Stream: RS_STREAM_CHUNK (2048)
 // consecutive rays of the order per work-item, dealt into streams of RS_STREAM_RAYS (64) rays of one direction octant,
 // each walking the 8-wide collapse node by node, each ray tested alone against a node's eight boxes
 // (cl/traverse_stream.h): a stream's rays share each node's fetch.
