@@ -28,6 +28,9 @@ RS_LANE_INLINE rs_pf rsp_load(const float* p) { return RS_PACKET_CAT(vload, RS_P
 RS_LANE_INLINE rs_pi rsp_loadi(const int* p) { return RS_PACKET_CAT(vload, RS_PACKET_W)(0, p); }
 RS_LANE_INLINE void rsp_store(rs_pf a, float* p) { RS_PACKET_CAT(vstore, RS_PACKET_W)(a, 0, p); }
 RS_LANE_INLINE void rsp_storei(rs_pi a, int* p) { RS_PACKET_CAT(vstore, RS_PACKET_W)(a, 0, p); }
+/* Lane i of a: a permute and a move (vpermd on x86), where a store and a load through private memory
+ * took 4-5 % more of packet16's time on sibenik's primary rays (results/history/trace-kernels.md). */
+RS_LANE_INLINE float rsp_lane(rs_pf a, int i) { return shuffle(a, (RS_PACKET_CAT(uint, RS_PACKET_W))((uint)i)).s0; }
 /* The lanes of a -1/0 mask as bits, lane i -> bit i: one movmskps / vmovmskps / kmov on x86 (the
  * forms of lanes.h), the portable AND-and-OR elsewhere. */
 #if RS_PACKET_W == 4
@@ -93,6 +96,7 @@ RS_LANE_INLINE void rsp_store(rs_pf a, float* p) {
 RS_LANE_INLINE void rsp_storei(rs_pi a, int* p) {
   for (int i = 0; i < RS_PACKET_W; ++i) p[i] = a.s[i];
 }
+RS_LANE_INLINE float rsp_lane(rs_pf a, int i) { return a.s[i]; }
 RS_LANE_INLINE int rsp_bits(rs_pi m) {
   int b = 0;
   for (int i = 0; i < RS_PACKET_W; ++i) b |= (m.s[i] & 1) << i;

@@ -396,11 +396,7 @@ RS_INLINE void rs_traverse_packet(RS_GLOBAL const RsWideNode* nodes, RS_GLOBAL c
         for (int c = 0; c < 4; ++c) {
           if (!((entered >> c) & 1)) continue;
           float d = 3.4028235e38f;
-          if (!any_hit && ((hit_lanes[c] >> lead) & 1)) {
-            float tn[RS_PACKET_W];
-            rsp_store(tnear[c], tn);
-            d = tn[lead];
-          }
+          if (!any_hit && ((hit_lanes[c] >> lead) & 1)) d = rsp_lane(tnear[c], lead);
           int j = k++;
           for (; j > 0 && key[j - 1] > d; --j) {
             key[j] = key[j - 1];
