@@ -15,9 +15,9 @@ namespace raysort {
 // ray per vector lane (cl/traverse_packet.h). HybridN: the same packets, but a subtree that at most
 // N/4 lanes reach is walked by each of them alone (single rays). Packet, Hybrid: the width the device
 // prefers, resolved by resolve_trace_layout before anything runs. Stream: RS_STREAM_CHUNK (2048)
-// consecutive rays of the order per work-item, dealt into streams of RS_STREAM_RAYS (64) rays of one direction octant,
-// each walking the 8-wide collapse node by node, each ray tested alone against a node's eight boxes
-// (cl/traverse_stream.h): a stream's rays share each node's fetch.
+// consecutive rays of the order per work-item, dealt into streams of RS_STREAM_RAYS (64) rays of one
+// direction octant, each walking the 8-wide collapse node by node, each ray tested alone against a
+// node's eight boxes (cl/traverse_stream.h): a stream's rays share each node's fetch.
 // Cwbvh: one ray per work-item over the compressed 8-wide BVH (host/bvh/cwbvh.cpp,
 // cl/traverse_cwbvh.h; Ylitie et al. 2017), the GPU-class kernel. BinaryWw: the binary BVH in the
 // while-while loop form of Aila and Laine 2009 (cl/traverse_binary_ww.h; Binary is their if-if form).
