@@ -213,11 +213,9 @@ RS_INLINE int rs_packet_triangle(const RsRayPacket* p, int lanes, float v0x, flo
   const rs_pf sx = p->ox - rsp_splat(v0x), sy = p->oy - rsp_splat(v0y), sz = p->oz - rsp_splat(v0z);
   const rs_pf u = (sx * px + sy * py + sz * pz) * inv_det;
   bits &= rsp_bits((u >= zero) & (u <= one));
-  if (!bits) return 0;
   const rs_pf qx = sy * E1z - sz * E1y, qy = sz * E1x - sx * E1z, qz = sx * E1y - sy * E1x;
   const rs_pf v = (p->dx * qx + p->dy * qy + p->dz * qz) * inv_det;
   bits &= rsp_bits((v >= zero) & (u + v <= one));
-  if (!bits) return 0;
   const rs_pf t = (E2x * qx + E2y * qy + E2z * qz) * inv_det;
   bits &= rsp_bits((t > p->tmin) & (t < tmax));
   *t_out = t;
