@@ -28,6 +28,8 @@ RS_LANE_INLINE rs_pf rsp_load(const float* p) { return RS_PACKET_CAT(vload, RS_P
 RS_LANE_INLINE rs_pi rsp_loadi(const int* p) { return RS_PACKET_CAT(vload, RS_PACKET_W)(0, p); }
 RS_LANE_INLINE void rsp_store(rs_pf a, float* p) { RS_PACKET_CAT(vstore, RS_PACKET_W)(a, 0, p); }
 RS_LANE_INLINE void rsp_storei(rs_pi a, int* p) { RS_PACKET_CAT(vstore, RS_PACKET_W)(a, 0, p); }
+/* a's bits as integers, lane by lane. */
+RS_LANE_INLINE rs_pi rsp_as_int(rs_pf a) { return RS_PACKET_CAT(as_int, RS_PACKET_W)(a); }
 /* Lane i of a: a permute and a move (vpermd on x86), where a store and a load through private memory
  * took 4-5 % more of packet16's time on sibenik's primary rays (results/history/trace-kernels.md). */
 RS_LANE_INLINE float rsp_lane(rs_pf a, int i) { return shuffle(a, (RS_PACKET_CAT(uint, RS_PACKET_W))((uint)i)).s0; }
@@ -61,6 +63,32 @@ RS_LANE_INLINE rs_pi rsp_lane_bits(void) {
   return (int16)(1, 2, 4, 8, 16, 32, 64, 128, 256, 512, 1024, 2048, 4096, 8192, 16384, 32768);
 }
 #endif
+/* The largest and the smallest lane of a, by halves (the selects of rsp_max and rsp_min, exact, so
+ * the host's loop gives the same value). */
+RS_LANE_INLINE float rsp_max_lane(rs_pf a) {
+#if RS_PACKET_W == 16
+  const float8 m8 = select(a.hi, a.lo, a.lo > a.hi);
+  const float4 m4 = select(m8.hi, m8.lo, m8.lo > m8.hi);
+#elif RS_PACKET_W == 8
+  const float4 m4 = select(a.hi, a.lo, a.lo > a.hi);
+#else
+  const float4 m4 = a;
+#endif
+  const float2 m2 = select(m4.hi, m4.lo, m4.lo > m4.hi);
+  return m2.s0 > m2.s1 ? m2.s0 : m2.s1;
+}
+RS_LANE_INLINE float rsp_min_lane(rs_pf a) {
+#if RS_PACKET_W == 16
+  const float8 m8 = select(a.hi, a.lo, a.lo < a.hi);
+  const float4 m4 = select(m8.hi, m8.lo, m8.lo < m8.hi);
+#elif RS_PACKET_W == 8
+  const float4 m4 = select(a.hi, a.lo, a.lo < a.hi);
+#else
+  const float4 m4 = a;
+#endif
+  const float2 m2 = select(m4.hi, m4.lo, m4.lo < m4.hi);
+  return m2.s0 < m2.s1 ? m2.s0 : m2.s1;
+}
 #else
 typedef rs_lanes_f<RS_PACKET_W> rs_pf;
 typedef rs_lanes_i<RS_PACKET_W> rs_pi;
@@ -97,6 +125,21 @@ RS_LANE_INLINE void rsp_storei(rs_pi a, int* p) {
   for (int i = 0; i < RS_PACKET_W; ++i) p[i] = a.s[i];
 }
 RS_LANE_INLINE float rsp_lane(rs_pf a, int i) { return a.s[i]; }
+RS_LANE_INLINE rs_pi rsp_as_int(rs_pf a) {
+  rs_pi r;
+  for (int i = 0; i < RS_PACKET_W; ++i) r.s[i] = rs_float_as_int(a.s[i]);
+  return r;
+}
+RS_LANE_INLINE float rsp_max_lane(rs_pf a) {
+  float m = a.s[0];
+  for (int i = 1; i < RS_PACKET_W; ++i) m = a.s[i] > m ? a.s[i] : m;
+  return m;
+}
+RS_LANE_INLINE float rsp_min_lane(rs_pf a) {
+  float m = a.s[0];
+  for (int i = 1; i < RS_PACKET_W; ++i) m = a.s[i] < m ? a.s[i] : m;
+  return m;
+}
 RS_LANE_INLINE int rsp_bits(rs_pi m) {
   int b = 0;
   for (int i = 0; i < RS_PACKET_W; ++i) b |= (m.s[i] & 1) << i;

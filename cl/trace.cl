@@ -9,7 +9,7 @@
  * with the same order when it compares against NoSort.
  * The traversals themselves live in traverse_wide.h (rs_traverse_wide: the 4-wide BVH of
  * host/bvh/wide.cpp, the default), traverse_wide8.h (the 8-wide BVH of host/bvh/wide8.cpp),
- * traverse_packet.h and traverse_binary.h, shared with the host reference.
+ * traverse_packet.h, traverse_coherent.h, traverse_stream.h and traverse_binary.h, shared with the host reference.
  * The global size is padded to a multiple of the local size (PoCL 3.1 has no non-uniform
  * work-groups), so every kernel guards on count.
  *
@@ -28,7 +28,7 @@
 #endif
 /* The kernel loader inlines a guarded header at its first #include (host/runtime/runtime.cpp), so
  * the 8-wide traversal comes first under either class that needs it. */
-#if defined(RS_TRACE_WIDE8) || defined(RS_TRACE_STREAM)
+#if defined(RS_TRACE_WIDE8) || defined(RS_TRACE_STREAM) || defined(RS_TRACE_COHERENT)
 #include "traverse_wide8.h"
 #endif
 #ifdef RS_TRACE_STREAM
@@ -40,6 +40,9 @@
 #ifdef RS_TRACE_PACKET
 #define RS_PACKET_W RS_TRACE_PACKET
 #include "traverse_packet.h"
+#ifdef RS_TRACE_COHERENT
+#include "traverse_coherent.h"
+#endif
 /* The hybrid classes hand a subtree to lone rays when at most this many lanes reach it (0: never). */
 #ifndef RS_PACKET_SINGLE_AT
 #define RS_PACKET_SINGLE_AT 0
@@ -122,7 +125,8 @@
   }
 
 /* One trace class per build (host/trace/tracer.cpp passes -DRS_TRACE_BINARY for the binary BVH,
- * -DRS_TRACE_WIDE8 for the 8-wide one, -DRS_TRACE_PACKET=W for packets of W rays, -DRS_TRACE_STREAM
+ * -DRS_TRACE_WIDE8 for the 8-wide one, -DRS_TRACE_PACKET=W for packets of W rays (with -DRS_TRACE_COHERENT
+ * the coherent packets over the 8-wide BVH), -DRS_TRACE_STREAM
  * for streams, -DRS_TRACE_CWBVH for the compressed 8-wide BVH, -DRS_TRACE_BINARY_WW for the binary BVH in
  * the while-while loop form; the define of
  * each class is its row of host/trace/trace_class.cpp), so a run compiles only the kernels it
@@ -178,6 +182,13 @@ RS_TRACE_KERNELS(_binary_ww_robust, RS_WW_ROBUST)
  * each traced node by node, each ray alone against a node's eight boxes (the stream class). */
 RS_GROUP_KERNELS(_stream, RsWide8Node, RsTriPacket8, RS_STREAM_CHUNK, rs_traverse_stream, 0)
 RS_GROUP_KERNELS(_stream_robust, RsWide8Node, RsTriPacket8, RS_STREAM_CHUNK, rs_traverse_stream, 1)
+
+#elif defined(RS_TRACE_PACKET) && defined(RS_TRACE_COHERENT)
+/* Coherent ray packets over the 8-wide BVH (traverse_coherent.h): work-item p traces rays
+ * [p * RS_PACKET_W, (p + 1) * RS_PACKET_W) of the order as one packet, a node's children tested
+ * against the packet's frustum before its lanes. */
+RS_GROUP_KERNELS(_coherent, RsWide8Node, RsTriPacket8, RS_PACKET_W, rs_traverse_coherent, 0)
+RS_GROUP_KERNELS(_coherent_robust, RsWide8Node, RsTriPacket8, RS_PACKET_W, rs_traverse_coherent, 1)
 
 #elif defined(RS_TRACE_PACKET)
 /* Ray packets over the 4-wide BVH (traverse_packet.h): work-item p traces rays

@@ -105,7 +105,7 @@ TEST(ExactOracle, RobustHasNoWrongAnswerOnTheRecordedDisagreements) {
       const bool any_hit = batch.at("any_hit").get<bool>();
       for (TraceLayout layout :
            {TraceLayout::Wide, TraceLayout::Wide8, TraceLayout::Binary, TraceLayout::Packet8, TraceLayout::Packet16,
-            TraceLayout::Stream, TraceLayout::Cwbvh}) {
+            TraceLayout::Coherent16, TraceLayout::Stream, TraceLayout::Cwbvh}) {
         const auto host = trace_reference(p.bvh, rays, nullptr, any_hit, nullptr, TraceVariant::Robust, layout);
         const auto dev =
             Tracer(raysort::testing::runtime(), p.bvh, TraceVariant::Robust, layout).run(rays, nullptr, any_hit).hits;

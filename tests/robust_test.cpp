@@ -208,9 +208,10 @@ void expect_watertight(const char* what, const IndexedMesh& m, const std::vector
       EXPECT_EQ(count_hit_mismatches(dev.hits, host), 0u) << what;
       EXPECT_EQ(exact.wrong, 0u) << what;
       // The packet class, 16 aimed rays per packet, the 8-wide tree (eight boxes and eight
-      // triangles per test) and streams of 64 rays of one octant over it: watertight too, and equal to
-      // their host twins.
-      for (TraceLayout layout : {TraceLayout::Packet16, TraceLayout::Wide8, TraceLayout::Stream, TraceLayout::Cwbvh}) {
+      // triangles per test), coherent packets of 16 and streams of 64 rays of one octant over it:
+      // watertight too, and equal to their host twins.
+      for (TraceLayout layout : {TraceLayout::Packet16, TraceLayout::Wide8, TraceLayout::Coherent16, TraceLayout::Stream,
+                                 TraceLayout::Cwbvh}) {
         const char* name = trace_layout_name(layout);
         const auto class_host = trace_reference(bvh, rays, nullptr, false, nullptr, v, layout);
         const auto class_dev = Tracer(testing::runtime(), bvh, v, layout).run(rays, nullptr, false).hits;

@@ -182,12 +182,14 @@ TEST(Trace, WideAndBinaryLayoutsAgree) {
     }
   }
 }
-// The packet and hybrid classes (cl/traverse_packet.h) and the stream class (cl/traverse_stream.h):
-// each kernel equals its host twin bit for bit, hits and per-ray step counts, with packets (streams)
-// formed from a shuffled order and a batch whose size is no multiple of the width (a partial last
-// packet); and every ray's hit equals the single-ray wide traversal's up to ties (another triangle
-// at exactly the same t), as between the wide and binary classes. Shadow rays: the same occluded /
-// free answer.
+// The packet and hybrid classes (cl/traverse_packet.h), the coherent packets (cl/traverse_coherent.h)
+// and the stream class (cl/traverse_stream.h): each kernel equals its host twin bit for bit, hits and
+// per-ray step counts, with packets (streams) formed from a shuffled order and a batch whose size is no
+// multiple of the width (a partial last packet); and every ray's hit equals the single-ray wide
+// traversal's up to ties (another triangle at exactly the same t), as between the wide and binary
+// classes. Shadow rays: the same occluded / free answer. The coherent packets also in the batch's own
+// order, where the camera's packets share an origin and an octant and the frustum alone decides the
+// inner nodes.
 TEST(Trace, PacketKernelsEqualTheirHostTwinAndSingleRays) {
   Scene scene = load_scene("detail-room", {"", {64, 36, 0}});
   Scene::Flat tris = scene.flatten();
@@ -196,33 +198,37 @@ TEST(Trace, PacketKernelsEqualTheirHostTwinAndSingleRays) {
   ASSERT_GE(batches.size(), 3u);
   Runtime& rt = testing::runtime();
   for (TraceLayout layout : {TraceLayout::Packet4, TraceLayout::Packet8, TraceLayout::Packet16, TraceLayout::Hybrid8,
-                             TraceLayout::Hybrid16, TraceLayout::Stream}) {
+                             TraceLayout::Hybrid16, TraceLayout::Coherent16, TraceLayout::Stream}) {
     for (TraceVariant v : {TraceVariant::Fast, TraceVariant::Robust}) {
       Tracer packet(rt, bvh, v, layout);
       ASSERT_EQ(packet.layout(), layout);
       const std::string what = std::string(trace_layout_name(layout)) + " " + trace_variant_name(v);
       for (const auto& rb : batches) {
-        const bool any = rb.batch.any_hit();
-        std::vector<RsRay> rays = rb.batch.rays;
-        rays.resize(rays.size() - 3);  // a partial last packet for every width
-        std::vector<std::uint32_t> order(rays.size());
-        std::iota(order.begin(), order.end(), 0u);
-        std::shuffle(order.begin(), order.end(), std::mt19937(7));
-        const auto dev = packet.run(rays, &order, any).hits;
-        const auto host = trace_reference(bvh, rays, order.data(), any, nullptr, v, layout);
-        EXPECT_EQ(count_hit_mismatches(dev, host), 0u) << what << " " << rb.batch.name;
-        const auto single = trace_reference(bvh, rays, order.data(), any, nullptr, v, TraceLayout::Wide);
-        std::size_t disagree = 0, hits = 0;
-        for (std::size_t i = 0; i < dev.size(); ++i) {
-          const bool p_hit = dev[i].tri != RS_NO_HIT, s_hit = single[i].tri != RS_NO_HIT;
-          hits += p_hit;
-          if (any)
-            disagree += p_hit != s_hit;
-          else
-            disagree += dev[i].tri != single[i].tri && dev[i].t != single[i].t;
+        for (const bool shuffled : {true, false}) {
+          if (!shuffled && layout != TraceLayout::Coherent16) continue;
+          const bool any = rb.batch.any_hit();
+          std::vector<RsRay> rays = rb.batch.rays;
+          rays.resize(rays.size() - 3);  // a partial last packet for every width
+          std::vector<std::uint32_t> order(rays.size());
+          std::iota(order.begin(), order.end(), 0u);
+          if (shuffled) std::shuffle(order.begin(), order.end(), std::mt19937(7));
+          const std::string where = rb.batch.name + (shuffled ? " shuffled" : " in order");
+          const auto dev = packet.run(rays, &order, any).hits;
+          const auto host = trace_reference(bvh, rays, order.data(), any, nullptr, v, layout);
+          EXPECT_EQ(count_hit_mismatches(dev, host), 0u) << what << " " << where;
+          const auto single = trace_reference(bvh, rays, order.data(), any, nullptr, v, TraceLayout::Wide);
+          std::size_t disagree = 0, hits = 0;
+          for (std::size_t i = 0; i < dev.size(); ++i) {
+            const bool p_hit = dev[i].tri != RS_NO_HIT, s_hit = single[i].tri != RS_NO_HIT;
+            hits += p_hit;
+            if (any)
+              disagree += p_hit != s_hit;
+            else
+              disagree += dev[i].tri != single[i].tri && dev[i].t != single[i].t;
+          }
+          EXPECT_EQ(disagree, 0u) << what << " " << where;
+          EXPECT_GT(hits, 0u) << what << " " << where;
         }
-        EXPECT_EQ(disagree, 0u) << what << " " << rb.batch.name;
-        EXPECT_GT(hits, 0u) << what << " " << rb.batch.name;
       }
       // The counted kernel: the same hits, and per ray the steps its lane was active, as the twin.
       const RayBatch& b = batches[0].batch;
@@ -379,7 +385,7 @@ TEST(Trace, TraceClassNames) {
   EXPECT_EQ(resolve_trace_layout(TraceLayout::Hybrid, avx512), TraceLayout::Hybrid16);
   EXPECT_EQ(resolve_trace_layout(TraceLayout::Hybrid, gpu), TraceLayout::Hybrid8);
   EXPECT_EQ(parse_trace_layouts("wide,packet8,wide").size(), 2u);
-  EXPECT_EQ(parse_trace_layouts("all").size(), 11u);  // every class but the unresolved packet and hybrid
+  EXPECT_EQ(parse_trace_layouts("all").size(), 12u);  // every class but the unresolved packet and hybrid
   EXPECT_TRUE(loops_while_while(TraceLayout::BinaryWw));
   EXPECT_FALSE(loops_while_while(TraceLayout::Binary));
   EXPECT_EQ(tree_kind(TraceLayout::BinaryWw), TreeKind::Binary);
@@ -394,6 +400,9 @@ TEST(Trace, TraceClassNames) {
   EXPECT_EQ(tree_width(TraceLayout::Wide8), 8);
   EXPECT_EQ(tree_width(TraceLayout::Wide), 4);
   EXPECT_EQ(tree_width(TraceLayout::Packet16), 4);
+  EXPECT_EQ(tree_width(TraceLayout::Coherent16), 8);
+  EXPECT_EQ(packet_width(TraceLayout::Coherent16), 16);
+  EXPECT_FALSE(is_stream(TraceLayout::Coherent16));
   EXPECT_EQ(tree_width(TraceLayout::Binary), 2);
   EXPECT_FALSE(walks_wide_tree(TraceLayout::Wide8));
   EXPECT_EQ(resolve_trace_layout(TraceLayout::Wide8, avx512), TraceLayout::Wide8);

@@ -31,6 +31,7 @@
 #include "study.h"
 #include "trace/tracer.h"
 #include "traverse_wide.h"
+#include "traverse_wide8.h"
 
 namespace {
 

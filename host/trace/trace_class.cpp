@@ -51,6 +51,10 @@ constexpr TraceClass kTraceClasses[] = {
      "packets of 16, single rays from 4 lanes"},
     {TraceLayout::Hybrid, "hybrid", 0, 0, false, TreeKind::Wide4, "", "", false,
      "hybrids of the device's preferred width"},
+    {TraceLayout::Coherent16, "coherent16", 16, 0, false, TreeKind::Wide8, "-DRS_TRACE_PACKET=16 -DRS_TRACE_COHERENT",
+     "_coherent", false,
+     "packets of 16 over the 8-wide BVH, a node's children tested against the packet's frustum before its lanes "
+     "(Embree's coherent packets)"},
     {TraceLayout::Stream, "stream", RS_STREAM_CHUNK, 0, true, TreeKind::Wide8, "-DRS_TRACE_STREAM", "_stream", false,
      "streams of " RS_STREAM_TEXT(RS_STREAM_RAYS) " rays of one direction octant (dealt from " RS_STREAM_TEXT(RS_STREAM_CHUNK)
      " consecutive rays) over the 8-wide BVH, node by node"},

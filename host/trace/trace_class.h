@@ -14,7 +14,9 @@ namespace raysort {
 // layout gains). PacketN: N consecutive rays of the order per work-item over the 4-wide tree, one
 // ray per vector lane (cl/traverse_packet.h). HybridN: the same packets, but a subtree that at most
 // N/4 lanes reach is walked by each of them alone (single rays). Packet, Hybrid: the width the device
-// prefers, resolved by resolve_trace_layout before anything runs. Stream: RS_STREAM_CHUNK (2048)
+// prefers, resolved by resolve_trace_layout before anything runs. Coherent16: packets of 16 over the 8-wide
+// collapse, a node's children tested against the packet's frustum before its lanes (cl/traverse_coherent.h,
+// Embree's coherent packets). Stream: RS_STREAM_CHUNK (2048)
 // consecutive rays of the order per work-item, dealt into streams of RS_STREAM_RAYS (64) rays of one
 // direction octant, each walking the 8-wide collapse node by node, each ray tested alone against a
 // node's eight boxes (cl/traverse_stream.h): a stream's rays share each node's fetch.
@@ -32,13 +34,14 @@ enum class TraceLayout {
   Hybrid8,
   Hybrid16,
   Hybrid,
+  Coherent16,
   Stream,
   Cwbvh,
   BinaryWw
 };
 
 // The classes' names, in the order help and errors list them: wide, wide8, binary, packet4, packet8,
-// packet16, packet, hybrid8, hybrid16, hybrid, stream, cwbvh, binary-ww. parse throws an Error naming the accepted values.
+// packet16, packet, hybrid8, hybrid16, hybrid, coherent16, stream, cwbvh, binary-ww. parse throws an Error naming the accepted values.
 const std::vector<std::string>& trace_layout_names();
 TraceLayout parse_trace_layout(std::string_view name);
 const char* trace_layout_name(TraceLayout l);
