@@ -6,10 +6,17 @@
  * `intersectCoherent`: a frustum test of an N-wide node, lanes only for the children it hits), the
  * path that runs primary rays 3x faster than its incoherent packets on the same rays.
  *
- * Everything but the frustum is the packet class's traversal (traverse_packet.h) over the 8-wide
- * tree: per-lane active masks, nearest child first by the first active lane's entry distance, per
- * lane the box and triangle arithmetic of the single-ray tests. The frustum only skips children
- * that no lane's own test can enter, so hits and steps are those of the same walk without it.
+ * Two modes per packet:
+ * - One origin (every lane's origin has the same bits: a pinhole camera's packets): the frustum is
+ *   as tight as its 1/d bounds, so it alone decides the inner nodes. Every active lane goes on into
+ *   each child it admits, nearest first by the frustum's entry bound, pushed with that bound in
+ *   every lane; a popped entry keeps the lanes whose closest hit is not nearer. Lanes meet only
+ *   triangles.
+ * - Otherwise: the packet class's traversal (traverse_packet.h) over the 8-wide tree, per-lane slab
+ *   tests and masks, nearest child first by the first active lane's entry distance, but only for
+ *   the children the frustum admits (if the packet has one): the frustum skips only children no
+ *   lane's own test enters, so hits and steps are those of the same walk without it.
+ * Either way each lane meets triangles with the single-ray arithmetic (rs_packet_triangle[_robust]).
  *
  * The frustum (Reshetov, Soupikov and Hurley 2005; Embree's Frustum): the bounds, over the packet's
  * active lanes, of the origin, of 1/d and of the interval [tmin, closest hit so far]. A lane's entry

@@ -1,5 +1,6 @@
-// The host twin of the packet kernels: cl/traverse_packet.h (and cl/traverse_coherent.h) compiled for each packet width, each in
-// a namespace of its own (the header has no include guard for that reason; packet_lanes.h).
+// The host twin of the packet kernels: cl/traverse_packet.h compiled for each packet width (and
+// cl/traverse_coherent.h for 16), each in a namespace of its own (the headers have no include guard
+// for that reason; packet_lanes.h).
 #include "trace/packet_twin.h"
 
 #include "intersect.h"
@@ -13,6 +14,20 @@ namespace raysort {
 
 #include "trace/packet_widths.inc"
 
+namespace {
+
+// Calls trace(first) for every packet of `width` consecutive positions among n, on host threads.
+template <typename TracePacket>
+void for_each_packet(int width, rs_u32 n, const TracePacket& trace) {
+  const std::size_t packets = (static_cast<std::size_t>(n) + width - 1) / width;
+  auto work = [&](std::size_t begin, std::size_t end) {
+    for (std::size_t p = begin; p < end; ++p) trace(static_cast<rs_u32>(p * width));
+  };
+  for_each_block(packets, n < 4096, work, 64);
+}
+
+}  // namespace
+
 void trace_packets_on_host(int width, int single_at, const WideBvh& wide, const std::vector<RsRay>& rays,
                            const std::uint32_t* order, int robust, int any_hit, std::vector<RsHit>& hits,
                            std::uint32_t* visits) {
@@ -20,13 +35,10 @@ void trace_packets_on_host(int width, int single_at, const WideBvh& wide, const 
   if (!trace) throw Error("internal: no packet traversal of width " + std::to_string(width) + " (4, 8 or 16)");
   const auto n = static_cast<rs_u32>(rays.size());
   hits.resize(n);
-  const std::size_t packets = (static_cast<std::size_t>(n) + width - 1) / width;
-  auto work = [&](std::size_t begin, std::size_t end) {
-    for (std::size_t p = begin; p < end; ++p)
-      trace(wide.nodes.data(), wide.packets.data(), rays.data(), order, static_cast<rs_u32>(p * width), n, robust,
-            any_hit, single_at, hits.data(), visits);
-  };
-  for_each_block(packets, n < 4096, work, 64);
+  for_each_packet(width, n, [&](rs_u32 first) {
+    trace(wide.nodes.data(), wide.packets.data(), rays.data(), order, first, n, robust, any_hit, single_at, hits.data(),
+          visits);
+  });
 }
 
 void trace_coherent_on_host(int width, const Wide8Bvh& wide8, const std::vector<RsRay>& rays, const std::uint32_t* order,
@@ -35,13 +47,9 @@ void trace_coherent_on_host(int width, const Wide8Bvh& wide8, const std::vector<
   if (!trace) throw Error("internal: no coherent packet traversal of width " + std::to_string(width) + " (16)");
   const auto n = static_cast<rs_u32>(rays.size());
   hits.resize(n);
-  const std::size_t packets = (static_cast<std::size_t>(n) + width - 1) / width;
-  auto work = [&](std::size_t begin, std::size_t end) {
-    for (std::size_t p = begin; p < end; ++p)
-      trace(wide8.nodes.data(), wide8.packets.data(), rays.data(), order, static_cast<rs_u32>(p * width), n, robust,
-            any_hit, hits.data(), visits);
-  };
-  for_each_block(packets, n < 4096, work, 64);
+  for_each_packet(width, n, [&](rs_u32 first) {
+    trace(wide8.nodes.data(), wide8.packets.data(), rays.data(), order, first, n, robust, any_hit, hits.data(), visits);
+  });
 }
 
 }  // namespace raysort
