@@ -14,13 +14,16 @@
 #include "sampling.h"
 #include "shared.h"
 #include "traverse_wide.h"
+#include "traverse_wide8.h"
 
 namespace raysort {
 
-// traverse_packet.h at the widest packet, in a namespace of its own as in host/trace/packet_twin.cpp.
+// traverse_packet.h and traverse_coherent.h at the widest packet, in a namespace of their own as in
+// host/trace/packet_twin.cpp.
 namespace setup16 {
 #define RS_PACKET_W 16
 #include "traverse_packet.h"
+#include "traverse_coherent.h"
 #undef RS_PACKET_W
 }  // namespace setup16
 
@@ -140,6 +143,118 @@ TEST(SharedMath, PacketRaySetUpEqualsTheSingleRaySetUpInEveryLane) {
     ASSERT_EQ(p.any_parallel, any_parallel) << "round " << round;
   }
   EXPECT_EQ(compared, 4000 * 16);
+}
+
+// The coherent packets' frustum (cl/traverse_coherent.h) admits every child of an 8-wide node that
+// some active lane's own slab test enters (rs_packet_box, rs_packet_box_robust, with the lane's
+// closest hit so far as the far bound), and its entry bound for that child is at most the lane's
+// entry distance: what lets it skip children, and lets a one-origin packet go by the frustum alone
+// (its pushed entries carry that bound, and a lane is dropped at a pop only when its closest hit is
+// nearer). Packets of one octant, with one origin or origins up to far apart; boxes random, flat,
+// on the origin's planes, huge and tiny; directions with zero (of the octant's sign), tiny, huge and
+// ordinary components; tmin 0 or not; closest hits near, far or 1e30. Both variants.
+TEST(SharedMath, PacketFrustumAdmitsEveryChildALaneEnters) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f), pos(0.05f, 1.0f);
+  std::uniform_int_distribution<int> pick(0, 7);
+  // The robust variant calls a component below 1e-20 of the largest parallel (RS_PARALLEL_FRACTION),
+  // and a packet with a parallel lane gets no frustum: its small components stay above that.
+  const float magnitudes[2][5] = {{0.0f, 1e-36f, 1e-20f, 1e-6f, 1e20f}, {1e-18f, 1e-9f, 1e-6f, 1e-3f, 10.0f}};
+  const float coordinates[] = {0.0f, -0.0f, 1e-30f, -1e-30f, 1e30f, -1e30f, 3e38f, -3e38f};
+  long entered = 0, admitted_only = 0, lanes_checked = 0;
+  int refused = 0, one_origin = 0;
+  for (int round = 0; round < 20000; ++round) {
+    const int robust = round & 1, octant = pick(rng);
+    const bool shared_origin = (round & 2) != 0;
+    const float spread = (round & 4) ? 0.01f : 3.0f;
+    float o0[3];
+    for (float& c : o0) c = pick(rng) == 0 ? coordinates[pick(rng)] * 1e-30f : 2.0f * unit(rng);
+    std::vector<RsRay> rays(16);
+    std::vector<rs_u32> order(16);
+    for (rs_u32 i = 0; i < 16; ++i) {
+      RsRay& r = rays[i];
+      for (int a = 0; a < 3; ++a) {
+        r.o[a] = shared_origin ? o0[a] : o0[a] + spread * unit(rng);
+        const int k = pick(rng);
+        const float m = k < 5 ? magnitudes[robust][k] : pos(rng);
+        r.d[a] = ((octant >> a) & 1) ? -m : m;  // -0 on a negative axis: 1/d keeps the octant's sign
+      }
+      r.tmin = pick(rng) == 0 ? 1e-3f : 0.0f;
+      r.tmax = pick(rng) == 0 ? 1e30f : 10.0f * pos(rng);
+      order[i] = i;
+    }
+    if (robust && round % 20 == 1) rays[3].d[1] = 0.0f;  // a parallel lane: no frustum
+    setup16::RsRayPacket p;
+    setup16::rs_pf tmax;
+    RsRay lane_rays[16];
+    const rs_u32 count = round % 7 == 0 ? 9u : 16u;
+    const int live = setup16::rs_packet_load(rays.data(), order.data(), 0, count, robust, lane_rays, &p, &tmax);
+    if (!live) continue;
+    // Closest hits so far: the lane's tmax, or nearer.
+    setup16::rs_pf hit_t = tmax;
+    for (int i = 0; i < 16; ++i)
+      if (pick(rng) < 3) hit_t.s[i] = tmax.s[i] * pos(rng);
+    setup16::RsPacketFrustum f;
+    if (!setup16::rs_packet_frustum(&p, live, robust, hit_t, &f)) {
+      ++refused;
+      continue;
+    }
+    one_origin += f.one_origin;
+    RsWide8Node node;
+    float* b = reinterpret_cast<float*>(&node);  // lo_x hi_x lo_y hi_y lo_z hi_z, eight each
+    rs_i32* valid = reinterpret_cast<rs_i32*>(&node.valid);
+    for (int c = 0; c < 8; ++c) {
+      valid[c] = pick(rng) == 0 ? 0 : -1;
+      node.child[c] = static_cast<rs_u32>(c);
+      for (int a = 0; a < 3; ++a) {
+        float lo, hi;
+        switch (pick(rng)) {
+          case 0: lo = hi = o0[a] + unit(rng); break;                     // flat
+          case 1: lo = o0[a], hi = o0[a] + pos(rng); break;               // on the origin's plane
+          case 2: lo = o0[a] - pos(rng), hi = o0[a]; break;
+          case 3: lo = -1e30f, hi = 1e30f * pos(rng); break;              // huge
+          case 4: lo = o0[a] + 1e-30f * unit(rng), hi = lo + 1e-30f; break;  // tiny
+          default: {
+            const float x = o0[a] + 4.0f * unit(rng), y = o0[a] + 4.0f * unit(rng);
+            lo = std::min(x, y), hi = std::max(x, y);
+          }
+        }
+        b[16 * a + c] = lo, b[16 * a + 8 + c] = hi;
+      }
+    }
+    float fnear[8];
+    const int admitted = setup16::rs_packet_frustum_children(&f, &node, robust, fnear);
+    for (int c = 0; c < 8; ++c) {
+      if (!valid[c]) {
+        ASSERT_FALSE((admitted >> c) & 1) << "round " << round << ": an empty slot admitted";
+        continue;
+      }
+      setup16::rs_pf tn;
+      const setup16::rs_pi m =
+          robust ? setup16::rs_packet_box_robust(&p, b[c], b[8 + c], b[16 + c], b[24 + c], b[32 + c], b[40 + c], hit_t, &tn)
+                 : setup16::rs_packet_box(&p, b[c], b[8 + c], b[16 + c], b[24 + c], b[32 + c], b[40 + c], hit_t, &tn);
+      const int lanes = setup16::rsp_bits(m) & live;
+      if (!lanes) {
+        admitted_only += (admitted >> c) & 1;
+        continue;
+      }
+      ++entered;
+      ASSERT_TRUE((admitted >> c) & 1) << "round " << round << " child " << c << ": lanes " << lanes
+                                      << " enter it, the frustum (" << (robust ? "robust" : "fast") << ") refuses it";
+      for (int i = 0; i < 16; ++i)
+        if ((lanes >> i) & 1) {
+          ASSERT_LE(fnear[c], tn.s[i]) << "round " << round << " child " << c << " lane " << i;
+          ++lanes_checked;
+        }
+    }
+  }
+  std::printf("[ frustum  ] %ld children entered by a lane, all admitted (%ld lanes' entry distances above the bound); "
+              "%ld admitted and entered by none; %d packets refused a frustum, %d of one origin\n",
+              entered, lanes_checked, admitted_only, refused, one_origin);
+  EXPECT_GT(entered, 10000);
+  EXPECT_GT(one_origin, 2000);
+  EXPECT_GE(refused, 500);  // every packet with a parallel lane, at least
+  EXPECT_LT(refused, 2000);
 }
 
 }  // namespace raysort
