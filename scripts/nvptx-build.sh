@@ -56,6 +56,7 @@ BUILDS=(
   "trace-packet16|cl/trace.cl|-DRS_TRACE_PACKET=16"
   "trace-hybrid8|cl/trace.cl|-DRS_TRACE_PACKET=8 -DRS_PACKET_SINGLE_AT=2"
   "trace-hybrid16|cl/trace.cl|-DRS_TRACE_PACKET=16 -DRS_PACKET_SINGLE_AT=4"
+  "trace-coherent8|cl/trace.cl|-DRS_TRACE_PACKET=8 -DRS_TRACE_COHERENT"
   "trace-coherent16|cl/trace.cl|-DRS_TRACE_PACKET=16 -DRS_TRACE_COHERENT"
   "encode|cl/encode.cl|"
   "permute|cl/permute.cl|"

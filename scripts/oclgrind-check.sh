@@ -57,7 +57,7 @@ cases=(
   "trace-binary|trace ${DEV[*]} --scene cornell --resolution 16x9 ${PROTO[*]} --variant both --layout binary,binary-ww"
   "trace-wide8|trace ${DEV[*]} --scene cornell --resolution 16x9 ${PROTO[*]} --variant both --layout wide8"
   "trace-packets|trace ${DEV[*]} --scene cornell --resolution 16x9 ${PROTO[*]} --variant both --layout packet4,packet16,hybrid8"
-  "trace-coherent|trace ${DEV[*]} --scene cornell --resolution 16x9 ${PROTO[*]} --variant both --layout coherent16"
+  "trace-coherent|trace ${DEV[*]} --scene cornell --resolution 16x9 ${PROTO[*]} --variant both --layout coherent8,coherent16"
   "trace-stream|trace ${DEV[*]} --scene cornell --resolution 16x9 ${PROTO[*]} --variant both --layout stream"
   "trace-cwbvh|trace ${DEV[*]} --scene cornell --resolution 16x9 ${PROTO[*]} --variant both --layout cwbvh"
   "encode-all|encodebench ${DEV[*]} --scene cornell --resolution 16x9 ${PROTO[*]} --bits 16,32,64"

@@ -198,14 +198,16 @@ TEST(Trace, PacketKernelsEqualTheirHostTwinAndSingleRays) {
   ASSERT_GE(batches.size(), 3u);
   Runtime& rt = testing::runtime();
   for (TraceLayout layout : {TraceLayout::Packet4, TraceLayout::Packet8, TraceLayout::Packet16, TraceLayout::Hybrid8,
-                             TraceLayout::Hybrid16, TraceLayout::Coherent16, TraceLayout::Stream}) {
+                             TraceLayout::Hybrid16, TraceLayout::Coherent8, TraceLayout::Coherent16,
+                             TraceLayout::Stream}) {
     for (TraceVariant v : {TraceVariant::Fast, TraceVariant::Robust}) {
       Tracer packet(rt, bvh, v, layout);
       ASSERT_EQ(packet.layout(), layout);
       const std::string what = std::string(trace_layout_name(layout)) + " " + trace_variant_name(v);
       for (const auto& rb : batches) {
         for (const bool shuffled : {true, false}) {
-          if (!shuffled && layout != TraceLayout::Coherent16) continue;
+          const bool coherent = layout == TraceLayout::Coherent8 || layout == TraceLayout::Coherent16;
+          if (!shuffled && !coherent) continue;  // the coherent packets in order too
           const bool any = rb.batch.any_hit();
           std::vector<RsRay> rays = rb.batch.rays;
           rays.resize(rays.size() - 3);  // a partial last packet for every width
@@ -384,8 +386,12 @@ TEST(Trace, TraceClassNames) {
   EXPECT_EQ(resolve_trace_layout(TraceLayout::Binary, avx512), TraceLayout::Binary);
   EXPECT_EQ(resolve_trace_layout(TraceLayout::Hybrid, avx512), TraceLayout::Hybrid16);
   EXPECT_EQ(resolve_trace_layout(TraceLayout::Hybrid, gpu), TraceLayout::Hybrid8);
+  EXPECT_EQ(resolve_trace_layout(TraceLayout::Coherent, avx512), TraceLayout::Coherent16);
+  EXPECT_EQ(resolve_trace_layout(TraceLayout::Coherent, avx), TraceLayout::Coherent8);
+  EXPECT_EQ(resolve_trace_layout(TraceLayout::Coherent, gpu), TraceLayout::Coherent8);
+  EXPECT_EQ(packet_width(TraceLayout::Coherent8), 8);
   EXPECT_EQ(parse_trace_layouts("wide,packet8,wide").size(), 2u);
-  EXPECT_EQ(parse_trace_layouts("all").size(), 12u);  // every class but the unresolved packet and hybrid
+  EXPECT_EQ(parse_trace_layouts("all").size(), 13u);  // every class but the unresolved packet, hybrid, coherent
   EXPECT_TRUE(loops_while_while(TraceLayout::BinaryWw));
   EXPECT_FALSE(loops_while_while(TraceLayout::Binary));
   EXPECT_EQ(tree_kind(TraceLayout::BinaryWw), TreeKind::Binary);

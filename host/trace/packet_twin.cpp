@@ -1,5 +1,5 @@
 // The host twin of the packet kernels: cl/traverse_packet.h compiled for each packet width (and
-// cl/traverse_coherent.h for 16), each in a namespace of its own (the headers have no include guard
+// cl/traverse_coherent.h for 8 and 16), each in a namespace of its own (the headers have no include guard
 // for that reason; packet_lanes.h).
 #include "trace/packet_twin.h"
 
@@ -44,7 +44,7 @@ void trace_packets_on_host(int width, int single_at, const WideBvh& wide, const 
 void trace_coherent_on_host(int width, const Wide8Bvh& wide8, const std::vector<RsRay>& rays, const std::uint32_t* order,
                             int robust, int any_hit, std::vector<RsHit>& hits, std::uint32_t* visits) {
   const CoherentTraversal trace = coherent_traversal(width);
-  if (!trace) throw Error("internal: no coherent packet traversal of width " + std::to_string(width) + " (16)");
+  if (!trace) throw Error("internal: no coherent packet traversal of width " + std::to_string(width) + " (8 or 16)");
   const auto n = static_cast<rs_u32>(rays.size());
   hits.resize(n);
   for_each_packet(width, n, [&](rs_u32 first) {

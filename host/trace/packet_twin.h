@@ -17,8 +17,8 @@ void trace_packets_on_host(int width, int single_at, const WideBvh& wide, const 
                            const std::uint32_t* order, int robust, int any_hit, std::vector<RsHit>& hits,
                            std::uint32_t* visits);
 
-// The same for the coherent packets over the 8-wide tree (cl/traverse_coherent.h, the coherent16 class):
-// packets of `width` (16) consecutive positions, exactly as the coherent kernels trace them.
+// The same for the coherent packets over the 8-wide tree (cl/traverse_coherent.h, the coherent8 and coherent16 classes):
+// packets of `width` (8 or 16) consecutive positions, exactly as the coherent kernels trace them.
 void trace_coherent_on_host(int width, const Wide8Bvh& wide8, const std::vector<RsRay>& rays, const std::uint32_t* order,
                             int robust, int any_hit, std::vector<RsHit>& hits, std::uint32_t* visits);
 

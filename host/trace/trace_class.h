@@ -14,9 +14,9 @@ namespace raysort {
 // layout gains). PacketN: N consecutive rays of the order per work-item over the 4-wide tree, one
 // ray per vector lane (cl/traverse_packet.h). HybridN: the same packets, but a subtree that at most
 // N/4 lanes reach is walked by each of them alone (single rays). Packet, Hybrid: the width the device
-// prefers, resolved by resolve_trace_layout before anything runs. Coherent16: packets of 16 over the 8-wide
+// prefers, resolved by resolve_trace_layout before anything runs. CoherentN: packets of N over the 8-wide
 // collapse, a node's children tested against the packet's frustum before its lanes (cl/traverse_coherent.h,
-// Embree's coherent packets). Stream: RS_STREAM_CHUNK (2048)
+// Embree's coherent packets); Coherent: the preferred width's. Stream: RS_STREAM_CHUNK (2048)
 // consecutive rays of the order per work-item, dealt into streams of RS_STREAM_RAYS (64) rays of one
 // direction octant, each walking the 8-wide collapse node by node, each ray tested alone against a
 // node's eight boxes (cl/traverse_stream.h): a stream's rays share each node's fetch.
@@ -34,14 +34,16 @@ enum class TraceLayout {
   Hybrid8,
   Hybrid16,
   Hybrid,
+  Coherent8,
   Coherent16,
+  Coherent,
   Stream,
   Cwbvh,
   BinaryWw
 };
 
 // The classes' names, in the order help and errors list them: wide, wide8, binary, packet4, packet8,
-// packet16, packet, hybrid8, hybrid16, hybrid, coherent16, stream, cwbvh, binary-ww. parse throws an Error naming the accepted values.
+// packet16, packet, hybrid8, hybrid16, hybrid, coherent8, coherent16, coherent, stream, cwbvh, binary-ww. parse throws an Error naming the accepted values.
 const std::vector<std::string>& trace_layout_names();
 TraceLayout parse_trace_layout(std::string_view name);
 const char* trace_layout_name(TraceLayout l);
@@ -57,8 +59,9 @@ int packet_width(TraceLayout l);
 int packet_single_at(TraceLayout l);
 // The class walks ray streams (cl/traverse_stream.h), not packets in vector lanes.
 bool is_stream(TraceLayout l);
-// Packet (Hybrid) becomes the packet (hybrid) class of a device's preferred float vector width
-// (16 on AVX-512, 8 on AVX; packets: else 4, hybrids: else 8); every other class is returned as it is.
+// Packet (Hybrid, Coherent) becomes the packet (hybrid, coherent) class of a device's preferred float
+// vector width (16 on AVX-512, 8 on AVX; packets: else 4, hybrids and coherent packets: else 8); every
+// other class is returned as it is.
 // trace/tracer.h has the overload that takes the device.
 TraceLayout resolve_trace_layout(TraceLayout l, unsigned preferred_float_width);
 // The kernel build's define and the kernels' name suffix (cl/trace.cl) of a resolved class.
