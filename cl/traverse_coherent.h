@@ -28,6 +28,10 @@
  * its smallest upper exit bound is entered by no lane. Rays with a non-finite origin or 1/d, or
  * (robust) a parallel axis, leave their packet without a frustum.
  *
+ * The leaf loop, the pop and the write-out repeat rs_traverse_packet's on purpose: as shared
+ * functions (the triangle call with a stride, the hit update and the write-out through pointers) PoCL
+ * made coherent16 1.5-2.5 % slower on sibenik's primary rays (results/history/trace-kernels.md).
+ *
  * Include after traverse_packet.h (same RS_PACKET_W) and traverse_wide8.h; no include guard, for the
  * same reason as traverse_packet.h.
  */
