@@ -168,7 +168,7 @@ TEST(SharedMath, PacketFrustumAdmitsEveryChildALaneEnters) {
     const bool shared_origin = (round & 2) != 0;
     const float spread = (round & 4) ? 0.01f : 3.0f;
     float o0[3];
-    for (float& c : o0) c = pick(rng) == 0 ? coordinates[pick(rng)] * 1e-30f : 2.0f * unit(rng);
+    for (float& c : o0) c = pick(rng) == 0 ? coordinates[pick(rng)] : 2.0f * unit(rng);
     std::vector<RsRay> rays(16);
     std::vector<rs_u32> order(16);
     for (rs_u32 i = 0; i < 16; ++i) {
