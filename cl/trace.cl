@@ -9,7 +9,8 @@
  * with the same order when it compares against NoSort.
  * The traversals themselves live in traverse_wide.h (rs_traverse_wide: the 4-wide BVH of
  * host/bvh/wide.cpp, the default), traverse_wide8.h (the 8-wide BVH of host/bvh/wide8.cpp),
- * traverse_packet.h, traverse_coherent.h, traverse_stream.h and traverse_binary.h, shared with the host reference.
+ * traverse_packet.h, traverse_coherent.h, traverse_stream.h and traverse_binary.h, shared with the
+ * host reference.
  * The global size is padded to a multiple of the local size (PoCL 3.1 has no non-uniform
  * work-groups), so every kernel guards on count.
  *

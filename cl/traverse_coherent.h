@@ -129,7 +129,7 @@ RS_INLINE void rs_traverse_coherent(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBA
   rs_pi steps = rsp_splati(0);
   RsPacketFrustum f;
   const int frustum = live ? rs_packet_frustum(&p, live, robust, hit_t, &f) : 0;
-  /* Lanes of one origin: the frustum alone decides the inner nodes (docs/trace.md, "coherent16"). */
+  /* Lanes of one origin: the frustum alone decides the inner nodes (docs/trace.md, "coherent8, coherent16"). */
   const int frustum_only = frustum && f.one_origin;
   int finished = 0; /* any hit: lanes that found theirs */
   rs_u32 stack[RS_WIDE8_STACK_SIZE];
