@@ -10,8 +10,8 @@
  * - One origin (every lane's origin has the same bits: a pinhole camera's packets): the frustum is
  *   as tight as its 1/d bounds, so it alone decides the inner nodes. Every active lane goes on into
  *   each child it admits, nearest first by the frustum's entry bound, pushed with that bound in
- *   every lane; a popped entry keeps the lanes whose closest hit is not nearer. Lanes meet only
- *   triangles.
+ *   every lane; a popped entry keeps the lanes whose closest hit is not nearer. Lanes meet
+ *   triangles, and (fast variant) the leaf children of a node that admits more than one child.
  * - Otherwise: the packet class's traversal (traverse_packet.h) over the 8-wide tree, per-lane slab
  *   tests and masks, nearest child first by the first active lane's entry distance, but only for
  *   the children the frustum admits (if the packet has one): the frustum skips only children no
@@ -152,6 +152,19 @@ RS_INLINE void rs_traverse_coherent(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBA
         /* Every active lane goes on into each child the frustum admits. */
         entered = candidates;
         for (int c = 0; c < 8; ++c) child_lanes[c] = lanes;
+        /* Fast variant, two or more admitted children: a leaf child keeps only the lanes whose own
+         * slab test enters it, and is skipped when none does (a leaf costs a sixteen-lane triangle
+         * test per triangle). A lone admitted child is where the packet's rays go, so its lanes
+         * rarely miss it; the robust variant's box test costs more than it saves
+         * (results/history/trace-kernels.md, "Coherent packets"). */
+        for (int rest = robust || !(candidates & (candidates - 1)) ? 0 : candidates; rest; rest &= rest - 1) {
+          const int c = rs_lowest_bit(rest);
+          if (!(n->child[c] & RS_WIDE_LEAF)) continue;
+          rs_pf tn;
+          const rs_pi m = rs_packet_box(&p, b[c], b[8 + c], b[16 + c], b[24 + c], b[32 + c], b[40 + c], hit_t, &tn);
+          child_lanes[c] = lanes & rsp_bits(m);
+          if (!child_lanes[c]) entered &= ~(1 << c);
+        }
       } else {
         for (int rest = candidates; rest; rest &= rest - 1) {
           const int c = rs_lowest_bit(rest);
@@ -203,15 +216,16 @@ RS_INLINE void rs_traverse_coherent(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBA
         RS_GLOBAL const rs_i32* nondegenerate = (RS_GLOBAL const rs_i32*)&tp->nondegenerate;
         for (int j = 0; j < 8 && lanes; ++j) {
           if (!tri_valid[j] || (robust && !nondegenerate[j])) continue;
-          rs_pf t, u, v;
+          rs_pf t = hit_t, u = hit_u, v = hit_v;
           const int found =
               robust ? rs_packet_triangle_robust(&p, lane_rays, lanes, v0x[j], v0x[8 + j], v0x[16 + j], v0x[24 + j],
                                                  v0x[32 + j], v0x[40 + j], v0x[48 + j], v0x[56 + j], v0x[64 + j], hit_t,
                                                  &t, &u, &v)
                      : rs_packet_triangle(&p, lanes, v0x[j], v0x[8 + j], v0x[16 + j], v0x[24 + j], v0x[32 + j],
                                           v0x[40 + j], v0x[48 + j], v0x[56 + j], v0x[64 + j], hit_t, &t, &u, &v);
-          if (!found) continue;
-          found_any = 1;
+          /* Fast variant: the hit taken in without a branch (found or not); robust: only when found. */
+          if (robust && !found) continue;
+          found_any |= found;
           const rs_pi m = rsp_mask(found);
           hit_t = rsp_select(hit_t, t, m);
           hit_tri = rsp_selecti(hit_tri, rsp_splati((int)tp->id[j]), m);
