@@ -206,8 +206,7 @@ TEST(Trace, PacketKernelsEqualTheirHostTwinAndSingleRays) {
       const std::string what = std::string(trace_layout_name(layout)) + " " + trace_variant_name(v);
       for (const auto& rb : batches) {
         for (const bool shuffled : {true, false}) {
-          const bool coherent = layout == TraceLayout::Coherent8 || layout == TraceLayout::Coherent16;
-          if (!shuffled && !coherent) continue;  // the coherent packets in order too
+          if (!shuffled && !is_coherent(layout)) continue;  // the coherent packets in order too
           const bool any = rb.batch.any_hit();
           std::vector<RsRay> rays = rb.batch.rays;
           rays.resize(rays.size() - 3);  // a partial last packet for every width

@@ -122,6 +122,11 @@ int packet_single_at(TraceLayout l) { return trace_class(l).single_at; }
 
 bool is_stream(TraceLayout l) { return trace_class(l).stream; }
 
+bool is_coherent(TraceLayout l) {
+  const TraceClass& c = trace_class(l);
+  return c.tree == TreeKind::Wide8 && c.width > 1 && !c.stream;
+}
+
 TreeKind tree_kind(TraceLayout l) { return trace_class(l).tree; }
 
 bool loops_while_while(TraceLayout l) { return trace_class(l).while_while; }

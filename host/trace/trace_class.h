@@ -59,6 +59,8 @@ int packet_width(TraceLayout l);
 int packet_single_at(TraceLayout l);
 // The class walks ray streams (cl/traverse_stream.h), not packets in vector lanes.
 bool is_stream(TraceLayout l);
+// The class walks coherent packets (cl/traverse_coherent.h): packets over the 8-wide tree, not a stream.
+bool is_coherent(TraceLayout l);
 // Packet (Hybrid, Coherent) becomes the packet (hybrid, coherent) class of a device's preferred float
 // vector width (16 on AVX-512, 8 on AVX; packets: else 4, hybrids and coherent packets: else 8); every
 // other class is returned as it is.

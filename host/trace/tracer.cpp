@@ -151,8 +151,8 @@ std::vector<RsHit> trace_reference(const Bvh& bvh, const std::vector<RsRay>& ray
     trace_streams_on_host(wide8, rays, order, robust, any_hit ? 1 : 0, hits, node_visits ? node_visits->data() : nullptr);
     return hits;
   }
-  if (const int width = packet_width(layout); width > 1 && tree_kind(layout) == TreeKind::Wide8) {
-    trace_coherent_on_host(width, wide8, rays, order, robust, any_hit ? 1 : 0, hits,
+  if (is_coherent(layout)) {
+    trace_coherent_on_host(packet_width(layout), wide8, rays, order, robust, any_hit ? 1 : 0, hits,
                            node_visits ? node_visits->data() : nullptr);
     return hits;
   }
