@@ -132,7 +132,16 @@ TEST(Cli, ImpossibleCombinationsRefusedBeforeWork) {
 // best path; an unknown path is refused with the valid names, before any work.
 TEST(CliTrace, EmbreePathsAllPrintsALinePerPath) {
   expect_refused({"trace", "--scene", "cornell", "--embree-paths", "1M"}, {"--embree-paths 1M goes with --reference embree"});
+  expect_refused({"trace", "--scene", "cornell", "--embree-isa", "avx2"}, {"--embree-isa avx2 goes with --reference embree"});
 #ifdef RAYSORT_HAVE_EMBREE
+  expect_refused({"trace", "--scene", "cornell", "--reference", "embree", "--embree-isa", "avx3"},
+                 {"unknown Embree instruction set 'avx3' in --embree-isa; the sets are native, sse2"});
+  // Held to SSE2: the embree line says so, and 8-ray packets are not native.
+  CliResult held = run_cli({"trace", "--scene", "cornell", "--resolution", "16x16", "--reps", "1", "--warmup", "0",
+                            "--reference", "embree", "--embree-isa", "sse2", "--embree-paths", "1,8"});
+  ASSERT_EQ(held.code, 0) << held.out << held.err;
+  EXPECT_NE(held.out.find(" held to sse2, "), std::string::npos) << held.out;
+  EXPECT_NE(held.out.find("native packets: 8 no"), std::string::npos) << held.out;
   expect_refused({"trace", "--scene", "cornell", "--reference", "embree", "--embree-paths", "1,17"},
                  {"unknown Embree path '17' in --embree-paths", "1 (rtcIntersect1)", "1M-coherent", "16-coherent", "or all"});
   expect_refused({"trace", "--scene", "cornell", "--reference", "embree", "--embree-paths", ""},

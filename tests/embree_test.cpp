@@ -239,6 +239,50 @@ TEST(Embree, EveryPathTracesAPartialLastPacket) {
   EXPECT_TRUE(embree.trace({}, false, EmbreePath::Packet16).empty());
 }
 
+// --embree-isa: Embree held to an instruction set runs that set's kernels, not the widest the CPU
+// has. Under SSE2 no packet wider than 4 rays is native (RTC_DEVICE_PROPERTY_NATIVE_RAY8/16), under
+// AVX2 none of 16, whatever CPU runs the test; the hits stay rtcIntersect1's on a native device.
+// An unknown set is refused with the list; a set the CPU lacks, with the set named.
+TEST(Embree, InstructionSetIsHeldWhereAsked) {
+  for (const char* isa : kEmbreeIsas) EXPECT_NO_THROW(check_embree_isa(isa)) << isa;
+  try {
+    check_embree_isa("avx3");
+    ADD_FAILURE() << "avx3 is no instruction set of Embree's";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("unknown Embree instruction set 'avx3' in --embree-isa; the sets are native, "
+                                         "sse2, sse4.2, avx, avx2, avx512"),
+              std::string::npos) << e.what();
+  }
+  EXPECT_THROW(EmbreeScene(Scene::Flat{}, 1, "avx3"), Error);
+  const Scene::Flat tris = testing::two_quads().flatten();
+  std::vector<RsRay> rays;
+  for (int i = 0; i < 37; ++i) {
+    const float a = 0.05f + 0.02f * static_cast<float>(i % 20), b = a + 0.3f;
+    rays.push_back(i % 2 ? testing::ray(a, b, 1.0f, 0, 0, -1) : testing::ray(b, a, 1.0f, 0, 0, -1));
+  }
+  const EmbreeScene native(tris, 2);
+  EXPECT_EQ(native.isa(), "native");
+  const EmbreeScene sse2(tris, 2, "sse2");
+  EXPECT_EQ(sse2.isa(), "sse2");
+  EXPECT_TRUE(sse2.native_packets(4));
+  EXPECT_FALSE(sse2.native_packets(8)) << "Embree held to SSE2 still runs 8-ray packets natively";
+  EXPECT_FALSE(sse2.native_packets(16));
+  const std::vector<RsHit> expected = native.trace(rays, false);
+  for (const EmbreePathInfo& info : kEmbreePaths) {
+    const std::vector<RsHit> hits = sse2.trace(rays, false, info.path);
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      EXPECT_EQ(hits[i].tri, expected[i].tri) << info.key << " ray " << i;
+      EXPECT_NEAR(hits[i].t, expected[i].t, 1e-6f) << info.key << " ray " << i;
+    }
+  }
+  try {
+    const EmbreeScene avx2(tris, 2, "avx2");
+    EXPECT_FALSE(avx2.native_packets(16)) << "Embree held to AVX2 still runs 16-ray packets natively";
+  } catch (const Error& e) {  // a CPU without AVX2: refused, naming the set
+    EXPECT_NE(std::string(e.what()).find("--embree-isa avx2: this CPU does not run it"), std::string::npos) << e.what();
+  }
+}
+
 TEST(Embree, EveryPathAgreesWithRtcIntersect1OnCornell) {
   expect_paths_agree("cornell", {97, 71, 2});
 }
@@ -432,6 +476,32 @@ TEST(EmbreeRun, ResumeWithOtherPathsIsRefused) {
   CliResult same = run_cli(tiny_run(out, {"--embree-paths", "16-coherent,1"}, "1"));
   EXPECT_EQ(same.code, 0) << same.err;
   EXPECT_NE(same.out.find("0 cells run, 10 already done"), std::string::npos) << same.out;
+}
+
+// --embree-isa in run: the instruction set is part of the matrix (a resume with another is another
+// matrix; native, the default, adds no entry) and meta.json's Embree section names it; without
+// --embree-paths, or unknown, it is refused before any work.
+TEST(EmbreeRun, InstructionSetIsPartOfTheMatrix) {
+  const std::string out = testing::temp_path("embree-isa");
+  CliResult r = run_cli(tiny_run(out, {"--embree-paths", "8", "--embree-isa", "sse2"}, "1"));
+  ASSERT_EQ(r.code, 0) << r.out << r.err;
+  EXPECT_NE((r.out + r.err).find("(held to sse2)"), std::string::npos) << r.out << r.err;
+  const nlohmann::json meta = nlohmann::json::parse(read_file(out + "/meta.json"));
+  EXPECT_EQ(meta["matrix"]["embree_isa"], "sse2");
+  EXPECT_NE(meta["embree"]["isa"].get<std::string>().find("isa=sse2"), std::string::npos) << meta["embree"].dump();
+  EXPECT_EQ(meta["embree"]["paths"][0]["native"], false) << "8-ray packets under SSE2";
+  CliResult other = run_cli(tiny_run(out, {"--embree-paths", "8"}, "1"));
+  EXPECT_EQ(other.code, 1) << other.out << other.err;
+  EXPECT_NE(other.err.find("different matrix configuration (embree_isa"), std::string::npos) << other.err;
+  const std::string none = testing::temp_path("embree-isa-none");
+  CliResult alone = run_cli(tiny_run(none, {"--embree-isa", "avx2"}));
+  EXPECT_EQ(alone.code, 1);
+  EXPECT_NE(alone.err.find("--embree-isa avx2 sets the instruction set of Embree's arms: give --embree-paths too"),
+            std::string::npos) << alone.err;
+  CliResult bad = run_cli(tiny_run(none, {"--embree-paths", "1", "--embree-isa", "avx3"}));
+  EXPECT_EQ(bad.code, 1);
+  EXPECT_NE(bad.err.find("unknown Embree instruction set 'avx3' in --embree-isa"), std::string::npos) << bad.err;
+  EXPECT_FALSE(std::filesystem::exists(none)) << "refused before the result set was made";
 }
 
 // An unknown path is refused before any work, naming the paths; the NoSort-only default adds no

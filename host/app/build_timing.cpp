@@ -13,11 +13,13 @@
 
 namespace raysort {
 
-BuildTiming time_builds(const Scene::Flat& tris, unsigned rounds, bool with_embree, std::uint64_t seed) {
+BuildTiming time_builds(const Scene::Flat& tris, unsigned rounds, bool with_embree, std::uint64_t seed,
+                        const std::string& embree_isa) {
 #ifndef RAYSORT_HAVE_EMBREE
   if (with_embree) throw Error("this build has no Embree: install libembree-dev and reconfigure");
 #endif
   BuildTiming t;
+  t.embree_isa = embree_isa;
   t.rounds = rounds;
   t.threads = host_threads();
   Measurement m;
@@ -29,7 +31,7 @@ BuildTiming time_builds(const Scene::Flat& tris, unsigned rounds, bool with_embr
 #ifdef RAYSORT_HAVE_EMBREE
   if (with_embree)
     m.arms.push_back({{"embree"}, [&] {
-                        const EmbreeScene scene(tris);
+                        const EmbreeScene scene(tris, 0, embree_isa);
                         t.embree_threads = scene.threads();
                         return std::vector<double>{scene.build_ms()};
                       }});
@@ -53,8 +55,8 @@ std::string build_timing_text(const BuildTiming& t) {
                                  t.rounds, interval_text(t.ours.estimate(), 2), t.threads, t.sah_cost);
   if (t.embree) {
 #ifdef RAYSORT_HAVE_EMBREE
-    text += fmt::format("\n         Embree {} build quality high, {} threads: {} ms; ours/Embree {}", EmbreeScene::version(),
-                        t.embree_threads, interval_text(t.embree->estimate(), 2), interval_text(t.ratio));
+    text += fmt::format("\n         Embree {}{} build quality high, {} threads: {} ms; ours/Embree {}", EmbreeScene::version(),
+                        t.embree_isa == "native" ? "" : " (" + t.embree_isa + ")", t.embree_threads, interval_text(t.embree->estimate(), 2), interval_text(t.ratio));
 #endif
   }
   return text;

@@ -29,7 +29,7 @@ struct RunArgs {
   std::vector<unsigned> bits, top_bits;
   bool warp_sort = false;
   CommonOptions common;  // --device, --scene-root, --resolution, --spp, --seed
-  std::string variant, access, baseline, layout, gpu_model, embree_paths;
+  std::string variant, access, baseline, layout, gpu_model, embree_paths, embree_isa;
   unsigned reps = 0, warmup = 0;
   double max_noise_pct = 0, max_time_s = 0;
   EncoderParams params;  // the knobs given (encode/encoder_params.h)
@@ -88,6 +88,7 @@ MatrixSpec matrix_from(const RunArgs& a, const CLI::App& cmd) {
     throw Error("--embree-paths: this build has no Embree: install libembree-dev and reconfigure");
 #endif
   }
+  if (cmd.count("--embree-isa")) spec.embree_isa = a.embree_isa;  // checked with the matrix (validate_matrix)
   if (cmd.count("--reps")) spec.reps = a.reps;
   if (cmd.count("--warmup")) spec.warmup = a.warmup;
   if (cmd.count("--max-noise")) spec.max_noise = a.max_noise_pct / 100.0;
@@ -183,6 +184,9 @@ void register_run_command(CLI::App& app) {
                   "with libembree-dev): 1 (rtcIntersect1), 1M and 1M-coherent (rtcIntersect1M streams), 4, 8, 16 and "
                   "4-coherent, 8-coherent, 16-coherent (packets of consecutive rays), comma-separated, or all; off by "
                   "default");
+  cmd->add_option("--embree-isa", a->embree_isa,
+                  "with --embree-paths: the instruction set Embree's arms run: native (the widest this CPU has, the "
+                  "default), sse2, sse4.2, avx, avx2 or avx512 (docs/trace.md, \"Embree anchor\")");
   cmd->add_option("--gpu-model", a->gpu_model,
                   "also replay every cell's traversal through a GPU's caches and predict its speedup (docs/gpu-model.md): "
                   "a profile in gpu/profiles/ (rtx3060, h100, h200) or a .toml path; off by default (it adds the replay's "

@@ -47,6 +47,7 @@ struct TraceArgs {
   std::string layout = "wide";
   std::string reference;  // "" or "embree"
   std::optional<std::string> embree_paths;  // --embree-paths; none: "1" (rtcIntersect1 alone, the columns of issue 9)
+  std::optional<std::string> embree_isa;    // --embree-isa; none: native (embree/embree_reference.h kEmbreeIsas)
   bool adjudicate = false;       // judge every ray the answers differ on, exactly (trace/adjudicate.h)
   std::string disagreements;     // with adjudicate: write those rays to DIR/<scene>.json
   unsigned build_rounds = 0;     // > 0: time the BVH builds in this many rounds and stop
@@ -399,7 +400,7 @@ void trace_scene(Runtime& rt, const std::string& scene_name, const TraceArgs& ar
   std::optional<EmbreeScene> embree_scene;
   std::optional<EmbreeReference> embree;
   if (args.reference == "embree") {
-    embree_scene.emplace(p.tris);
+    embree_scene.emplace(p.tris, 0, args.embree_isa.value_or("native"));
     embree.emplace(EmbreeReference{*embree_scene, parse_embree_paths(args.embree_paths.value_or("1"))});
     embree_ref = &*embree;
     embree_columns_on_row = embree->single_only();
@@ -410,9 +411,10 @@ void trace_scene(Runtime& rt, const std::string& scene_name, const TraceArgs& ar
       if (std::any_of(embree->paths.begin(), embree->paths.end(),
                       [&](EmbreePath path) { return embree_path_info(path).packet == width; }))
         native += fmt::format("{}{} {}", native.empty() ? "" : ", ", width, embree_scene->native_packets(width) ? "yes" : "no");
-    fmt::print("embree   Embree {}, {} threads, {}, build quality high: BVH built in {:.0f} ms (ours {:.0f} ms = {:.2f}x "
+    fmt::print("embree   Embree {}{}, {} threads, {}, build quality high: BVH built in {:.0f} ms (ours {:.0f} ms = {:.2f}x "
                "Embree's){}\n",
-               EmbreeScene::version(), embree_scene->threads(), calls, embree_scene->build_ms(), p.bvh.build_ms,
+               EmbreeScene::version(), embree_scene->isa() == "native" ? "" : " held to " + embree_scene->isa(),
+               embree_scene->threads(), calls, embree_scene->build_ms(), p.bvh.build_ms,
                embree_scene->build_ms() > 0 ? p.bvh.build_ms / embree_scene->build_ms() : 0.0,
                native.empty() ? "" : "; native packets: " + native);
   }
@@ -474,7 +476,7 @@ int run_build_timing(const TraceArgs& args) {
     const PreparedScene p = prepare_scene(scene_name, args.common.scene_options());
     fmt::print("\nscene    {}: {} triangles, loaded in {:.0f} ms\n", p.scene.name, p.tris.size(), p.load_ms);
     const BuildTiming t = time_builds(p.tris, args.build_rounds, args.reference == "embree",
-                                      protocol_seed("build/" + p.scene.name));
+                                      protocol_seed("build/" + p.scene.name), args.embree_isa.value_or("native"));
     fmt::print("{}\n", build_timing_text(t));
     std::fflush(stdout);
   }
@@ -484,10 +486,13 @@ int run_build_timing(const TraceArgs& args) {
 int run_trace(const TraceArgs& args) {
   if (args.embree_paths && args.reference != "embree")
     throw Error("--embree-paths " + *args.embree_paths + " goes with --reference embree");
+  if (args.embree_isa && args.reference != "embree")
+    throw Error("--embree-isa " + *args.embree_isa + " goes with --reference embree");
 #ifndef RAYSORT_HAVE_EMBREE
   if (args.reference == "embree") throw Error("this build has no Embree: install libembree-dev and reconfigure");
 #else
   if (args.embree_paths) parse_embree_paths(*args.embree_paths);  // a bad list is refused before any work
+  if (args.embree_isa) check_embree_isa(*args.embree_isa);
 #endif
   parse_trace_variants(args.variant);  // a bad --variant is refused before any work
   parse_trace_layouts(args.layout);
@@ -561,6 +566,10 @@ void register_trace_command(CLI::App& app) {
                   "with --reference embree: Embree's paths to time, each an arm of every batch's rounds "
                   "(comma-separated): 1 (rtcIntersect1, the default), 1M and 1M-coherent (rtcIntersect1M streams), "
                   "4, 8, 16 and 4-coherent, 8-coherent, 16-coherent (packets of consecutive rays), or all");
+  cmd->add_option("--embree-isa", args->embree_isa,
+                  "with --reference embree: the instruction set Embree runs: native (the widest this CPU has, the "
+                  "default), sse2, sse4.2, avx, avx2 or avx512; e.g. avx2 on an AVX-512 CPU, with PoCL held to AVX2 too "
+                  "(docs/trace.md, \"Embree anchor\"), compares both at an AVX2 CPU's width");
   cmd->add_flag("--adjudicate", args->adjudicate,
                 "decide every ray on which the variants (and Embree) disagree with exact rational arithmetic, and "
                 "count each answer right, tie (correct up to float precision) or wrong; exits 1 if a robust answer "

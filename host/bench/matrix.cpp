@@ -70,6 +70,7 @@ nlohmann::json MatrixSpec::to_json() const {
   if (!gpu_model.empty()) j["gpu_model"] = gpu_model;
   // Likewise Embree's paths: part of the matrix (a resume with other paths is another matrix).
   if (!embree_paths.empty()) j["embree_paths"] = embree_paths;
+  if (embree_isa != "native") j["embree_isa"] = embree_isa;
   // Likewise the warp-granular sort: a set sorted in full has no entry.
   if (sort_warp_group) j["sort_warp_group"] = sort_warp_group;
   // Likewise the sampling overrides: a set that keeps the scenes' own shadow rays and depth has no entry.
@@ -89,7 +90,8 @@ void check_matrix_json(const nlohmann::json& matrix, const std::string& file) {
       {"resolution", Text},   {"spp", Count},            {"reps", Count},              {"warmup", Count},
       {"max_noise", Number},  {"max_time_s", Number},    {"seed", Count},              {"variant", Text},
       {"access", Text},       {"baseline", Text},        {"layout", Text},             {"gpu_model", Text},
-      {"shadow_rays", Count}, {"bounces", Count},        {"embree_paths", TextList},   {"sort_warp_group", Count}};
+      {"shadow_rays", Count}, {"bounces", Count},        {"embree_paths", TextList},   {"sort_warp_group", Count},
+      {"embree_isa", Text}};
   auto is = [](const nlohmann::json& v, Kind k) {
     switch (k) {
       case Text: return v.is_string();
@@ -270,6 +272,15 @@ void validate_matrix(const MatrixSpec& spec) {
       throw Error(fmt::format("unknown Embree path '{}' in --embree-paths; the paths are {}, or all", path, keys));
     }
   }
+  if (std::none_of(std::begin(kEmbreeIsas), std::end(kEmbreeIsas),
+                   [&](const char* isa) { return spec.embree_isa == isa; })) {
+    std::string isas;
+    for (const char* isa : kEmbreeIsas) isas += fmt::format("{}{}", isas.empty() ? "" : ", ", isa);
+    throw Error(fmt::format("unknown Embree instruction set '{}' in --embree-isa; the sets are {}", spec.embree_isa, isas));
+  }
+  if (spec.embree_isa != "native" && spec.embree_paths.empty())
+    throw Error(fmt::format("--embree-isa {} sets the instruction set of Embree's arms: give --embree-paths too",
+                            spec.embree_isa));
   if (!spec.ray_file.empty() &&
       (spec.scenes.size() != 1 || spec.batches != std::vector<std::string>{ray_file_batch_name(spec.ray_file)}))
     throw Error(fmt::format("--rays {} is one batch of one scene: give that scene alone with --scene, and leave out "

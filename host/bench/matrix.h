@@ -54,6 +54,9 @@ struct MatrixSpec {
   // order (docs/measurement.md, "Embree on sorted orders"). Empty: none (no arm, no entry in
   // meta.json's matrix, so sets written without it resume).
   std::vector<std::string> embree_paths;
+  // The instruction set Embree's arms run (run --embree-isa: kEmbreeIsas, embree/embree_reference.h).
+  // "native": the widest this CPU has (no entry in meta.json's matrix, so sets written before it resume).
+  std::string embree_isa = "native";
   EncoderParams params;
 
   // The measurement protocol of every cell (bench/protocol.h): warm-up rounds, the fewest timed

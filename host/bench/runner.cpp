@@ -155,10 +155,10 @@ nlohmann::json ray_files_meta(const MatrixSpec& spec) {
 // Embree's arms (run --embree-paths): which call and context flag each path makes, on how many
 // threads, and how an arm is timed. Empty without paths (and in a build without Embree, which
 // refuses them in validate_matrix).
-nlohmann::json embree_meta(const std::vector<std::string>& keys) {
+nlohmann::json embree_meta(const std::vector<std::string>& keys, const std::string& isa) {
 #ifdef RAYSORT_HAVE_EMBREE
   if (keys.empty()) return nullptr;
-  const EmbreeScene probe(Scene::Flat{});  // the device each scene's EmbreeScene gets: its threads, native widths
+  const EmbreeScene probe(Scene::Flat{}, 0, isa);  // the device each scene's EmbreeScene gets: its threads, native widths
   nlohmann::json paths = nlohmann::json::array();
   for (const std::string& key : keys) {
     const EmbreePath path = parse_embree_paths(key).front();
@@ -175,6 +175,7 @@ nlohmann::json embree_meta(const std::vector<std::string>& keys) {
   return {{"doc", "docs/measurement.md, \"Embree on sorted orders\"; docs/trace.md, \"Embree anchor\""},
           {"version", EmbreeScene::version()},
           {"threads", probe.threads()},
+          {"isa", isa == "native" ? "native (the widest this CPU runs)" : isa + " (rtcNewDevice \"isa=" + isa + "\", --embree-isa)"},
           {"paths", paths},
           {"scene", "one triangle geometry per scene (built once), RTC_SCENE_FLAG_NONE, RTC_BUILD_QUALITY_HIGH"},
           {"chunks", "each thread takes contiguous chunks of 4096 rays of the order traced; a packet is consecutive rays"},
@@ -185,7 +186,7 @@ nlohmann::json embree_meta(const std::vector<std::string>& keys) {
                      "Embree's layout and hits back inside it)"},
           {"speedup", "paired: embree:<path>:nosort / embree:<path>:trace per round, as the cell's own speedup"}};
 #else
-  (void)keys;
+  (void)keys, (void)isa;
   return nullptr;
 #endif
 }
@@ -232,7 +233,7 @@ nlohmann::json run_meta(const MatrixSpec& spec, const RunOptions& opts, const De
         {"shuffled", "Fisher-Yates over the generation order; j = (mt19937_64() * (i + 1)) >> 64, the engine seeded "
                      "with FNV-1a(batch name) ^ seed * 0x9e3779b97f4a7c15 (render/batches.h)"}}},
   };
-  if (!spec.embree_paths.empty()) meta["embree"] = embree_meta(spec.embree_paths);
+  if (!spec.embree_paths.empty()) meta["embree"] = embree_meta(spec.embree_paths, spec.embree_isa);
   if (nlohmann::json files = encoder_files_meta(spec.encoders); !files.is_null()) meta["encoder_files"] = std::move(files);
   if (nlohmann::json files = ray_files_meta(spec); !files.is_null()) meta["ray_files"] = std::move(files);
   return meta;

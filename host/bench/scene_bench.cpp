@@ -55,10 +55,11 @@ SceneBench::SceneBench(Runtime& rt, PreparedScene scene, const MatrixSpec& matri
   }
 #ifdef RAYSORT_HAVE_EMBREE
   if (!spec.embree_paths.empty()) {
-    embree_.emplace(prepared.tris);
+    embree_.emplace(prepared.tris, 0, spec.embree_isa);
     for (const std::string& key : spec.embree_paths) embree_paths.push_back(parse_embree_paths(key).front());
-    say(fmt::format("{}: Embree {} BVH built in {:.0f} ms ({} threads)", name, EmbreeScene::version(),
-                    embree_->build_ms(), embree_->threads()));
+    say(fmt::format("{}: Embree {}{} BVH built in {:.0f} ms ({} threads)", name, EmbreeScene::version(),
+                    spec.embree_isa == "native" ? "" : " (held to " + spec.embree_isa + ")", embree_->build_ms(),
+                    embree_->threads()));
   }
 #endif
   for (TraceVariant v : spec.variants)

@@ -247,11 +247,26 @@ void trace_packets(RTCScene scene, const RayAt& at, std::size_t n, bool any_hit,
 
 std::string EmbreeScene::version() { return RTC_VERSION_STRING; }
 
-EmbreeScene::EmbreeScene(const Scene::Flat& tris, unsigned threads) {
+void check_embree_isa(const std::string& isa) {
+  for (const char* known : kEmbreeIsas)
+    if (isa == known) return;
+  std::string list;
+  for (const char* known : kEmbreeIsas) list += (list.empty() ? "" : ", ") + std::string(known);
+  throw Error(fmt::format("unknown Embree instruction set '{}' in --embree-isa; the sets are {}", isa, list));
+}
+
+EmbreeScene::EmbreeScene(const Scene::Flat& tris, unsigned threads, const std::string& isa) : isa_(isa) {
+  check_embree_isa(isa);
   threads_ = threads ? threads : std::max(1u, std::thread::hardware_concurrency());
-  const std::string config = fmt::format("threads={}", threads_);
+  const std::string config = fmt::format("threads={}{}", threads_, isa == "native" ? "" : ",isa=" + isa);
   device_ = rtcNewDevice(config.c_str());
-  if (!device_) throw Error(fmt::format("rtcNewDevice(\"{}\") failed: {}", config, static_cast<int>(rtcGetDeviceError(nullptr))));
+  if (!device_) {
+    const int code = static_cast<int>(rtcGetDeviceError(nullptr));
+    if (code == RTC_ERROR_UNSUPPORTED_CPU)
+      throw Error(fmt::format("--embree-isa {}: this CPU does not run it (rtcNewDevice(\"{}\"): RTC_ERROR_UNSUPPORTED_CPU); "
+                              "choose a set it runs, or native", isa, config));
+    throw Error(fmt::format("rtcNewDevice(\"{}\") failed: {}", config, code));
+  }
   rtcSetDeviceErrorFunction(device_, on_embree_error, &error_sink());
 
   scene_ = rtcNewScene(device_);

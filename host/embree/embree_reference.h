@@ -74,17 +74,27 @@ std::string embree_path_calls(EmbreePath path);
 // repeated keys count once. Throws Error naming the unknown key and listing the valid ones.
 std::vector<EmbreePath> parse_embree_paths(const std::string& list);
 
+// The instruction sets Embree may be held to (trace and run --embree-isa): "native" lets Embree
+// choose the widest this CPU runs; any other asks rtcNewDevice for that one ("isa=avx2"), so that a
+// CPU with AVX-512 runs the kernels an AVX2 CPU would (docs/trace.md, "Embree anchor": with PoCL
+// held to the same set, a same-ISA comparison on one machine). The only list of them.
+inline constexpr const char* kEmbreeIsas[] = {"native", "sse2", "sse4.2", "avx", "avx2", "avx512"};
+// Throws Error naming the value and listing kEmbreeIsas when isa is not one of them.
+void check_embree_isa(const std::string& isa);
+
 // One Embree device and the scene of one triangle list. Not copyable.
 class EmbreeScene {
  public:
   // threads 0: std::thread::hardware_concurrency(). Used for Embree's own build threads (TBB) and
-  // for the trace threads. Throws Error when Embree reports one.
-  explicit EmbreeScene(const Scene::Flat& tris, unsigned threads = 0);
+  // for the trace threads. isa: one of kEmbreeIsas. Throws Error when Embree reports one (an ISA
+  // this CPU does not run among them).
+  explicit EmbreeScene(const Scene::Flat& tris, unsigned threads = 0, const std::string& isa = "native");
   ~EmbreeScene();
   EmbreeScene(const EmbreeScene&) = delete;
   EmbreeScene& operator=(const EmbreeScene&) = delete;
 
   unsigned threads() const { return threads_; }
+  const std::string& isa() const { return isa_; }  // as asked: "native" or the set Embree was held to
   double build_ms() const { return build_ms_; }  // rtcCommitScene (BVH build), wall clock
   static std::string version();                  // "3.13.5"
 
@@ -107,6 +117,7 @@ class EmbreeScene {
   RTCDeviceTy* device_ = nullptr;
   RTCSceneTy* scene_ = nullptr;
   unsigned threads_ = 1;
+  std::string isa_ = "native";
   double build_ms_ = 0.0;
 };
 
