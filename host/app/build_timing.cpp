@@ -56,7 +56,8 @@ std::string build_timing_text(const BuildTiming& t) {
   if (t.embree) {
 #ifdef RAYSORT_HAVE_EMBREE
     text += fmt::format("\n         Embree {}{} build quality high, {} threads: {} ms; ours/Embree {}", EmbreeScene::version(),
-                        t.embree_isa == "native" ? "" : " (" + t.embree_isa + ")", t.embree_threads, interval_text(t.embree->estimate(), 2), interval_text(t.ratio));
+                        t.embree_isa == "native" ? "" : " held to " + t.embree_isa + ",", t.embree_threads,
+                        interval_text(t.embree->estimate(), 2), interval_text(t.ratio));
 #endif
   }
   return text;

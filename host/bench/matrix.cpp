@@ -8,7 +8,7 @@
 #include <regex>
 
 #include "bench/batch_file.h"
-#include "embree/embree_reference.h"  // kEmbreePaths only: the keys a matrix may name
+#include "embree/embree_reference.h"  // kEmbreePaths and check_embree_isa only: the keys a matrix may name
 #include "scene/load.h"
 #include "util/error.h"
 
@@ -272,12 +272,7 @@ void validate_matrix(const MatrixSpec& spec) {
       throw Error(fmt::format("unknown Embree path '{}' in --embree-paths; the paths are {}, or all", path, keys));
     }
   }
-  if (std::none_of(std::begin(kEmbreeIsas), std::end(kEmbreeIsas),
-                   [&](const char* isa) { return spec.embree_isa == isa; })) {
-    std::string isas;
-    for (const char* isa : kEmbreeIsas) isas += fmt::format("{}{}", isas.empty() ? "" : ", ", isa);
-    throw Error(fmt::format("unknown Embree instruction set '{}' in --embree-isa; the sets are {}", spec.embree_isa, isas));
-  }
+  check_embree_isa(spec.embree_isa);
   if (spec.embree_isa != "native" && spec.embree_paths.empty())
     throw Error(fmt::format("--embree-isa {} sets the instruction set of Embree's arms: give --embree-paths too",
                             spec.embree_isa));

@@ -247,14 +247,6 @@ void trace_packets(RTCScene scene, const RayAt& at, std::size_t n, bool any_hit,
 
 std::string EmbreeScene::version() { return RTC_VERSION_STRING; }
 
-void check_embree_isa(const std::string& isa) {
-  for (const char* known : kEmbreeIsas)
-    if (isa == known) return;
-  std::string list;
-  for (const char* known : kEmbreeIsas) list += (list.empty() ? "" : ", ") + std::string(known);
-  throw Error(fmt::format("unknown Embree instruction set '{}' in --embree-isa; the sets are {}", isa, list));
-}
-
 EmbreeScene::EmbreeScene(const Scene::Flat& tris, unsigned threads, const std::string& isa) : isa_(isa) {
   check_embree_isa(isa);
   threads_ = threads ? threads : std::max(1u, std::thread::hardware_concurrency());

@@ -17,6 +17,7 @@
 
 #include "scene/scene.h"
 #include "shared.h"
+#include "util/error.h"
 
 struct RTCDeviceTy;
 struct RTCSceneTy;
@@ -79,8 +80,16 @@ std::vector<EmbreePath> parse_embree_paths(const std::string& list);
 // CPU with AVX-512 runs the kernels an AVX2 CPU would (docs/trace.md, "Embree anchor": with PoCL
 // held to the same set, a same-ISA comparison on one machine). The only list of them.
 inline constexpr const char* kEmbreeIsas[] = {"native", "sse2", "sse4.2", "avx", "avx2", "avx512"};
-// Throws Error naming the value and listing kEmbreeIsas when isa is not one of them.
-void check_embree_isa(const std::string& isa);
+// Throws Error naming the value and listing kEmbreeIsas when isa is not one of them (inline: a build
+// without Embree checks a matrix's --embree-isa too).
+inline void check_embree_isa(const std::string& isa) {
+  std::string list;
+  for (const char* known : kEmbreeIsas) {
+    if (isa == known) return;
+    list += (list.empty() ? "" : ", ") + std::string(known);
+  }
+  throw Error("unknown Embree instruction set '" + isa + "' in --embree-isa; the sets are " + list);
+}
 
 // One Embree device and the scene of one triangle list. Not copyable.
 class EmbreeScene {
