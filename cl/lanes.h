@@ -119,13 +119,22 @@ RS_LANE_INLINE rs_f16 rs16_min(rs_f16 a, rs_f16 b) { return select(b, a, a < b);
 RS_LANE_INLINE rs_f16 rs16_max(rs_f16 a, rs_f16 b) { return select(b, a, a > b); }
 /* The lanes of a sixteen- or eight-lane -1/0 mask as bits, lane i -> bit i (the cut-box tests,
  * keys_cut.h rs_cut_bits). On AVX-512 devices (PoCL on such CPUs) the compare's mask register is
- * the answer (kmovd, RS_MASK16_BITS = 1); elsewhere the lanes are ANDed with their bits and ORed
- * (on PoCL 1.2-1.6x slower box-set keys).
- * ClRuntime.MaskBitsFormsAgree checks them on the device. */
-#if defined(__AVX512F__) && defined(__AVX512DQ__) && !defined(RS_PORTABLE_MASK_BITS)
+ * the answer (kmovd, RS_MASK16_BITS = 1); on AVX devices without it, one vmovmskps per eight lanes
+ * (RS_MASK16_BITS = 2; PoCL compiling for AVX2: HCC's, MLHCC's and the grid's keys 5-11 % faster
+ * than with the portable form, results/history/encoder-kernels.md); elsewhere the lanes are ANDed
+ * with their bits and ORed (with AVX-512, 1.2-1.6x slower box-set keys). -DRS_AVX_MASK_BITS takes
+ * the AVX form on an AVX-512 device, -DRS_PORTABLE_MASK_BITS the portable one anywhere:
+ * ClRuntime.MaskBitsFormsAgree and Encode.DeviceCutBitsInEveryFormEqualTheHost check all three. */
+#if defined(__AVX512F__) && defined(__AVX512DQ__) && !defined(RS_PORTABLE_MASK_BITS) && !defined(RS_AVX_MASK_BITS)
 #define RS_MASK16_BITS 1
 RS_LANE_INLINE uint rs16_mask_bits(int16 m) { return (uint)__builtin_ia32_cvtd2mask512(m); }
 RS_LANE_INLINE uint rs8_mask_bits(int8 m) { return (uint)__builtin_ia32_movmskps256(as_float8(m)); }
+#elif defined(__x86_64__) && defined(__AVX__) && !defined(RS_PORTABLE_MASK_BITS)
+#define RS_MASK16_BITS 2
+RS_LANE_INLINE uint rs8_mask_bits(int8 m) { return (uint)__builtin_ia32_movmskps256(as_float8(m)); }
+RS_LANE_INLINE uint rs16_mask_bits(int16 m) {
+  return (uint)__builtin_ia32_movmskps256(as_float8(m.lo)) | ((uint)__builtin_ia32_movmskps256(as_float8(m.hi)) << 8);
+}
 #else
 #define RS_MASK16_BITS 0
 /* The lanes are ORed one by one, not folded by halves (.lo | .hi): the same bits, but Oclgrind's

@@ -134,6 +134,25 @@ __kernel void mask_bits16(__global const uint* patterns, __global uint* out) {
     EXPECT_EQ(w[2 * i], patterns[i]) << "rs16_mask_bits of pattern " << std::hex << patterns[i];
     EXPECT_EQ(w[2 * i + 1], patterns[i]) << "rs8_mask_bits of pattern " << std::hex << patterns[i];
   }
+  // The other forms of the sixteen- and eight-lane helpers, built on purpose: the AVX form (two
+  // vmovmskps, what an AVX2 CPU's PoCL builds; on an x86 device only) and the portable one.
+  std::vector<std::string> forms{"-DRS_PORTABLE_MASK_BITS"};
+  if (rt.info().is_pocl() && rt.info().type == "CPU") forms.push_back("-DRS_AVX_MASK_BITS");
+  for (const std::string& options : forms) {
+    cl::Program other = rt.build_source(src, "mask_bits.cl", options);
+    cl::Buffer out_other = rt.buffer("mask bits 16", patterns.size() * 2 * sizeof(std::uint32_t));
+    cl_call("mask_bits16", [&] {
+      cl::Kernel k(other, "mask_bits16");
+      k.setArg(0, pattern_buf);
+      k.setArg(1, out_other);
+      rt.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(patterns.size()), cl::NullRange);
+    });
+    rt.download("mask bits 16", out_other, w, patterns.size() * 2);
+    for (std::size_t i = 0; i < patterns.size(); ++i) {
+      EXPECT_EQ(w[2 * i], patterns[i]) << options << ": rs16_mask_bits of pattern " << std::hex << patterns[i];
+      EXPECT_EQ(w[2 * i + 1], patterns[i]) << options << ": rs8_mask_bits of pattern " << std::hex << patterns[i];
+    }
+  }
 }
 
 // RAYSORT_CL_OPTIONS reaches every kernel build (the way to the portable mask-bit forms on an x86

@@ -972,11 +972,13 @@ TEST(Encode, HccDirPassesMatchTheHostForEveryDirectionWidth) {
   }
 }
 
-// rs_cut_bits on the device, in both of its forms: the hit mask shifted into place (RS_MASK16_BITS,
-// what PoCL builds on an AVX-512 CPU) and the portable AND-and-fold of the lanes (GPUs, other CPUs; forced here with
-// -DRS_PORTABLE_MASK_BITS), against the host's, for group counts with a full, a more-than-half and
-// an at-most-half last group, placed from the top of the code and from a first bit below it.
-TEST(Encode, DeviceCutBitsInBothFormsEqualTheHost) {
+// rs_cut_bits on the device, in each of its forms: the hit mask shifted into place (RS_MASK16_BITS 1,
+// what PoCL builds on an AVX-512 CPU), one vmovmskps per eight lanes (2, an AVX2 CPU's; forced here
+// with -DRS_AVX_MASK_BITS on an x86 CPU device) and the portable AND-and-fold of the lanes (0: GPUs,
+// other CPUs; forced with -DRS_PORTABLE_MASK_BITS), against the host's, for group counts with a full,
+// a more-than-half and an at-most-half last group, placed from the top of the code and from a first
+// bit below it.
+TEST(Encode, DeviceCutBitsInEveryFormEqualTheHost) {
   Runtime& rt = testing::runtime();
   const std::string src = kernel_source("cl/keys_cut.h") + R"(
 __kernel void cut_bits(__global const RsCutGroup* g, uint n, uint first_bit, __global const RsRay* rays,
@@ -993,8 +995,10 @@ __kernel void cut_bits(__global const RsCutGroup* g, uint n, uint first_bit, __g
   for (int k = 0; k < 1024; ++k)
     rays.push_back(ray(u(rng), u(rng), u(rng), u(rng), u(rng), k % 7 == 0 ? 0.0f : u(rng), k % 3 ? RS_T_FAR : 0.5f));
   cl::Buffer ray_buf = rt.upload("rays", rays);
-  int forms_seen[2] = {0, 0};
-  for (const char* options : {"", "-DRS_PORTABLE_MASK_BITS"}) {
+  int forms_seen[3] = {0, 0, 0};
+  const bool x86_cpu = rt.info().is_pocl() && rt.info().type == "CPU";
+  for (const char* options : {"", "-DRS_PORTABLE_MASK_BITS", "-DRS_AVX_MASK_BITS"}) {
+    if (std::string(options) == "-DRS_AVX_MASK_BITS" && !x86_cpu) continue;
     cl::Program program = rt.build_source(src, "cut_bits.cl", options);
     for (rs_u32 n : {1u, 7u, 8u, 9u, 16u, 17u, 24u, 25u, 40u, 63u, 64u}) {
       std::vector<RsBox> boxes(n);
@@ -1022,7 +1026,8 @@ __kernel void cut_bits(__global const RsCutGroup* g, uint n, uint first_bit, __g
         std::vector<int> f;
         rt.download("codes", out, codes, rays.size());
         rt.download("mask form", form, f, 1);
-        forms_seen[f[0] != 0] = 1;
+        ASSERT_TRUE(f[0] >= 0 && f[0] <= 2) << "RS_MASK16_BITS " << f[0];
+        forms_seen[f[0]] = 1;
         std::size_t bad = 0;
         for (std::size_t i = 0; i < rays.size(); ++i) {
           const RsCutRay c = rs_cut_ray(rs_prepare_ray(rays[i]));
@@ -1041,6 +1046,9 @@ __kernel void cut_bits(__global const RsCutGroup* g, uint n, uint first_bit, __g
   if (rt.info().is_pocl() && rt.info().type == "CPU" && __builtin_cpu_supports("avx512f") &&
       __builtin_cpu_supports("avx512dq")) {
     EXPECT_EQ(forms_seen[1], 1) << "PoCL on this AVX-512 CPU should build the mask-bits form";
+  }
+  if (x86_cpu && __builtin_cpu_supports("avx")) {
+    EXPECT_EQ(forms_seen[2], 1) << "the AVX form was not built";
   }
 #endif
 }
