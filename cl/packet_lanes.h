@@ -39,26 +39,10 @@ RS_LANE_INLINE float rsp_lane(rs_pf a, int i) { return shuffle(a, (RS_PACKET_CAT
 RS_LANE_INLINE int rsp_bits(rs_pi m) { return rs4_bits(m); }
 RS_LANE_INLINE rs_pi rsp_lane_bits(void) { return (int4)(1, 2, 4, 8); }
 #elif RS_PACKET_W == 8
-#if defined(__x86_64__) && defined(__AVX__) && !defined(RS_PORTABLE_MASK_BITS)
-RS_LANE_INLINE int rsp_bits(rs_pi m) { return __builtin_ia32_movmskps256(as_float8(m)); }
-#else
 RS_LANE_INLINE int rsp_bits(rs_pi m) { return (int)rs8_mask_bits(m); }
-#endif
 RS_LANE_INLINE rs_pi rsp_lane_bits(void) { return (int8)(1, 2, 4, 8, 16, 32, 64, 128); }
 #else
-#if !defined(RS_MASK16_BITS) || RS_MASK16_BITS == 0
-#if defined(__x86_64__) && defined(__AVX__) && !defined(RS_PORTABLE_MASK_BITS)
-/* AVX without AVX-512: a sixteen-lane mask is two ymm registers, one vmovmskps each. */
-#define RS_PACKET_MASK16_AVX 1
-#endif
-#endif
-#ifdef RS_PACKET_MASK16_AVX
-RS_LANE_INLINE int rsp_bits(rs_pi m) {
-  return __builtin_ia32_movmskps256(as_float8(m.lo)) | (__builtin_ia32_movmskps256(as_float8(m.hi)) << 8);
-}
-#else
 RS_LANE_INLINE int rsp_bits(rs_pi m) { return (int)rs16_mask_bits(m); }
-#endif
 RS_LANE_INLINE rs_pi rsp_lane_bits(void) {
   return (int16)(1, 2, 4, 8, 16, 32, 64, 128, 256, 512, 1024, 2048, 4096, 8192, 16384, 32768);
 }
