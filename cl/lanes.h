@@ -41,6 +41,8 @@ RS_LANE_INLINE int rs_lowest_bit(int x) { return 31 - clz(x & -x); }
 /* The same for a 32-bit mask whose top bit may be set (no signed overflow in the negation). */
 RS_LANE_INLINE int rs_lowest_bit_u(uint x) { return 31 - (int)clz(x & (0u - x)); }
 RS_LANE_INLINE int rs_lowest_bit_ul(ulong x) { return 63 - (int)clz(x & (0ul - x)); }
+/* Index of the highest set bit of x != 0. */
+RS_LANE_INLINE int rs_highest_bit(int x) { return 31 - clz(x); }
 RS_LANE_INLINE int rs_popcount(int x) { return popcount(x); }
 RS_LANE_INLINE rs_f4 rs4_load(const float* p) { return vload4(0, p); }
 #else
@@ -96,6 +98,7 @@ RS_LANE_INLINE int rs4_bits(rs_i4 m) { return (m.s[0] & 1) | (m.s[1] & 2) | (m.s
 RS_LANE_INLINE int rs_lowest_bit(int x) { return std::countr_zero(static_cast<unsigned>(x)); }
 RS_LANE_INLINE int rs_lowest_bit_u(rs_u32 x) { return std::countr_zero(x); }
 RS_LANE_INLINE int rs_lowest_bit_ul(rs_u64 x) { return std::countr_zero(x); }
+RS_LANE_INLINE int rs_highest_bit(int x) { return 31 - std::countl_zero(static_cast<unsigned>(x)); }
 RS_LANE_INLINE int rs_popcount(int x) { return std::popcount(static_cast<unsigned>(x)); }
 RS_LANE_INLINE void rs4_store(rs_f4 a, float* p) {
   for (int i = 0; i < 4; ++i) p[i] = a.s[i];

@@ -96,10 +96,10 @@ RS_INLINE void rs_trace_stream(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBAL con
           const RsWide8Planes own = others & ((rs_u64)1 << i) ? rs_wide8_planes(n, octant_of[i]) : planes;
           h = robust ? rs_wide8_slabs_robust(&own, &rr[i], hit[i].t, &tnear) : rs_wide8_slabs(&own, &tr[i], hit[i].t, &tnear);
         }
-        if (i < 32)
-          rays_lo = rays_lo | (h & rs8_splati((int)(1u << i)));
-        else
-          rays_hi = rays_hi | (h & rs8_splati((int)(1u << (i - 32))));
+        /* The ray's bit in both halves (one of them 0): no branch on which half holds it. */
+        const rs_u64 bit = (rs_u64)1 << i;
+        rays_lo = rays_lo | (h & rs8_splati((int)(rs_u32)bit));
+        rays_hi = rays_hi | (h & rs8_splati((int)(rs_u32)(bit >> 32)));
         any_in = any_in | h;
         nearest = rs8_min(nearest, rs8_select(rs8_splat(3.4028235e38f), tnear, h));
       }
@@ -108,6 +108,21 @@ RS_INLINE void rs_trace_stream(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBAL con
         int child_lo[8], child_hi[8];
         rs8_storei(rays_lo, child_lo);
         rs8_storei(rays_hi, child_hi);
+        if (any_hit) {
+          /* Slot order: the lowest entered child next, the others pushed highest first so that the
+           * next lowest is on top; what the sort below gives with every key 0, without its arrays. */
+          const int first = rs_lowest_bit(entered);
+          for (int b = entered & (entered - 1); b;) {
+            const int c = rs_highest_bit(b);
+            b &= ~(1 << c);
+            stack[sp] = n->child[c];
+            stack_rays[sp] = (rs_u64)(rs_u32)child_lo[c] | (rs_u64)(rs_u32)child_hi[c] << 32;
+            ++sp;
+          }
+          ref = n->child[first];
+          m = (rs_u64)(rs_u32)child_lo[first] | (rs_u64)(rs_u32)child_hi[first] << 32;
+          continue;
+        }
         float dist[8];
         rs8_store(nearest, dist);
         rs_u32 refs[8];
@@ -116,7 +131,7 @@ RS_INLINE void rs_trace_stream(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBAL con
         int k = 0;
         for (int b = entered; b; b &= b - 1) {
           const int c = rs_lowest_bit(b);
-          const float key = any_hit ? 0.0f : dist[c];
+          const float key = dist[c];
           int j = k++;
           for (; j > 0 && keys[j - 1] > key; --j) {
             keys[j] = keys[j - 1];
