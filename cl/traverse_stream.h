@@ -165,8 +165,7 @@ RS_INLINE void rs_trace_stream(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBAL con
           const int i = rs_lowest_bit_ul(rest);
           rs_f8 tw, uw, vw;
           const int bits = robust ? rs_packet8_intersect_robust(&rr[i], ray[i].d, p, hit[i].t, &tw, &uw, &vw)
-                         : any_hit ? rs_packet8_intersect_edges_whole(tr[i], &e, hit[i].t, &tw, &uw, &vw)
-                                   : rs_packet8_intersect_edges(tr[i], &e, hit[i].t, &tw, &uw, &vw);
+                                  : rs_packet8_intersect_edges(tr[i], &e, hit[i].t, &tw, &uw, &vw);
           if (bits && rs_wide8_keep_nearest(bits, tw, uw, vw, p, &hit[i]) && any_hit) {
             looking &= ~((rs_u64)1 << i);
             live &= ~((rs_u64)1 << i);

@@ -40,7 +40,6 @@
 #define RsWEdges RsTriEdges
 #define rsw_edges rs_tri_edges
 #define rsw_intersect_edges rs_packet_intersect_edges
-#define rsw_intersect_edges_whole rs_packet_intersect_edges_whole
 #define rsw_keep_nearest rs_wide_keep_nearest
 #define rsw_intersect_robust rs_packet_intersect_robust
 #define rsw_traverse_subtree rs_traverse_wide_subtree
@@ -72,7 +71,6 @@
 #define RsWEdges RsTriEdges8
 #define rsw_edges rs_tri_edges8
 #define rsw_intersect_edges rs_packet8_intersect_edges
-#define rsw_intersect_edges_whole rs_packet8_intersect_edges_whole
 #define rsw_keep_nearest rs_wide8_keep_nearest
 #define rsw_intersect_robust rs_packet8_intersect_robust
 #define rsw_traverse_subtree rs_traverse_wide8_subtree
@@ -182,7 +180,10 @@ RS_INLINE RsWEdges rsw_edges(RS_GLOBAL const RsWPacket* p) {
 }
 
 /* Möller–Trumbore on a packet of RS_WIDE_W triangles: per lane the operations of
- * rs_intersect_triangle in the same order. Returns the bits of the lanes hit within (tmin, tmax), with t, u, v per lane. */
+ * rs_intersect_triangle in the same order. Returns the bits of the lanes hit within (tmin, tmax), with
+ * t, u, v per lane. Every lane is carried to the end and tested once: a packet's lanes mostly fail, and
+ * early exits after det, u and v mispredicted (without them: the stream 3-9 % faster on shadow rays,
+ * 2-7 % on bounce rays; results/history/trace-kernels.md). */
 RS_INLINE int rsw_intersect_edges(RsTraversalRay r, const RsWEdges* e, float tmax, rsw_f* t_out, rsw_f* u_out,
                                   rsw_f* v_out) {
   const rsw_f v0x = e->v0x, v0y = e->v0y, v0z = e->v0z;
@@ -190,37 +191,7 @@ RS_INLINE int rsw_intersect_edges(RsTraversalRay r, const RsWEdges* e, float tma
   const rsw_f e2x = e->e2x, e2y = e->e2y, e2z = e->e2z;
   const rsw_f px = r.d.y * e2z - r.d.z * e2y, py = r.d.z * e2x - r.d.x * e2z, pz = r.d.x * e2y - r.d.y * e2x;
   const rsw_f det = e1x * px + e1y * py + e1z * pz;
-  int bits = rsw_bits(e->valid & (det != 0.0f));
-  if (!bits) return 0;
   /* Lanes with det == 0 divide by 1 instead (and stay rejected): no inf in any lane. */
-  const rsw_f inv_det = rsw_splat(1.0f) / rsw_select(det, rsw_splat(1.0f), det == 0.0f);
-  const rsw_f sx = r.o.x - v0x, sy = r.o.y - v0y, sz = r.o.z - v0z;
-  const rsw_f u = (sx * px + sy * py + sz * pz) * inv_det;
-  bits &= rsw_bits((u >= 0.0f) & (u <= 1.0f));
-  if (!bits) return 0;
-  const rsw_f qx = sy * e1z - sz * e1y, qy = sz * e1x - sx * e1z, qz = sx * e1y - sy * e1x;
-  const rsw_f v = (r.d.x * qx + r.d.y * qy + r.d.z * qz) * inv_det;
-  bits &= rsw_bits((v >= 0.0f) & (u + v <= 1.0f));
-  if (!bits) return 0;
-  const rsw_f t = (e2x * qx + e2y * qy + e2z * qz) * inv_det;
-  bits &= rsw_bits((t > r.tmin) & (t < tmax));
-  *t_out = t;
-  *u_out = u;
-  *v_out = v;
-  return bits;
-}
-
-/* The same lanes, t, u and v as rsw_intersect_edges, every lane carried to the end and tested once:
- * for any-hit rays, whose lanes mostly fail and whose three early exits mispredict (the stream 3-9 %
- * faster on shadow rays). Its own function, with one mask: rsw_intersect_edges with its exits switched
- * off by a flag measured up to 5 % slower on sibenik's shadow0 (results/history/trace-kernels.md). */
-RS_INLINE int rsw_intersect_edges_whole(RsTraversalRay r, const RsWEdges* e, float tmax, rsw_f* t_out, rsw_f* u_out,
-                                        rsw_f* v_out) {
-  const rsw_f v0x = e->v0x, v0y = e->v0y, v0z = e->v0z;
-  const rsw_f e1x = e->e1x, e1y = e->e1y, e1z = e->e1z;
-  const rsw_f e2x = e->e2x, e2y = e->e2y, e2z = e->e2z;
-  const rsw_f px = r.d.y * e2z - r.d.z * e2y, py = r.d.z * e2x - r.d.x * e2z, pz = r.d.x * e2y - r.d.y * e2x;
-  const rsw_f det = e1x * px + e1y * py + e1z * pz;
   const rsw_f inv_det = rsw_splat(1.0f) / rsw_select(det, rsw_splat(1.0f), det == 0.0f);
   const rsw_f sx = r.o.x - v0x, sy = r.o.y - v0y, sz = r.o.z - v0z;
   const rsw_f u = (sx * px + sy * py + sz * pz) * inv_det;
@@ -235,12 +206,10 @@ RS_INLINE int rsw_intersect_edges_whole(RsTraversalRay r, const RsWEdges* e, flo
   return bits;
 }
 
-/* A packet against one ray: rsw_intersect_edges, or its whole form (whole = 1, for any-hit rays). */
-RS_INLINE int rsw_intersect(RsTraversalRay r, RS_GLOBAL const RsWPacket* p, float tmax, int whole, rsw_f* t_out,
-                            rsw_f* u_out, rsw_f* v_out) {
+RS_INLINE int rsw_intersect(RsTraversalRay r, RS_GLOBAL const RsWPacket* p, float tmax, rsw_f* t_out, rsw_f* u_out,
+                            rsw_f* v_out) {
   const RsWEdges e = rsw_edges(p);
-  return whole ? rsw_intersect_edges_whole(r, &e, tmax, t_out, u_out, v_out)
-               : rsw_intersect_edges(r, &e, tmax, t_out, u_out, v_out);
+  return rsw_intersect_edges(r, &e, tmax, t_out, u_out, v_out);
 }
 
 /* The watertight test (Woop et al. 2013, as rs_intersect_triangle_robust) on a packet of RS_WIDE_W
@@ -363,7 +332,7 @@ RS_INLINE int rsw_leaf(RS_GLOBAL const RsWPacket* packets, rs_u32 ref, RsTravers
   for (rs_u32 pi = first; pi < end; ++pi) {
     rsw_f tw, uw, vw;
     const int bits = robust ? rsw_intersect_robust(rr, d, &packets[pi], hit->t, &tw, &uw, &vw)
-                            : rsw_intersect(r, &packets[pi], hit->t, any_hit, &tw, &uw, &vw);
+                            : rsw_intersect(r, &packets[pi], hit->t, &tw, &uw, &vw);
     if (bits && rsw_keep_nearest(bits, tw, uw, vw, &packets[pi], hit) && any_hit) return 1;
   }
   return 0;
@@ -507,7 +476,6 @@ RS_INLINE RsHit rsw_traverse(RS_GLOBAL const RsWNode* nodes, RS_GLOBAL const RsW
 #undef RsWEdges
 #undef rsw_edges
 #undef rsw_intersect_edges
-#undef rsw_intersect_edges_whole
 #undef rsw_keep_nearest
 #undef rsw_intersect_robust
 #undef rsw_traverse_subtree
