@@ -33,6 +33,11 @@
 
 #include "traverse_wide8.h"
 
+/* Child c's rays as one 64-bit mask, from the halves a node's test gathers lane-wise (rays 0-31, 32-63). */
+RS_INLINE rs_u64 rs_stream_child_rays(const int* lo, const int* hi, int c) {
+  return (rs_u64)(rs_u32)lo[c] | (rs_u64)(rs_u32)hi[c] << 32;
+}
+
 /* Traces the rays at positions pos[0..n) of the order (n <= RS_STREAM_RAYS) as one stream into their
  * hits: closest hit (any_hit = 0) or any hit, fast (robust = 0) or robust. visits, when not null,
  * receives per ray its steps. */
@@ -116,11 +121,11 @@ RS_INLINE void rs_trace_stream(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBAL con
             const int c = rs_highest_bit(b);
             b &= ~(1 << c);
             stack[sp] = n->child[c];
-            stack_rays[sp] = (rs_u64)(rs_u32)child_lo[c] | (rs_u64)(rs_u32)child_hi[c] << 32;
+            stack_rays[sp] = rs_stream_child_rays(child_lo, child_hi, c);
             ++sp;
           }
           ref = n->child[first];
-          m = (rs_u64)(rs_u32)child_lo[first] | (rs_u64)(rs_u32)child_hi[first] << 32;
+          m = rs_stream_child_rays(child_lo, child_hi, first);
           continue;
         }
         float dist[8];
@@ -140,7 +145,7 @@ RS_INLINE void rs_trace_stream(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBAL con
           }
           keys[j] = key;
           refs[j] = n->child[c];
-          masks[j] = (rs_u64)(rs_u32)child_lo[c] | (rs_u64)(rs_u32)child_hi[c] << 32;
+          masks[j] = rs_stream_child_rays(child_lo, child_hi, c);
         }
         for (int j = k - 1; j > 0; --j) {
           stack[sp] = refs[j];
