@@ -35,6 +35,14 @@
 #endif
 /* Fully unrolls the short fixed loop that follows (per-axis loops in the traversal). */
 #define RS_UNROLL _Pragma("unroll")
+/* A prefetch hint, on a CPU device only: the host builds a CPU device's kernels with RS_PREFETCH_AHEAD
+ * (host/runtime/runtime.cpp; cl/trace.cl, "Gather on a CPU"), and PoCL's clang makes the builtin a
+ * prefetcht0. Oclgrind gets the define without the x86 or Arm builtin. A prefetch changes no result. */
+#if defined(RS_PREFETCH_AHEAD) && (defined(__x86_64__) || defined(__aarch64__))
+#define RS_PREFETCH(p) __builtin_prefetch(p)
+#else
+#define RS_PREFETCH(p) ((void)(p))
+#endif
 typedef uchar rs_u8;
 typedef uint rs_u32;
 typedef int rs_i32;
@@ -59,6 +67,7 @@ RS_INLINE float rs_int_as_float(rs_i32 i) { return as_float(i); }
 #define RS_LANE_INLINE inline __attribute__((always_inline))
 #define RS_FORCE_INLINE inline
 #define RS_UNROLL _Pragma("GCC unroll 4")
+#define RS_PREFETCH(p) ((void)(p)) /* the host twins need no prefetch */
 typedef std::uint8_t rs_u8;
 typedef std::uint32_t rs_u32;
 typedef std::int32_t rs_i32;

@@ -51,14 +51,9 @@
 #endif
 
 /* Prefetches the rays at order positions [from, from + n) that exist (see the top: CPU devices).
- * Oclgrind gets RS_PREFETCH_AHEAD too, without the x86 or Arm builtin: its unoptimised build still
- * reads order[pf], so its bounds check covers the loop's guard. */
+ * Oclgrind gets RS_PREFETCH_AHEAD too, without the x86 or Arm builtin (RS_PREFETCH, shared.h): its
+ * unoptimised build still reads order[pf], so its bounds check covers the loop's guard. */
 #ifdef RS_PREFETCH_AHEAD
-#if defined(__x86_64__) || defined(__aarch64__)
-#define RS_PREFETCH(p) __builtin_prefetch(p)
-#else
-#define RS_PREFETCH(p) ((void)(p))
-#endif
 #define RS_PREFETCH_RAYS(rays, order, from, n, count) \
   for (uint pf = (from); pf < (from) + (n) && pf < (count); ++pf) RS_PREFETCH(&(rays)[(order)[pf]])
 #else

@@ -38,6 +38,22 @@ RS_INLINE rs_u64 rs_stream_child_rays(const int* lo, const int* hi, int c) {
   return (rs_u64)(rs_u32)lo[c] | (rs_u64)(rs_u32)hi[c] << 32;
 }
 
+/* Starts the fetch of a child the stream has entered, on a CPU (RS_PREFETCH, shared.h): an inner node's
+ * four lines, or a leaf's first packet up to its valid lanes (the vertex rows the leaf test reads,
+ * five lines). The nearest child is visited next and the others when popped: a stream spends long
+ * enough on a node's rays for the fetch to arrive in time, where a single ray's next node is loaded at
+ * once anyway (results/history/trace-kernels.md, "Streams: the children prefetched"). */
+RS_INLINE void rs_stream_prefetch_child(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBAL const RsTriPacket8* packets,
+                                        rs_u32 ref) {
+  if (ref & RS_WIDE_LEAF) {
+    RS_GLOBAL const char* p = (RS_GLOBAL const char*)&packets[(ref & ~RS_WIDE_LEAF) >> 2];
+    RS_UNROLL for (int line = 0; line < 5; ++line) RS_PREFETCH(p + 64 * line);
+  } else {
+    RS_GLOBAL const char* p = (RS_GLOBAL const char*)&nodes[ref];
+    RS_UNROLL for (int line = 0; line < 4; ++line) RS_PREFETCH(p + 64 * line);
+  }
+}
+
 /* Traces the rays at positions pos[0..n) of the order (n <= RS_STREAM_RAYS) as one stream into their
  * hits: closest hit (any_hit = 0) or any hit, fast (robust = 0) or robust. visits, when not null,
  * receives per ray its steps. */
@@ -109,6 +125,7 @@ RS_INLINE void rs_trace_stream(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBAL con
         nearest = rs8_min(nearest, rs8_select(rs8_splat(3.4028235e38f), tnear, h));
       }
       const int entered = rs8_bits(any_in);
+      for (int b = entered; b; b &= b - 1) rs_stream_prefetch_child(nodes, packets, n->child[rs_lowest_bit(b)]);
       if (entered) {
         int child_lo[8], child_hi[8];
         rs8_storei(rays_lo, child_lo);
