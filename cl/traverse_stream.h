@@ -147,22 +147,20 @@ RS_INLINE void rs_trace_stream(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBAL con
         }
         float dist[8];
         rs8_store(nearest, dist);
+        /* Nearest first, ties by slot: a child's place is the number of entered children nearer than it,
+         * and of those as near in a lower slot (the order an insertion sort by entry distance gives, in
+         * two popcounts per child instead of its data-dependent loop). No key is NaN: a ray enters a
+         * child only when its entry distance compares. */
         rs_u32 refs[8];
         rs_u64 masks[8];
-        float keys[8];
-        int k = 0;
+        const int k = rs_popcount(entered);
         for (int b = entered; b; b &= b - 1) {
           const int c = rs_lowest_bit(b);
-          const float key = dist[c];
-          int j = k++;
-          for (; j > 0 && keys[j - 1] > key; --j) {
-            keys[j] = keys[j - 1];
-            refs[j] = refs[j - 1];
-            masks[j] = masks[j - 1];
-          }
-          keys[j] = key;
-          refs[j] = n->child[c];
-          masks[j] = rs_stream_child_rays(child_lo, child_hi, c);
+          const rs_f8 key = rs8_splat(dist[c]);
+          const int r = rs_popcount(rs8_bits(nearest < key) & entered) +
+                        rs_popcount(rs8_bits(nearest == key) & entered & ((1 << c) - 1));
+          refs[r] = n->child[c];
+          masks[r] = rs_stream_child_rays(child_lo, child_hi, c);
         }
         for (int j = k - 1; j > 0; --j) {
           stack[sp] = refs[j];
