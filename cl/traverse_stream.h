@@ -41,8 +41,9 @@ RS_INLINE rs_u64 rs_stream_child_rays(const int* lo, const int* hi, int c) {
 /* Starts the fetch of a child the stream has entered, on a CPU (RS_PREFETCH, shared.h): an inner node's
  * four lines, or a leaf's first packet up to its valid lanes (the vertex rows the leaf test reads,
  * five lines). The nearest child is visited next and the others when popped: a stream spends long
- * enough on a node's rays for the fetch to arrive in time, where a single ray's next node is loaded at
- * once anyway (results/history/trace-kernels.md, "Streams: the children prefetched"). */
+ * enough on a node's rays for the fetch to arrive in time, where a single ray's next node is loaded
+ * at once anyway (results/history/trace-kernels.md, "Streams: the children prefetched, and placed by
+ * rank"). */
 RS_INLINE void rs_stream_prefetch_child(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBAL const RsTriPacket8* packets,
                                         rs_u32 ref) {
   if (ref & RS_WIDE_LEAF) {
