@@ -45,6 +45,11 @@ typedef struct {
  *                       and count = (ref & 3) + 1.
  * Node 0 is the root. host/bvh/wide.cpp collapses the binary BVH into this layout. */
 #define RS_WIDE_LEAF 0x80000000u
+/* A leaf reference's packets (RS_WIDE_LEAF set): the first, how many (1 to 4), and one past the last.
+ * Macros, not functions: as functions PoCL compiled the kernels' leaf loops differently. */
+#define RS_WIDE_LEAF_FIRST(ref) (((ref) & ~RS_WIDE_LEAF) >> 2)
+#define RS_WIDE_LEAF_COUNT(ref) (((ref) & 3u) + 1u)
+#define RS_WIDE_LEAF_END(ref) (RS_WIDE_LEAF_FIRST(ref) + ((ref) & 3u) + 1u)
 typedef struct {
   rs_f4 lo_x, hi_x, lo_y, hi_y, lo_z, hi_z;
   rs_i4 valid;
@@ -71,7 +76,7 @@ typedef struct {
 /* A node of the 8-wide BVH (the wide8 trace class, traverse_wide8.h), 256 bytes (four cache
  * lines): RsWideNode with eight lanes, so one float8 operation tests eight boxes (one ymm register
  * on an AVX CPU). child[i] as in RsWideNode (RS_WIDE_LEAF set: packets [first, first + count) of
- * RsTriPacket8, first = (ref & ~RS_WIDE_LEAF) >> 2, count = (ref & 3) + 1). Node 0 is the root.
+ * RsTriPacket8, RS_WIDE_LEAF_FIRST and RS_WIDE_LEAF_COUNT). Node 0 is the root.
  * host/bvh/wide8.cpp collapses the binary BVH into this layout. */
 typedef struct {
   rs_f8 lo_x, hi_x, lo_y, hi_y, lo_z, hi_z;

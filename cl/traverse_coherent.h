@@ -207,7 +207,7 @@ RS_INLINE void rs_traverse_coherent(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBA
         continue;
       }
     } else {
-      const rs_u32 first_packet = (ref & ~RS_WIDE_LEAF) >> 2, end = first_packet + (ref & 3u) + 1u;
+      const rs_u32 first_packet = RS_WIDE_LEAF_FIRST(ref), end = RS_WIDE_LEAF_END(ref);
       int found_any = 0;
       for (rs_u32 pi = first_packet; pi < end && lanes; ++pi) {
         RS_GLOBAL const RsTriPacket8* tp = &packets[pi];

@@ -414,7 +414,7 @@ RS_INLINE void rs_traverse_packet(RS_GLOBAL const RsWideNode* nodes, RS_GLOBAL c
         continue;
       }
     } else {
-      const rs_u32 first_packet = (ref & ~RS_WIDE_LEAF) >> 2, end = first_packet + (ref & 3u) + 1u;
+      const rs_u32 first_packet = RS_WIDE_LEAF_FIRST(ref), end = RS_WIDE_LEAF_END(ref);
       for (rs_u32 pi = first_packet; pi < end && lanes; ++pi) {
         RS_GLOBAL const RsTriPacket* tp = &packets[pi];
         RS_GLOBAL const float* v0x = (RS_GLOBAL const float*)&tp->v0x; /* v0x v0y v0z v1x ... v2z, four each */

@@ -47,7 +47,7 @@ RS_INLINE rs_u64 rs_stream_child_rays(const int* lo, const int* hi, int c) {
 RS_INLINE void rs_stream_prefetch_child(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBAL const RsTriPacket8* packets,
                                         rs_u32 ref) {
   if (ref & RS_WIDE_LEAF) {
-    RS_GLOBAL const char* p = (RS_GLOBAL const char*)&packets[(ref & ~RS_WIDE_LEAF) >> 2];
+    RS_GLOBAL const char* p = (RS_GLOBAL const char*)&packets[RS_WIDE_LEAF_FIRST(ref)];
     RS_UNROLL for (int line = 0; line < 5; ++line) RS_PREFETCH(p + 64 * line);
   } else {
     RS_GLOBAL const char* p = (RS_GLOBAL const char*)&nodes[ref];
@@ -177,7 +177,7 @@ RS_INLINE void rs_trace_stream(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBAL con
        * are computed once for all of them (fast variant): per ray the packets in the same order,
        * the same tests and the same choice of the nearest lane; an any-hit ray leaves at its first
        * hit. */
-      const rs_u32 first_packet = (ref & ~RS_WIDE_LEAF) >> 2, end_packet = first_packet + (ref & 3u) + 1u;
+      const rs_u32 first_packet = RS_WIDE_LEAF_FIRST(ref), end_packet = RS_WIDE_LEAF_END(ref);
       rs_u64 looking = m;
       for (rs_u32 pi = first_packet; pi < end_packet && looking; ++pi) {
         RS_GLOBAL const RsTriPacket8* p = &packets[pi];

@@ -328,7 +328,7 @@ RS_INLINE int rsw_keep_nearest(int bits, rsw_f tw, rsw_f uw, rsw_f vw, RS_GLOBAL
  * with a hit and returns 1; otherwise returns 0. */
 RS_INLINE int rsw_leaf(RS_GLOBAL const RsWPacket* packets, rs_u32 ref, RsTraversalRay r, const RsRobustRay* rr,
                        const float* d, int robust, int any_hit, RsHit* hit) {
-  const rs_u32 first = (ref & ~RS_WIDE_LEAF) >> 2, end = first + (ref & 3u) + 1u;
+  const rs_u32 first = RS_WIDE_LEAF_FIRST(ref), end = RS_WIDE_LEAF_END(ref);
   for (rs_u32 pi = first; pi < end; ++pi) {
     rsw_f tw, uw, vw;
     const int bits = robust ? rsw_intersect_robust(rr, d, &packets[pi], hit->t, &tw, &uw, &vw)

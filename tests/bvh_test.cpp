@@ -152,7 +152,7 @@ TEST(WideBvh, SmallSubtreesBecomeOnePacketWhereSahAgrees) {
         if (!w.valid.s[lane]) continue;
         const std::uint32_t ref = w.child[lane];
         if (ref & RS_WIDE_LEAF) {
-          const std::uint32_t first = (ref & ~RS_WIDE_LEAF) >> 2, end = first + (ref & 3u) + 1u;
+          const std::uint32_t first = RS_WIDE_LEAF_FIRST(ref), end = RS_WIDE_LEAF_END(ref);
           for (std::uint32_t p = first; p < end; ++p)
             for (int k = 0; k < 4; ++k) sum.first += bvh.wide.packets[p].valid.s[k] != 0;
           sum.second += area(w, lane);

@@ -147,7 +147,7 @@ void GpuAddressMap::step_blocks(std::uint32_t ref, unsigned line, std::vector<st
   auto read = [&](std::uint64_t count) { return leaf_reads > 0 ? std::min<std::uint64_t>(count, leaf_reads) : count; };
   if (!binary_) {
     if (!(ref & RS_WIDE_LEAF)) return range_blocks(node_base_ + ref * wide_node_bytes_, wide_node_bytes_, line, out);
-    const std::uint64_t first = (ref & ~RS_WIDE_LEAF) >> 2, count = (ref & 3u) + 1u;
+    const std::uint64_t first = RS_WIDE_LEAF_FIRST(ref), count = RS_WIDE_LEAF_COUNT(ref);
     return range_blocks(prim_base_ + first * wide_packet_bytes_, read(count) * wide_packet_bytes_, line, out);
   }
   const RsBvhNode& n = binary_[ref];

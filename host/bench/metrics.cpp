@@ -83,7 +83,7 @@ class DistinctNodes {
 
  private:
   std::size_t slot(std::uint32_t ref) const {
-    return ref & RS_WIDE_LEAF ? inner_ + ((ref & ~RS_WIDE_LEAF) >> 2) : ref;
+    return ref & RS_WIDE_LEAF ? inner_ + RS_WIDE_LEAF_FIRST(ref) : ref;
   }
   std::size_t inner_;
   std::vector<std::uint32_t> last_;
@@ -135,7 +135,7 @@ struct TrailRecorder {
   std::uint32_t leaf_reads_until(std::uint32_t tri, std::uint32_t leaf_ref) const {
     if (cw_layout) return 0;  // a cwbvh step reads one triangle: all of it
     if (wide_layout || wide8_layout) {
-      const std::uint32_t first = (leaf_ref & ~RS_WIDE_LEAF) >> 2, count = (leaf_ref & 3u) + 1u;
+      const std::uint32_t first = RS_WIDE_LEAF_FIRST(leaf_ref), count = RS_WIDE_LEAF_COUNT(leaf_ref);
       for (std::uint32_t k = 0; k < count; ++k)
         for (std::uint32_t id : wide8_layout ? std::span<const std::uint32_t>(wide8.packets[first + k].id)
                                              : std::span<const std::uint32_t>(wide.packets[first + k].id))

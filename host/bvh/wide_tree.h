@@ -379,7 +379,7 @@ std::string validate(const Tree& wide, const Bvh& bvh, std::uint32_t stack_size)
         todo.push_back({ref, depth + 1});
         continue;
       }
-      const std::uint32_t first = (ref & ~RS_WIDE_LEAF) >> 2, end = first + (ref & 3u) + 1u;
+      const std::uint32_t first = RS_WIDE_LEAF_FIRST(ref), end = RS_WIDE_LEAF_END(ref);
       if (end > wide.packets.size()) return "leaf packets out of range";
       for (std::uint32_t p = first; p < end; ++p)
         for (int k = 0; k < W; ++k) {
