@@ -16,7 +16,8 @@
  *   those rays runs the wide8 class's slab test (rs_wide8_boxes / rs_wide8_boxes_robust) with its
  *   own closest hit so far as the far bound; a child is entered with the rays that hit its box.
  * - Children nearest first by the smallest entry distance among their rays (ties by slot); any hit
- *   keeps slot order. The others are pushed with their ray masks.
+ *   keeps slot order (largest box first, host/bvh/wide8.cpp). The others are pushed with their ray
+ *   masks.
  * - Leaves: each ray of the mask tests the leaf's triangle packets as the wide8 class does
  *   (rs_wide8_leaf: Möller–Trumbore or the watertight test on eight triangles at once; a packet's
  *   edges computed once for the mask); any hit: a ray that finds one leaves the stream, which ends

@@ -12,6 +12,7 @@
 #include <utility>
 
 #include "bvh/bvh.h"
+#include "bvh/had.h"
 #include "scene/load.h"
 #include "test_util.h"
 
@@ -232,6 +233,24 @@ TEST_P(ProceduralWide8Bvh, CollapseKeepsEveryTriangleAndBox) {
 
 INSTANTIATE_TEST_SUITE_P(Scenes, ProceduralWide8Bvh,
                          ::testing::Values("cornell", "detail-room", "landscape", "multi-instance"));
+
+// The lanes of every 8-wide node hold its children largest box first (host/bvh/wide8.cpp): the
+// order an any-hit walk takes them in, so that a shadow ray meets its likeliest occluder soonest.
+TEST_P(ProceduralWide8Bvh, ChildrenLargestBoxFirst) {
+  const Bvh bvh = build_bvh(load_scene(GetParam()).flatten());
+  const Wide8Bvh w = collapse_to_wide8(bvh);
+  auto area = [](const RsWide8Node& n, int lane) {
+    RsBvhNode box{};
+    box.bmin[0] = n.lo_x.s[lane], box.bmin[1] = n.lo_y.s[lane], box.bmin[2] = n.lo_z.s[lane];
+    box.bmax[0] = n.hi_x.s[lane], box.bmax[1] = n.hi_y.s[lane], box.bmax[2] = n.hi_z.s[lane];
+    return node_surface_area(box);
+  };
+  std::size_t ordered_pairs = 0;
+  for (std::size_t i = 0; i < w.nodes.size(); ++i)
+    for (int lane = 1; lane < 8 && w.nodes[i].valid.s[lane] != 0; ++lane, ++ordered_pairs)
+      ASSERT_GE(area(w.nodes[i], lane - 1), area(w.nodes[i], lane)) << "node " << i << " lane " << lane;
+  EXPECT_GT(ordered_pairs, w.nodes.size()) << "nodes with several children";
+}
 
 TEST(Wide8Bvh, OneLeafAndEmptyTrees) {
   Bvh one = build_bvh(flat_from({{{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}}}));

@@ -51,6 +51,13 @@ wide_tree::Slots wide8_slots(const Bvh& bvh, const wide_tree::Subtrees& sub, std
     slots[best] = c;
     slots.insert(best + 1, c + 1);
   }
+  // Largest box first: an any-hit walk takes the children in slot order, and the child whose box is
+  // largest is the one a ray most likely enters and the likeliest to hold its occluder, so a shadow
+  // ray stops sooner (the order of Ize and Hansen's occlusion heuristic, RTSAH, 2011, by area alone).
+  // Nearest-first walks only break ties by slot. Ties keep the tree's order: the same tree every run.
+  std::stable_sort(&slots[0], &slots[0] + slots.size(), [&](std::uint32_t a, std::uint32_t b) {
+    return node_surface_area(bvh.nodes[a]) > node_surface_area(bvh.nodes[b]);
+  });
   return slots;
 }
 
