@@ -56,6 +56,33 @@ RS_INLINE void rs_stream_prefetch_child(RS_GLOBAL const RsWide8Node* nodes, RS_G
   }
 }
 
+/* rs_wide8_keep_nearest without a branch per lane, the same lane and so the same bits: the hit lanes'
+ * t, +inf elsewhere; a lane is nearest where its t is at most every lane's, and of those the lowest
+ * is kept (the first lane of least t, which rs_wide8_keep_nearest's scan with < keeps). Which lane is
+ * nearest is data the branch predictor cannot learn; in the stream, whose rays meet a leaf one after
+ * another, the scan's branches cost more than the eight compares (sibenik bounce1 6-8 %), where the
+ * single-ray walks run the scan faster (results/history/trace-kernels.md, "The nearest lane without a
+ * branch"). */
+RS_INLINE int rs_stream_keep_nearest(int bits, rs_f8 tw, rs_f8 uw, rs_f8 vw, RS_GLOBAL const RsTriPacket8* p,
+                                     RsHit* hit) {
+  float ts[8], us[8], vs[8], m[8];
+  rs8_store(tw, ts);
+  rs8_store(uw, us);
+  rs8_store(vw, vs);
+  for (int i = 0; i < 8; ++i) m[i] = (bits >> i) & 1 ? ts[i] : INFINITY;
+  const rs_f8 mw = rs8_load(m);
+  int nearest = bits;
+  for (int j = 0; j < 8; ++j) nearest &= rs8_bits(mw <= rs8_splat(m[j]));
+  if (!nearest) return 0;
+  const int best = rs_lowest_bit(nearest);
+  if (!(ts[best] < hit->t)) return 0;
+  hit->t = ts[best];
+  hit->tri = p->id[best];
+  hit->u = us[best];
+  hit->v = vs[best];
+  return 1;
+}
+
 /* Traces the rays at positions pos[0..n) of the order (n <= RS_STREAM_RAYS) as one stream into their
  * hits: closest hit (any_hit = 0) or any hit, fast (robust = 0) or robust. visits, when not null,
  * receives per ray its steps. */
@@ -188,7 +215,7 @@ RS_INLINE void rs_trace_stream(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBAL con
           rs_f8 tw, uw, vw;
           const int bits = robust ? rs_packet8_intersect_robust(&rr[i], ray[i].d, p, hit[i].t, &tw, &uw, &vw)
                                   : rs_packet8_intersect_edges(tr[i], &e, hit[i].t, &tw, &uw, &vw);
-          if (bits && rs_wide8_keep_nearest(bits, tw, uw, vw, p, &hit[i]) && any_hit) {
+          if (bits && rs_stream_keep_nearest(bits, tw, uw, vw, p, &hit[i]) && any_hit) {
             looking &= ~((rs_u64)1 << i);
             live &= ~((rs_u64)1 << i);
           }

@@ -14,6 +14,7 @@
 #include "sampling.h"
 #include "shared.h"
 #include "traverse_wide.h"
+#include "traverse_stream.h"
 #include "traverse_wide8.h"
 
 namespace raysort {
@@ -255,6 +256,38 @@ TEST(SharedMath, PacketFrustumAdmitsEveryChildALaneEnters) {
   EXPECT_GT(one_origin, 2000);
   EXPECT_GE(refused, 500);  // every packet with a parallel lane, at least
   EXPECT_LT(refused, 2000);
+}
+
+// The stream's branch-free choice of a packet's nearest hit lane (traverse_stream.h) against the
+// single-ray walk's scan (rs_wide8_keep_nearest): the same lane, t, u, v and answer on packets whose
+// lanes tie often (t from five values, +0 and -0 among them), with the closest hit so far among them.
+TEST(SharedMath, StreamKeepsTheNearestLaneAsTheScanDoes) {
+  std::mt19937 rng(7);
+  const float values[] = {0.0f, -0.0f, 0.5f, 1.0f, 2.0f};
+  RsTriPacket8 p{};
+  for (int i = 0; i < 8; ++i) p.id[i] = 100 + i;
+  int kept = 0, ties = 0;
+  for (int trial = 0; trial < 20000; ++trial) {
+    float t[8], u[8], v[8];
+    for (int i = 0; i < 8; ++i) {
+      t[i] = values[rng() % 5];
+      u[i] = static_cast<float>(rng() % 1000) / 1000.0f;
+      v[i] = static_cast<float>(rng() % 1000) / 1000.0f;
+    }
+    const int bits = static_cast<int>(rng() % 256);
+    RsHit scan = rs_miss(rng() % 4 == 0 ? INFINITY : values[2 + rng() % 3]), branch_free = scan;
+    const int a = rs_wide8_keep_nearest(bits, rs8_load(t), rs8_load(u), rs8_load(v), &p, &scan);
+    const int b = rs_stream_keep_nearest(bits, rs8_load(t), rs8_load(u), rs8_load(v), &p, &branch_free);
+    ASSERT_EQ(a, b) << "trial " << trial;
+    ASSERT_EQ(std::memcmp(&scan, &branch_free, sizeof(RsHit)), 0) << "trial " << trial << ": triangle " << scan.tri
+                                                                   << " against " << branch_free.tri;
+    kept += a;
+    int at_least = 0;
+    for (int i = 0; i < 8; ++i) at_least += a && ((bits >> i) & 1) && t[i] == scan.t;
+    ties += at_least > 1;
+  }
+  EXPECT_GT(kept, 5000);
+  EXPECT_GT(ties, 1000) << "packets whose nearest t several lanes share";
 }
 
 }  // namespace raysort
