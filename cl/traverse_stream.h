@@ -60,7 +60,7 @@ RS_INLINE void rs_stream_prefetch_child(RS_GLOBAL const RsWide8Node* nodes, RS_G
  * t, +inf elsewhere; a lane is nearest where its t is at most every lane's, and of those the lowest
  * is kept (the first lane of least t, which rs_wide8_keep_nearest's scan with < keeps). Which lane is
  * nearest is data the branch predictor cannot learn; in the stream, whose rays meet a leaf one after
- * another, the scan's branches cost more than the eight compares (sibenik bounce1 6-8 %), where the
+ * another, the scan's branches cost more than the eight compares (bounce rays 3-10 %), where the
  * single-ray walks run the scan faster (results/history/trace-kernels.md, "The nearest lane without a
  * branch"). */
 RS_INLINE int rs_stream_keep_nearest(int bits, rs_f8 tw, rs_f8 uw, rs_f8 vw, RS_GLOBAL const RsTriPacket8* p,
