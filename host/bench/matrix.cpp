@@ -174,11 +174,10 @@ MatrixSpec matrix_preset(const std::string& name) {
     m.key_length_scenes = {"detail-room"};
     m.key_length_bits = {16, 64};
     m.frame = {320, 180, 1};
-    // A cell's rounds stop after 0.25 s (or sooner, at the noise target): `make bench` stays under
-    // three minutes on a busy 2-core machine with PoCL compiling the kernels in the same run (at 0.3 s
-    // it took 170-190 s; the run alone 122-137 s at 0.25 s against 155-170 s, A/A 93-96 % against
-    // 96-99 %, 27-30 % of packet16's bounce1 speedup intervals containing 1 against 20-26 %;
-    // docs/measurement.md, "The quick preset's time per cell").
+    // A cell's rounds stop after 0.25 s (or sooner, at the noise target), so that `make bench` stays
+    // under three minutes on a busy 2-core machine with PoCL compiling the kernels in the same run;
+    // 0.3 s did not, at the same A/A calibration (the figures: docs/measurement.md, "The quick
+    // preset's time per cell").
     m.max_time_s = 0.25;
     // Single rays beside packets of the device's width (issue 40): on a CPU the packet class is
     // where an order changes SIMD divergence, not only cache hits.
