@@ -252,6 +252,12 @@ RS_INLINE void rs_traverse_coherent(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBA
       }
     }
   }
+#ifdef RS_PACKET_ROWS
+  if (first + (rs_u32)RS_PACKET_W <= count && !visits) {
+    rs_packet_store_hits_in_a_row(hit_t, hit_tri, hit_u, hit_v, hits + first);
+    return;
+  }
+#endif
   float ft[RS_PACKET_W], fu[RS_PACKET_W], fv[RS_PACKET_W];
   int tri[RS_PACKET_W], nsteps[RS_PACKET_W];
   rsp_store(hit_t, ft), rsp_store(hit_u, fu), rsp_store(hit_v, fv);

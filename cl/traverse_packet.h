@@ -85,12 +85,153 @@ RS_INLINE int rs_packet_prepare_robust(rs_pf dx, rs_pf dy, rs_pf dz, RsRayPacket
   return rsp_bits(valid);
 }
 
+/* The rest of a packet's set-up once its rays are in their lanes (and, fast variant, ix..iz hold
+ * rs_safe_rcp of their directions): the robust fields, or none, and the octant masks. Returns the
+ * active lanes: in_range, and for the robust variant with a valid direction. */
+RS_INLINE int rs_packet_prepare(int robust, int in_range, RsRayPacket* p) {
+  const rs_pf zero = rsp_splat(0.0f);
+  int active = in_range;
+  if (robust) {
+    int parallel = 0;
+    active &= rs_packet_prepare_robust(p->dx, p->dy, p->dz, p, &parallel);
+    p->any_parallel = (parallel & active) != 0;
+  } else {
+    const rs_pi none = rsp_splati(0);
+    p->par_x = p->par_y = p->par_z = none;
+    p->kx1 = p->kx2 = p->ky1 = p->ky2 = p->kz1 = p->kz2 = none;
+    p->okx = p->oky = p->okz = p->sx = p->sy = p->sz = zero;
+    p->any_parallel = 0;
+  }
+  p->neg_x = p->ix < zero, p->neg_y = p->iy < zero, p->neg_z = p->iz < zero;
+  return active;
+}
+
+#if defined(__OPENCL_VERSION__) && (RS_PACKET_W == 16 || RS_PACKET_W == 8)
+/* Packets of rays in a row (device, 8 or 16 lanes): their rays loaded and their hits stored a row at a
+ * time, transposed by shuffles, where the lane loops' loads and stores became gathers per field
+ * (vgatherqps) and stores per lane through private memory: on the AMD EPYC a fifth of coherent16's
+ * samples on primary rays, whose kernel is 1.2x faster with rows (results/history/trace-kernels.md,
+ * "Rays in a row"). The same values in the same lanes, so the same bits as the lane loops. */
+#define RS_PACKET_ROWS 1
+typedef RS_PACKET_CAT(uint, RS_PACKET_W) rs_pu;
+
+/* Whether the packet's rays lie one after another in memory (order[first + i] = order[first] + i,
+ * every lane in range): the batch's own order and every permuted one (docs/trace.md, "Rays in a row"). */
+RS_INLINE int rs_packet_rays_in_a_row(RS_GLOBAL const rs_u32* order, rs_u32 first, rs_u32 count) {
+  if (first > count || count - first < (rs_u32)RS_PACKET_W) return 0;
+  const rs_pu o = RS_PACKET_CAT(vload, RS_PACKET_W)(0, order + first);
+#if RS_PACKET_W == 16
+  const rs_pu lane = (uint16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+#else
+  const rs_pu lane = (uint8)(0, 1, 2, 3, 4, 5, 6, 7);
+#endif
+  return all(o == (rs_pu)(o.s0) + lane);
+}
+
+/* rs_safe_rcp in every lane: the same comparison, sign and IEEE division per lane. */
+RS_INLINE rs_pf rs_packet_safe_rcp(rs_pf d) {
+  const rs_pi sign = rsp_as_int(d) & rsp_splati((int)0x80000000u);
+  const rs_pf tiny_signed = RS_PACKET_CAT(as_float, RS_PACKET_W)(rsp_splati(rs_float_as_int(1e-30f)) | sign);
+  return rsp_splat(1.0f) / rsp_select(d, tiny_signed, fabs(d) < rsp_splat(1e-30f));
+}
+
+/* The packet's rays from row[0..W): 64-byte loads of two rays ([o tmin d tmax] each), then rounds of
+ * two-source shuffles. f[k] receives field k (o.x o.y o.z tmin d.x d.y d.z tmax) of every lane, and
+ * rays_out each lane's RsRay. */
+RS_INLINE void rs_packet_rows_transpose(RS_GLOBAL const RsRay* row, RsRay* rays_out, rs_pf* f) {
+  RS_GLOBAL const float* src = (RS_GLOBAL const float*)row;
+  float16 a[RS_PACKET_W / 2]; /* rays 2k and 2k + 1 */
+  RS_UNROLL
+  for (int k = 0; k < RS_PACKET_W / 2; ++k) {
+    a[k] = vload16(k, src);
+    vstore16(a[k], k, (float*)rays_out);
+  }
+  /* Round 1: rays 4k..4k+3, fields 0-3 (b[2k]) and 4-7 (b[2k + 1]), lane 4 * field + ray. */
+  const uint16 m1lo = (uint16)(0, 8, 16, 24, 1, 9, 17, 25, 2, 10, 18, 26, 3, 11, 19, 27);
+  const uint16 m1hi = m1lo + (uint16)(4);
+  float16 b[RS_PACKET_W / 2];
+  RS_UNROLL
+  for (int k = 0; k < RS_PACKET_W / 4; ++k) {
+    b[2 * k] = shuffle2(a[2 * k], a[2 * k + 1], m1lo);
+    b[2 * k + 1] = shuffle2(a[2 * k], a[2 * k + 1], m1hi);
+  }
+#if RS_PACKET_W == 8
+  /* Round 2: every lane of one field, b[h] holding rays 0-3 and b[2 + h] rays 4-7 of fields 4h..4h+3.
+   * (Into eight lanes directly: Oclgrind reads the halves .lo and .hi of a shuffle's result as
+   * uninitialized.) */
+  const uint8 m2 = (uint8)(0, 1, 2, 3, 16, 17, 18, 19);
+  RS_UNROLL
+  for (int h = 0; h < 2; ++h) {
+    RS_UNROLL
+    for (int q = 0; q < 4; ++q) f[4 * h + q] = shuffle2(b[h], b[2 + h], m2 + (uint8)(4 * q));
+  }
+#else
+  /* Round 2: rays 8j..8j+7, two fields each, lane 8 * field + ray: c[4j + 2h + g] holds fields
+   * 4h + 2g and 4h + 2g + 1. */
+  const uint16 m2lo = (uint16)(0, 1, 2, 3, 16, 17, 18, 19, 4, 5, 6, 7, 20, 21, 22, 23);
+  const uint16 m2hi = m2lo + (uint16)(8);
+  float16 c[RS_PACKET_W / 2];
+  RS_UNROLL
+  for (int j = 0; j < RS_PACKET_W / 8; ++j) {
+    RS_UNROLL
+    for (int h = 0; h < 2; ++h) {
+      c[4 * j + 2 * h] = shuffle2(b[4 * j + h], b[4 * j + 2 + h], m2lo);
+      c[4 * j + 2 * h + 1] = shuffle2(b[4 * j + h], b[4 * j + 2 + h], m2hi);
+    }
+  }
+  /* Round 3: rays 0..15 of one field. */
+  const uint16 m3lo = (uint16)(0, 1, 2, 3, 4, 5, 6, 7, 16, 17, 18, 19, 20, 21, 22, 23);
+  const uint16 m3hi = m3lo + (uint16)(8);
+  RS_UNROLL
+  for (int q = 0; q < 4; ++q) {
+    f[2 * q] = shuffle2(c[q], c[4 + q], m3lo);
+    f[2 * q + 1] = shuffle2(c[q], c[4 + q], m3hi);
+  }
+#endif
+}
+
+/* The packet's hits into hits[0..W) (RsHit: t, tri, u, v): shuffles interleave the four fields, and
+ * 64-byte stores write four hits each. */
+RS_INLINE void rs_packet_store_hits_in_a_row(rs_pf t, rs_pi tri, rs_pf u, rs_pf v, RS_GLOBAL RsHit* hits) {
+  const rs_pf tri_bits = RS_PACKET_CAT(as_float, RS_PACKET_W)(tri);
+  const uint16 quad_lo = (uint16)(0, 1, 16, 17, 2, 3, 18, 19, 4, 5, 20, 21, 6, 7, 22, 23);
+  const uint16 quad_hi = quad_lo + (uint16)(8);
+  RS_GLOBAL float* out = (RS_GLOBAL float*)hits;
+#if RS_PACKET_W == 16
+  const uint16 pair_lo = (uint16)(0, 16, 1, 17, 2, 18, 3, 19, 4, 20, 5, 21, 6, 22, 7, 23);
+  const uint16 pair_hi = pair_lo + (uint16)(8);
+  const float16 t_tri_lo = shuffle2(t, tri_bits, pair_lo), t_tri_hi = shuffle2(t, tri_bits, pair_hi);
+  const float16 u_v_lo = shuffle2(u, v, pair_lo), u_v_hi = shuffle2(u, v, pair_hi);
+  vstore16(shuffle2(t_tri_lo, u_v_lo, quad_lo), 0, out);
+  vstore16(shuffle2(t_tri_lo, u_v_lo, quad_hi), 1, out);
+  vstore16(shuffle2(t_tri_hi, u_v_hi, quad_lo), 2, out);
+  vstore16(shuffle2(t_tri_hi, u_v_hi, quad_hi), 3, out);
+#else
+  const uint16 pair = (uint16)(0, 8, 1, 9, 2, 10, 3, 11, 4, 12, 5, 13, 6, 14, 7, 15);
+  const float16 t_tri = shuffle2(t, tri_bits, pair), u_v = shuffle2(u, v, pair);
+  vstore16(shuffle2(t_tri, u_v, quad_lo), 0, out);
+  vstore16(shuffle2(t_tri, u_v, quad_hi), 1, out);
+#endif
+}
+#endif
+
 /* Loads rays[order[first + i]] into lane i (lanes past count stay inactive) and returns the
  * active lanes as bits: in range, and for the robust variant a valid direction (as
  * rs_prepare_robust_ray; an invalid one hits nothing, as in the single-ray traversal). rays_out
  * keeps each lane's RsRay for the rare per-lane paths (the double-precision t). */
 RS_INLINE int rs_packet_load(RS_GLOBAL const RsRay* rays, RS_GLOBAL const rs_u32* order, rs_u32 first, rs_u32 count,
                              int robust, RsRay* rays_out, RsRayPacket* p, rs_pf* tmax_out) {
+#ifdef RS_PACKET_ROWS
+  if (rs_packet_rays_in_a_row(order, first, count)) {
+    rs_pf f[8];
+    rs_packet_rows_transpose(rays + order[first], rays_out, f);
+    p->ox = f[0], p->oy = f[1], p->oz = f[2], p->tmin = f[3];
+    p->dx = f[4], p->dy = f[5], p->dz = f[6];
+    *tmax_out = f[7];
+    if (!robust) p->ix = rs_packet_safe_rcp(f[4]), p->iy = rs_packet_safe_rcp(f[5]), p->iz = rs_packet_safe_rcp(f[6]);
+    return rs_packet_prepare(robust, (1 << RS_PACKET_W) - 1, p);
+  }
+#endif
   float ox[RS_PACKET_W], oy[RS_PACKET_W], oz[RS_PACKET_W], dx[RS_PACKET_W], dy[RS_PACKET_W], dz[RS_PACKET_W];
   float ix[RS_PACKET_W], iy[RS_PACKET_W], iz[RS_PACKET_W], tmin[RS_PACKET_W], tmax[RS_PACKET_W];
   int in_range = 0;
@@ -120,22 +261,8 @@ RS_INLINE int rs_packet_load(RS_GLOBAL const RsRay* rays, RS_GLOBAL const rs_u32
   p->dx = rsp_load(dx), p->dy = rsp_load(dy), p->dz = rsp_load(dz);
   p->tmin = rsp_load(tmin);
   *tmax_out = rsp_load(tmax);
-  const rs_pf zero = rsp_splat(0.0f);
-  int active = in_range;
-  if (robust) {
-    int parallel = 0;
-    active &= rs_packet_prepare_robust(p->dx, p->dy, p->dz, p, &parallel);
-    p->any_parallel = (parallel & active) != 0;
-  } else {
-    p->ix = rsp_load(ix), p->iy = rsp_load(iy), p->iz = rsp_load(iz);
-    const rs_pi none = rsp_splati(0);
-    p->par_x = p->par_y = p->par_z = none;
-    p->kx1 = p->kx2 = p->ky1 = p->ky2 = p->kz1 = p->kz2 = none;
-    p->okx = p->oky = p->okz = p->sx = p->sy = p->sz = zero;
-    p->any_parallel = 0;
-  }
-  p->neg_x = p->ix < zero, p->neg_y = p->iy < zero, p->neg_z = p->iz < zero;
-  return active;
+  if (!robust) p->ix = rsp_load(ix), p->iy = rsp_load(iy), p->iz = rsp_load(iz);
+  return rs_packet_prepare(robust, in_range, p);
 }
 
 /* One axis of the slab test for every lane: the distances to the lane's near plane (the box's upper
@@ -453,6 +580,12 @@ RS_INLINE void rs_traverse_packet(RS_GLOBAL const RsWideNode* nodes, RS_GLOBAL c
       }
     }
   }
+#ifdef RS_PACKET_ROWS
+  if (first + (rs_u32)RS_PACKET_W <= count && !visits) {
+    rs_packet_store_hits_in_a_row(hit_t, hit_tri, hit_u, hit_v, hits + first);
+    return;
+  }
+#endif
   float ft[RS_PACKET_W], fu[RS_PACKET_W], fv[RS_PACKET_W];
   int tri[RS_PACKET_W], nsteps[RS_PACKET_W];
   rsp_store(hit_t, ft), rsp_store(hit_u, fu), rsp_store(hit_v, fv);

@@ -187,9 +187,10 @@ TEST(Trace, WideAndBinaryLayoutsAgree) {
 // per-ray step counts, with packets (streams) formed from a shuffled order and a batch whose size is no
 // multiple of the width (a partial last packet); and every ray's hit equals the single-ray wide
 // traversal's up to ties (another triangle at exactly the same t), as between the wide and binary
-// classes. Shadow rays: the same occluded / free answer. The coherent packets also in the batch's own
-// order, where the camera's packets share an origin and an octant and the frustum alone decides the
-// inner nodes.
+// classes. Shadow rays: the same occluded / free answer. Also in the batch's own order, where packets
+// load their rays and store their hits a row at a time (cl/traverse_packet.h, RS_PACKET_ROWS) and the
+// coherent packets' cameras share an origin and an octant, so the frustum alone decides the inner
+// nodes; and in that order rotated by 5, whose rows start off a 64-byte boundary and one wraps.
 TEST(Trace, PacketKernelsEqualTheirHostTwinAndSingleRays) {
   Scene scene = load_scene("detail-room", {"", {64, 36, 0}});
   Scene::Flat tris = scene.flatten();
@@ -205,15 +206,17 @@ TEST(Trace, PacketKernelsEqualTheirHostTwinAndSingleRays) {
       ASSERT_EQ(packet.layout(), layout);
       const std::string what = std::string(trace_layout_name(layout)) + " " + trace_variant_name(v);
       for (const auto& rb : batches) {
-        for (const bool shuffled : {true, false}) {
-          if (!shuffled && !is_coherent(layout)) continue;  // the coherent packets in order too
+        for (const char* arrangement : {"shuffled", "in order", "rotated"}) {
           const bool any = rb.batch.any_hit();
           std::vector<RsRay> rays = rb.batch.rays;
           rays.resize(rays.size() - 3);  // a partial last packet for every width
           std::vector<std::uint32_t> order(rays.size());
           std::iota(order.begin(), order.end(), 0u);
-          if (shuffled) std::shuffle(order.begin(), order.end(), std::mt19937(7));
-          const std::string where = rb.batch.name + (shuffled ? " shuffled" : " in order");
+          if (arrangement == std::string("shuffled")) std::shuffle(order.begin(), order.end(), std::mt19937(7));
+          // Rotated by 5: packets of rays in a row that start off a 64-byte boundary, and one that wraps
+          // from the last ray to the first (not in a row).
+          if (arrangement == std::string("rotated")) std::rotate(order.begin(), order.begin() + 5, order.end());
+          const std::string where = rb.batch.name + " " + arrangement;
           const auto dev = packet.run(rays, &order, any).hits;
           const auto host = trace_reference(bvh, rays, order.data(), any, nullptr, v, layout);
           EXPECT_EQ(count_hit_mismatches(dev, host), 0u) << what << " " << where;
