@@ -12,7 +12,7 @@ from paper_correlation import correlations, paper_speedups, scene_correlations
 
 from .prose_early import BAR, _elapsed_s, _noise, _rows, duration
 from .sampling import column_label
-from .sets import PACKET_EPYC, PACKET_EPYC_ACCESS
+from .sets import PACKET_EPYC, PACKET_EPYC_ACCESS, PACKET_ROWS
 
 FIVE = os.path.join(PACKET_EPYC, "five-scenes")
 WIDTHS = os.path.join(PACKET_EPYC, "widths-8-4")
@@ -21,6 +21,8 @@ WIDTH_SHADOW0 = os.path.join(PACKET_EPYC, "width-shadow0")
 WIDTHS_AGAIN = os.path.join(PACKET_EPYC, "widths-8-16")
 FAST_ROBUST = os.path.join(PACKET_EPYC, "landscape-fast-robust")
 PACKET_STEPS = os.path.join(PACKET_EPYC, "packet-steps")  # build/packet_study SCENE 1920x1080 shadow0
+ROWS_FIVE = os.path.join(PACKET_ROWS, "five-scenes")
+ROWS_LANDSCAPE_21M = os.path.join(PACKET_ROWS, "landscape-21m")
 AS_PAPER_SIZE = {"scenes/paper-size/landscape-21m.toml": "landscape"}
 
 # (label, set folders, scene mapping, the classes and access modes to show), in the block's order
@@ -31,6 +33,9 @@ ROWS = [
     ("`widths-8-4/`", [WIDTHS], None, [("packet8", "permute"), ("packet4", "permute")]),
     ("`widths-8-16/`", [WIDTHS_AGAIN], None, [("packet8", "permute"), ("packet16", "permute")]),
     ("`five-scenes/` with `landscape-21m/` as the paper's landscape", [FIVE, LANDSCAPE_21M], AS_PAPER_SIZE,
+     [("packet16", "permute")]),
+    ("`paper-1spp-packet-a4d24f4`, rays in a row: `five-scenes/`", [ROWS_FIVE], None, [("packet16", "permute")]),
+    ("the same with its `landscape-21m/` as the paper's landscape", [ROWS_FIVE, ROWS_LANDSCAPE_21M], AS_PAPER_SIZE,
      [("packet16", "permute")]),
 ]
 

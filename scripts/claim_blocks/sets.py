@@ -18,6 +18,9 @@ PACKET_SETUP = os.path.join(XEON, "paper-1spp-packet-06b6e7c")
 # sibenik (PACKET_EPYC); both access modes of packet16 and single rays (PACKET_EPYC_ACCESS).
 PACKET_EPYC = os.path.join(EPYC, "paper-1spp-packet-139c5a4")
 PACKET_EPYC_ACCESS = os.path.join(EPYC, "paper-1spp-access-139c5a4")
+# The packet16 cells of PACKET_EPYC's five-scenes and landscape-21m again with the kernels of a4d24f4: packets
+# of rays in a row load their rays and store their hits a row at a time (results/history/trace-kernels.md).
+PACKET_ROWS = os.path.join(EPYC, "paper-1spp-packet-a4d24f4")
 VIEWPORT = os.path.join(EPYC, "paper-viewport-1spp-d8b4b22")
 HCC_DIR = os.path.join(EPYC, "paper-hcc-dir-1spp-d8b4b22")
 BOUNCES = os.path.join(EPYC, "paper-bounces-1spp-d8b4b22")
