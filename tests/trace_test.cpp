@@ -206,16 +206,16 @@ TEST(Trace, PacketKernelsEqualTheirHostTwinAndSingleRays) {
       ASSERT_EQ(packet.layout(), layout);
       const std::string what = std::string(trace_layout_name(layout)) + " " + trace_variant_name(v);
       for (const auto& rb : batches) {
-        for (const char* arrangement : {"shuffled", "in order", "rotated"}) {
+        for (const std::string arrangement : {"shuffled", "in order", "rotated"}) {
           const bool any = rb.batch.any_hit();
           std::vector<RsRay> rays = rb.batch.rays;
           rays.resize(rays.size() - 3);  // a partial last packet for every width
           std::vector<std::uint32_t> order(rays.size());
           std::iota(order.begin(), order.end(), 0u);
-          if (arrangement == std::string("shuffled")) std::shuffle(order.begin(), order.end(), std::mt19937(7));
+          if (arrangement == "shuffled") std::shuffle(order.begin(), order.end(), std::mt19937(7));
           // Rotated by 5: packets of rays in a row that start off a 64-byte boundary, and one that wraps
           // from the last ray to the first (not in a row).
-          if (arrangement == std::string("rotated")) std::rotate(order.begin(), order.begin() + 5, order.end());
+          if (arrangement == "rotated") std::rotate(order.begin(), order.begin() + 5, order.end());
           const std::string where = rb.batch.name + " " + arrangement;
           const auto dev = packet.run(rays, &order, any).hits;
           const auto host = trace_reference(bvh, rays, order.data(), any, nullptr, v, layout);
