@@ -83,12 +83,14 @@ RS_INLINE int rs_stream_keep_nearest(int bits, rs_f8 tw, rs_f8 uw, rs_f8 vw, RS_
   return 1;
 }
 
-/* Traces the rays at positions pos[0..n) of the order (n <= RS_STREAM_RAYS) as one stream into their
- * hits: closest hit (any_hit = 0) or any hit, fast (robust = 0) or robust. visits, when not null,
+/* Traces the rays at positions pos[0..n) of the order (n <= RS_STREAM_RAYS), dealt by the octant
+ * dealt_octant of d's signs, as one stream into their hits: closest hit (any_hit = 0) or any hit, fast
+ * (robust = 0) or robust. visits, when not null,
  * receives per ray its steps. */
 RS_INLINE void rs_trace_stream(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBAL const RsTriPacket8* packets,
                                RS_GLOBAL const RsRay* rays, RS_GLOBAL const rs_u32* order, const rs_u32* pos, int n,
-                               int robust, int any_hit, RS_GLOBAL RsHit* hits, RS_GLOBAL rs_u32* visits) {
+                               int dealt_octant, int robust, int any_hit, RS_GLOBAL RsHit* hits,
+                               RS_GLOBAL rs_u32* visits) {
   RsRay ray[RS_STREAM_RAYS];
   RsTraversalRay tr[RS_STREAM_RAYS];
   RsRobustRay rr[RS_STREAM_RAYS];
@@ -96,6 +98,7 @@ RS_INLINE void rs_trace_stream(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBAL con
   rs_u32 steps[RS_STREAM_RAYS];
   rs_u64 live = 0; /* rays still looking (any hit: those without one yet) */
   rs_u64 in_octant[8] = {0, 0, 0, 0, 0, 0, 0, 0}; /* the rays of each 1/d octant */
+  rs_u64 elsewhere = 0; /* rays whose 1/d octant is not the one they were dealt by (rare) */
   int octant_of[RS_STREAM_RAYS];
   for (int i = 0; i < RS_STREAM_RAYS; ++i) {
     steps[i] = 0;
@@ -111,6 +114,14 @@ RS_INLINE void rs_trace_stream(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBAL con
     live |= (rs_u64)1 << i;
     octant_of[i] = robust ? rs_octant(rr[i].inv_d[0], rr[i].inv_d[1], rr[i].inv_d[2])
                           : rs_octant(tr[i].inv_d.x, tr[i].inv_d.y, tr[i].inv_d.z);
+    elsewhere |= (rs_u64)(octant_of[i] != dealt_octant) << i;
+  }
+  /* The octants' rays after the loop, the same sets as an `in_octant[octant_of[i]] |= bit` per ray in it,
+   * which was a read-modify-write through memory on the same word for nearly every ray: one dependent
+   * chain through the whole set-up (results/history/trace-kernels.md, "The stream's octant sets"). */
+  in_octant[dealt_octant] = live & ~elsewhere;
+  for (rs_u64 rest = live & elsewhere; rest; rest &= rest - 1) {
+    const int i = rs_lowest_bit_ul(rest);
     in_octant[octant_of[i]] |= (rs_u64)1 << i;
   }
   rs_u32 stack[RS_WIDE8_STACK_SIZE];
@@ -268,7 +279,7 @@ RS_INLINE void rs_traverse_stream(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBAL 
       if (rest == 8) break;
       full = rest;
     }
-    rs_trace_stream(nodes, packets, rays, order, dealt[full], held[full], robust, any_hit, hits, visits);
+    rs_trace_stream(nodes, packets, rays, order, dealt[full], held[full], full, robust, any_hit, hits, visits);
     held[full] = 0;
   }
 }
