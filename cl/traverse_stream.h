@@ -85,8 +85,7 @@ RS_INLINE int rs_stream_keep_nearest(int bits, rs_f8 tw, rs_f8 uw, rs_f8 vw, RS_
 
 /* Traces the rays at positions pos[0..n) of the order (n <= RS_STREAM_RAYS), dealt by the octant
  * dealt_octant of d's signs, as one stream into their hits: closest hit (any_hit = 0) or any hit, fast
- * (robust = 0) or robust. visits, when not null,
- * receives per ray its steps. */
+ * (robust = 0) or robust. visits, when not null, receives per ray its steps. */
 RS_INLINE void rs_trace_stream(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBAL const RsTriPacket8* packets,
                                RS_GLOBAL const RsRay* rays, RS_GLOBAL const rs_u32* order, const rs_u32* pos, int n,
                                int dealt_octant, int robust, int any_hit, RS_GLOBAL RsHit* hits,
