@@ -128,7 +128,10 @@ RS_INLINE int rs_packet_rays_in_a_row(RS_GLOBAL const rs_u32* order, rs_u32 firs
   return all(o == (rs_pu)(o.s0) + lane);
 }
 
-/* rs_safe_rcp in every lane: the same comparison, sign and IEEE division per lane. */
+/* rs_safe_rcp (intersect.h) in every lane: the same comparison, sign and IEEE division per lane, so the
+ * rows give the bits the lane loop's per-lane rs_prepare_ray gives. Its vector form, kept in step with
+ * the scalar one: the lane loop calls the scalar one per lane, which PoCL vectorises there only because
+ * the loop is a loop. */
 RS_INLINE rs_pf rs_packet_safe_rcp(rs_pf d) {
   const rs_pi sign = rsp_as_int(d) & rsp_splati((int)0x80000000u);
   const rs_pf tiny_signed = RS_PACKET_CAT(as_float, RS_PACKET_W)(rsp_splati(rs_float_as_int(1e-30f)) | sign);
