@@ -1,6 +1,7 @@
 // The OpenCL runtime: device choice, error names, build failures that surface the log.
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <cstdint>
 #include <cstdlib>
 #include <vector>
@@ -77,7 +78,8 @@ TEST(ClRuntime, OversizedAllocationNamesBufferAndLimit) {
 // rs4_bits (cl/lanes.h) is one movmskps on x86 devices and an AND/OR form elsewhere: on the device,
 // both give lane i -> bit i for each of the sixteen -1/0 masks, and the x86 form is the one PoCL
 // builds here (a test that could only ever see the portable form would check nothing new). The
-// sixteen- and eight-lane forms (rs16_mask_bits, rs8_mask_bits: one instruction on AVX-512 devices) on bit patterns.
+// sixteen- and eight-lane forms (rs16_mask_bits, rs8_mask_bits: one instruction on AVX-512 devices) on bit patterns,
+// and the lowest set bit (rs_lowest_bit[_u|_ul]: tzcnt on x86 devices, clz of the isolated bit elsewhere).
 TEST(ClRuntime, MaskBitsFormsAgree) {
   Runtime& rt = testing::runtime();
   const std::string src = kernel_source("cl/lanes.h") + R"(
@@ -89,14 +91,22 @@ __kernel void mask_bits(__global int* out) {
   out[3 * i + 2] = RS_MASK_BITS_MOVMSK;
 }
 /* Sixteen- and eight-lane masks from bit patterns p (lane l set when bit l of p is):
- * rs16_mask_bits and rs8_mask_bits must give p back. */
+ * rs16_mask_bits and rs8_mask_bits must give p back; and rs_lowest_bit[_u|_ul] of p at three places. */
 __kernel void mask_bits16(__global const uint* patterns, __global uint* out) {
   const int i = get_global_id(0);
   const uint p = patterns[i];
   const int16 lanes = (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
   const int16 m = ((int16)(p) >> lanes & 1) != 0;
-  out[2 * i] = rs16_mask_bits(m);
-  out[2 * i + 1] = rs8_mask_bits(m.lo) | (rs8_mask_bits(m.hi) << 8);
+  out[6 * i] = rs16_mask_bits(m);
+  out[6 * i + 1] = rs8_mask_bits(m.lo) | (rs8_mask_bits(m.hi) << 8);
+  /* The lowest set bit (x != 0) of p and of p moved to the top of 32 and 64 bits. */
+  const uint top = p ? p << 16 : 0x80000000u;
+  const ulong high = p ? (ulong)p << 48 : 0x8000000000000000ul;
+  const ulong middle = p ? (ulong)p << 20 : 1ul;
+  out[6 * i + 2] = p ? (uint)rs_lowest_bit((int)p) : 99u;
+  out[6 * i + 3] = (uint)rs_lowest_bit_u(top);
+  out[6 * i + 4] = (uint)rs_lowest_bit_ul(high);
+  out[6 * i + 5] = (uint)rs_lowest_bit_ul(middle);
 }
 )";
   cl::Program program = rt.build_source(src, "mask_bits.cl");
@@ -128,7 +138,7 @@ __kernel void mask_bits16(__global const uint* patterns, __global uint* out) {
   if (rt.info().is_pocl() && rt.info().type == "CPU") forms.push_back("-DRS_AVX_MASK_BITS");
   for (const std::string& options : forms) {
     cl::Program form = options.empty() ? program : rt.build_source(src, "mask_bits.cl", options);
-    cl::Buffer out16 = rt.buffer("mask bits 16", patterns.size() * 2 * sizeof(std::uint32_t));
+    cl::Buffer out16 = rt.buffer("mask bits 16", patterns.size() * 6 * sizeof(std::uint32_t));
     cl_call("mask_bits16", [&] {
       cl::Kernel k(form, "mask_bits16");
       k.setArg(0, pattern_buf);
@@ -136,10 +146,16 @@ __kernel void mask_bits16(__global const uint* patterns, __global uint* out) {
       rt.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(patterns.size()), cl::NullRange);
     });
     std::vector<std::uint32_t> w;
-    rt.download("mask bits 16", out16, w, patterns.size() * 2);
+    rt.download("mask bits 16", out16, w, patterns.size() * 6);
     for (std::size_t i = 0; i < patterns.size(); ++i) {
-      EXPECT_EQ(w[2 * i], patterns[i]) << options << ": rs16_mask_bits of pattern " << std::hex << patterns[i];
-      EXPECT_EQ(w[2 * i + 1], patterns[i]) << options << ": rs8_mask_bits of pattern " << std::hex << patterns[i];
+      const std::uint32_t p = patterns[i];
+      EXPECT_EQ(w[6 * i], p) << options << ": rs16_mask_bits of pattern " << std::hex << p;
+      EXPECT_EQ(w[6 * i + 1], p) << options << ": rs8_mask_bits of pattern " << std::hex << p;
+      const std::uint32_t low = p ? static_cast<std::uint32_t>(std::countr_zero(p)) : 99u;
+      EXPECT_EQ(w[6 * i + 2], low) << options << ": rs_lowest_bit of " << std::hex << p;
+      EXPECT_EQ(w[6 * i + 3], p ? low + 16 : 31u) << options << ": rs_lowest_bit_u of " << std::hex << (p << 16);
+      EXPECT_EQ(w[6 * i + 4], p ? low + 48 : 63u) << options << ": rs_lowest_bit_ul of " << std::hex << p << " << 48";
+      EXPECT_EQ(w[6 * i + 5], p ? low + 20 : 0u) << options << ": rs_lowest_bit_ul of " << std::hex << p << " << 20";
     }
   }
 }
