@@ -12,7 +12,7 @@ from paper_correlation import correlations, paper_speedups, scene_correlations
 
 from .prose_early import BAR, _elapsed_s, _noise, _rows, duration
 from .sampling import column_label
-from .sets import PACKET_EPYC, PACKET_EPYC_ACCESS, PACKET_ROWS
+from .sets import PACKET_EPYC, PACKET_EPYC_ACCESS, PACKET_ROWS, PACKET_TZCNT
 
 FIVE = os.path.join(PACKET_EPYC, "five-scenes")
 WIDTHS = os.path.join(PACKET_EPYC, "widths-8-4")
@@ -23,6 +23,7 @@ FAST_ROBUST = os.path.join(PACKET_EPYC, "landscape-fast-robust")
 PACKET_STEPS = os.path.join(PACKET_EPYC, "packet-steps")  # build/packet_study SCENE 1920x1080 shadow0
 ROWS_FIVE = os.path.join(PACKET_ROWS, "five-scenes")
 ROWS_LANDSCAPE_21M = os.path.join(PACKET_ROWS, "landscape-21m")
+TZCNT_FIVE = os.path.join(PACKET_TZCNT, "five-scenes")
 AS_PAPER_SIZE = {"scenes/paper-size/landscape-21m.toml": "landscape"}
 
 # (label, set folders, scene mapping, the classes and access modes to show), in the block's order
@@ -36,6 +37,8 @@ ROWS = [
      [("packet16", "permute")]),
     ("`paper-1spp-packet-a4d24f4`, rays in a row: `five-scenes/`", [ROWS_FIVE], None, [("packet16", "permute")]),
     ("the same with its `landscape-21m/` as the paper's landscape", [ROWS_FIVE, ROWS_LANDSCAPE_21M], AS_PAPER_SIZE,
+     [("packet16", "permute")]),
+    ("`paper-1spp-packet-4399aef`, one `tzcnt` a lowest bit: `five-scenes/`", [TZCNT_FIVE], None,
      [("packet16", "permute")]),
 ]
 

@@ -21,6 +21,8 @@ PACKET_EPYC_ACCESS = os.path.join(EPYC, "paper-1spp-access-139c5a4")
 # The packet16 cells of PACKET_EPYC's five-scenes and landscape-21m again with the kernels of a4d24f4: packets
 # of rays in a row load their rays and store their hits a row at a time (results/history/trace-kernels.md).
 PACKET_ROWS = os.path.join(EPYC, "paper-1spp-packet-a4d24f4")
+# The packet16 cells of five-scenes again with the kernels of 4399aef (the lowest set bit one tzcnt).
+PACKET_TZCNT = os.path.join(EPYC, "paper-1spp-packet-4399aef")
 VIEWPORT = os.path.join(EPYC, "paper-viewport-1spp-d8b4b22")
 HCC_DIR = os.path.join(EPYC, "paper-hcc-dir-1spp-d8b4b22")
 BOUNCES = os.path.join(EPYC, "paper-bounces-1spp-d8b4b22")
