@@ -251,6 +251,7 @@ RS_KEY_INLINE RsTraversalRay rs_exit_ray(RsRay ray) {
   t.o = rs_vec3(ray.o[0], ray.o[1], ray.o[2]);
   t.d = rs_vec3(ray.d[0], ray.d[1], ray.d[2]);
   t.inv_d = rs_vec3(rs_exit_rcp(ray.d[0]), rs_exit_rcp(ray.d[1]), rs_exit_rcp(ray.d[2]));
+  t.o_inv_d = rs_vec3(-(t.o.x * t.inv_d.x), -(t.o.y * t.inv_d.y), -(t.o.z * t.inv_d.z));
   t.tmin = ray.tmin;
   t.tmax = ray.tmax;
   return t;

@@ -11,8 +11,9 @@
 #include "lanes.h"
 
 /* Does the segment [tmin, tmax] of r overlap box b? The same slab arithmetic, in the same order,
- * as rs_intersect_box in intersect.h (which takes a __global node; this takes a box by value):
- * a cut-node bit is 1 exactly when traversal would enter it.
+ * as rs_intersect_box_unfused in intersect.h (which takes a __global node; this takes a box by value),
+ * the encoders' form of the slab test: a cut-node bit is 1 when the fast traversal would enter the
+ * node, up to a ray that grazes it within an ulp of a plane (the trace fuses its distances).
  * (The key kernels test sixteen boxes at once, rs_cut_mask; this one-box form is kept for
  * reference and tests.) */
 RS_KEY_INLINE int rs_segment_overlaps_box(RsTraversalRay r, RsBox b) {

@@ -1,5 +1,6 @@
 /* raysort — the prefix path code (Xiang et al. section 4.1): the first box tests of a traversal of
- * the binary BVH in fixed left-first order, with the trace kernels' own tests (intersect.h).
+ * the binary BVH in fixed left-first order, with the trace kernels' triangle test (intersect.h) and
+ * the encoders' slab test (rs_intersect_box_unfused).
  */
 #ifndef RAYSORT_KEYS_PPC_H
 #define RAYSORT_KEYS_PPC_H
@@ -9,7 +10,7 @@
 
 /* PPC (Xiang et al. section 4.1): the first `bits` box-test results of a closest-hit traversal
  * that visits children in fixed order, left first: the root's test, then at each inner node the
- * left and the right child's tests (rs_intersect_box, the trace kernels' test, against the
+ * left and the right child's tests (rs_intersect_box_unfused, the encoders' box test, against the
  * current closest hit); leaves test their triangles, which shortens the segment as in a trace.
  * 1 = hit, most significant first; a traversal that ends early leaves 0s. */
 RS_KEY_INLINE rs_u64 rs_prefix_path_code(RS_GLOBAL const RsBvhNode* nodes, RS_GLOBAL const RsTriangle* tris, RsRay ray,
@@ -18,7 +19,7 @@ RS_KEY_INLINE rs_u64 rs_prefix_path_code(RS_GLOBAL const RsBvhNode* nodes, RS_GL
   float tmax = ray.tmax;
   RsBitWriter w = rs_bit_writer();
   int hit;
-  rs_intersect_box(r, &nodes[0], tmax, &hit);
+  rs_intersect_box_unfused(r, &nodes[0], tmax, &hit);
   rs_put_bits(&w, (rs_u32)hit, 1u);
   if (!hit) return w.code;
   rs_u32 stack[RS_STACK_SIZE];
@@ -34,8 +35,8 @@ RS_KEY_INLINE rs_u64 rs_prefix_path_code(RS_GLOBAL const RsBvhNode* nodes, RS_GL
     } else {
       rs_u32 left = n->first;
       int hit_l, hit_r;
-      rs_intersect_box(r, &nodes[left], tmax, &hit_l);
-      rs_intersect_box(r, &nodes[left + 1], tmax, &hit_r);
+      rs_intersect_box_unfused(r, &nodes[left], tmax, &hit_l);
+      rs_intersect_box_unfused(r, &nodes[left + 1], tmax, &hit_r);
       rs_put_bits(&w, (rs_u32)hit_l, 1u);
       rs_put_bits(&w, (rs_u32)hit_r, 1u);
       if (hit_l) {

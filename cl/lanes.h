@@ -22,6 +22,7 @@ RS_LANE_INLINE rs_f4 rs4_splat(float x) { return (float4)(x); }
 RS_LANE_INLINE rs_f4 rs4_min(rs_f4 a, rs_f4 b) { return select(b, a, a < b); }
 RS_LANE_INLINE rs_f4 rs4_max(rs_f4 a, rs_f4 b) { return select(b, a, a > b); }
 RS_LANE_INLINE rs_f4 rs4_select(rs_f4 if_false, rs_f4 if_true, rs_i4 m) { return select(if_false, if_true, m); }
+RS_LANE_INLINE rs_f4 rs4_fma(rs_f4 a, rs_f4 b, rs_f4 c) { return fma(a, b, c); }
 /* The lanes of a -1/0 mask as bits, lane i -> bit i. The traversal branches on these bits at every
  * node, so on x86 devices (PoCL) it is one movmskps; the portable form (AND with 1, 2, 4, 8, then OR
  * the lanes) put a shuffle-and-OR chain on that path, and the trace took 4-13 % longer (sibenik,
@@ -98,6 +99,11 @@ RS_LANE_INLINE rs_f4 operator-(float a, rs_f4 b) { return rs4_splat(a) - b; }
 RS_LANE_INLINE rs_f4 rs4_select(rs_f4 if_false, rs_f4 if_true, rs_i4 m) {
   rs_f4 r;
   for (int i = 0; i < 4; ++i) r.s[i] = m.s[i] < 0 ? if_true.s[i] : if_false.s[i];
+  return r;
+}
+RS_LANE_INLINE rs_f4 rs4_fma(rs_f4 a, rs_f4 b, rs_f4 c) {
+  rs_f4 r;
+  for (int i = 0; i < 4; ++i) r.s[i] = rs_fma(a.s[i], b.s[i], c.s[i]);
   return r;
 }
 RS_LANE_INLINE rs_f4 rs4_min(rs_f4 a, rs_f4 b) { return rs4_select(b, a, a < b); }
@@ -212,6 +218,7 @@ RS_LANE_INLINE rs_f8 rs8_splat(float x) { return (float8)(x); }
 RS_LANE_INLINE rs_f8 rs8_min(rs_f8 a, rs_f8 b) { return select(b, a, a < b); }
 RS_LANE_INLINE rs_f8 rs8_max(rs_f8 a, rs_f8 b) { return select(b, a, a > b); }
 RS_LANE_INLINE rs_f8 rs8_select(rs_f8 if_false, rs_f8 if_true, rs_i8 m) { return select(if_false, if_true, m); }
+RS_LANE_INLINE rs_f8 rs8_fma(rs_f8 a, rs_f8 b, rs_f8 c) { return fma(a, b, c); }
 /* Lane i -> bit i: one vmovmskps on an AVX device (the traversal branches on it at every node, as
  * rs4_bits), the portable AND-and-OR of rs8_mask_bits elsewhere. */
 #if defined(__x86_64__) && defined(__AVX__) && !defined(RS_PORTABLE_MASK_BITS)
@@ -257,6 +264,11 @@ RS_LANE_INLINE rs_f8 operator-(float a, rs_f8 b) { return rs8_splat(a) - b; }
 RS_LANE_INLINE rs_f8 rs8_select(rs_f8 if_false, rs_f8 if_true, rs_i8 m) {
   rs_f8 r;
   for (int i = 0; i < 8; ++i) r.s[i] = m.s[i] < 0 ? if_true.s[i] : if_false.s[i];
+  return r;
+}
+RS_LANE_INLINE rs_f8 rs8_fma(rs_f8 a, rs_f8 b, rs_f8 c) {
+  rs_f8 r;
+  for (int i = 0; i < 8; ++i) r.s[i] = rs_fma(a.s[i], b.s[i], c.s[i]);
   return r;
 }
 RS_LANE_INLINE rs_f8 rs8_min(rs_f8 a, rs_f8 b) { return rs8_select(b, a, a < b); }

@@ -24,6 +24,8 @@ RS_LANE_INLINE rs_pf rsp_splat(float x) { return (rs_pf)(x); }
 RS_LANE_INLINE rs_pi rsp_splati(int x) { return (rs_pi)(x); }
 RS_LANE_INLINE rs_pf rsp_select(rs_pf if_false, rs_pf if_true, rs_pi m) { return select(if_false, if_true, m); }
 RS_LANE_INLINE rs_pi rsp_selecti(rs_pi if_false, rs_pi if_true, rs_pi m) { return select(if_false, if_true, m); }
+RS_LANE_INLINE rs_pf rsp_fma(rs_pf a, rs_pf b, rs_pf c) { return fma(a, b, c); }
+RS_LANE_INLINE rs_pf rsp_neg(rs_pf a) { return -a; }
 RS_LANE_INLINE rs_pf rsp_load(const float* p) { return RS_PACKET_CAT(vload, RS_PACKET_W)(0, p); }
 RS_LANE_INLINE rs_pi rsp_loadi(const int* p) { return RS_PACKET_CAT(vload, RS_PACKET_W)(0, p); }
 RS_LANE_INLINE void rsp_store(rs_pf a, float* p) { RS_PACKET_CAT(vstore, RS_PACKET_W)(a, 0, p); }
@@ -90,6 +92,16 @@ RS_LANE_INLINE rs_pf rsp_select(rs_pf if_false, rs_pf if_true, rs_pi m) {
 RS_LANE_INLINE rs_pi rsp_selecti(rs_pi if_false, rs_pi if_true, rs_pi m) {
   rs_pi r;
   for (int i = 0; i < RS_PACKET_W; ++i) r.s[i] = m.s[i] < 0 ? if_true.s[i] : if_false.s[i];
+  return r;
+}
+RS_LANE_INLINE rs_pf rsp_fma(rs_pf a, rs_pf b, rs_pf c) {
+  rs_pf r;
+  for (int i = 0; i < RS_PACKET_W; ++i) r.s[i] = rs_fma(a.s[i], b.s[i], c.s[i]);
+  return r;
+}
+RS_LANE_INLINE rs_pf rsp_neg(rs_pf a) {
+  rs_pf r;
+  for (int i = 0; i < RS_PACKET_W; ++i) r.s[i] = -a.s[i];
   return r;
 }
 RS_LANE_INLINE rs_pf rsp_load(const float* p) {

@@ -52,6 +52,8 @@ RS_INLINE float rs_max(float a, float b) { return fmax(a, b); }
 RS_INLINE float rs_abs(float a) { return fabs(a); }
 RS_INLINE float rs_sqrt(float a) { return sqrt(a); }
 RS_INLINE float rs_floor(float a) { return floor(a); }
+/* a·b + c rounded once (IEEE fused multiply-add; OpenCL's fma is correctly rounded on every device). */
+RS_INLINE float rs_fma(float a, float b, float c) { return fma(a, b, c); }
 RS_INLINE rs_i32 rs_float_as_int(float f) { return as_int(f); }
 RS_INLINE float rs_int_as_float(rs_i32 i) { return as_float(i); }
 #else
@@ -81,6 +83,9 @@ RS_INLINE float rs_max(float a, float b) { return (a > b || b != b) ? a : b; }
 RS_INLINE float rs_abs(float a) { return std::fabs(a); }
 RS_INLINE float rs_sqrt(float a) { return std::sqrt(a); }
 RS_INLINE float rs_floor(float a) { return std::floor(a); }
+/* a·b + c rounded once: std::fma's float overload is fmaf (the FMA instruction where the CPU has
+ * one), never the double form, whose second rounding to float could differ. */
+RS_INLINE float rs_fma(float a, float b, float c) { return std::fma(a, b, c); }
 RS_INLINE rs_i32 rs_float_as_int(float f) { return std::bit_cast<rs_i32>(f); }
 RS_INLINE float rs_int_as_float(rs_i32 i) { return std::bit_cast<float>(i); }
 #endif

@@ -14,20 +14,30 @@
 
 #include "intersect.h"
 
+/* The variant argument of rs_traverse_variant_recorded beyond fast (0) and robust (1): the fast variant
+ * with the encoders' unfused box test (rs_intersect_box_unfused), for the node traffic the learned
+ * encoders read (host/trace/tracer.cpp, node_traffic), so that their keys keep their bits. */
+#define RS_VARIANT_FAST_UNFUSED 2
+
+/* A child's box test in the variant (0, 1 or RS_VARIANT_FAST_UNFUSED): entry distance and *hit. */
+RS_INLINE float rs_binary_box(RS_GLOBAL const RsBvhNode* n, RsTraversalRay r, const RsRobustRay* rr, int variant,
+                              float tmax, int* hit) {
+  return variant == 1                         ? rs_intersect_box_robust(rr, n, tmax, hit)
+         : variant == RS_VARIANT_FAST_UNFUSED ? rs_intersect_box_unfused(r, n, tmax, hit)
+                                              : rs_intersect_box(r, n, tmax, hit);
+}
+
 /* Whether the ray enters the root's box (and, robust, has a valid direction): where the binary
  * traversals start (this one and the while-while one, traverse_binary_ww.h). */
 RS_INLINE int rs_binary_root_entered(RS_GLOBAL const RsBvhNode* nodes, RsTraversalRay r, const RsRobustRay* rr, int robust,
                                      float tmax) {
   int hit;
-  if (robust)
-    rs_intersect_box_robust(rr, &nodes[0], tmax, &hit);
-  else
-    rs_intersect_box(r, &nodes[0], tmax, &hit);
-  return hit && (!robust || rr->valid);
+  rs_binary_box(&nodes[0], r, rr, robust, tmax, &hit);
+  return hit && (robust != 1 || rr->valid);
 }
 
 /* Closest hit (any_hit = 0) or first hit found (any_hit = 1, shadow rays), fast (robust = 0) or
- * robust (robust = 1) variant.
+ * robust (robust = 1) variant, or the fast one with the encoders' box test (RS_VARIANT_FAST_UNFUSED).
  * *node_visits, when not null, counts the nodes whose box was fetched (for cost heatmaps).
  * trail, when not null, receives the id of every node the loop steps through, in order, up to
  * trail_cap entries; *trail_len gets the full step count (the SIMT model, host only: kernels pass
@@ -41,7 +51,9 @@ RS_INLINE RsHit rs_traverse_variant_recorded(RS_GLOBAL const RsBvhNode* nodes, R
   RsHit hit = rs_miss(ray.tmax);
   rs_u32 visits = 1;
 
-  if (!rs_binary_root_entered(nodes, r, &rr, robust, hit.t)) {
+  const int variant = robust;
+  robust = robust == 1; /* the triangle test's variant */
+  if (!rs_binary_root_entered(nodes, r, &rr, variant, hit.t)) {
     if (node_visits) *node_visits = visits;
     if (trail_len) *trail_len = 0;
     return hit;
@@ -65,10 +77,8 @@ RS_INLINE RsHit rs_traverse_variant_recorded(RS_GLOBAL const RsBvhNode* nodes, R
     } else {
       rs_u32 left = n->first;
       int hit_l, hit_r;
-      float t_l = robust ? rs_intersect_box_robust(&rr, &nodes[left], hit.t, &hit_l)
-                         : rs_intersect_box(r, &nodes[left], hit.t, &hit_l);
-      float t_r = robust ? rs_intersect_box_robust(&rr, &nodes[left + 1], hit.t, &hit_r)
-                         : rs_intersect_box(r, &nodes[left + 1], hit.t, &hit_r);
+      float t_l = rs_binary_box(&nodes[left], r, &rr, variant, hit.t, &hit_l);
+      float t_r = rs_binary_box(&nodes[left + 1], r, &rr, variant, hit.t, &hit_r);
       visits += 2;
       if (hit_l && hit_r) {
         /* Nearest child first; ties go left so the order is fixed. */

@@ -17,6 +17,10 @@
  *   the children the frustum admits (if the packet has one): the frustum skips only children no
  *   lane's own test enters, so hits and steps are those of the same walk without it.
  * Either way each lane meets triangles with the single-ray arithmetic (rs_packet_triangle[_robust]).
+ * A lane's own box test (fast variant) keeps the unfused distances (plane − o) · 1/d
+ * (rs_packet_box_unfused), which the frustum below bounds exactly; the other fast classes fuse them
+ * (rs_intersect_box), so this class equals them up to ties and a ray that grazes a box within an
+ * ulp, as the binary and the wide trees (whose boxes differ) equal each other.
  *
  * The frustum (Reshetov, Soupikov and Hurley 2005; Embree's Frustum): the bounds, over the packet's
  * active lanes, of the origin, of 1/d and of the interval [tmin, closest hit so far]. A lane's entry
@@ -89,8 +93,8 @@ RS_INLINE int rs_packet_frustum(const RsRayPacket* p, int lanes, int robust, rs_
 }
 
 /* The children of n (bits) that some lane of the frustum's packet may enter: every child a lane's
- * own slab test (rs_packet_box, rs_packet_box_robust, with the far planes scaled as there) enters
- * is among them. */
+ * own slab test (rs_packet_box_unfused, rs_packet_box_robust, with the far planes scaled as there)
+ * enters is among them. */
 RS_INLINE int rs_packet_frustum_children(const RsPacketFrustum* f, RS_GLOBAL const RsWide8Node* n, int robust,
                                          float* tnear_out) {
   const RsWide8Planes b = rs_wide8_planes(n, f->octant);
@@ -161,7 +165,7 @@ RS_INLINE void rs_traverse_coherent(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBA
           const int c = rs_lowest_bit(rest);
           if (!(n->child[c] & RS_WIDE_LEAF)) continue;
           rs_pf tn;
-          const rs_pi m = rs_packet_box(&p, b[c], b[8 + c], b[16 + c], b[24 + c], b[32 + c], b[40 + c], hit_t, &tn);
+          const rs_pi m = rs_packet_box_unfused(&p, b[c], b[8 + c], b[16 + c], b[24 + c], b[32 + c], b[40 + c], hit_t, &tn);
           child_lanes[c] = lanes & rsp_bits(m);
           if (!child_lanes[c]) entered &= ~(1 << c);
         }
@@ -169,7 +173,7 @@ RS_INLINE void rs_traverse_coherent(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBA
         for (int rest = candidates; rest; rest &= rest - 1) {
           const int c = rs_lowest_bit(rest);
           const rs_pi m = robust ? rs_packet_box_robust(&p, b[c], b[8 + c], b[16 + c], b[24 + c], b[32 + c], b[40 + c], hit_t, &tnear[c])
-                                 : rs_packet_box(&p, b[c], b[8 + c], b[16 + c], b[24 + c], b[32 + c], b[40 + c], hit_t, &tnear[c]);
+                                 : rs_packet_box_unfused(&p, b[c], b[8 + c], b[16 + c], b[24 + c], b[32 + c], b[40 + c], hit_t, &tnear[c]);
           child_lanes[c] = lanes & rsp_bits(m);
           if (child_lanes[c]) entered |= 1 << c;
         }

@@ -39,9 +39,9 @@ RS_INLINE void rs_cwbvh_box_of(RS_GLOBAL const RsCwbvhNode* n, int s, float lo[3
 
 /* rs_intersect_box's slab test on a box in private memory (the fast variant). */
 RS_INLINE int rs_cwbvh_slab(RsTraversalRay r, const float lo[3], const float hi[3], float tmax) {
-  const float tx0 = (lo[0] - r.o.x) * r.inv_d.x, tx1 = (hi[0] - r.o.x) * r.inv_d.x;
-  const float ty0 = (lo[1] - r.o.y) * r.inv_d.y, ty1 = (hi[1] - r.o.y) * r.inv_d.y;
-  const float tz0 = (lo[2] - r.o.z) * r.inv_d.z, tz1 = (hi[2] - r.o.z) * r.inv_d.z;
+  const float tx0 = rs_fma(lo[0], r.inv_d.x, r.o_inv_d.x), tx1 = rs_fma(hi[0], r.inv_d.x, r.o_inv_d.x);
+  const float ty0 = rs_fma(lo[1], r.inv_d.y, r.o_inv_d.y), ty1 = rs_fma(hi[1], r.inv_d.y, r.o_inv_d.y);
+  const float tz0 = rs_fma(lo[2], r.inv_d.z, r.o_inv_d.z), tz1 = rs_fma(hi[2], r.inv_d.z, r.o_inv_d.z);
   const float tnear = rs_max(rs_max(rs_min(tx0, tx1), rs_min(ty0, ty1)), rs_max(rs_min(tz0, tz1), r.tmin));
   const float tfar = rs_min(rs_min(rs_max(tx0, tx1), rs_max(ty0, ty1)), rs_min(rs_max(tz0, tz1), tmax));
   return tnear <= tfar;

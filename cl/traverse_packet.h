@@ -34,11 +34,13 @@
 #include "packet_lanes.h"
 #include "traverse_wide.h"
 
-/* The packet's rays, transposed: one lane per ray. Fast variant: inv_d = rs_safe_rcp(d). Robust:
+/* The packet's rays, transposed: one lane per ray. Fast variant: inv_d = rs_safe_rcp(d) and ax..az
+ * = −(o · 1/d), rs_prepare_ray's o_inv_d (the fused slab test's offsets, rs_packet_box). Robust:
  * inv_d = 0 where the lane's axis is parallel (par_*), the Woop et al. ray-space transform as
  * per-lane selectors of the permuted axes, okx..oky the permuted origin, sx..sz the shear. */
 typedef struct {
   rs_pf ox, oy, oz, dx, dy, dz, ix, iy, iz, tmin;
+  rs_pf ax, ay, az;                      /* fast: −(o · 1/d) */
   rs_pi neg_x, neg_y, neg_z;             /* 1/d < 0: the lane's near plane is the box's upper bound */
   rs_pi par_x, par_y, par_z;             /* robust: parallel axes */
   rs_pi kx1, kx2, ky1, ky2, kz1, kz2;    /* robust: kx == 1, kx == 2, ... */
@@ -101,6 +103,7 @@ RS_INLINE int rs_packet_prepare(int robust, int in_range, RsRayPacket* p) {
     p->kx1 = p->kx2 = p->ky1 = p->ky2 = p->kz1 = p->kz2 = none;
     p->okx = p->oky = p->okz = p->sx = p->sy = p->sz = zero;
     p->any_parallel = 0;
+    p->ax = rsp_neg(p->ox * p->ix), p->ay = rsp_neg(p->oy * p->iy), p->az = rsp_neg(p->oz * p->iz);
   }
   p->neg_x = p->ix < zero, p->neg_y = p->iy < zero, p->neg_z = p->iz < zero;
   return active;
@@ -269,17 +272,41 @@ RS_INLINE int rs_packet_load(RS_GLOBAL const RsRay* rays, RS_GLOBAL const rs_u32
 }
 
 /* One axis of the slab test for every lane: the distances to the lane's near plane (the box's upper
- * bound where 1/d < 0, as rs_wide_boxes chooses it) and to its far plane. */
+ * bound where 1/d < 0, as rs_wide_boxes chooses it) and to its far plane, (plane − o) · 1/d: the
+ * robust variant's form, and the coherent packets' (rs_packet_box_unfused). */
 RS_INLINE void rs_packet_slab(float lo, float hi, rs_pf o, rs_pf inv_d, rs_pi neg, rs_pf* t_near, rs_pf* t_far) {
   const rs_pf bl = rsp_splat(lo), bh = rsp_splat(hi);
   *t_near = (rsp_select(bl, bh, neg) - o) * inv_d;
   *t_far = (rsp_select(bh, bl, neg) - o) * inv_d;
 }
 
+/* The same axis with the fast variant's fused distances, fma(plane, 1/d, −o·1/d) (rs_intersect_box). */
+RS_INLINE void rs_packet_slab_fused(float lo, float hi, rs_pf inv_d, rs_pf o_inv_d, rs_pi neg, rs_pf* t_near,
+                                    rs_pf* t_far) {
+  const rs_pf bl = rsp_splat(lo), bh = rsp_splat(hi);
+  *t_near = rsp_fma(rsp_select(bl, bh, neg), inv_d, o_inv_d);
+  *t_far = rsp_fma(rsp_select(bh, bl, neg), inv_d, o_inv_d);
+}
+
 /* Slab test of one child box (lo/hi per axis) against every lane, fast variant: per lane the
  * operations of rs_wide_boxes. Returns the lanes hit (as a -1/0 mask) and their entry distances. */
 RS_INLINE rs_pi rs_packet_box(const RsRayPacket* p, float lo_x, float hi_x, float lo_y, float hi_y, float lo_z, float hi_z,
                               rs_pf tmax, rs_pf* tnear_out) {
+  rs_pf tnx, tfx, tny, tfy, tnz, tfz;
+  rs_packet_slab_fused(lo_x, hi_x, p->ix, p->ax, p->neg_x, &tnx, &tfx);
+  rs_packet_slab_fused(lo_y, hi_y, p->iy, p->ay, p->neg_y, &tny, &tfy);
+  rs_packet_slab_fused(lo_z, hi_z, p->iz, p->az, p->neg_z, &tnz, &tfz);
+  const rs_pf tnear = rsp_max(rsp_max(tnx, tny), rsp_max(tnz, p->tmin));
+  const rs_pf tfar = rsp_min(rsp_min(tfx, tfy), rsp_min(tfz, tmax));
+  *tnear_out = tnear;
+  return tnear <= tfar;
+}
+
+/* The same test with the unfused distances (plane − o) · 1/d (rs_intersect_box_unfused's), for the
+ * coherent packets (traverse_coherent.h): their frustum bounds these exactly, where bounding the fused
+ * ones cost coherent16 8-15 % on primary rays (results/history/trace-kernels.md, "The fused slab test"). */
+RS_INLINE rs_pi rs_packet_box_unfused(const RsRayPacket* p, float lo_x, float hi_x, float lo_y, float hi_y, float lo_z,
+                                      float hi_z, rs_pf tmax, rs_pf* tnear_out) {
   rs_pf tnx, tfx, tny, tfy, tnz, tfz;
   rs_packet_slab(lo_x, hi_x, p->ox, p->ix, p->neg_x, &tnx, &tfx);
   rs_packet_slab(lo_y, hi_y, p->oy, p->iy, p->neg_y, &tny, &tfy);

@@ -22,6 +22,7 @@
 #define rsw_min rs4_min
 #define rsw_max rs4_max
 #define rsw_select rs4_select
+#define rsw_fma rs4_fma
 #define rsw_abs rs4_abs
 #define rsw_bits rs4_bits
 #define rsw_store rs4_store
@@ -53,6 +54,7 @@
 #define rsw_min rs8_min
 #define rsw_max rs8_max
 #define rsw_select rs8_select
+#define rsw_fma rs8_fma
 #define rsw_abs rs8_abs
 #define rsw_bits rs8_bits
 #define rsw_store rs8_store
@@ -101,12 +103,14 @@ RS_INLINE RsWPlanes rsw_planes(RS_GLOBAL const RsWNode* n, int octant) {
   return p;
 }
 
-/* Slab test of the boxes (fast variant) for a ray of the planes' octant. Returns the hit lanes (with
- * the node's valid lanes) and each box's entry distance. */
+/* Slab test of the boxes (fast variant) for a ray of the planes' octant, rs_intersect_box's fused
+ * distances per lane. Returns the hit lanes (with the node's valid lanes) and each box's entry distance. */
 RS_INLINE rsw_i rsw_slabs(const RsWPlanes* b, const RsTraversalRay* r, float tmax, rsw_f* tnear_out) {
-  rsw_f tnx = (b->near_x - r->o.x) * r->inv_d.x, tfx = (b->far_x - r->o.x) * r->inv_d.x;
-  rsw_f tny = (b->near_y - r->o.y) * r->inv_d.y, tfy = (b->far_y - r->o.y) * r->inv_d.y;
-  rsw_f tnz = (b->near_z - r->o.z) * r->inv_d.z, tfz = (b->far_z - r->o.z) * r->inv_d.z;
+  const rsw_f ix = rsw_splat(r->inv_d.x), iy = rsw_splat(r->inv_d.y), iz = rsw_splat(r->inv_d.z);
+  const rsw_f ax = rsw_splat(r->o_inv_d.x), ay = rsw_splat(r->o_inv_d.y), az = rsw_splat(r->o_inv_d.z);
+  rsw_f tnx = rsw_fma(b->near_x, ix, ax), tfx = rsw_fma(b->far_x, ix, ax);
+  rsw_f tny = rsw_fma(b->near_y, iy, ay), tfy = rsw_fma(b->far_y, iy, ay);
+  rsw_f tnz = rsw_fma(b->near_z, iz, az), tfz = rsw_fma(b->far_z, iz, az);
   rsw_f tnear = rsw_max(rsw_max(tnx, tny), rsw_max(tnz, rsw_splat(r->tmin)));
   rsw_f tfar = rsw_min(rsw_min(tfx, tfy), rsw_min(tfz, rsw_splat(tmax)));
   *tnear_out = tnear;
@@ -458,6 +462,7 @@ RS_INLINE RsHit rsw_traverse(RS_GLOBAL const RsWNode* nodes, RS_GLOBAL const RsW
 #undef rsw_min
 #undef rsw_max
 #undef rsw_select
+#undef rsw_fma
 #undef rsw_abs
 #undef rsw_bits
 #undef rsw_store

@@ -184,8 +184,8 @@ TEST(EncodeMath, SceneExitEqualsTheMinMaxForm) {
 
 // TwoPoint's scene exit prepares its ray with rs_exit_ray, a select where rs_safe_rcp moves the sign
 // bit with integer operations (so PoCL vectorises the kernel, cl/keys.h). Every field must have
-// rs_prepare_ray's bits: directions around the ±tiny threshold, ±0, denormals, ±inf, NaN, and
-// random bit patterns.
+// rs_prepare_ray's bits (−(o · 1/d): its value, a NaN's payload aside): directions around the ±tiny
+// threshold, ±0, denormals, ±inf, NaN, and random bit patterns.
 TEST(EncodeMath, ExitRayIsThePreparedRay) {
   const auto bits = [](float x) { return std::bit_cast<std::uint32_t>(x); };
   std::vector<float> ds = {0.0f, -0.0f, 1e-30f, -1e-30f, 1.0f, -1.0f, std::numeric_limits<float>::infinity(),
@@ -202,11 +202,16 @@ TEST(EncodeMath, ExitRayIsThePreparedRay) {
     ray.tmin = ds[(i + 7) % ds.size()];
     ray.tmax = ds[(i + 11) % ds.size()];
     const RsTraversalRay want = rs_prepare_ray(ray), got = rs_exit_ray(ray);
-    const float w[11] = {want.o.x, want.o.y, want.o.z, want.d.x, want.d.y, want.d.z,
-                         want.inv_d.x, want.inv_d.y, want.inv_d.z, want.tmin, want.tmax};
-    const float g[11] = {got.o.x, got.o.y, got.o.z, got.d.x, got.d.y, got.d.z,
-                         got.inv_d.x, got.inv_d.y, got.inv_d.z, got.tmin, got.tmax};
-    for (int f = 0; f < 11; ++f) ASSERT_EQ(bits(g[f]), bits(w[f])) << "ray " << i << " field " << f << " d=" << ray.d[f % 3];
+    const float w[14] = {want.o.x, want.o.y, want.o.z, want.d.x, want.d.y, want.d.z, want.inv_d.x,
+                         want.inv_d.y, want.inv_d.z, want.o_inv_d.x, want.o_inv_d.y, want.o_inv_d.z, want.tmin, want.tmax};
+    const float g[14] = {got.o.x, got.o.y, got.o.z, got.d.x, got.d.y, got.d.z, got.inv_d.x,
+                         got.inv_d.y, got.inv_d.z, got.o_inv_d.x, got.o_inv_d.y, got.o_inv_d.z, got.tmin, got.tmax};
+    for (int f = 0; f < 14; ++f) {
+      // −(o · 1/d) of a NaN origin and a NaN reciprocal: which payload the product keeps depends on the
+      // operand order the compiler chose, and no test reads it (every comparison with NaN is false).
+      if (f >= 9 && f < 12 && std::isnan(g[f]) && std::isnan(w[f])) continue;
+      ASSERT_EQ(bits(g[f]), bits(w[f])) << "ray " << i << " field " << f << " d=" << ray.d[f % 3];
+    }
   }
 }
 
@@ -1453,7 +1458,7 @@ TEST(Encode, NodeTrafficCountsTheRaysEnteringEachNode) {
     std::uint64_t entering = 0;
     for (const RsRay& r : rb.batch.rays) {
       int hit = 0;
-      rs_intersect_box(rs_prepare_ray(r), &d.bvh.nodes[0], r.tmax, &hit);
+      rs_intersect_box_unfused(rs_prepare_ray(r), &d.bvh.nodes[0], r.tmax, &hit);  // node_traffic's box test
       entering += hit != 0;
     }
     EXPECT_EQ(visits[0], entering) << rb.batch.name;

@@ -147,7 +147,7 @@ TEST(SharedMath, PacketRaySetUpEqualsTheSingleRaySetUpInEveryLane) {
 }
 
 // The coherent packets' frustum (cl/traverse_coherent.h) admits every child of an 8-wide node that
-// some active lane's own slab test enters (rs_packet_box, rs_packet_box_robust, with the lane's
+// some active lane's own slab test enters (rs_packet_box_unfused, rs_packet_box_robust, with the lane's
 // closest hit so far as the far bound), and its entry bound for that child is at most the lane's
 // entry distance: what lets it skip children, and lets a one-origin packet go by the frustum alone
 // (its pushed entries carry that bound, and a lane is dropped at a pop only when its closest hit is
@@ -233,7 +233,7 @@ TEST(SharedMath, PacketFrustumAdmitsEveryChildALaneEnters) {
       setup16::rs_pf tn;
       const setup16::rs_pi m =
           robust ? setup16::rs_packet_box_robust(&p, b[c], b[8 + c], b[16 + c], b[24 + c], b[32 + c], b[40 + c], hit_t, &tn)
-                 : setup16::rs_packet_box(&p, b[c], b[8 + c], b[16 + c], b[24 + c], b[32 + c], b[40 + c], hit_t, &tn);
+                 : setup16::rs_packet_box_unfused(&p, b[c], b[8 + c], b[16 + c], b[24 + c], b[32 + c], b[40 + c], hit_t, &tn);
       const int lanes = setup16::rsp_bits(m) & live;
       if (!lanes) {
         admitted_only += (admitted >> c) & 1;

@@ -194,14 +194,17 @@ std::vector<std::uint64_t> node_traffic(const Bvh& bvh, const std::vector<RsRay>
   auto work = [&](unsigned t, std::size_t begin, std::size_t end) {
     std::vector<rs_u32> trail(256);
     std::vector<std::uint64_t>& c = counts[t];
+    // The fast walk with the encoders' box test (cl/traverse_binary.h, RS_VARIANT_FAST_UNFUSED).
+    auto walk = [&](std::size_t i, rs_u32* len) {
+      rs_traverse_variant_recorded(bvh.nodes.data(), bvh.triangles.data(), rays[i], RS_VARIANT_FAST_UNFUSED,
+                                   any_hit ? 1 : 0, nullptr, trail.data(), static_cast<rs_u32>(trail.size()), len);
+    };
     for (std::size_t i = begin; i < end; ++i) {
       rs_u32 len = 0;
-      rs_traverse_recorded(bvh.nodes.data(), bvh.triangles.data(), rays[i], any_hit ? 1 : 0, nullptr, trail.data(),
-                           static_cast<rs_u32>(trail.size()), &len);
+      walk(i, &len);
       if (len > trail.size()) {  // a longer walk than the trail holds: again with room for all of it
         trail.resize(len);
-        rs_traverse_recorded(bvh.nodes.data(), bvh.triangles.data(), rays[i], any_hit ? 1 : 0, nullptr, trail.data(),
-                             static_cast<rs_u32>(trail.size()), &len);
+        walk(i, &len);
       }
       for (rs_u32 k = 0; k < len; ++k) ++c[trail[k]];
     }

@@ -80,8 +80,8 @@ std::vector<RsHit> trace_reference(const Bvh& bvh, const std::vector<RsRay>& ray
                                    TraceVariant variant = TraceVariant::Fast, TraceLayout layout = TraceLayout::Wide);
 
 // Node traffic of a batch (hcc-traffic's priority, issue 21): for every node of the binary BVH, the
-// number of rays whose host traversal (cl/traverse_binary.h, fast variant, closest or any hit)
-// stepped through it (the SIMT model's trail: its box was hit when its parent was tested, and the
+// number of rays whose host traversal (cl/traverse_binary.h, fast variant with the encoders' unfused box
+// test, RS_VARIANT_FAST_UNFUSED, so the learned keys keep their bits; closest or any hit) stepped through it (the SIMT model's trail: its box was hit when its parent was tested, and the
 // walk reached it). Indexed like bvh.nodes; the root's count is the rays that hit the scene box, and
 // no node has more than its parent. Independent of the rays' order; host threads, deterministic.
 std::vector<std::uint64_t> node_traffic(const Bvh& bvh, const std::vector<RsRay>& rays, bool any_hit);
