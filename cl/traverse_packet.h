@@ -289,32 +289,35 @@ RS_INLINE void rs_packet_slab_fused(float lo, float hi, rs_pf inv_d, rs_pf o_inv
 }
 
 /* Slab test of one child box (lo/hi per axis) against every lane, fast variant: per lane the
- * operations of rs_wide_boxes. Returns the lanes hit (as a -1/0 mask) and their entry distances. */
-RS_INLINE rs_pi rs_packet_box(const RsRayPacket* p, float lo_x, float hi_x, float lo_y, float hi_y, float lo_z, float hi_z,
-                              rs_pf tmax, rs_pf* tnear_out) {
+ * operations of rs_wide_boxes, with fused distances (rs_packet_box) or unfused ones (plane − o) · 1/d
+ * (rs_packet_box_unfused, rs_intersect_box_unfused's, for the coherent packets, traverse_coherent.h:
+ * their frustum bounds these exactly, where bounding the fused ones cost coherent16 8-15 % on primary
+ * rays; results/history/trace-kernels.md, "The fused slab test"). Returns the lanes hit (as a -1/0
+ * mask) and their entry distances. `fused` is a constant at every call. */
+RS_INLINE rs_pi rs_packet_box_form(const RsRayPacket* p, float lo_x, float hi_x, float lo_y, float hi_y, float lo_z,
+                                   float hi_z, rs_pf tmax, rs_pf* tnear_out, int fused) {
   rs_pf tnx, tfx, tny, tfy, tnz, tfz;
-  rs_packet_slab_fused(lo_x, hi_x, p->ix, p->ax, p->neg_x, &tnx, &tfx);
-  rs_packet_slab_fused(lo_y, hi_y, p->iy, p->ay, p->neg_y, &tny, &tfy);
-  rs_packet_slab_fused(lo_z, hi_z, p->iz, p->az, p->neg_z, &tnz, &tfz);
+  if (fused) {
+    rs_packet_slab_fused(lo_x, hi_x, p->ix, p->ax, p->neg_x, &tnx, &tfx);
+    rs_packet_slab_fused(lo_y, hi_y, p->iy, p->ay, p->neg_y, &tny, &tfy);
+    rs_packet_slab_fused(lo_z, hi_z, p->iz, p->az, p->neg_z, &tnz, &tfz);
+  } else {
+    rs_packet_slab(lo_x, hi_x, p->ox, p->ix, p->neg_x, &tnx, &tfx);
+    rs_packet_slab(lo_y, hi_y, p->oy, p->iy, p->neg_y, &tny, &tfy);
+    rs_packet_slab(lo_z, hi_z, p->oz, p->iz, p->neg_z, &tnz, &tfz);
+  }
   const rs_pf tnear = rsp_max(rsp_max(tnx, tny), rsp_max(tnz, p->tmin));
   const rs_pf tfar = rsp_min(rsp_min(tfx, tfy), rsp_min(tfz, tmax));
   *tnear_out = tnear;
   return tnear <= tfar;
 }
-
-/* The same test with the unfused distances (plane − o) · 1/d (rs_intersect_box_unfused's), for the
- * coherent packets (traverse_coherent.h): their frustum bounds these exactly, where bounding the fused
- * ones cost coherent16 8-15 % on primary rays (results/history/trace-kernels.md, "The fused slab test"). */
+RS_INLINE rs_pi rs_packet_box(const RsRayPacket* p, float lo_x, float hi_x, float lo_y, float hi_y, float lo_z, float hi_z,
+                              rs_pf tmax, rs_pf* tnear_out) {
+  return rs_packet_box_form(p, lo_x, hi_x, lo_y, hi_y, lo_z, hi_z, tmax, tnear_out, 1);
+}
 RS_INLINE rs_pi rs_packet_box_unfused(const RsRayPacket* p, float lo_x, float hi_x, float lo_y, float hi_y, float lo_z,
                                       float hi_z, rs_pf tmax, rs_pf* tnear_out) {
-  rs_pf tnx, tfx, tny, tfy, tnz, tfz;
-  rs_packet_slab(lo_x, hi_x, p->ox, p->ix, p->neg_x, &tnx, &tfx);
-  rs_packet_slab(lo_y, hi_y, p->oy, p->iy, p->neg_y, &tny, &tfy);
-  rs_packet_slab(lo_z, hi_z, p->oz, p->iz, p->neg_z, &tnz, &tfz);
-  const rs_pf tnear = rsp_max(rsp_max(tnx, tny), rsp_max(tnz, p->tmin));
-  const rs_pf tfar = rsp_min(rsp_min(tfx, tfy), rsp_min(tfz, tmax));
-  *tnear_out = tnear;
-  return tnear <= tfar;
+  return rs_packet_box_form(p, lo_x, hi_x, lo_y, hi_y, lo_z, hi_z, tmax, tnear_out, 0);
 }
 
 /* The conservative slab test (Ize 2013) of one child box against every lane: per lane the
