@@ -68,9 +68,10 @@ RS_INLINE RsTraversalRay rs_prepare_ray(RsRay r) {
 /* Slab test: returns the entry distance and sets *hit when [entry, exit] overlaps [tmin, tmax].
  * A plane's distance is fma(plane, 1/d, −o·1/d), one fused operation after the ray's product (as
  * Embree's and Aila and Laine's kernels write it), not (plane − o) · 1/d: a subtraction fewer per
- * plane in every class's box test, measured 2-10 % faster on PoCL (results/history/trace-kernels.md,
- * "The fused slab test"). Every fast class computes exactly this per box and lane, so they still
- * agree bit for bit; the robust variant keeps Ize's form, whose error bound is written for it. */
+ * plane in every class's box test, measured 1-10 % faster on PoCL (results/history/trace-kernels.md,
+ * "The fused slab test"). Every fast class but the coherent packets (traverse_coherent.h, whose
+ * frustum bounds the unfused form) computes exactly this per box and lane, so they still agree bit
+ * for bit; the robust variant keeps Ize's form, whose error bound is written for it. */
 RS_INLINE float rs_intersect_box(RsTraversalRay r, RS_GLOBAL const RsBvhNode* n, float tmax, int* hit) {
   const float ax = r.o_inv_d.x, ay = r.o_inv_d.y, az = r.o_inv_d.z;
   float tx0 = rs_fma(n->bmin[0], r.inv_d.x, ax), tx1 = rs_fma(n->bmax[0], r.inv_d.x, ax);
