@@ -104,13 +104,6 @@ RS_INLINE RsHit rs_traverse_variant_recorded(RS_GLOBAL const RsBvhNode* nodes, R
   return hit;
 }
 
-/* The fast variant with a trail (the SIMT model, host/bench/metrics.cpp). */
-RS_INLINE RsHit rs_traverse_recorded(RS_GLOBAL const RsBvhNode* nodes, RS_GLOBAL const RsTriangle* tris, RsRay ray,
-                                     int any_hit, rs_u32* node_visits, rs_u32* trail, rs_u32 trail_cap,
-                                     rs_u32* trail_len) {
-  return rs_traverse_variant_recorded(nodes, tris, ray, 0, any_hit, node_visits, trail, trail_cap, trail_len);
-}
-
 RS_INLINE RsHit rs_traverse(RS_GLOBAL const RsBvhNode* nodes, RS_GLOBAL const RsTriangle* tris, RsRay ray, int any_hit,
                             rs_u32* node_visits) {
   return rs_traverse_variant_recorded(nodes, tris, ray, 0, any_hit, node_visits, 0, 0, 0);
