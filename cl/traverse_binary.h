@@ -28,22 +28,22 @@ RS_INLINE float rs_binary_box(RS_GLOBAL const RsBvhNode* n, RsTraversalRay r, co
 }
 
 /* Whether the ray enters the root's box (and, robust, has a valid direction): where the binary
- * traversals start (this one and the while-while one, traverse_binary_ww.h). */
-RS_INLINE int rs_binary_root_entered(RS_GLOBAL const RsBvhNode* nodes, RsTraversalRay r, const RsRobustRay* rr, int robust,
+ * traversals start (this one and the while-while one, traverse_binary_ww.h). variant as rs_binary_box's. */
+RS_INLINE int rs_binary_root_entered(RS_GLOBAL const RsBvhNode* nodes, RsTraversalRay r, const RsRobustRay* rr, int variant,
                                      float tmax) {
   int hit;
-  rs_binary_box(&nodes[0], r, rr, robust, tmax, &hit);
-  return hit && (robust != 1 || rr->valid);
+  rs_binary_box(&nodes[0], r, rr, variant, tmax, &hit);
+  return hit && (variant != 1 || rr->valid);
 }
 
-/* Closest hit (any_hit = 0) or first hit found (any_hit = 1, shadow rays), fast (robust = 0) or
- * robust (robust = 1) variant, or the fast one with the encoders' box test (RS_VARIANT_FAST_UNFUSED).
+/* Closest hit (any_hit = 0) or first hit found (any_hit = 1, shadow rays), fast (variant = 0) or
+ * robust (variant = 1), or the fast one with the encoders' box test (RS_VARIANT_FAST_UNFUSED).
  * *node_visits, when not null, counts the nodes whose box was fetched (for cost heatmaps).
  * trail, when not null, receives the id of every node the loop steps through, in order, up to
  * trail_cap entries; *trail_len gets the full step count (the SIMT model, host only: kernels pass
  * null and the compiler drops the recording). */
 RS_INLINE RsHit rs_traverse_variant_recorded(RS_GLOBAL const RsBvhNode* nodes, RS_GLOBAL const RsTriangle* tris,
-                                             RsRay ray, int robust, int any_hit, rs_u32* node_visits, rs_u32* trail,
+                                             RsRay ray, int variant, int any_hit, rs_u32* node_visits, rs_u32* trail,
                                              rs_u32 trail_cap, rs_u32* trail_len) {
   rs_u32 steps = 0;
   RsTraversalRay r = rs_prepare_ray(ray);
@@ -51,8 +51,7 @@ RS_INLINE RsHit rs_traverse_variant_recorded(RS_GLOBAL const RsBvhNode* nodes, R
   RsHit hit = rs_miss(ray.tmax);
   rs_u32 visits = 1;
 
-  const int variant = robust;
-  robust = robust == 1; /* the triangle test's variant */
+  const int robust = variant == 1; /* the triangle test's variant */
   if (!rs_binary_root_entered(nodes, r, &rr, variant, hit.t)) {
     if (node_visits) *node_visits = visits;
     if (trail_len) *trail_len = 0;
