@@ -73,11 +73,12 @@ typedef struct {
  * pushes at most three children: 3 * 32 = 96 entries suffice. */
 #define RS_WIDE_STACK_SIZE 96
 
-/* A node of the 8-wide BVH (the wide8 trace class, traverse_wide8.h), 256 bytes (four cache
- * lines): RsWideNode with eight lanes, so one float8 operation tests eight boxes (one ymm register
- * on an AVX CPU). child[i] as in RsWideNode (RS_WIDE_LEAF set: packets [first, first + count) of
- * RsTriPacket8, RS_WIDE_LEAF_FIRST and RS_WIDE_LEAF_COUNT). Node 0 is the root.
- * host/bvh/wide8.cpp collapses the binary BVH into this layout. */
+/* A node of the 8-wide BVH (the wide8, stream and coherent trace classes: traverse_wide8.h,
+ * traverse_stream.h, traverse_coherent.h), 256 bytes (four cache lines): RsWideNode with eight lanes,
+ * so one float8 operation tests eight boxes (one ymm register on an AVX CPU). child[i] as in
+ * RsWideNode, but a leaf reference names lanes as well as packets (RS_WIDE8_LEAF_*, below): the small
+ * leaves of a node share packets. Node 0 is the root. host/bvh/wide8.cpp collapses the binary BVH into
+ * this layout. */
 typedef struct {
   rs_f8 lo_x, hi_x, lo_y, hi_y, lo_z, hi_z;
   rs_i8 valid;
@@ -93,6 +94,25 @@ typedef struct {
   rs_i8 nondegenerate;
   rs_u32 id[8];
 } RsTriPacket8;
+
+/* An 8-wide leaf reference (RS_WIDE_LEAF set):
+ *   RS_WIDE_LEAF | first << 8 | (lanes - 1) << 5 | lane << 2 | (packets - 1)
+ * The leaf is lanes [lane, lane + lanes) of packets [first, first + packets): a leaf of up to eight
+ * triangles lies in one packet, beside the node's other small leaves (host/bvh/wide_tree.h,
+ * pack_leaves), and a larger one (max_leaf_size above 8) fills its own packets from lane 0 (lanes 8;
+ * the last packet's valid lanes end it). Half the 8-wide leaves hold one or two triangles: one leaf to
+ * a packet left 3.97 of its 8 lanes filled on sibenik, and the leaf packets were 84 % of the tree's
+ * bytes; sharing them takes a third fewer packets (results/history/trace-kernels.md, "Leaves that
+ * share a packet"). A triangle is tested in its lane with the arithmetic of every other lane, so a ray
+ * hits what it hit with a packet of its own; RS_WIDE8_LEAF_LANES masks the lanes of the other leaves.
+ * RS_WIDE8_LEAF_SLOT numbers a leaf by its first lane (8 * first + lane: no two leaves share it). */
+#define RS_WIDE8_LEAF_FIRST(ref) (((ref) & ~RS_WIDE_LEAF) >> 8)
+#define RS_WIDE8_LEAF_COUNT(ref) (((ref) & 3u) + 1u)
+#define RS_WIDE8_LEAF_END(ref) (RS_WIDE8_LEAF_FIRST(ref) + ((ref) & 3u) + 1u)
+#define RS_WIDE8_LEAF_LANES(ref) ((int)((0xffu >> (7u - (((ref) >> 5) & 7u))) << (((ref) >> 2) & 7u)))
+#define RS_WIDE8_LEAF_SLOT(ref) (8u * RS_WIDE8_LEAF_FIRST(ref) + (((ref) >> 2) & 7u))
+/* The packets an 8-wide leaf reference can name (23 bits of first). */
+#define RS_WIDE8_MAX_PACKETS (1u << 23)
 
 /* Traversal stack entries for the 8-wide BVH. Every inner child of an 8-wide node lies at least
  * three binary levels below the node's binary node (host/bvh/wide8.cpp: the collapse opens every

@@ -211,7 +211,8 @@ RS_INLINE void rs_traverse_coherent(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBA
         continue;
       }
     } else {
-      const rs_u32 first_packet = RS_WIDE_LEAF_FIRST(ref), end = RS_WIDE_LEAF_END(ref);
+      const rs_u32 first_packet = RS_WIDE8_LEAF_FIRST(ref), end = RS_WIDE8_LEAF_END(ref);
+      const int leaf_lanes = RS_WIDE8_LEAF_LANES(ref); /* the leaf's own triangles of a shared packet */
       int found_any = 0;
       for (rs_u32 pi = first_packet; pi < end && lanes; ++pi) {
         RS_GLOBAL const RsTriPacket8* tp = &packets[pi];
@@ -219,7 +220,7 @@ RS_INLINE void rs_traverse_coherent(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBA
         RS_GLOBAL const rs_i32* tri_valid = (RS_GLOBAL const rs_i32*)&tp->valid;
         RS_GLOBAL const rs_i32* nondegenerate = (RS_GLOBAL const rs_i32*)&tp->nondegenerate;
         for (int j = 0; j < 8 && lanes; ++j) {
-          if (!tri_valid[j] || (robust && !nondegenerate[j])) continue;
+          if (!((leaf_lanes >> j) & 1) || !tri_valid[j] || (robust && !nondegenerate[j])) continue;
           rs_pf t = hit_t, u = hit_u, v = hit_v;
           const int found =
               robust ? rs_packet_triangle_robust(&p, lane_rays, lanes, v0x[j], v0x[8 + j], v0x[16 + j], v0x[24 + j],

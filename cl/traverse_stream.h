@@ -48,7 +48,7 @@ RS_INLINE rs_u64 rs_stream_child_rays(const int* lo, const int* hi, int c) {
 RS_INLINE void rs_stream_prefetch_child(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBAL const RsTriPacket8* packets,
                                         rs_u32 ref) {
   if (ref & RS_WIDE_LEAF) {
-    RS_GLOBAL const char* p = (RS_GLOBAL const char*)&packets[RS_WIDE_LEAF_FIRST(ref)];
+    RS_GLOBAL const char* p = (RS_GLOBAL const char*)&packets[RS_WIDE8_LEAF_FIRST(ref)];
     RS_UNROLL for (int line = 0; line < 5; ++line) RS_PREFETCH(p + 64 * line);
   } else {
     RS_GLOBAL const char* p = (RS_GLOBAL const char*)&nodes[ref];
@@ -215,7 +215,8 @@ RS_INLINE void rs_trace_stream(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBAL con
        * are computed once for all of them (fast variant): per ray the packets in the same order,
        * the same tests and the same choice of the nearest lane; an any-hit ray leaves at its first
        * hit. */
-      const rs_u32 first_packet = RS_WIDE_LEAF_FIRST(ref), end_packet = RS_WIDE_LEAF_END(ref);
+      const rs_u32 first_packet = RS_WIDE8_LEAF_FIRST(ref), end_packet = RS_WIDE8_LEAF_END(ref);
+      const int lanes = RS_WIDE8_LEAF_LANES(ref); /* the leaf's own lanes of a shared packet */
       rs_u64 looking = m;
       for (rs_u32 pi = first_packet; pi < end_packet && looking; ++pi) {
         RS_GLOBAL const RsTriPacket8* p = &packets[pi];
@@ -223,8 +224,8 @@ RS_INLINE void rs_trace_stream(RS_GLOBAL const RsWide8Node* nodes, RS_GLOBAL con
         for (rs_u64 rest = looking; rest; rest &= rest - 1) {
           const int i = rs_lowest_bit_ul(rest);
           rs_f8 tw, uw, vw;
-          const int bits = robust ? rs_packet8_intersect_robust(&rr[i], ray[i].d, p, hit[i].t, &tw, &uw, &vw)
-                                  : rs_packet8_intersect_edges(tr[i], &e, hit[i].t, &tw, &uw, &vw);
+          const int bits = lanes & (robust ? rs_packet8_intersect_robust(&rr[i], ray[i].d, p, hit[i].t, &tw, &uw, &vw)
+                                           : rs_packet8_intersect_edges(tr[i], &e, hit[i].t, &tw, &uw, &vw));
           if (bits && rs_stream_keep_nearest(bits, tw, uw, vw, p, &hit[i]) && any_hit) {
             looking &= ~((rs_u64)1 << i);
             live &= ~((rs_u64)1 << i);

@@ -47,6 +47,9 @@
 #define rsw_traverse_recorded rs_traverse_wide_recorded
 #define rsw_traverse rs_traverse_wide
 #define rsw_leaf rs_wide_leaf
+#define RSW_LEAF_FIRST RS_WIDE_LEAF_FIRST
+#define RSW_LEAF_END RS_WIDE_LEAF_END
+#define RSW_LEAF_LANES(ref) 0xf /* a 4-wide leaf has its packets to itself */
 #elif RS_WIDE_W == 8
 #define rsw_f rs_f8
 #define rsw_i rs_i8
@@ -79,6 +82,9 @@
 #define rsw_traverse_recorded rs_traverse_wide8_recorded
 #define rsw_traverse rs_traverse_wide8
 #define rsw_leaf rs_wide8_leaf
+#define RSW_LEAF_FIRST RS_WIDE8_LEAF_FIRST
+#define RSW_LEAF_END RS_WIDE8_LEAF_END
+#define RSW_LEAF_LANES RS_WIDE8_LEAF_LANES
 #else
 #error "RS_WIDE_W must be 4 or 8 (traverse_wide.h, traverse_wide8.h)"
 #endif
@@ -329,14 +335,16 @@ RS_INLINE int rsw_keep_nearest(int bits, rsw_f tw, rsw_f uw, rsw_f vw, RS_GLOBAL
 
 /* The triangle packets of the leaf `ref` against one ray: hit becomes the closest hit so far (the
  * lane of smallest t below hit->t, ties by lane). Any hit (any_hit = 1) stops at the first packet
- * with a hit and returns 1; otherwise returns 0. */
+ * with a hit and returns 1; otherwise returns 0. Only the leaf's own lanes count (an 8-wide leaf may
+ * share its packet: RS_WIDE8_LEAF_LANES, bvh_layout.h). */
 RS_INLINE int rsw_leaf(RS_GLOBAL const RsWPacket* packets, rs_u32 ref, RsTraversalRay r, const RsRobustRay* rr,
                        const float* d, int robust, int any_hit, RsHit* hit) {
-  const rs_u32 first = RS_WIDE_LEAF_FIRST(ref), end = RS_WIDE_LEAF_END(ref);
+  const rs_u32 first = RSW_LEAF_FIRST(ref), end = RSW_LEAF_END(ref);
+  const int lanes = RSW_LEAF_LANES(ref);
   for (rs_u32 pi = first; pi < end; ++pi) {
     rsw_f tw, uw, vw;
-    const int bits = robust ? rsw_intersect_robust(rr, d, &packets[pi], hit->t, &tw, &uw, &vw)
-                            : rsw_intersect(r, &packets[pi], hit->t, &tw, &uw, &vw);
+    const int bits = lanes & (robust ? rsw_intersect_robust(rr, d, &packets[pi], hit->t, &tw, &uw, &vw)
+                                     : rsw_intersect(r, &packets[pi], hit->t, &tw, &uw, &vw));
     if (bits && rsw_keep_nearest(bits, tw, uw, vw, &packets[pi], hit) && any_hit) return 1;
   }
   return 0;
@@ -487,3 +495,6 @@ RS_INLINE RsHit rsw_traverse(RS_GLOBAL const RsWNode* nodes, RS_GLOBAL const RsW
 #undef rsw_traverse_recorded
 #undef rsw_traverse
 #undef rsw_leaf
+#undef RSW_LEAF_FIRST
+#undef RSW_LEAF_END
+#undef RSW_LEAF_LANES

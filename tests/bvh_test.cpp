@@ -231,6 +231,49 @@ TEST_P(ProceduralWide8Bvh, CollapseKeepsEveryTriangleAndBox) {
   EXPECT_GT(per_node, 4.0) << "the greedy fill should use more than half of the lanes";
 }
 
+// A node's small leaves share packets (host/bvh/wide_tree.h, plan_leaves; RS_WIDE8_LEAF_*): each leaf
+// of up to eight triangles is the lanes of its triangles in one packet of its node's, first fit in
+// slot order, so no packet of a node could have taken a leaf that opened a later one; fewer packets
+// than leaves, and more triangles per packet than a packet per leaf gave.
+TEST_P(ProceduralWide8Bvh, SmallLeavesOfANodeSharePackets) {
+  const Bvh bvh = build_bvh(load_scene(GetParam()).flatten());
+  const Wide8Bvh w = collapse_to_wide8(bvh);
+  ASSERT_EQ(validate_wide8(w, bvh), "");
+  std::size_t leaves = 0, shared = 0;
+  for (std::size_t i = 0; i < w.nodes.size(); ++i) {
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> used;  // (packet, lanes taken so far), in the order opened
+    for (int lane = 0; lane < 8; ++lane) {
+      const std::uint32_t ref = w.nodes[i].child[lane];
+      if (!w.nodes[i].valid.s[lane] || !(ref & RS_WIDE_LEAF)) continue;
+      ++leaves;
+      const std::uint32_t first = RS_WIDE8_LEAF_FIRST(ref), at = (ref >> 2) & 7u, count = ((ref >> 5) & 7u) + 1;
+      if (RS_WIDE8_LEAF_COUNT(ref) > 1) continue;  // a large leaf has packets of its own
+      auto it = std::find_if(used.begin(), used.end(), [&](const auto& u) { return u.first == first; });
+      for (auto f = used.begin(); f != it; ++f)
+        EXPECT_GT(f->second + count, 8u) << GetParam() << " node " << i << " lane " << lane
+                                         << ": an earlier packet of the node had room (first fit)";
+      if (it == used.end()) {
+        EXPECT_EQ(at, 0u) << GetParam() << " node " << i << " lane " << lane << ": a new packet starts at lane 0";
+        used.push_back({first, count});
+      } else {
+        EXPECT_EQ(at, it->second) << GetParam() << " node " << i << " lane " << lane << ": right after the last leaf";
+        it->second += count;
+        ++shared;
+      }
+    }
+  }
+  std::size_t tri_lanes = 0;
+  for (const RsTriPacket8& p : w.packets)
+    for (int k = 0; k < 8; ++k) tri_lanes += p.valid.s[k] != 0;
+  std::printf("[ wide8    ] %-14s %zu leaves in %zu packets (%zu leaves in a packet opened before them), "
+              "%.2f triangles per packet\n",
+              GetParam().c_str(), leaves, w.packets.size(), shared, double(tri_lanes) / double(w.packets.size()));
+  EXPECT_EQ(leaves, w.packets.size() + shared) << "every other leaf opened one packet";
+  if (w.nodes.size() > 1) {
+    EXPECT_GT(shared, 0u) << GetParam();
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(Scenes, ProceduralWide8Bvh,
                          ::testing::Values("cornell", "detail-room", "landscape", "multi-instance"));
 
@@ -269,8 +312,9 @@ TEST(Wide8Bvh, OneLeafAndEmptyTrees) {
 
 // "" when a W-wide tree is laid out depth first, else the first place it is not: node 0 the root,
 // each inner child's subtree right after the node's earlier children's, in lane order, and the leaf
-// packets in the order the same walk meets them. The layout the collapses promise on any number
-// of threads (wide_tree::collapse).
+// packets in the order the same walk meets them (an 8-wide leaf in a packet its node opened for an
+// earlier leaf meets none: RS_WIDE8_LEAF_*). The layout the collapses promise on any number of
+// threads (wide_tree::collapse).
 template <int W, class Tree>
 std::string depth_first_layout(const Tree& t) {
   std::uint64_t next_node = 0, next_packet = 0;
@@ -281,6 +325,7 @@ std::string depth_first_layout(const Tree& t) {
       return;
     }
     ++next_node;
+    std::vector<std::uint32_t> opened;  // the packets this node's leaves opened
     for (int lane = 0; lane < W && err.empty(); ++lane) {
       if (t.nodes[n].valid.s[lane] == 0) continue;
       const std::uint32_t ref = t.nodes[n].child[lane];
@@ -288,10 +333,12 @@ std::string depth_first_layout(const Tree& t) {
         self(self, ref);
         continue;
       }
-      const std::uint32_t first = (ref & ~RS_WIDE_LEAF) >> 2;
+      const std::uint32_t first = W == 8 ? RS_WIDE8_LEAF_FIRST(ref) : RS_WIDE_LEAF_FIRST(ref);
+      if (W == 8 && std::find(opened.begin(), opened.end(), first) != opened.end()) continue;
       if (first != next_packet)
         err = "node " + std::to_string(n) + " lane " + std::to_string(lane) + ": packet " + std::to_string(first) +
               " where depth-first order puts packet " + std::to_string(next_packet);
+      opened.push_back(first);
       next_packet += (ref & 3u) + 1;
     }
   };
@@ -361,6 +408,25 @@ TEST(Wide8Bvh, ValidatorCatchesABrokenCollapse) {
   broken = good;
   broken.packets[0].v1x.s[0] += 1.0f;  // a vertex not copied exactly
   EXPECT_NE(validate_wide8(broken, bvh), "");
+  // Leaves that share a packet (RS_WIDE8_LEAF_*): one naming a lane of its neighbour's, or an empty lane.
+  bool overlapped = false, widened = false;
+  for (std::size_t i = 0; i < good.nodes.size() && !(overlapped && widened); ++i)
+    for (int lane = 0; lane < 8; ++lane) {
+      const std::uint32_t ref = good.nodes[i].child[lane];
+      if (!good.nodes[i].valid.s[lane] || !(ref & RS_WIDE_LEAF) || RS_WIDE8_LEAF_COUNT(ref) > 1) continue;
+      const std::uint32_t at = (ref >> 2) & 7u, end = at + ((ref >> 5) & 7u) + 1;
+      broken = good;
+      if (!overlapped && at > 0) {  // one lane earlier: the last lane of the leaf before it
+        broken.nodes[i].child[lane] = ref - (1u << 2);
+        EXPECT_NE(validate_wide8(broken, bvh), "") << "node " << i << " lane " << lane;
+        overlapped = true;
+      } else if (!widened && end < 8 && good.packets[RS_WIDE8_LEAF_FIRST(ref)].valid.s[end] == 0) {
+        broken.nodes[i].child[lane] = ref + (1u << 5);  // one lane more, an empty one
+        EXPECT_NE(validate_wide8(broken, bvh), "") << "node " << i << " lane " << lane;
+        widened = true;
+      }
+    }
+  EXPECT_TRUE(overlapped && widened) << "detail-room has leaves after others in a packet, and packets with room";
 }
 
 }  // namespace raysort

@@ -153,7 +153,7 @@ TEST(GpuModel, LeafStepsReadTheirPacketsAndRayLoadsCoalesce) {
 }
 
 // The wide8 class's tree: a node step reads its 256 bytes (two 128-byte lines), a leaf step its
-// 384-byte packets.
+// 384-byte packets, the whole packet where the leaf has some of its lanes (RS_WIDE8_LEAF_*).
 TEST(GpuModel, Wide8StepsReadTheirNodesAndPackets) {
   Wide8Bvh wide8;
   wide8.nodes.resize(32, RsWide8Node{});  // 32 x 256 bytes = 8 KB, so packets start at 8192
@@ -163,9 +163,15 @@ TEST(GpuModel, Wide8StepsReadTheirNodesAndPackets) {
   map.step_blocks(3, 128, lines);  // node 3: bytes 768-1023
   EXPECT_EQ(lines, (std::vector<std::uint64_t>{6, 7}));
   lines.clear();
-  map.step_blocks(RS_WIDE_LEAF | (1u << 2) | 0u, 128, lines);  // packet 1: bytes 8576-8959
+  map.step_blocks(RS_WIDE_LEAF | (1u << 8) | (7u << 5) | 0u, 128, lines);  // packet 1: bytes 8576-8959
   EXPECT_EQ(lines, (std::vector<std::uint64_t>{67, 68, 69}));
-  EXPECT_TRUE(map.is_leaf(RS_WIDE_LEAF | (1u << 2)));
+  lines.clear();
+  map.step_blocks(RS_WIDE_LEAF | (1u << 8) | (2u << 5) | (4u << 2), 128, lines);  // its lanes 4-6: the same rows
+  EXPECT_EQ(lines, (std::vector<std::uint64_t>{67, 68, 69}));
+  lines.clear();
+  map.step_blocks(RS_WIDE_LEAF | (1u << 8) | (7u << 5) | 1u, 128, lines);  // packets 1-2: bytes 8576-9343
+  EXPECT_EQ(lines, (std::vector<std::uint64_t>{67, 68, 69, 70, 71, 72}));
+  EXPECT_TRUE(map.is_leaf(RS_WIDE_LEAF | (1u << 8)));
   EXPECT_FALSE(map.is_leaf(3));
 }
 

@@ -6,12 +6,16 @@
 #include <cstring>
 #include <numeric>
 #include <random>
+#include <tuple>
 
 #include "bvh/bvh.h"
 #include "render/batches.h"
 #include "scene/load.h"
 #include "test_util.h"
+#include "trace/packet_twin.h"
+#include "trace/stream_twin.h"
 #include "trace/tracer.h"
+#include "traverse_wide8.h"
 #include "util/error.h"
 
 namespace raysort {
@@ -323,6 +327,77 @@ std::size_t expect_class_equals_twin_and_wide(const Scene& scene, TraceLayout la
 
 TEST(Trace, Wide8KernelsEqualTheirHostTwinAndWideRays) {
   EXPECT_GT(expect_class_equals_twin_and_wide(load_scene("detail-room", {"", {64, 36, 0}}), TraceLayout::Wide8), 0u);
+}
+
+// A leaf of the 8-wide tree names its lanes of a packet it may share (RS_WIDE8_LEAF_*, cl/bvh_layout.h):
+// every class that walks that tree tests a leaf's own lanes only. A hand-made tree: the root's one
+// child is lanes 0-1 of packet 0 (two triangles off every ray's path), and lanes 2-3 of the packet,
+// valid but no leaf's, hold the quad every ray crosses at t = 1. Walked through the lanes 0-1 leaf,
+// each class misses on every ray; through a reference to lanes 2-3, each hits the quad; both variants,
+// closest and any hit. (The lanes a leaf does not name change no hit in a real tree, whose other
+// leaves' triangles lie outside the leaf's box, only which of two equally near triangles a ray keeps;
+// so this is where a leaf test that reads another leaf's lanes shows.)
+TEST(Trace, EightWideLeavesTestOnlyTheirOwnLanes) {
+  auto tree = [](std::uint32_t lane, std::uint32_t lanes) {
+    Wide8Bvh w;
+    w.nodes.resize(1);
+    w.packets.resize(1);
+    RsWide8Node& n = w.nodes[0];
+    std::memset(&n, 0, sizeof n);
+    n.lo_x.s[0] = n.lo_y.s[0] = n.lo_z.s[0] = -10.0f;
+    n.hi_x.s[0] = n.hi_y.s[0] = n.hi_z.s[0] = 10.0f;
+    n.valid.s[0] = -1;
+    n.child[0] = RS_WIDE_LEAF | 0u << 8 | (lanes - 1) << 5 | lane << 2 | 0u;
+    RsTriPacket8& p = w.packets[0];
+    std::memset(&p, 0, sizeof p);
+    const float tri[4][9] = {{5, 5, 5, 6, 5, 5, 5, 6, 5},      // lanes 0-1: beside every ray
+                             {-5, -5, 5, -6, -5, 5, -5, -6, 5},
+                             {-2, -2, 1, 2, -2, 1, 2, 2, 1},   // lanes 2-3: the quad z = 1, |x|, |y| <= 2
+                             {-2, -2, 1, 2, 2, 1, -2, 2, 1}};
+    for (int l = 0; l < 4; ++l) {
+      p.v0x.s[l] = tri[l][0], p.v0y.s[l] = tri[l][1], p.v0z.s[l] = tri[l][2];
+      p.v1x.s[l] = tri[l][3], p.v1y.s[l] = tri[l][4], p.v1z.s[l] = tri[l][5];
+      p.v2x.s[l] = tri[l][6], p.v2y.s[l] = tri[l][7], p.v2z.s[l] = tri[l][8];
+      p.valid.s[l] = p.nondegenerate.s[l] = -1;
+      p.id[l] = 10u + static_cast<std::uint32_t>(l);
+    }
+    for (int l = 4; l < 8; ++l) p.id[l] = RS_NO_HIT;
+    w.depth = 1;
+    return w;
+  };
+  std::vector<RsRay> rays(48);
+  for (std::size_t i = 0; i < rays.size(); ++i)  // from below the quad, up through it
+    rays[i] = RsRay{{0.02f * static_cast<float>(i % 7), -0.03f * static_cast<float>(i % 5), 0.0f}, 0.0f,
+                    {0.01f * static_cast<float>(i % 3), 0.02f * static_cast<float>(i % 4), 1.0f}, INFINITY};
+  std::vector<std::uint32_t> order(rays.size());
+  std::iota(order.begin(), order.end(), 0u);
+  for (const auto& [lane, lanes, want_hit] : {std::tuple{0u, 2u, false}, std::tuple{2u, 2u, true}}) {
+    const Wide8Bvh w = tree(lane, lanes);
+    for (int robust : {0, 1})
+      for (int any : {0, 1}) {
+        const std::string what = std::string(want_hit ? "lanes 2-3" : "lanes 0-1") + (robust ? " robust" : " fast") +
+                                 (any ? " any hit" : " closest hit");
+        std::vector<std::pair<std::string, std::vector<RsHit>>> classes;
+        std::vector<RsHit> hits(rays.size());
+        for (std::size_t i = 0; i < rays.size(); ++i)
+          hits[i] = rs_traverse_wide8(w.nodes.data(), w.packets.data(), rays[i], robust, any, nullptr);
+        classes.emplace_back("wide8", hits);
+        trace_streams_on_host(w, rays, order.data(), robust, any, hits, nullptr);
+        classes.emplace_back("stream", hits);
+        for (int width : {8, 16}) {
+          trace_coherent_on_host(width, w, rays, order.data(), robust, any, hits, nullptr);
+          classes.emplace_back("coherent" + std::to_string(width), hits);
+        }
+        for (const auto& [name, got] : classes)
+          for (std::size_t i = 0; i < rays.size(); ++i) {
+            ASSERT_EQ(got[i].tri != RS_NO_HIT, want_hit) << name << ", " << what << ", ray " << i << ": triangle " << got[i].tri;
+            if (want_hit) {
+              EXPECT_TRUE(got[i].tri == 12u || got[i].tri == 13u) << name << ", " << what << ", ray " << i;
+              EXPECT_FLOAT_EQ(got[i].t, 1.0f) << name << ", " << what << ", ray " << i;
+            }
+          }
+      }
+  }
 }
 
 TEST(Trace, Wide8SibenikEqualsItsHostTwinAndWideRays) {

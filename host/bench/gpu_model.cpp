@@ -122,7 +122,7 @@ GpuAddressMap::GpuAddressMap(const WideBvh& wide, std::size_t rays) {
 }
 
 GpuAddressMap::GpuAddressMap(const Wide8Bvh& wide8, std::size_t rays)
-    : wide_node_bytes_(sizeof(RsWide8Node)), wide_packet_bytes_(sizeof(RsTriPacket8)) {
+    : wide_node_bytes_(sizeof(RsWide8Node)), wide_packet_bytes_(sizeof(RsTriPacket8)), wide8_(true) {
   (void)rays;
   prim_base_ = align_up(wide8.nodes.size() * sizeof(RsWide8Node), 4096);
   ray_base_ = prim_base_ + align_up(wide8.packets.size() * sizeof(RsTriPacket8), 4096);
@@ -147,7 +147,10 @@ void GpuAddressMap::step_blocks(std::uint32_t ref, unsigned line, std::vector<st
   auto read = [&](std::uint64_t count) { return leaf_reads > 0 ? std::min<std::uint64_t>(count, leaf_reads) : count; };
   if (!binary_) {
     if (!(ref & RS_WIDE_LEAF)) return range_blocks(node_base_ + ref * wide_node_bytes_, wide_node_bytes_, line, out);
-    const std::uint64_t first = RS_WIDE_LEAF_FIRST(ref), count = RS_WIDE_LEAF_COUNT(ref);
+    // An 8-wide leaf that shares its packet reads the packet's rows all the same (a row's eight lanes
+    // are one 32-byte sector).
+    const std::uint64_t first = wide8_ ? RS_WIDE8_LEAF_FIRST(ref) : RS_WIDE_LEAF_FIRST(ref);
+    const std::uint64_t count = wide8_ ? RS_WIDE8_LEAF_COUNT(ref) : RS_WIDE_LEAF_COUNT(ref);
     return range_blocks(prim_base_ + first * wide_packet_bytes_, read(count) * wide_packet_bytes_, line, out);
   }
   const RsBvhNode& n = binary_[ref];

@@ -99,6 +99,7 @@ class GpuAddressMap {
  private:
   const RsBvhNode* binary_ = nullptr;  // null on the wide layouts
   std::uint64_t wide_node_bytes_ = sizeof(RsWideNode), wide_packet_bytes_ = sizeof(RsTriPacket);
+  bool wide8_ = false;  // leaf references name lanes too (RS_WIDE8_LEAF_*, cl/bvh_layout.h)
   std::uint64_t node_base_ = 0, prim_base_ = 0, ray_base_ = 0;
 };
 

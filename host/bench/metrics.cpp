@@ -63,12 +63,14 @@ void tally_warp(const Lanes& lanes, std::vector<std::uint32_t>& scratch, WarpTal
 // The size of a warp's union of visited nodes, for trails on a tree of known size: each node's slot
 // holds the number of the last warp that visited it, so the count is linear in the trail length.
 // Sorting the union (tally_warp) was 2.6 % of a quick preset's samples (issue 42, item 5); the
-// count is the same. Slots: a binary node or a wide inner node by its index, a wide leaf
-// (RS_WIDE_LEAF | first packet << 2 | count - 1, traverse_wide_w.h) by its first packet, after
-// the inner nodes (no two leaves share a first packet).
+// count is the same. Slots: a binary node or a wide inner node by its index, a wide leaf after the
+// inner nodes: a 4-wide one (RS_WIDE_LEAF | first packet << 2 | count - 1, cl/bvh_layout.h) by its
+// first packet (no two share it), an 8-wide one by its first lane (RS_WIDE8_LEAF_SLOT: its small
+// leaves share packets).
 class DistinctNodes {
  public:
-  DistinctNodes(std::size_t inner, std::size_t packets) : inner_(inner), last_(inner + packets, 0) {}
+  DistinctNodes(std::size_t inner, std::size_t packets, bool wide8 = false)
+      : inner_(inner), wide8_(wide8), last_(inner + (wide8 ? 8 : 1) * packets, 0) {}
   std::uint64_t count(const Lanes& lanes) {
     ++warp_;
     std::uint64_t distinct = 0;
@@ -83,9 +85,11 @@ class DistinctNodes {
 
  private:
   std::size_t slot(std::uint32_t ref) const {
-    return ref & RS_WIDE_LEAF ? inner_ + RS_WIDE_LEAF_FIRST(ref) : ref;
+    if (!(ref & RS_WIDE_LEAF)) return ref;
+    return inner_ + (wide8_ ? RS_WIDE8_LEAF_SLOT(ref) : RS_WIDE_LEAF_FIRST(ref));
   }
   std::size_t inner_;
+  bool wide8_;
   std::vector<std::uint32_t> last_;
   std::uint32_t warp_ = 0;
 };
@@ -135,7 +139,8 @@ struct TrailRecorder {
   std::uint32_t leaf_reads_until(std::uint32_t tri, std::uint32_t leaf_ref) const {
     if (cw_layout) return 0;  // a cwbvh step reads one triangle: all of it
     if (wide_layout || wide8_layout) {
-      const std::uint32_t first = RS_WIDE_LEAF_FIRST(leaf_ref), count = RS_WIDE_LEAF_COUNT(leaf_ref);
+      const std::uint32_t first = wide8_layout ? RS_WIDE8_LEAF_FIRST(leaf_ref) : RS_WIDE_LEAF_FIRST(leaf_ref);
+      const std::uint32_t count = wide8_layout ? RS_WIDE8_LEAF_COUNT(leaf_ref) : RS_WIDE_LEAF_COUNT(leaf_ref);
       for (std::uint32_t k = 0; k < count; ++k)
         for (std::uint32_t id : wide8_layout ? std::span<const std::uint32_t>(wide8.packets[first + k].id)
                                              : std::span<const std::uint32_t>(wide.packets[first + k].id))
@@ -153,7 +158,7 @@ struct TrailRecorder {
     auto work = [&](unsigned tid) {
       std::vector<std::uint32_t> buffer(cap);
       DistinctNodes distinct = wide_layout    ? DistinctNodes(wide.nodes.size(), wide.packets.size())
-                               : wide8_layout ? DistinctNodes(wide8.nodes.size(), wide8.packets.size())
+                               : wide8_layout ? DistinctNodes(wide8.nodes.size(), wide8.packets.size(), true)
                                : cw_layout    ? DistinctNodes(cw.nodes.size(), cw.triangles.size())
                                               : DistinctNodes(bvh.nodes.size(), 0);
       Lanes lanes;

@@ -143,32 +143,78 @@ std::uint32_t leaf_packets(std::uint32_t count) {
   return (count + W - 1) / W;
 }
 
-// Writes the W-lane packets of binary leaf `leaf` (triangles [first, first + count) of bvh's leaf
-// order) to packets[at], packets[at + 1], ... and returns the leaf reference (RS_WIDE_LEAF | at << 2 |
-// packets - 1, as in cl/bvh_layout.h). Lanes past the last triangle stay invalid (valid = 0, id
-// RS_NO_HIT). The collapse has checked that the leaf fits (at most four packets, at < 2^29).
-template <int W, class Packet>
-std::uint32_t write_leaf(const Bvh& bvh, const RsBvhNode& leaf, Packet* packets, std::uint64_t at) {
-  const std::uint32_t count = leaf_packets<W>(leaf.count);
-  for (std::uint32_t p = 0; p < count; ++p) {
-    Packet pk{};
-    for (int lane = 0; lane < W; ++lane) {
-      const std::uint32_t k = leaf.first + W * p + static_cast<std::uint32_t>(lane);
-      if (k >= leaf.first + leaf.count) {
-        pk.id[lane] = RS_NO_HIT;  // valid = 0: never hit
-        continue;
-      }
-      const RsTriangle& t = bvh.triangles[k];
-      pk.v0x.s[lane] = t.v0[0], pk.v0y.s[lane] = t.v0[1], pk.v0z.s[lane] = t.v0[2];
-      pk.v1x.s[lane] = t.v1[0], pk.v1y.s[lane] = t.v1[1], pk.v1z.s[lane] = t.v1[2];
-      pk.v2x.s[lane] = t.v2[0], pk.v2y.s[lane] = t.v2[1], pk.v2z.s[lane] = t.v2[2];
-      pk.valid.s[lane] = -1;
-      pk.nondegenerate.s[lane] = exactly_degenerate(t) ? 0 : -1;
-      pk.id[lane] = t.id;
+// Where the leaves among a wide node's slots go. Per slot that is a leaf (sub.leafish), in slot order:
+// its first packet, numbered among the packets the node opens (0, 1, ... in the order the walk opens
+// them), and its first lane. W = 8: a leaf of up to eight triangles goes into the first packet this
+// node has opened with room for it (first fit), else into a new one, so a node's small leaves share
+// packets (RS_WIDE8_LEAF_*, cl/bvh_layout.h: a third fewer packets on sibenik); a larger leaf opens
+// packets of its own. W = 4: every leaf opens its own packets at lane 0 (RS_WIDE_LEAF_FIRST's
+// layout, whose references name no lanes). The same plan for the count (collapse's Extent) and the
+// writing walk, so they agree.
+struct LeafPlan {
+  std::array<std::uint32_t, 8> packet{}, lane{};
+  std::uint32_t packets = 0;  // the node opens in all
+  std::uint32_t largest = 0;  // triangles of its largest leaf
+};
+
+template <int W>
+LeafPlan plan_leaves(const Subtrees& sub, const Slots& slots, std::uint32_t merge_triangles) {
+  LeafPlan plan;
+  std::array<std::uint32_t, 8> used{};    // W = 8: lanes taken in each packet opened for leaves of up to 8
+  std::array<std::uint32_t, 8> shared{};  // those packets, numbered as plan.packet
+  std::size_t open = 0;
+  for (std::size_t i = 0; i < slots.size(); ++i) {
+    if (!sub.leafish(slots[i], merge_triangles)) continue;
+    const std::uint32_t count = sub.count(slots[i]);
+    plan.largest = std::max(plan.largest, count);
+    std::size_t k = 0;
+    if (W == 8 && count <= 8) {
+      while (k < open && used[k] + count > 8) ++k;
+      if (k == open) shared[open++] = plan.packets++;
+      plan.packet[i] = shared[k], plan.lane[i] = used[k];
+      used[k] += count;
+      continue;
     }
-    packets[at + p] = pk;
+    plan.packet[i] = plan.packets, plan.lane[i] = 0;
+    plan.packets += leaf_packets<W>(count);
   }
-  return RS_WIDE_LEAF | static_cast<std::uint32_t>(at << 2) | (count - 1);
+  return plan;
+}
+
+// An empty packet: every lane invalid (valid = 0, id RS_NO_HIT), what a lane no leaf fills keeps.
+template <int W, class Packet>
+Packet empty_packet() {
+  Packet pk{};
+  for (int lane = 0; lane < W; ++lane) pk.id[lane] = RS_NO_HIT;
+  return pk;
+}
+
+// Writes the triangles of leaf `leaf` (triangles [first, first + count) of bvh's leaf order) into the
+// lanes from `lane` on of packets[at], then packets[at + 1], ... (already written empty: the lanes of
+// other leaves and those past the last triangle are left as they are), and returns the leaf reference:
+// RS_WIDE_LEAF | at << 2 | packets - 1 for W = 4, RS_WIDE8_LEAF_* for W = 8 (cl/bvh_layout.h). The
+// collapse has checked that the leaf fits (at most four packets, `at` within the reference's bits).
+template <int W, class Packet>
+std::uint32_t write_leaf(const Bvh& bvh, const RsBvhNode& leaf, Packet* packets, std::uint64_t at, std::uint32_t lane) {
+  for (std::uint32_t k = 0; k < leaf.count; ++k) {
+    const std::uint32_t slot = lane + k;
+    Packet& pk = packets[at + slot / W];
+    const int l = static_cast<int>(slot % W);
+    const RsTriangle& t = bvh.triangles[leaf.first + k];
+    pk.v0x.s[l] = t.v0[0], pk.v0y.s[l] = t.v0[1], pk.v0z.s[l] = t.v0[2];
+    pk.v1x.s[l] = t.v1[0], pk.v1y.s[l] = t.v1[1], pk.v1z.s[l] = t.v1[2];
+    pk.v2x.s[l] = t.v2[0], pk.v2y.s[l] = t.v2[1], pk.v2z.s[l] = t.v2[2];
+    pk.valid.s[l] = -1;
+    pk.nondegenerate.s[l] = exactly_degenerate(t) ? 0 : -1;
+    pk.id[l] = t.id;
+  }
+  const std::uint32_t count = leaf_packets<W>(leaf.count);
+  if constexpr (W == 8) {
+    const std::uint32_t lanes = std::min<std::uint32_t>(leaf.count, 8);
+    return RS_WIDE_LEAF | static_cast<std::uint32_t>(at << 8) | (lanes - 1) << 5 | lane << 2 | (count - 1);
+  } else {
+    return RS_WIDE_LEAF | static_cast<std::uint32_t>(at << 2) | (count - 1);
+  }
 }
 
 // Writes binary node b's box into lane `lane` of wide node w.
@@ -211,9 +257,9 @@ Tree collapse(const Bvh& bvh, const Subtrees& sub, std::uint32_t stack_size, std
   struct Extent {
     std::uint64_t nodes = 0, packets = 0;
     std::uint32_t depth = 0, largest_leaf = 0;
-    void add_leaf(std::uint32_t count) {
-      packets += leaf_packets<W>(count);
-      largest_leaf = std::max(largest_leaf, count);
+    void add_leaves(const LeafPlan& plan) {  // a node's leaves (plan_leaves)
+      packets += plan.packets;
+      largest_leaf = std::max(largest_leaf, plan.largest);
     }
     void add_child(const Extent& c) {
       nodes += c.nodes, packets += c.packets;
@@ -231,9 +277,9 @@ Tree collapse(const Bvh& bvh, const Subtrees& sub, std::uint32_t stack_size, std
   };
   auto extent_of = [&](auto& self, const Slots& slots) -> Extent {
     Extent e{1, 0, 1, 0};
+    e.add_leaves(plan_leaves<W>(sub, slots, merge_triangles));
     for (std::uint32_t s : slots)
-      if (sub.leafish(s, merge_triangles)) e.add_leaf(sub.count(s));
-      else e.add_child(self(self, slots_of(s)));
+      if (!sub.leafish(s, merge_triangles)) e.add_child(self(self, slots_of(s)));
     return e;
   };
   Node* nodes = nullptr;
@@ -264,19 +310,25 @@ Tree collapse(const Bvh& bvh, const Subtrees& sub, std::uint32_t stack_size, std
       top_extent.depth = std::max(top_extent.depth, depth);
     }
     const auto index = static_cast<std::uint32_t>(at ? at->node++ : 0);
+    const LeafPlan plan = plan_leaves<W>(sub, slots, merge_triangles);
+    if (!at) top_extent.add_leaves(plan);
+    // The node's packets, placed where the walk opens them (a leaf that opens one: at the cursor),
+    // written empty before any leaf fills its lanes.
+    std::array<std::uint64_t, 32> placed{};
+    std::uint32_t opened = 0;
     Node w{};  // lanes past slots.size(): valid = 0, empty boxes, child 0 (never read)
     for (std::size_t i = 0; i < slots.size(); ++i) {
       const std::uint32_t s = slots[i];
       set_box(w, static_cast<int>(i), bvh.nodes[s]);
       w.valid.s[i] = -1;
       if (sub.leafish(s, merge_triangles)) {
+        if (!at) continue;
         const RsBvhNode leaf = sub.as_leaf(s);
-        if (!at) {
-          top_extent.add_leaf(leaf.count);
-          continue;
+        for (; opened < plan.packet[i] + leaf_packets<W>(leaf.count); ++opened) {
+          placed[opened] = at->packet++;
+          packets[placed[opened]] = empty_packet<W, Packet>();
         }
-        w.child[i] = write_leaf<W>(bvh, leaf, packets, at->packet);
-        at->packet += leaf_packets<W>(leaf.count);
+        w.child[i] = write_leaf<W>(bvh, leaf, packets, placed[plan.packet[i]], plan.lane[i]);
       } else if (depth + 1 != task_depth) {
         w.child[i] = self(self, slots_of(s), depth + 1, at);
       } else if (!at) {
@@ -303,7 +355,11 @@ Tree collapse(const Bvh& bvh, const Subtrees& sub, std::uint32_t stack_size, std
     throw Error("BVH leaf of " + std::to_string(whole.largest_leaf) + " triangles does not fit the " +
                 std::to_string(W) + "-wide layout (at most " + std::to_string(4 * W) +
                 " per leaf: lower max_leaf_size)");
-  if (whole.packets > (1u << 29)) throw Error("scene too large for the wide BVH layout (2^29 leaf packets)");
+  // The leaf reference's bits for the first packet (cl/bvh_layout.h): 29 at 4 lanes, 23 at 8 (lanes named too).
+  const std::uint64_t max_packets = W == 8 ? RS_WIDE8_MAX_PACKETS : (1u << 29);
+  if (whole.packets > max_packets)
+    throw Error("scene too large for the " + std::to_string(W) + "-wide BVH layout (" + std::to_string(whole.packets) +
+                " leaf packets, at most " + std::to_string(max_packets) + "): trace it with a 4-wide or binary layout");
   if ((W - 1) * whole.depth > stack_size)
     throw Error(std::to_string(W) + "-wide BVH of depth " + std::to_string(whole.depth) +
                 " could overflow the trace stack (" + std::to_string(stack_size) +
@@ -379,12 +435,21 @@ std::string validate(const Tree& wide, const Bvh& bvh, std::uint32_t stack_size)
         todo.push_back({ref, depth + 1});
         continue;
       }
-      const std::uint32_t first = RS_WIDE_LEAF_FIRST(ref), end = RS_WIDE_LEAF_END(ref);
+      const std::uint32_t first = W == 8 ? RS_WIDE8_LEAF_FIRST(ref) : RS_WIDE_LEAF_FIRST(ref);
+      const std::uint32_t end = W == 8 ? RS_WIDE8_LEAF_END(ref) : RS_WIDE_LEAF_END(ref);
+      const int own = W == 8 ? RS_WIDE8_LEAF_LANES(ref) : (1 << W) - 1;  // the leaf's lanes of each packet
+      if (W == 8 && ((ref >> 2) & 7u) + ((ref >> 5) & 7u) >= 8u) return "leaf lanes past the packet's eighth";
+      if (W == 8 && end - first > 1 && own != 0xff) return "a leaf of several packets that shares them";
       if (end > wide.packets.size()) return "leaf packets out of range";
       for (std::uint32_t p = first; p < end; ++p)
         for (int k = 0; k < W; ++k) {
           const auto& pk = wide.packets[p];
-          if (pk.valid.s[k] == 0) continue;
+          if (!((own >> k) & 1)) continue;  // another leaf's lane
+          if (pk.valid.s[k] == 0) {
+            if (W == 8 && end - first == 1)  // an 8-wide leaf's lanes in one packet are its triangles
+              return "leaf of node " + std::to_string(ni) + " lane " + std::to_string(lane) + " names an empty lane";
+            continue;
+          }
           const std::uint32_t id = pk.id[k];
           if (id >= seen_tri.size() || seen_tri[id]++) return "triangle " + std::to_string(id) + " bad or in two lanes";
           const RsTriangle& t = bvh.triangles[index_of_tri[id]];
