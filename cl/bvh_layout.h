@@ -99,7 +99,7 @@ typedef struct {
  *   RS_WIDE_LEAF | first << 8 | (lanes - 1) << 5 | lane << 2 | (packets - 1)
  * The leaf is lanes [lane, lane + lanes) of packets [first, first + packets): a leaf of up to eight
  * triangles lies in one packet, beside the node's other small leaves (host/bvh/wide_tree.h,
- * pack_leaves), and a larger one (max_leaf_size above 8) fills its own packets from lane 0 (lanes 8;
+ * plan_leaves), and a larger one (max_leaf_size above 8) fills its own packets from lane 0 (lanes 8;
  * the last packet's valid lanes end it). Half the 8-wide leaves hold one or two triangles: one leaf to
  * a packet left 3.97 of its 8 lanes filled on sibenik, and the leaf packets were 84 % of the tree's
  * bytes; sharing them takes a third fewer packets (results/history/trace-kernels.md, "Leaves that

@@ -359,7 +359,9 @@ Tree collapse(const Bvh& bvh, const Subtrees& sub, std::uint32_t stack_size, std
   const std::uint64_t max_packets = W == 8 ? RS_WIDE8_MAX_PACKETS : (1u << 29);
   if (whole.packets > max_packets)
     throw Error("scene too large for the " + std::to_string(W) + "-wide BVH layout (" + std::to_string(whole.packets) +
-                " leaf packets, at most " + std::to_string(max_packets) + "): trace it with a 4-wide or binary layout");
+                " leaf packets, at most " + std::to_string(max_packets) + ")" +
+                (W == 8 ? ": the wide8, stream and coherent classes cannot hold it; trace it with --layout wide, packet16 or binary"
+                        : ""));
   if ((W - 1) * whole.depth > stack_size)
     throw Error(std::to_string(W) + "-wide BVH of depth " + std::to_string(whole.depth) +
                 " could overflow the trace stack (" + std::to_string(stack_size) +
