@@ -106,11 +106,15 @@ typedef struct {
  * share a packet"). A triangle is tested in its lane with the arithmetic of every other lane, so a ray
  * hits what it hit with a packet of its own; RS_WIDE8_LEAF_LANES masks the lanes of the other leaves.
  * RS_WIDE8_LEAF_SLOT numbers a leaf by its first lane (8 * first + lane: no two leaves share it). */
+#define RS_WIDE8_LEAF_REF(first, lane, lanes, packets) \
+  (RS_WIDE_LEAF | (first) << 8 | ((lanes) - 1u) << 5 | (lane) << 2 | ((packets) - 1u))
 #define RS_WIDE8_LEAF_FIRST(ref) (((ref) & ~RS_WIDE_LEAF) >> 8)
 #define RS_WIDE8_LEAF_COUNT(ref) (((ref) & 3u) + 1u)
-#define RS_WIDE8_LEAF_END(ref) (RS_WIDE8_LEAF_FIRST(ref) + ((ref) & 3u) + 1u)
-#define RS_WIDE8_LEAF_LANES(ref) ((int)((0xffu >> (7u - (((ref) >> 5) & 7u))) << (((ref) >> 2) & 7u)))
-#define RS_WIDE8_LEAF_SLOT(ref) (8u * RS_WIDE8_LEAF_FIRST(ref) + (((ref) >> 2) & 7u))
+#define RS_WIDE8_LEAF_END(ref) (RS_WIDE8_LEAF_FIRST(ref) + RS_WIDE8_LEAF_COUNT(ref))
+#define RS_WIDE8_LEAF_LANE(ref) (((ref) >> 2) & 7u)
+#define RS_WIDE8_LEAF_LANE_COUNT(ref) ((((ref) >> 5) & 7u) + 1u)
+#define RS_WIDE8_LEAF_LANES(ref) ((int)((0xffu >> (8u - RS_WIDE8_LEAF_LANE_COUNT(ref))) << RS_WIDE8_LEAF_LANE(ref)))
+#define RS_WIDE8_LEAF_SLOT(ref) (8u * RS_WIDE8_LEAF_FIRST(ref) + RS_WIDE8_LEAF_LANE(ref))
 /* The packets an 8-wide leaf reference can name (23 bits of first). */
 #define RS_WIDE8_MAX_PACKETS (1u << 23)
 

@@ -246,7 +246,7 @@ TEST_P(ProceduralWide8Bvh, SmallLeavesOfANodeSharePackets) {
       const std::uint32_t ref = w.nodes[i].child[lane];
       if (!w.nodes[i].valid.s[lane] || !(ref & RS_WIDE_LEAF)) continue;
       ++leaves;
-      const std::uint32_t first = RS_WIDE8_LEAF_FIRST(ref), at = (ref >> 2) & 7u, count = ((ref >> 5) & 7u) + 1;
+      const std::uint32_t first = RS_WIDE8_LEAF_FIRST(ref), at = RS_WIDE8_LEAF_LANE(ref), count = RS_WIDE8_LEAF_LANE_COUNT(ref);
       if (RS_WIDE8_LEAF_COUNT(ref) > 1) continue;  // a large leaf has packets of its own
       auto it = std::find_if(used.begin(), used.end(), [&](const auto& u) { return u.first == first; });
       for (auto f = used.begin(); f != it; ++f)
@@ -333,7 +333,7 @@ std::string depth_first_layout(const Tree& t) {
         self(self, ref);
         continue;
       }
-      const std::uint32_t first = W == 8 ? RS_WIDE8_LEAF_FIRST(ref) : RS_WIDE_LEAF_FIRST(ref);
+      const std::uint32_t first = wide_leaf(ref, W == 8).first;
       if (W == 8 && std::find(opened.begin(), opened.end(), first) != opened.end()) continue;
       if (first != next_packet)
         err = "node " + std::to_string(n) + " lane " + std::to_string(lane) + ": packet " + std::to_string(first) +
@@ -414,7 +414,7 @@ TEST(Wide8Bvh, ValidatorCatchesABrokenCollapse) {
     for (int lane = 0; lane < 8; ++lane) {
       const std::uint32_t ref = good.nodes[i].child[lane];
       if (!good.nodes[i].valid.s[lane] || !(ref & RS_WIDE_LEAF) || RS_WIDE8_LEAF_COUNT(ref) > 1) continue;
-      const std::uint32_t at = (ref >> 2) & 7u, end = at + ((ref >> 5) & 7u) + 1;
+      const std::uint32_t at = RS_WIDE8_LEAF_LANE(ref), end = at + RS_WIDE8_LEAF_LANE_COUNT(ref);
       broken = good;
       if (!overlapped && at > 0) {  // one lane earlier: the last lane of the leaf before it
         broken.nodes[i].child[lane] = ref - (1u << 2);

@@ -163,15 +163,15 @@ TEST(GpuModel, Wide8StepsReadTheirNodesAndPackets) {
   map.step_blocks(3, 128, lines);  // node 3: bytes 768-1023
   EXPECT_EQ(lines, (std::vector<std::uint64_t>{6, 7}));
   lines.clear();
-  map.step_blocks(RS_WIDE_LEAF | (1u << 8) | (7u << 5) | 0u, 128, lines);  // packet 1: bytes 8576-8959
+  map.step_blocks(RS_WIDE8_LEAF_REF(1u, 0u, 8u, 1u), 128, lines);  // packet 1: bytes 8576-8959
   EXPECT_EQ(lines, (std::vector<std::uint64_t>{67, 68, 69}));
   lines.clear();
-  map.step_blocks(RS_WIDE_LEAF | (1u << 8) | (2u << 5) | (4u << 2), 128, lines);  // its lanes 4-6: the same rows
+  map.step_blocks(RS_WIDE8_LEAF_REF(1u, 4u, 3u, 1u), 128, lines);  // its lanes 4-6: the same rows
   EXPECT_EQ(lines, (std::vector<std::uint64_t>{67, 68, 69}));
   lines.clear();
-  map.step_blocks(RS_WIDE_LEAF | (1u << 8) | (7u << 5) | 1u, 128, lines);  // packets 1-2: bytes 8576-9343
+  map.step_blocks(RS_WIDE8_LEAF_REF(1u, 0u, 8u, 2u), 128, lines);  // packets 1-2: bytes 8576-9343
   EXPECT_EQ(lines, (std::vector<std::uint64_t>{67, 68, 69, 70, 71, 72}));
-  EXPECT_TRUE(map.is_leaf(RS_WIDE_LEAF | (1u << 8)));
+  EXPECT_TRUE(map.is_leaf(RS_WIDE8_LEAF_REF(1u, 0u, 1u, 1u)));
   EXPECT_FALSE(map.is_leaf(3));
 }
 

@@ -347,7 +347,7 @@ TEST(Trace, EightWideLeavesTestOnlyTheirOwnLanes) {
     n.lo_x.s[0] = n.lo_y.s[0] = n.lo_z.s[0] = -10.0f;
     n.hi_x.s[0] = n.hi_y.s[0] = n.hi_z.s[0] = 10.0f;
     n.valid.s[0] = -1;
-    n.child[0] = RS_WIDE_LEAF | 0u << 8 | (lanes - 1) << 5 | lane << 2 | 0u;
+    n.child[0] = RS_WIDE8_LEAF_REF(0u, lane, lanes, 1u);
     RsTriPacket8& p = w.packets[0];
     std::memset(&p, 0, sizeof p);
     const float tri[4][9] = {{5, 5, 5, 6, 5, 5, 5, 6, 5},      // lanes 0-1: beside every ray

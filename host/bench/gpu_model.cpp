@@ -149,8 +149,8 @@ void GpuAddressMap::step_blocks(std::uint32_t ref, unsigned line, std::vector<st
     if (!(ref & RS_WIDE_LEAF)) return range_blocks(node_base_ + ref * wide_node_bytes_, wide_node_bytes_, line, out);
     // An 8-wide leaf that shares its packet reads the packet's rows all the same (a row's eight lanes
     // are one 32-byte sector).
-    const std::uint64_t first = wide8_ ? RS_WIDE8_LEAF_FIRST(ref) : RS_WIDE_LEAF_FIRST(ref);
-    const std::uint64_t count = wide8_ ? RS_WIDE8_LEAF_COUNT(ref) : RS_WIDE_LEAF_COUNT(ref);
+    const WideLeaf leaf = wide_leaf(ref, wide8_);
+    const std::uint64_t first = leaf.first, count = leaf.count();
     return range_blocks(prim_base_ + first * wide_packet_bytes_, read(count) * wide_packet_bytes_, line, out);
   }
   const RsBvhNode& n = binary_[ref];

@@ -139,8 +139,8 @@ struct TrailRecorder {
   std::uint32_t leaf_reads_until(std::uint32_t tri, std::uint32_t leaf_ref) const {
     if (cw_layout) return 0;  // a cwbvh step reads one triangle: all of it
     if (wide_layout || wide8_layout) {
-      const std::uint32_t first = wide8_layout ? RS_WIDE8_LEAF_FIRST(leaf_ref) : RS_WIDE_LEAF_FIRST(leaf_ref);
-      const std::uint32_t count = wide8_layout ? RS_WIDE8_LEAF_COUNT(leaf_ref) : RS_WIDE_LEAF_COUNT(leaf_ref);
+      const WideLeaf leaf = wide_leaf(leaf_ref, wide8_layout);
+      const std::uint32_t first = leaf.first, count = leaf.count();
       for (std::uint32_t k = 0; k < count; ++k)
         for (std::uint32_t id : wide8_layout ? std::span<const std::uint32_t>(wide8.packets[first + k].id)
                                              : std::span<const std::uint32_t>(wide.packets[first + k].id))

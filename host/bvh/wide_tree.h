@@ -211,7 +211,7 @@ std::uint32_t write_leaf(const Bvh& bvh, const RsBvhNode& leaf, Packet* packets,
   const std::uint32_t count = leaf_packets<W>(leaf.count);
   if constexpr (W == 8) {
     const std::uint32_t lanes = std::min<std::uint32_t>(leaf.count, 8);
-    return RS_WIDE_LEAF | static_cast<std::uint32_t>(at << 8) | (lanes - 1) << 5 | lane << 2 | (count - 1);
+    return RS_WIDE8_LEAF_REF(static_cast<std::uint32_t>(at), lane, lanes, count);
   } else {
     return RS_WIDE_LEAF | static_cast<std::uint32_t>(at << 2) | (count - 1);
   }
@@ -437,10 +437,10 @@ std::string validate(const Tree& wide, const Bvh& bvh, std::uint32_t stack_size)
         todo.push_back({ref, depth + 1});
         continue;
       }
-      const std::uint32_t first = W == 8 ? RS_WIDE8_LEAF_FIRST(ref) : RS_WIDE_LEAF_FIRST(ref);
-      const std::uint32_t end = W == 8 ? RS_WIDE8_LEAF_END(ref) : RS_WIDE_LEAF_END(ref);
-      const int own = W == 8 ? RS_WIDE8_LEAF_LANES(ref) : (1 << W) - 1;  // the leaf's lanes of each packet
-      if (W == 8 && ((ref >> 2) & 7u) + ((ref >> 5) & 7u) >= 8u) return "leaf lanes past the packet's eighth";
+      const WideLeaf leaf = wide_leaf(ref, W == 8);
+      const std::uint32_t first = leaf.first, end = leaf.end;
+      const int own = leaf.lanes;  // the leaf's lanes of each packet
+      if (W == 8 && RS_WIDE8_LEAF_LANE(ref) + RS_WIDE8_LEAF_LANE_COUNT(ref) > 8u) return "leaf lanes past the packet's eighth";
       if (W == 8 && end - first > 1 && own != 0xff) return "a leaf of several packets that shares them";
       if (end > wide.packets.size()) return "leaf packets out of range";
       for (std::uint32_t p = first; p < end; ++p)
