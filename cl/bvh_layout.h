@@ -50,6 +50,9 @@ typedef struct {
 #define RS_WIDE_LEAF_FIRST(ref) (((ref) & ~RS_WIDE_LEAF) >> 2)
 #define RS_WIDE_LEAF_COUNT(ref) (((ref) & 3u) + 1u)
 #define RS_WIDE_LEAF_END(ref) (RS_WIDE_LEAF_FIRST(ref) + ((ref) & 3u) + 1u)
+/* The leaf's lanes of each packet, a bit per lane: all four (a 4-wide leaf has its packets to itself;
+ * an 8-wide one may not: RS_WIDE8_LEAF_LANES). */
+#define RS_WIDE_LEAF_LANES(ref) ((void)(ref), 0xf)
 typedef struct {
   rs_f4 lo_x, hi_x, lo_y, hi_y, lo_z, hi_z;
   rs_i4 valid;

@@ -49,7 +49,7 @@
 #define rsw_leaf rs_wide_leaf
 #define RSW_LEAF_FIRST RS_WIDE_LEAF_FIRST
 #define RSW_LEAF_END RS_WIDE_LEAF_END
-#define RSW_LEAF_LANES(ref) 0xf /* a 4-wide leaf has its packets to itself */
+#define RSW_LEAF_LANES RS_WIDE_LEAF_LANES
 #elif RS_WIDE_W == 8
 #define rsw_f rs_f8
 #define rsw_i rs_i8

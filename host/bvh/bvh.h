@@ -22,9 +22,6 @@ struct BvhBuildOptions {
   unsigned threads = 0;
 };
 
-// The 4-wide form the trace kernels traverse (RsWideNode / RsTriPacket in cl/bvh_layout.h), collapsed
-// from the binary tree: a wide node holds its binary node's grandchildren, or a child itself when
-// that child is a leaf. Same boxes, same leaves; only the branching factor changes.
 // A wide leaf reference decoded, for either width (cl/bvh_layout.h): packets [first, end), and the
 // leaf's lanes of each (a bit per lane; every lane of a 4-wide leaf's packets, an 8-wide leaf's own
 // lanes of a packet it may share: RS_WIDE8_LEAF_*). The host's one reader of both encodings.
@@ -35,9 +32,12 @@ struct WideLeaf {
 };
 inline WideLeaf wide_leaf(std::uint32_t ref, bool wide8) {
   if (wide8) return {RS_WIDE8_LEAF_FIRST(ref), RS_WIDE8_LEAF_END(ref), RS_WIDE8_LEAF_LANES(ref)};
-  return {RS_WIDE_LEAF_FIRST(ref), RS_WIDE_LEAF_END(ref), 0xf};
+  return {RS_WIDE_LEAF_FIRST(ref), RS_WIDE_LEAF_END(ref), RS_WIDE_LEAF_LANES(ref)};
 }
 
+// The 4-wide form the trace kernels traverse (RsWideNode / RsTriPacket in cl/bvh_layout.h), collapsed
+// from the binary tree: a wide node holds its binary node's grandchildren, or a child itself when
+// that child is a leaf. Same boxes, same leaves; only the branching factor changes.
 struct WideBvh {
   // Filled in place on all threads by the collapse: resize() leaves new elements unwritten.
   UninitVector<RsWideNode> nodes;     // node 0 is the root (always an inner node)
