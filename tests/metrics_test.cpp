@@ -181,7 +181,7 @@ TEST(SimtModel, TracedDistinctNodesEqualTheSortedUnion) {
   std::shuffle(order.begin(), order.end(), rng);
   WideBvh wide_scratch;
   const WideBvh& wide = wide_of(bvh, wide_scratch);
-  const Wide8Bvh wide8 = collapse_to_wide8(bvh);
+  const Wide8Bvh& wide8 = split_tree(bvh).wide8;  // the tree the model and kernels walk
   const CwBvh cw = collapse_to_cwbvh(bvh);
   for (TraceLayout layout : {TraceLayout::Wide, TraceLayout::Wide8, TraceLayout::Binary, TraceLayout::Cwbvh})
     for (int any : {0, 1}) {

@@ -393,6 +393,14 @@ void trace_scene(Runtime& rt, const std::string& scene_name, const TraceArgs& ar
   for (TraceLayout layout : layouts)
     for (TraceVariant v : variants) tracers.emplace_back(rt, p.bvh, v, layout);
   const bool several_classes = layouts.size() > 1;
+  if (std::any_of(layouts.begin(), layouts.end(), [](TraceLayout l) { return tree_kind(l) == TreeKind::Wide8; })) {
+    const SplitTree& split = split_tree(p.bvh);  // built by the first 8-wide class's Tracer
+    fmt::print("split    the 8-wide classes' tree, with spatial splits: {} references to {} triangles (+{:.1f} %), {} nodes, "
+               "depth {}, SAH cost {:.4f}; built and collapsed in {:.0f} ms\n",
+               split.binary.triangles.size(), p.bvh.triangles.size(),
+               100.0 * (static_cast<double>(split.binary.triangles.size()) / static_cast<double>(p.bvh.triangles.size()) - 1.0),
+               split.binary.nodes.size(), split.binary.depth, split.binary.sah_cost, split.build_ms);
+  }
   fmt::print("kernels  built in {:.0f} ms (reported apart from trace times)\n", rt.build_ms() - build_before);
   bool embree_columns_on_row = false;  // issue 9's columns: rtcIntersect1 alone
   const EmbreeReference* embree_ref = nullptr;

@@ -213,12 +213,13 @@ SimtModel simt_model(const Bvh& bvh, const std::vector<RsRay>& rays, const std::
                      RayTrails* trails) {
   WideBvh scratch;
   // Each class's model walks the tree its kernels walk, one ray per lane: the binary tree (binary,
-  // binary-ww), the 8-wide one (wide8, stream), the compressed one (cwbvh), else the 4-wide one (the
+  // binary-ww), the 8-wide one (wide8, stream, coherent: split_tree), the compressed one (cwbvh), else the 4-wide one (the
   // packet classes too: the model's warp of 32 lanes is their packet, at a GPU's width).
   const bool wide_layout = walks_wide_tree(layout), wide8_layout = tree_kind(layout) == TreeKind::Wide8;
   const bool cw_layout = tree_kind(layout) == TreeKind::Compressed8;
   const WideBvh& wide = wide_layout ? wide_of(bvh, scratch) : scratch;
-  const Wide8Bvh wide8 = wide8_layout ? collapse_to_wide8(bvh) : Wide8Bvh{};
+  const Wide8Bvh no_wide8;
+  const Wide8Bvh& wide8 = wide8_layout ? split_tree(bvh).wide8 : no_wide8;
   const CwBvh cw = cw_layout ? collapse_to_cwbvh(bvh) : CwBvh{};
   const std::size_t n = rays.size();
   const std::size_t warps = (n + kWarpSize - 1) / kWarpSize;

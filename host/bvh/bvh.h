@@ -4,6 +4,7 @@
 // This binary tree is the reference structure: HCC cuts, PPC and the host reference traversal
 // all work on it.
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -68,6 +69,22 @@ struct CwBvh {
   bool empty() const { return nodes.empty(); }
 };
 
+struct SplitTree;
+
+// Where split_tree() keeps the tree it builds on first use. A copy of a Bvh starts with an empty
+// slot (the copy may then be changed, and its split tree must be its own); a move takes it along.
+class SplitTreeSlot {
+ public:
+  SplitTreeSlot();
+  ~SplitTreeSlot();
+  SplitTreeSlot(const SplitTreeSlot&) : SplitTreeSlot() {}
+  SplitTreeSlot& operator=(const SplitTreeSlot&);
+  SplitTreeSlot(SplitTreeSlot&&) noexcept;
+  SplitTreeSlot& operator=(SplitTreeSlot&&) noexcept;
+  struct State;
+  std::unique_ptr<State> state_;
+};
+
 struct Bvh {
   // Filled in place on all threads by the build: resize() leaves new elements unwritten.
   UninitVector<RsBvhNode> nodes;       // node 0 is the root
@@ -79,7 +96,23 @@ struct Bvh {
   double sah_cost = 0.0;              // of the binary tree (sah_cost below), the build's figure of quality
   Aabb bounds() const;                // the root's box
   bool is_leaf(std::uint32_t n) const { return nodes[n].count > 0; }
+  SplitTreeSlot split_tree_slot;      // split_tree(*this), once built
 };
+
+// The tree the 8-wide classes (wide8, stream, coherent) walk: the binary tree's triangles rebuilt
+// with spatial splits (build_spatial_bvh), collapsed to 8 wide. Embree's best paths walk a tree
+// with spatial splits too (RTC_BUILD_QUALITY_HIGH), and without them the stream only tied its
+// shadow rays (results/history/trace-kernels.md, stop 75). The 4-wide and binary classes, HCC's
+// cuts and the golden figures keep the plain tree.
+struct SplitTree {
+  Bvh binary;       // a triangle may be in several leaves: its parts on each side of a split plane
+  Wide8Bvh wide8;   // its 8-wide collapse
+  double build_ms = 0.0;  // both
+};
+
+// bvh's split tree, built on first use (on all threads) and then kept with bvh: the same tree, bit for
+// bit, on every call and thread count. Safe to call from several threads.
+const SplitTree& split_tree(const Bvh& bvh);
 
 // Binned SAH build (Wald 2007, "On fast Construction of SAH-based Bounding Volume Hierarchies")
 // over the flattened triangles, on opts.threads threads (host/bvh/build_sah.cpp says how).
@@ -87,6 +120,16 @@ struct Bvh {
 // whatever the thread count. Depth stays below RS_STACK_SIZE: past kMaxSahDepth levels, nodes
 // split at the object median.
 Bvh build_bvh(const Scene::Flat& tris, const BvhBuildOptions& opts = {});
+
+// The triangles of `plain` in a binary tree with spatial splits (SBVH; Stich, Friedrich and Dietrich
+// 2009; host/bvh/build_spatial.cpp): a node splits by the binned SAH of build_bvh or, where cheaper,
+// at a plane through its box, a triangle straddling it then referenced from both sides with a box
+// around its part on each. `budget`: the references splits may add, as a share of the triangles
+// (Embree's default, 1.2 references per triangle in all). Leaves then index `triangles`, in which a
+// triangle appears once per reference (with its id). Deterministic as build_bvh; its `wide` is left
+// empty (wide_of collapses it where needed).
+inline constexpr double kSpatialSplitBudget = 0.2;
+Bvh build_spatial_bvh(const Bvh& plain, const BvhBuildOptions& opts = {}, double budget = kSpatialSplitBudget);
 
 // The tree's SAH cost (MacDonald and Booth 1990; the cost the builder minimises greedily, Wald
 // 2007): over the root's surface area A, the sum of traversal_cost · A(n) over inner nodes and
@@ -99,7 +142,7 @@ double sah_cost(const Bvh& bvh, const BvhBuildOptions& opts = {});
 // threads (0: host_threads()), the same tree for every count.
 WideBvh collapse_to_wide(const Bvh& bvh, unsigned threads = 0);
 
-// Checks the wide tree against its binary source: every triangle in exactly one valid packet lane
+// Checks the wide tree against its binary source: each of a triangle's references in one valid packet lane
 // (with its vertices and id), each child box equal to a binary node's box, every reference in
 // range, every inner node reached once, and 3 * depth within RS_WIDE_STACK_SIZE. Returns an empty
 // string when all hold, else a description of the first violation.
@@ -135,5 +178,11 @@ const WideBvh& wide_of(const Bvh& bvh, WideBvh& scratch);
 // inside its parent, leaf sizes within max_leaf_size, depth below the stack bound, children in
 // range. Returns an empty string when all hold, else a description of the first violation.
 std::string validate_bvh(const Bvh& bvh, std::size_t triangle_count, const BvhBuildOptions& opts = {});
+
+// validate_bvh's checks on build_spatial_bvh(plain, opts, budget): every triangle of plain in at
+// least one leaf, each copy exactly plain's (vertices and id), at most (1 + budget) references per
+// triangle in all, and a leaf's box meeting each of its triangles' boxes (it holds their parts, not
+// the whole; that the parts cover each triangle is tested by sampling, tests/spatial_bvh_test.cpp).
+std::string validate_spatial_bvh(const Bvh& split, const Bvh& plain, double budget, const BvhBuildOptions& opts = {});
 
 }  // namespace raysort

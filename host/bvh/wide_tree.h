@@ -398,21 +398,28 @@ template <int W, class Tree>
 std::string validate(const Tree& wide, const Bvh& bvh, std::uint32_t stack_size) {
   if (wide.nodes.empty()) return "no root";
   if ((W - 1) * wide.depth > stack_size) return "depth " + std::to_string(wide.depth) + " exceeds the stack bound";
-  std::vector<std::uint32_t> seen_tri(bvh.triangles.size(), 0), seen_node(wide.nodes.size(), 0);
+  std::vector<std::uint32_t> seen_node(wide.nodes.size(), 0);
   // Binary boxes, to check that each wide child box is one of them.
   auto same_box = [](const auto& w, int lane, const RsBvhNode& b) {
     return w.lo_x.s[lane] == b.bmin[0] && w.lo_y.s[lane] == b.bmin[1] && w.lo_z.s[lane] == b.bmin[2] &&
            w.hi_x.s[lane] == b.bmax[0] && w.hi_y.s[lane] == b.bmax[1] && w.hi_z.s[lane] == b.bmax[2];
   };
-  // Each triangle id's binary leaf (to match a leaf reference to its box) and leaf-order index
-  // (to compare its vertices).
-  std::vector<std::uint32_t> leaf_of_tri(bvh.triangles.size(), 0), index_of_tri(bvh.triangles.size(), 0);
+  // Per triangle id: its references in the binary leaf order (one, or one per part in a tree with
+  // spatial splits, build_spatial_bvh), as [ref_begin[id], ref_begin[id + 1]) of refs_of, each
+  // reference's binary leaf (to match a leaf reference to its box), and how many lanes hold it.
+  std::uint32_t ids = 0;
+  for (const RsTriangle& t : bvh.triangles) ids = std::max(ids, t.id + 1);
+  std::vector<std::uint32_t> ref_begin(static_cast<std::size_t>(ids) + 1, 0), refs_of(bvh.triangles.size(), 0);
+  for (const RsTriangle& t : bvh.triangles) ++ref_begin[t.id + 1];
+  for (std::uint32_t id = 0; id < ids; ++id) ref_begin[id + 1] += ref_begin[id];
+  {
+    std::vector<std::uint32_t> at(ref_begin.begin(), ref_begin.end() - 1);
+    for (std::uint32_t k = 0; k < bvh.triangles.size(); ++k) refs_of[at[bvh.triangles[k].id]++] = k;
+  }
+  std::vector<std::uint32_t> leaf_of_ref(bvh.triangles.size(), 0), seen_tri(ids, 0);
   for (std::uint32_t n = 0; n < bvh.nodes.size(); ++n)
     if (bvh.is_leaf(n))
-      for (std::uint32_t k = bvh.nodes[n].first; k < bvh.nodes[n].first + bvh.nodes[n].count; ++k) {
-        leaf_of_tri[bvh.triangles[k].id] = n;
-        index_of_tri[bvh.triangles[k].id] = k;
-      }
+      for (std::uint32_t k = bvh.nodes[n].first; k < bvh.nodes[n].first + bvh.nodes[n].count; ++k) leaf_of_ref[k] = n;
   std::vector<std::uint32_t> parent(bvh.nodes.size(), 0);
   for (std::uint32_t n = 0; n < bvh.nodes.size(); ++n)
     if (!bvh.is_leaf(n)) parent[bvh.nodes[n].first] = parent[bvh.nodes[n].first + 1] = n;
@@ -453,8 +460,9 @@ std::string validate(const Tree& wide, const Bvh& bvh, std::uint32_t stack_size)
             continue;
           }
           const std::uint32_t id = pk.id[k];
-          if (id >= seen_tri.size() || seen_tri[id]++) return "triangle " + std::to_string(id) + " bad or in two lanes";
-          const RsTriangle& t = bvh.triangles[index_of_tri[id]];
+          if (id >= ids || seen_tri[id]++ == ref_begin[id + 1] - ref_begin[id])
+            return "triangle " + std::to_string(id) + " bad or in more lanes than it has references";
+          const RsTriangle& t = bvh.triangles[refs_of[ref_begin[id]]];
           const float lanes[9] = {pk.v0x.s[k], pk.v0y.s[k], pk.v0z.s[k], pk.v1x.s[k], pk.v1y.s[k],
                                   pk.v1z.s[k], pk.v2x.s[k], pk.v2y.s[k], pk.v2z.s[k]};
           const float verts[9] = {t.v0[0], t.v0[1], t.v0[2], t.v1[0], t.v1[1], t.v1[2], t.v2[0], t.v2[1], t.v2[2]};
@@ -462,18 +470,24 @@ std::string validate(const Tree& wide, const Bvh& bvh, std::uint32_t stack_size)
             return "vertices of triangle " + std::to_string(id) + " not copied exactly";
           if ((pk.nondegenerate.s[k] == 0) != exactly_degenerate(t))
             return "degenerate flag of triangle " + std::to_string(id) + " wrong";
-          // A wide leaf is a binary leaf or a merged small subtree: its box is that of the
-          // triangle's binary leaf or of one of the leaf's ancestors (so it holds the triangle).
-          std::uint32_t b = leaf_of_tri[id];
-          while (!same_box(w, lane, bvh.nodes[b]) && b != 0) b = parent[b];
-          if (!same_box(w, lane, bvh.nodes[b]))
+          // A wide leaf is a binary leaf or a merged small subtree: its box is that of one of the
+          // triangle's binary leaves or of one of their ancestors (so it holds the triangle's part).
+          bool boxed = false;
+          for (std::uint32_t r = ref_begin[id]; r < ref_begin[id + 1] && !boxed; ++r) {
+            std::uint32_t b = leaf_of_ref[refs_of[r]];
+            while (!same_box(w, lane, bvh.nodes[b]) && b != 0) b = parent[b];
+            boxed = same_box(w, lane, bvh.nodes[b]);
+          }
+          if (!boxed)
             return "leaf box of node " + std::to_string(ni) + " lane " + std::to_string(lane) +
                    " is not the box of triangle " + std::to_string(id) + "'s leaf or of an ancestor";
         }
     }
   }
-  for (std::size_t i = 0; i < seen_tri.size(); ++i)
-    if (seen_tri[i] != 1) return "triangle " + std::to_string(i) + " in no packet";
+  for (std::uint32_t id = 0; id < ids; ++id)
+    if (seen_tri[id] != ref_begin[id + 1] - ref_begin[id])
+      return "triangle " + std::to_string(id) + " in " + std::to_string(seen_tri[id]) + " lanes for " +
+             std::to_string(ref_begin[id + 1] - ref_begin[id]) + " references";
   return "";
 }
 

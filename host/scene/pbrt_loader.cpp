@@ -28,7 +28,7 @@ using Matrix = std::array<double, 16>;  // row-major 4×4
 constexpr Matrix kIdentity{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
 constexpr int kMaxIncludeDepth = 32;  // an Include cycle is refused, not followed until the stack ends
 
-Matrix multiply(const Matrix& a, const Matrix& b) {
+Matrix compose(const Matrix& a, const Matrix& b) {
   Matrix r{};
   for (int i = 0; i < 4; ++i)
     for (int j = 0; j < 4; ++j)
@@ -240,17 +240,17 @@ class PbrtLoader {
 bool PbrtLoader::transform_directive(PbrtTokenizer& tz, const Statement& s) {
   const auto& n = s.numbers;
   if (s.name == "Identity") gs_.ctm = kIdentity;
-  else if (s.name == "Translate") need_numbers(tz, s, 3), gs_.ctm = multiply(gs_.ctm, {1, 0, 0, n[0], 0, 1, 0, n[1], 0, 0, 1, n[2], 0, 0, 0, 1});
-  else if (s.name == "Scale") need_numbers(tz, s, 3), gs_.ctm = multiply(gs_.ctm, {n[0], 0, 0, 0, 0, n[1], 0, 0, 0, 0, n[2], 0, 0, 0, 0, 1});
+  else if (s.name == "Translate") need_numbers(tz, s, 3), gs_.ctm = compose(gs_.ctm, {1, 0, 0, n[0], 0, 1, 0, n[1], 0, 0, 1, n[2], 0, 0, 0, 1});
+  else if (s.name == "Scale") need_numbers(tz, s, 3), gs_.ctm = compose(gs_.ctm, {n[0], 0, 0, 0, 0, n[1], 0, 0, 0, 0, n[2], 0, 0, 0, 0, 1});
   else if (s.name == "Rotate") {
     need_numbers(tz, s, 4);
     if (!(n[1] * n[1] + n[2] * n[2] + n[3] * n[3] > 0)) tz.fail(s.line, "Rotate about a zero axis");
-    gs_.ctm = multiply(gs_.ctm, rotation(n[0], n[1], n[2], n[3]));
+    gs_.ctm = compose(gs_.ctm, rotation(n[0], n[1], n[2], n[3]));
   } else if (s.name == "Transform" || s.name == "ConcatTransform") {
     need_numbers(tz, s, 16);
     Matrix m;  // pbrt writes the matrix column by column (its translation is numbers 13–15)
     std::copy(n.begin(), n.end(), m.begin());
-    gs_.ctm = s.name == "Transform" ? transpose(m) : multiply(gs_.ctm, transpose(m));
+    gs_.ctm = s.name == "Transform" ? transpose(m) : compose(gs_.ctm, transpose(m));
   } else if (s.name == "LookAt") {
     need_numbers(tz, s, 9);
     // pbrt-v4 LookAt: world-from-camera has columns right, up, dir, eye; the CTM takes its inverse.
@@ -265,7 +265,7 @@ bool PbrtLoader::transform_directive(PbrtTokenizer& tz, const Statement& s) {
     if (!normalize(r)) tz.fail(s.line, "LookAt with the up vector along the view direction");
     const double up[3] = {d[1] * r[2] - d[2] * r[1], d[2] * r[0] - d[0] * r[2], d[0] * r[1] - d[1] * r[0]};
     const Matrix world_from_camera{r[0], up[0], d[0], n[0], r[1], up[1], d[1], n[1], r[2], up[2], d[2], n[2], 0, 0, 0, 1};
-    gs_.ctm = multiply(gs_.ctm, *inverse(world_from_camera));
+    gs_.ctm = compose(gs_.ctm, *inverse(world_from_camera));
   } else if (s.name == "CoordinateSystem") {
     if (s.strings.size() != 1) tz.fail(s.line, "CoordinateSystem needs one name");
     coordinate_systems_[s.strings[0]] = gs_.ctm;

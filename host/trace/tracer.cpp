@@ -40,7 +40,7 @@ Tracer::Tracer(Runtime& rt, const Bvh& bvh, TraceVariant variant, TraceLayout la
     nodes_ = rt.upload("4-wide bvh nodes", wide.nodes);
     triangles_ = rt.upload("triangle packets", wide.packets);
   } else if (tree_kind(layout_) == TreeKind::Wide8) {
-    const Wide8Bvh wide8 = collapse_to_wide8(bvh);
+    const Wide8Bvh& wide8 = split_tree(bvh).wide8;
     nodes_ = rt.upload("8-wide bvh nodes", wide8.nodes);
     triangles_ = rt.upload("8-triangle packets", wide8.packets);
   } else if (tree_kind(layout_) == TreeKind::Compressed8) {
@@ -137,7 +137,8 @@ std::vector<RsHit> trace_reference(const Bvh& bvh, const std::vector<RsRay>& ray
   if (node_visits) node_visits->assign(n, 0);
   WideBvh scratch;
   const WideBvh& wide = walks_wide_tree(layout) ? wide_of(bvh, scratch) : scratch;
-  const Wide8Bvh wide8 = tree_kind(layout) == TreeKind::Wide8 ? collapse_to_wide8(bvh) : Wide8Bvh{};
+  const Wide8Bvh no_wide8;
+  const Wide8Bvh& wide8 = tree_kind(layout) == TreeKind::Wide8 ? split_tree(bvh).wide8 : no_wide8;
   const CwBvh cw = tree_kind(layout) == TreeKind::Compressed8 ? collapse_to_cwbvh(bvh) : CwBvh{};
   const int robust = variant == TraceVariant::Robust ? 1 : 0;
   // The classes that trace several consecutive rays at once read them through an order.
