@@ -43,6 +43,7 @@ using sah::NodeBounds;
 using sah::PrimRef;
 using sah::SahBins;
 using sah::Split;
+using sah::set_box;
 
 // Past this depth nodes split at the object median, so depth <= kMaxSahDepth + log2(N) < 64.
 constexpr std::uint32_t kMaxSahDepth = 32;
@@ -183,13 +184,6 @@ std::optional<std::uint32_t> split_or_leaf(std::vector<PrimRef>& refs, const Ran
                      });
   }
   return mid;
-}
-
-void set_box(RsBvhNode& node, const Box& b) {
-  for (int a = 0; a < 3; ++a) {
-    node.bmin[a] = b.lo[a];
-    node.bmax[a] = b.hi[a];
-  }
 }
 
 // A subtree built by one thread, numbered as the serial build numbers a tree: root 0, children in

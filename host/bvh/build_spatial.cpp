@@ -47,6 +47,7 @@ using sah::NodeBounds;
 using sah::PrimRef;
 using sah::SahBins;
 using sah::Split;
+using sah::set_box;
 
 // As build_sah.cpp: past this depth, nodes split at the object median (and never spatially).
 constexpr std::uint32_t kMaxSahDepth = 32;
@@ -354,13 +355,6 @@ std::optional<std::pair<Work, Work>> split_node(const Source& src, Work& w, cons
   std::vector<PrimRef>().swap(w.refs);
   return std::pair<Work, Work>{Work{std::move(sides.first), w.depth + 1, left_budget},
                                Work{std::move(sides.second), w.depth + 1, rest - left_budget}};
-}
-
-void set_box(RsBvhNode& node, const Box& b) {
-  for (int a = 0; a < 3; ++a) {
-    node.bmin[a] = b.lo[a];
-    node.bmax[a] = b.hi[a];
-  }
 }
 
 // A subtree built by one thread, numbered as the serial build numbers a tree (root 0, children in

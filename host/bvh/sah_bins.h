@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "bvh_layout.h"
 #include "util/error.h"
 
 namespace raysort::sah {
@@ -41,6 +42,14 @@ struct Box {
     return 2.0f * (e0 * e1 + e1 * e2 + e2 * e0);
   }
 };
+
+// Writes a box into a binary node (both builders, build_sah.cpp and build_spatial.cpp).
+inline void set_box(RsBvhNode& node, const Box& b) {
+  for (int a = 0; a < 3; ++a) {
+    node.bmin[a] = b.lo[a];
+    node.bmax[a] = b.hi[a];
+  }
+}
 
 // One triangle as the builder moves it: its box and its index in the scene's flat list. The
 // builder partitions these 32-byte records themselves rather than indices to them, so every pass
